@@ -1,0 +1,46 @@
+"""Downwash fields: the default truth (``jet``), the protocol (``base``) and plug-in loading."""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+from aerodock.config import Config, ConfigError, resolve_factory
+from aerodock.downwash.base import BodyState, DownwashField
+
+__all__ = ["BodyState", "DownwashField", "build_field"]
+
+# World constants a field factory may accept; passed only when its signature names them.
+_WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3")
+
+
+def build_field(cfg: Config) -> DownwashField:
+    """Instantiate the configured field: ``[downwash] field`` with ``[downwash.params]``.
+
+    Raises:
+        ConfigError: unknown plug-in, bad parameters, or an object that is not a field.
+    """
+    path = cfg.downwash.field
+    factory = resolve_factory(path, cfg.source)
+    params: dict[str, Any] = dict(cfg.data["downwash"].get("params", {}))
+    try:
+        accepted = inspect.signature(factory).parameters
+    except (TypeError, ValueError):
+        accepted = {}
+    world = {"rotor_radius_m": cfg.vehicle.rotor_radius_m, "n_rotors": cfg.vehicle.n_rotors,
+             "air_density_kgpm3": cfg.sim.air_density_kgpm3}
+    for key in _WORLD_KWARGS:
+        if key in accepted and key not in params:
+            params[key] = world[key]
+    try:
+        field = factory(**params)
+    except TypeError as err:
+        raise ConfigError(f"{cfg.source}: 'downwash.params' do not fit {path} ({err})") from None
+    except ValueError as err:
+        raise ConfigError(f"{cfg.source}: 'downwash.params': {err}") from None
+    if not isinstance(field, DownwashField):
+        raise ConfigError(
+            f"{cfg.source}: 'downwash.field' {path} does not build a field "
+            "(needs reset(n, rng) and acceleration(leader, follower, dt))"
+        )
+    return field

@@ -1,0 +1,192 @@
+"""FlightLog: the one record format shared by simulated and real flights.
+
+A ``FlightLog`` is one flight of a leader (A) and a follower (B), time-aligned on one clock, in the
+world NED frame (z down), SI units. Everything downstream (labels, training, plots) reads
+FlightLogs, never a simulator object.
+
+On-disk format (``.npz``, written atomically, read with ``allow_pickle=False``): one file holds one
+or more flights. Keys:
+
+- ``format``: the string ``"aerodock-flightlog"``; ``version``: integer (currently 1);
+- ``n_flights``: integer;
+- ``f{i}/meta``: a JSON string (masses, source, label basis, ...);
+- ``f{i}/{field}``: one array per field below, and ``f{i}/extra/{name}`` for optional arrays.
+
+Fields (T samples):
+
+=========================  ========  ====================================================
+``t_s``                    (T,)      time, s, strictly increasing
+``leader_pos_m``           (T, 3)    leader position, NED
+``leader_vel_mps``         (T, 3)    leader velocity, NED
+``leader_quat``            (T, 4)    leader attitude, body to world, ``[w, x, y, z]``
+``follower_pos_m``         (T, 3)    follower position
+``follower_vel_mps``       (T, 3)    follower velocity
+``follower_quat``          (T, 4)    follower attitude
+``follower_cmd_accel_mps2`` (T, 3)   acceleration the follower's own actuation explains: the
+                                     commanded ``u_1:3`` sent to the inversion map (simulated or
+                                     flown with a controller log), or ``g e3 - R e3 T/m`` from
+                                     measured thrust (``meta["label_basis"] == "thrust"``)
+``follower_thrust_n``      (T,)      collective thrust (commanded or measured), N
+``follower_obs_accel_mps2`` (T, 3)   observed kinematic acceleration (gravity removed), NED
+=========================  ========  ====================================================
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+FORMAT_NAME = "aerodock-flightlog"
+FORMAT_VERSION = 1
+VEC3_FIELDS = (
+    "leader_pos_m", "leader_vel_mps", "follower_pos_m", "follower_vel_mps",
+    "follower_cmd_accel_mps2", "follower_obs_accel_mps2",
+)
+QUAT_FIELDS = ("leader_quat", "follower_quat")
+FIELDS = ("t_s", *VEC3_FIELDS, *QUAT_FIELDS, "follower_thrust_n")
+
+
+class FlightLogError(ValueError):
+    """A FlightLog (in memory or on disk) is malformed; the message says where and what."""
+
+
+@dataclass(frozen=True)
+class FlightLog:
+    """One two-vehicle flight, NED, SI units. See the module docstring for the fields."""
+
+    t_s: np.ndarray
+    leader_pos_m: np.ndarray
+    leader_vel_mps: np.ndarray
+    leader_quat: np.ndarray
+    follower_pos_m: np.ndarray
+    follower_vel_mps: np.ndarray
+    follower_quat: np.ndarray
+    follower_cmd_accel_mps2: np.ndarray
+    follower_thrust_n: np.ndarray
+    follower_obs_accel_mps2: np.ndarray
+    meta: dict[str, Any] = field(default_factory=dict)
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        where = self.meta.get("name", "flightlog")
+        n = np.shape(self.t_s)[0] if np.ndim(self.t_s) == 1 else -1
+        if n < 0:
+            raise FlightLogError(f"{where}: t_s must be 1-D")
+        for name in FIELDS:
+            arr = np.asarray(getattr(self, name), dtype=float)
+            object.__setattr__(self, name, arr)
+            expected = {"t_s": (n,), "follower_thrust_n": (n,)}.get(
+                name, (n, 4) if name in QUAT_FIELDS else (n, 3)
+            )
+            if arr.shape != expected:
+                raise FlightLogError(f"{where}: {name} has shape {arr.shape}, expected {expected}")
+            if not np.all(np.isfinite(arr)):
+                raise FlightLogError(f"{where}: {name} contains NaN or infinite values")
+        for key, arr in self.extra.items():
+            if np.shape(arr)[:1] != (n,):
+                raise FlightLogError(f"{where}: extra {key!r} must have {n} rows")
+        if n >= 2 and not np.all(np.diff(self.t_s) > 0):
+            raise FlightLogError(f"{where}: t_s is not strictly increasing")
+
+    @property
+    def n_samples(self) -> int:
+        """Number of time samples."""
+        return int(self.t_s.shape[0])
+
+    @property
+    def duration_s(self) -> float:
+        """Flight duration in seconds."""
+        return float(self.t_s[-1] - self.t_s[0]) if self.n_samples else 0.0
+
+    @property
+    def name(self) -> str:
+        """Human-readable flight name (from the metadata)."""
+        return str(self.meta.get("name", "flight"))
+
+    def slice(self, start: int, stop: int) -> FlightLog:
+        """Samples ``start:stop`` as a new FlightLog."""
+        kwargs = {k: getattr(self, k)[start:stop] for k in FIELDS}
+        extra = {k: v[start:stop] for k, v in self.extra.items()}
+        return replace(self, **kwargs, extra=extra)
+
+
+def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
+    """Write ``logs`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact."""
+    path = Path(path)
+    if path.suffix != ".npz":
+        path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
+    arrays: dict[str, np.ndarray] = {
+        "format": np.array(FORMAT_NAME),
+        "version": np.array(FORMAT_VERSION),
+        "n_flights": np.array(len(logs)),
+    }
+    for i, log in enumerate(logs):
+        arrays[f"f{i}/meta"] = np.array(json.dumps(log.meta, default=_json_default))
+        for name in FIELDS:
+            arrays[f"f{i}/{name}"] = getattr(log, name)
+        for key, arr in log.extra.items():
+            arrays[f"f{i}/extra/{key}"] = np.asarray(arr)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_flightlogs(path: str | Path) -> list[FlightLog]:
+    """Read every flight in an aerodock FlightLog file.
+
+    Raises:
+        FlightLogError: missing file, not an aerodock FlightLog, newer version, or bad contents.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            keys = set(data.files)
+            if "format" not in keys or str(data["format"]) != FORMAT_NAME:
+                raise FlightLogError(f"{path}: not an aerodock FlightLog file")
+            version = int(data["version"])
+            if version > FORMAT_VERSION:
+                raise FlightLogError(
+                    f"{path}: FlightLog format version {version} is newer than this aerodock "
+                    f"({FORMAT_VERSION}); upgrade aerodock"
+                )
+            logs = []
+            for i in range(int(data["n_flights"])):
+                missing = [n for n in FIELDS if f"f{i}/{n}" not in keys]
+                if missing:
+                    raise FlightLogError(f"{path}: flight {i} lacks {', '.join(missing)}")
+                meta = json.loads(str(data[f"f{i}/meta"]))
+                meta.setdefault("name", f"{path.stem}[{i}]")
+                prefix = f"f{i}/extra/"
+                extra = {k[len(prefix):]: data[k] for k in keys if k.startswith(prefix)}
+                logs.append(
+                    FlightLog(**{n: data[f"f{i}/{n}"] for n in FIELDS}, meta=meta, extra=extra)
+                )
+            return logs
+    except FileNotFoundError:
+        raise FlightLogError(f"{path}: file not found") from None
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
+        if isinstance(err, FlightLogError):
+            raise
+        raise FlightLogError(f"{path}: corrupt or unreadable FlightLog file ({err})") from None
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    raise TypeError(f"cannot store {type(obj).__name__} in FlightLog metadata")

@@ -1,0 +1,100 @@
+"""Rotations and SO(2) helpers, batch-first. The one place rotations are built.
+
+Conventions: world frame NED (z down); ``R`` maps body to world; Euler angles are ZYX
+(yaw, pitch, roll) applied as ``R = Rz(yaw) Ry(pitch) Rx(roll)``; quaternions are ``[w, x, y, z]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+E3 = np.array([0.0, 0.0, 1.0])
+
+
+def euler_to_rotmat(roll_rad: np.ndarray, pitch_rad: np.ndarray, yaw_rad: np.ndarray) -> np.ndarray:
+    """ZYX Euler angles (any matching shapes ``S``) to rotation matrices ``S + (3, 3)``."""
+    cr, sr = np.cos(roll_rad), np.sin(roll_rad)
+    cp, sp = np.cos(pitch_rad), np.sin(pitch_rad)
+    cy, sy = np.cos(yaw_rad), np.sin(yaw_rad)
+    rot = np.empty(np.shape(roll_rad) + (3, 3))
+    rot[..., 0, 0] = cy * cp
+    rot[..., 0, 1] = cy * sp * sr - sy * cr
+    rot[..., 0, 2] = cy * sp * cr + sy * sr
+    rot[..., 1, 0] = sy * cp
+    rot[..., 1, 1] = sy * sp * sr + cy * cr
+    rot[..., 1, 2] = sy * sp * cr - cy * sr
+    rot[..., 2, 0] = -sp
+    rot[..., 2, 1] = cp * sr
+    rot[..., 2, 2] = cp * cr
+    return rot
+
+
+def rotmat_to_euler(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rotation matrices ``S + (3, 3)`` to ZYX Euler angles (roll, pitch, yaw), radians."""
+    roll = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
+    pitch = -np.arcsin(np.clip(rot[..., 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
+    return roll, pitch, yaw
+
+
+def quat_to_rotmat(quat_wxyz: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``S + (4,)`` as ``[w, x, y, z]`` to rotation matrices ``S + (3, 3)``."""
+    q = np.asarray(quat_wxyz, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    rot = np.empty(q.shape[:-1] + (3, 3))
+    rot[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    rot[..., 0, 1] = 2 * (x * y - w * z)
+    rot[..., 0, 2] = 2 * (x * z + w * y)
+    rot[..., 1, 0] = 2 * (x * y + w * z)
+    rot[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    rot[..., 1, 2] = 2 * (y * z - w * x)
+    rot[..., 2, 0] = 2 * (x * z - w * y)
+    rot[..., 2, 1] = 2 * (y * z + w * x)
+    rot[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return rot
+
+
+def rotmat_to_quat(rot: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``S + (3, 3)`` to unit quaternions ``[w, x, y, z]`` with ``w >= 0``."""
+    rot = np.asarray(rot, dtype=float)
+    m = rot.reshape(-1, 3, 3)
+    tr = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
+    cand = np.stack(
+        [
+            np.stack([1 + tr, m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0],
+                      m[:, 1, 0] - m[:, 0, 1]], -1),
+            np.stack([m[:, 2, 1] - m[:, 1, 2], 1 + m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2],
+                      m[:, 0, 1] + m[:, 1, 0], m[:, 0, 2] + m[:, 2, 0]], -1),
+            np.stack([m[:, 0, 2] - m[:, 2, 0], m[:, 0, 1] + m[:, 1, 0],
+                      1 - m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2], m[:, 1, 2] + m[:, 2, 1]], -1),
+            np.stack([m[:, 1, 0] - m[:, 0, 1], m[:, 0, 2] + m[:, 2, 0], m[:, 1, 2] + m[:, 2, 1],
+                      1 - m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2]], -1),
+        ],
+        axis=1,
+    )  # (n, 4 candidates, 4): each candidate is 4 q_i q (up to scale), best-conditioned wins
+    best = np.argmax(np.stack([1 + tr, 1 + m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2],
+                               1 - m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2],
+                               1 - m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2]], -1), axis=-1)
+    q = cand[np.arange(len(m)), best]
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(rot.shape[:-2] + (4,))
+
+
+def rot_z(angle_rad: np.ndarray) -> np.ndarray:
+    """Rotations about the z axis, ``S + (3, 3)``."""
+    zero = np.zeros_like(np.asarray(angle_rad, dtype=float))
+    return euler_to_rotmat(zero, zero, angle_rad)
+
+
+def rotate_planar(vec_xy: np.ndarray, angle_rad: np.ndarray) -> np.ndarray:
+    """Rotate 2-vectors ``S + (2,)`` by ``angle_rad`` (SO(2) action, counter-clockwise x->y)."""
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    x, y = vec_xy[..., 0], vec_xy[..., 1]
+    return np.stack([c * x - s * y, s * x + c * y], axis=-1)
+
+
+def wrap_angle(angle_rad: np.ndarray) -> np.ndarray:
+    """Wrap angles to ``[-pi, pi)``."""
+    return (np.asarray(angle_rad) + np.pi) % (2 * np.pi) - np.pi

@@ -1,0 +1,185 @@
+"""The follower's single-point gripper: contact arm, HX711-like strain sensor, servo-driven gate.
+
+Geometry: the contact arm sits ``mount_height_m`` above the follower's centre of mass (body -z).
+The bar is *inside the gate* when it passes through the mouth (perpendicular distance from the
+gripper axis to the bar line <= ``aperture_m / 2``, within the bar's length) and its centre is no
+more than ``gate_height_m`` above the arm. Contact is a stiff spring-damper between arm and bar.
+
+Sensing and actuation: the strain gauge is read at ``sensor_rate_hz`` with noise and a resting bias
+that is calibrated at start (mean of ``calibration_samples`` readings, so a small residual remains);
+a passive trigger fires when the calibrated reading exceeds ``contact_threshold_n``; an active
+trigger fires when software commands it. Either way the servo starts ``latency_s`` later and the
+torque-limited gate takes ``close_time_s`` to close. The bar is captured only if it is still inside
+the gate when the gate finishes closing; if it was inside when closing began but not at the end,
+it slipped through (the paper's failure mode).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from enum import IntEnum
+
+import numpy as np
+
+from aerodock.config import Config
+
+
+class GateState(IntEnum):
+    """Per-trial gate state."""
+
+    OPEN = 0
+    CLOSING = 1
+    CAPTURED = 2
+    MISSED = 3
+
+
+@dataclass(frozen=True)
+class GripperParams:
+    """Constants of the gripper (see ``[gripper]`` in defaults.toml)."""
+
+    aperture_m: float
+    gate_height_m: float
+    mount_height_m: float
+    sensor_rate_hz: float
+    sensor_noise_n: float
+    sensor_bias_sd_n: float
+    calibration_samples: int
+    contact_threshold_n: float
+    contact_stiffness_npm: float
+    contact_damping_nspm: float
+    latency_s: float
+    close_time_s: float
+    passive: bool
+    active: bool
+    bar_radius_m: float
+    bar_half_length_m: float
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> GripperParams:
+        """Bind ``[gripper]`` (and the bar's size) of ``cfg``."""
+        g = cfg.gripper
+        return cls(
+            aperture_m=g.aperture_m, gate_height_m=g.gate_height_m,
+            mount_height_m=g.mount_height_m, sensor_rate_hz=g.sensor_rate_hz,
+            sensor_noise_n=g.sensor_noise_n, sensor_bias_sd_n=g.sensor_bias_sd_n,
+            calibration_samples=int(g.calibration_samples),
+            contact_threshold_n=g.contact_threshold_n,
+            contact_stiffness_npm=g.contact_stiffness_npm,
+            contact_damping_nspm=g.contact_damping_nspm, latency_s=g.latency_s,
+            close_time_s=g.close_time_s, passive=g.trigger in ("passive", "both"),
+            active=g.trigger in ("active", "both"),
+            bar_radius_m=cfg.platform.bar_diameter_m / 2.0,
+            bar_half_length_m=cfg.platform.bar_length_m / 2.0,
+        )
+
+
+@dataclass(frozen=True)
+class GripperState:
+    """Batch of N grippers."""
+
+    gate: np.ndarray  # (n,) GateState
+    bias_true_n: np.ndarray  # (n,) resting bias of the strain gauge
+    bias_est_n: np.ndarray  # (n,) calibrated estimate of it
+    reading_n: np.ndarray  # (n,) last calibrated reading
+    servo_start_s: np.ndarray  # (n,) when the servo starts closing (nan: not triggered)
+    triggered_by_contact: np.ndarray  # (n,) bool
+    inside_at_start: np.ndarray  # (n,) bool: bar inside the gate when closing began
+    slipped: np.ndarray  # (n,) bool: bar slipped through the closing gate
+    resolved_s: np.ndarray  # (n,) when the gate finished closing (nan: not yet)
+
+    @property
+    def captured(self) -> np.ndarray:
+        """(n,) bool."""
+        return self.gate == GateState.CAPTURED
+
+
+def calibrated_gripper(n: int, params: GripperParams, rng: np.random.Generator) -> GripperState:
+    """Grippers after the start-of-flight calibration of the strain gauge's resting bias."""
+    bias = params.sensor_bias_sd_n * rng.standard_normal(n)
+    calib_noise = params.sensor_noise_n / np.sqrt(params.calibration_samples)
+    est = bias + calib_noise * rng.standard_normal(n)
+    nan = np.full(n, np.nan)
+    false = np.zeros(n, dtype=bool)
+    return GripperState(
+        gate=np.zeros(n, dtype=np.int8), bias_true_n=bias, bias_est_n=est, reading_n=np.zeros(n),
+        servo_start_s=nan, triggered_by_contact=false, inside_at_start=false.copy(),
+        slipped=false.copy(), resolved_s=nan.copy(),
+    )
+
+
+def bar_in_gripper(
+    follower_p: np.ndarray, follower_R: np.ndarray, follower_v: np.ndarray,  # noqa: N803
+    bar_p: np.ndarray, bar_v: np.ndarray, bar_yaw_rad: np.ndarray, params: GripperParams,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Contact force magnitude (n,), inside-gate flag (n,) and the follower's up axis (n, 3).
+
+    The contact force pushes the bar along ``up`` and the follower along ``-up``.
+    """
+    up = -follower_R[:, :, 2]
+    arm = follower_p + up * params.mount_height_m
+    rel = bar_p - arm
+    height = np.einsum("ni,ni->n", rel, up)
+    horizontal = rel - height[:, None] * up
+    bar_axis = np.stack([np.cos(bar_yaw_rad), np.sin(bar_yaw_rad), np.zeros_like(bar_yaw_rad)], 1)
+    along = np.einsum("ni,ni->n", horizontal, bar_axis)
+    perp = np.linalg.norm(horizontal - along[:, None] * bar_axis, axis=1)
+    in_mouth = (perp <= params.aperture_m / 2.0) & (np.abs(along) <= params.bar_half_length_m)
+    inside = in_mouth & (height <= params.gate_height_m)
+    penetration = params.bar_radius_m - height
+    rate = -np.einsum("ni,ni->n", bar_v - follower_v, up)
+    force = params.contact_stiffness_npm * penetration + params.contact_damping_nspm * rate
+    force = np.where(in_mouth & (penetration > 0), np.maximum(force, 0.0), 0.0)
+    return force, inside, up
+
+
+def step_gripper(
+    state: GripperState,
+    t_s: float,
+    contact_force_n: np.ndarray,
+    inside: np.ndarray,
+    sample_sensor: bool,
+    close_command: np.ndarray,
+    params: GripperParams,
+    rng: np.random.Generator,
+) -> GripperState:
+    """Advance the sensor, triggers and gate to time ``t_s``.
+
+    Args:
+        state: current state.
+        t_s: simulation time now.
+        contact_force_n: (n,) true contact force on the arm.
+        inside: (n,) bar inside the gate now.
+        sample_sensor: the HX711 produces a sample at this step.
+        close_command: (n,) bool, the software's active trigger (ignored unless active).
+        params: gripper constants.
+        rng: noise source.
+    """
+    reading = state.reading_n
+    open_ = state.gate == GateState.OPEN
+    untriggered = open_ & np.isnan(state.servo_start_s)
+    fire = np.zeros_like(open_)
+    by_contact = state.triggered_by_contact
+    if sample_sensor:
+        raw = contact_force_n + state.bias_true_n + params.sensor_noise_n * rng.standard_normal(
+            contact_force_n.shape
+        )
+        reading = raw - state.bias_est_n
+        if params.passive:
+            sensed = untriggered & (reading > params.contact_threshold_n)
+            fire = fire | sensed
+            by_contact = by_contact | sensed
+    if params.active:
+        fire = fire | (untriggered & close_command)
+    servo_start = np.where(fire, t_s + params.latency_s, state.servo_start_s)
+    start_now = open_ & (servo_start <= t_s)
+    gate = np.where(start_now, GateState.CLOSING, state.gate).astype(np.int8)
+    inside_at_start = np.where(start_now, inside, state.inside_at_start)
+    done = (gate == GateState.CLOSING) & (t_s >= servo_start + params.close_time_s)
+    gate = np.where(done, np.where(inside, GateState.CAPTURED, GateState.MISSED), gate)
+    slipped = state.slipped | (done & ~inside & inside_at_start)
+    resolved = np.where(done, t_s, state.resolved_s)
+    return replace(
+        state, gate=gate.astype(np.int8), reading_n=reading, servo_start_s=servo_start,
+        triggered_by_contact=by_contact, inside_at_start=inside_at_start, slipped=slipped,
+        resolved_s=resolved,
+    )

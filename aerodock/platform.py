@@ -1,0 +1,133 @@
+"""The docking platform: a bar hanging under the leader on two cables of equal length ``d_p``.
+
+The cables hang from two points ``cable_spacing_m`` apart and hold the bar at its ends, so they stay
+parallel: the bar translates like a spherical pendulum of length ``d_p`` about the anchor (swinging
+in both directions) and yaws like a bifilar (torsion) pendulum, ``omega_yaw^2 = g (s/2)^2 / (L k^2)``
+with ``k^2 = l^2 / 12`` for a uniform bar of length ``l``. The cables only pull: a bar pushed up
+(by the gripper) goes slack and falls back. After capture the follower hangs from the bar and the
+same constraint carries its weight to the leader.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from aerodock.config import Config
+
+
+@dataclass(frozen=True)
+class PlatformParams:
+    """Constants of the two-cable bar (see ``[platform]`` in defaults.toml)."""
+
+    cable_length_m: float
+    cable_spacing_m: float
+    bar_length_m: float
+    bar_diameter_m: float
+    bar_mass_kg: float
+    anchor_below_leader_m: float
+    yaw_damping: float
+    swing_damping: float
+    gravity_mps2: float
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> PlatformParams:
+        """Bind ``[platform]`` (and gravity) of ``cfg``."""
+        p = cfg.platform
+        return cls(
+            cable_length_m=p.cable_length_m, cable_spacing_m=p.cable_spacing_m,
+            bar_length_m=p.bar_length_m, bar_diameter_m=p.bar_diameter_m,
+            bar_mass_kg=p.bar_mass_kg, anchor_below_leader_m=p.anchor_below_leader_m,
+            yaw_damping=p.yaw_damping, swing_damping=p.swing_damping,
+            gravity_mps2=cfg.sim.gravity_mps2,
+        )
+
+    @property
+    def bar_area_m2(self) -> float:
+        """Frontal area of the bar to a vertical flow."""
+        return self.bar_length_m * self.bar_diameter_m
+
+    @property
+    def yaw_omega2(self) -> float:
+        """Squared natural frequency of the bifilar yaw mode, 1/s²."""
+        k2 = self.bar_length_m**2 / 12.0
+        return self.gravity_mps2 * (self.cable_spacing_m / 2.0) ** 2 / (self.cable_length_m * k2)
+
+
+@dataclass(frozen=True)
+class BarState:
+    """Batch of N bars: centre position and velocity (NED), yaw and yaw rate."""
+
+    p: np.ndarray  # (n, 3)
+    v: np.ndarray  # (n, 3)
+    yaw_rad: np.ndarray  # (n,)
+    yaw_rate_radps: np.ndarray  # (n,)
+
+
+def anchor_point(leader_p: np.ndarray, leader_R: np.ndarray, params: PlatformParams) -> np.ndarray:  # noqa: N803
+    """(n, 3) cable attachment point (midpoint of the two cables) on the leader."""
+    return leader_p + leader_R[:, :, 2] * params.anchor_below_leader_m
+
+
+def hanging_bar(anchor_p: np.ndarray, anchor_v: np.ndarray, yaw_rad: np.ndarray,
+                params: PlatformParams) -> BarState:
+    """Bars at rest straight below ``anchor_p``."""
+    p = anchor_p + np.array([0.0, 0.0, params.cable_length_m])
+    return BarState(p=p, v=np.array(anchor_v, dtype=float), yaw_rad=np.array(yaw_rad, float),
+                    yaw_rate_radps=np.zeros(anchor_p.shape[0]))
+
+
+def step_bar(
+    bar: BarState,
+    anchor_p: np.ndarray,
+    anchor_v: np.ndarray,
+    anchor_a: np.ndarray,
+    leader_yaw_rad: np.ndarray,
+    force_n: np.ndarray,
+    mass_kg: np.ndarray,
+    params: PlatformParams,
+    dt_s: float,
+) -> tuple[BarState, np.ndarray]:
+    """Advance the bars by ``dt_s``; returns (state, cable force on the leader (n,3), N).
+
+    Args:
+        bar: current state.
+        anchor_p, anchor_v, anchor_a: (n, 3) attachment point's position, velocity, acceleration.
+        leader_yaw_rad: (n,) leader yaw (the bifilar mode aligns the bar with it).
+        force_n: (n, 3) every force on the hanging mass except gravity and the cables
+            (downwash drag, gripper contact, and for a captured follower its thrust, drag, ...).
+        mass_kg: (n,) hanging mass: the bar, or the bar plus a captured follower.
+        params: platform constants.
+        dt_s: physics step.
+    """
+    length = params.cable_length_m
+    rel = bar.p - anchor_p
+    rel_v = bar.v - anchor_v
+    dist = np.linalg.norm(rel, axis=1)
+    unit = rel / np.maximum(dist, 1e-9)[:, None]
+    free = force_n / mass_kg[:, None] - params.swing_damping * rel_v
+    free[:, 2] += params.gravity_mps2
+    # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
+    taut = dist >= length - 1e-6
+    radial_v = np.einsum("ni,ni->n", rel_v, unit)
+    tangential_v2 = np.einsum("ni,ni->n", rel_v, rel_v) - radial_v**2
+    lam = np.einsum("ni,ni->n", unit, free - anchor_a) + tangential_v2 / length
+    lam = np.where(taut, np.maximum(lam, 0.0), 0.0)
+    accel = free - lam[:, None] * unit
+    v = bar.v + accel * dt_s
+    p = bar.p + v * dt_s
+    # Project back onto the sphere and remove outward radial velocity (inextensible cables).
+    rel = p - anchor_p
+    dist = np.linalg.norm(rel, axis=1)
+    over = dist > length
+    if np.any(over):
+        unit = rel / np.maximum(dist, 1e-9)[:, None]
+        p = np.where(over[:, None], anchor_p + unit * length, p)
+        out_v = np.einsum("ni,ni->n", v - anchor_v, unit)
+        v = np.where((over & (out_v > 0))[:, None], v - out_v[:, None] * unit, v)
+    yaw_err = (bar.yaw_rad - leader_yaw_rad + np.pi) % (2 * np.pi) - np.pi
+    yaw_acc = -params.yaw_omega2 * np.sin(yaw_err) - params.yaw_damping * bar.yaw_rate_radps
+    yaw_rate = bar.yaw_rate_radps + yaw_acc * dt_s
+    new = replace(bar, p=p, v=v, yaw_rad=bar.yaw_rad + yaw_rate * dt_s, yaw_rate_radps=yaw_rate)
+    return new, (mass_kg * lam)[:, None] * unit
