@@ -1,0 +1,1 @@
+"""Registers the commands that live beside their subpackages on the ``aerodock`` app."""
