@@ -22,6 +22,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
+from aerodock.geometry import euler_to_rotmat
 from aerodock.gripper import (
     GateState,
     GripperParams,
@@ -44,9 +45,19 @@ from aerodock.vehicle import (
 class Observation:
     """What motion capture gives a controller: batch-first position, velocity and yaw."""
 
-    p: np.ndarray
-    v: np.ndarray
-    yaw_rad: np.ndarray
+    p: np.ndarray  # (n, 3) m
+    v: np.ndarray  # (n, 3) m/s
+    rpy: np.ndarray  # (n, 3) rad: roll, pitch, yaw
+
+    @property
+    def yaw_rad(self) -> np.ndarray:
+        """(n,) yaw."""
+        return self.rpy[:, 2]
+
+    @property
+    def R(self) -> np.ndarray:  # noqa: N802
+        """(n, 3, 3) body-to-world rotation."""
+        return euler_to_rotmat(self.rpy[:, 0], self.rpy[:, 1], self.rpy[:, 2])
 
 
 class World:
@@ -104,10 +115,10 @@ class World:
         self._history = {
             "lp": np.repeat(self.leader.p[None], size, 0),
             "lv": np.repeat(self.leader.v[None], size, 0),
-            "ly": np.repeat(self.leader.rpy[None, :, 2], size, 0),
+            "ly": np.repeat(self.leader.rpy[None], size, 0),
             "fp": np.repeat(self.follower.p[None], size, 0),
             "fv": np.repeat(self.follower.v[None], size, 0),
-            "fy": np.repeat(self.follower.rpy[None, :, 2], size, 0),
+            "fy": np.repeat(self.follower.rpy[None], size, 0),
         }
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = 0.0
@@ -136,11 +147,11 @@ class World:
         h = self._history
         n = self.n
 
-        def noisy(p, v, yaw):
+        def noisy(p, v, rpy):
             return Observation(
                 p=p + cfg.pos_noise_m * self.rng.standard_normal((n, 3)),
                 v=v + cfg.vel_noise_mps * self.rng.standard_normal((n, 3)),
-                yaw_rad=yaw.copy(),
+                rpy=rpy.copy(),
             )
 
         return noisy(h["lp"][k], h["lv"][k], h["ly"][k]), noisy(h["fp"][k], h["fv"][k], h["fy"][k])
@@ -234,9 +245,8 @@ class World:
                                     self.gripper_params, self.rng)
         k = self.step_index % (self._latency_steps + 1)
         h = self._history
-        h["lp"][k], h["lv"][k], h["ly"][k] = self.leader.p, self.leader.v, self.leader.rpy[:, 2]
-        h["fp"][k], h["fv"][k], h["fy"][k] = (self.follower.p, self.follower.v,
-                                              self.follower.rpy[:, 2])
+        h["lp"][k], h["lv"][k], h["ly"][k] = self.leader.p, self.leader.v, self.leader.rpy
+        h["fp"][k], h["fv"][k], h["fy"][k] = self.follower.p, self.follower.v, self.follower.rpy
 
     def advance(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand,
                 close_command: np.ndarray | None = None) -> None:

@@ -1,0 +1,20 @@
+"""Learning the leader's downwash: labels, datasets, features, models, training and runtime.
+
+The modules split along one line: everything the *deployed* path needs (``labels``, ``dataset``,
+``features``, ``modelfile``, ``runtime``, ``evaluate``) is NumPy-only, so a controller can load a
+trained model without PyTorch; ``models``, ``train``, ``export`` and ``sample_efficiency`` import
+PyTorch. This package's ``__init__`` imports nothing, on purpose: importing
+``aerodock.learning.runtime`` must not pull in torch.
+
+Typical use::
+
+    from aerodock.learning.dataset import load_data_paths
+    from aerodock.learning.train import train_model
+    from aerodock.learning.runtime import Predictor
+
+    ds = load_data_paths([Path("flights/")])
+    trained = train_model("so2", ds)
+    trained.save("models/so2")
+    predictor = Predictor.load("models/so2")
+    f_ext_mps2 = predictor.predict_bodies(leader_state, follower_state)   # (n, 3), NED
+"""

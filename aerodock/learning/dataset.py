@@ -1,0 +1,568 @@
+"""Training data sets: model inputs, leader attitudes and labels, built from FlightLogs.
+
+A :class:`Dataset` holds, for n samples of one or more flights, ``x = [dp, v_A, v_B]`` (n, 9)
+with ``dp = p_follower - p_leader`` (world NED), the leader's attitude ``leader_R`` (n, 3, 3,
+body to world), the de-biased labels ``y`` (n, 3, m/s², NED, see :mod:`aerodock.learning.labels`),
+the flight each sample comes from and its time. Simulated flights may also provide the true mean
+downwash acceleration (``extra["true_field_mean_mps2"]`` in the FlightLog) as ``y_true_mean``.
+
+On disk (``.npz``, written atomically, read with ``allow_pickle=False``): keys ``format`` (the
+string ``"aerodock-dataset"``), ``version`` (1), ``x``, ``leader_R``, ``y``, ``flight_id``,
+``t_s``, optionally ``y_true_mean``, and ``meta`` (a JSON string).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
+from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
+from aerodock.geometry import quat_to_rotmat
+from aerodock.learning.labels import FREE_AIR_RADIUS_M, labels_from_logs, valid_mask
+
+DATASET_FORMAT = "aerodock-dataset"
+DATASET_VERSION = 1
+TRUE_FIELD_KEY = "true_field_mean_mps2"
+INTERACTION_RADIUS_M = 0.2
+
+
+class DataError(ValueError):
+    """Training/evaluation data could not be read or built; the message names the file."""
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """Samples of model input, leader attitude and label (batch-first, world NED, SI).
+
+    Attributes:
+        x: (n, 9) ``[dp, v_A, v_B]``: relative position (m), leader and follower velocity (m/s).
+        leader_R: (n, 3, 3) leader attitude, body to world.
+        y: (n, 3) labels, m/s².
+        flight_id: (n,) index into ``meta["flights"]``.
+        t_s: (n,) time within the flight, s.
+        y_true_mean: (n, 3) the simulator's true mean downwash acceleration (NaN rows for
+            flights without it), or None when no flight has it.
+        meta: JSON-serialisable metadata: ``flights`` (one dict per flight: name, source,
+            n_samples, duration_s, dt_s, bias_mps2, bias_source, n_free_air), ``minutes``,
+            ``sources``, ``labels`` (label options), ``warnings``.
+    """
+
+    x: np.ndarray
+    leader_R: np.ndarray
+    y: np.ndarray
+    flight_id: np.ndarray
+    t_s: np.ndarray
+    y_true_mean: np.ndarray | None = None
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.x)[0] if np.ndim(self.x) == 2 else -1
+        shapes = {"x": (n, 9), "leader_R": (n, 3, 3), "y": (n, 3), "flight_id": (n,), "t_s": (n,)}
+        for name, shape in shapes.items():
+            dtype = np.int64 if name == "flight_id" else float
+            arr = np.asarray(getattr(self, name), dtype=dtype)
+            if arr.shape != shape:
+                raise DataError(f"dataset: {name} has shape {arr.shape}, expected {shape}")
+            object.__setattr__(self, name, arr)
+        if self.y_true_mean is not None:
+            arr = np.asarray(self.y_true_mean, dtype=float)
+            if arr.shape != (n, 3):
+                raise DataError(f"dataset: y_true_mean has shape {arr.shape}, expected {(n, 3)}")
+            object.__setattr__(self, "y_true_mean", arr)
+        meta = dict(self.meta)
+        meta.setdefault("flights", [])
+        if n and self.flight_id.min() < 0:
+            raise DataError("dataset: flight_id must be non-negative")
+        if n and (self.flight_id.min() < 0 or self.flight_id.max() >= len(meta["flights"])):
+            meta["flights"] = _fill_flights(meta["flights"], self.flight_id, self.t_s)
+        meta["n_samples"] = int(n)
+        meta["minutes"] = _minutes(self.flight_id, meta["flights"])
+        object.__setattr__(self, "meta", meta)
+
+    def __len__(self) -> int:
+        return int(self.x.shape[0])
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return len(self)
+
+    @property
+    def minutes(self) -> float:
+        """Flight time the samples span, minutes (samples x each flight's time step)."""
+        return float(self.meta["minutes"])
+
+    @property
+    def n_flights(self) -> int:
+        """Number of flights with at least one sample."""
+        return int(len(np.unique(self.flight_id)))
+
+    @property
+    def flight_names(self) -> list[str]:
+        """Names of the flights (indexed by ``flight_id``)."""
+        return [str(f.get("name", f"flight{i}")) for i, f in enumerate(self.meta["flights"])]
+
+    def interaction_mask(self, lateral_radius_m: float = INTERACTION_RADIUS_M) -> np.ndarray:
+        """Boolean (n,): follower below the leader (``dp_z > 0``) within ``lateral_radius_m``."""
+        dp = self.x[:, 0:3]
+        return (dp[:, 2] > 0.0) & (np.hypot(dp[:, 0], dp[:, 1]) <= lateral_radius_m)
+
+    def subset(self, index: np.ndarray) -> Dataset:
+        """Samples ``index`` (integer indices or boolean mask) as a new Dataset.
+
+        Flight ids are renumbered to the flights that remain; ``meta`` follows.
+        """
+        index = np.asarray(index)
+        if index.dtype == bool:
+            index = np.flatnonzero(index)
+        fid = self.flight_id[index]
+        kept, new_fid = np.unique(fid, return_inverse=True)
+        flights = self.meta["flights"]
+        meta = {**self.meta, "flights": [dict(flights[int(k)]) for k in kept]}
+        for fmeta, k in zip(meta["flights"], kept, strict=True):
+            fmeta["n_samples_used"] = int(np.sum(fid == k))
+        return Dataset(
+            x=self.x[index], leader_R=self.leader_R[index], y=self.y[index],
+            flight_id=new_fid.reshape(-1), t_s=self.t_s[index],
+            y_true_mean=None if self.y_true_mean is None else self.y_true_mean[index],
+            meta=meta,
+        )
+
+    def summary(self) -> dict[str, Any]:
+        """Short JSON-ready description (what model files record about their training data)."""
+        return {
+            "n_samples": self.n,
+            "n_flights": self.n_flights,
+            "minutes": round(self.minutes, 4),
+            "flights": self.flight_names,
+            "sources": self.meta.get("sources", []),
+            "has_true_mean": self.y_true_mean is not None,
+        }
+
+
+def _fill_flights(flights: list[dict], flight_id: np.ndarray, t_s: np.ndarray) -> list[dict]:
+    flights = [dict(f) for f in flights]
+    for k in range(len(flights), int(flight_id.max()) + 1):
+        t = t_s[flight_id == k]
+        flights.append({"name": f"flight{k}", "n_samples": int(len(t)), "dt_s": _dt(t)})
+    return flights
+
+
+def _dt(t_s: np.ndarray) -> float:
+    d = np.diff(np.sort(t_s))
+    d = d[d > 0]
+    return float(np.median(d)) if len(d) else 0.0
+
+
+def _minutes(flight_id: np.ndarray, flights: list[dict]) -> float:
+    counts = np.bincount(flight_id, minlength=len(flights)) if len(flight_id) else []
+    return float(sum(c * float(f.get("dt_s", 0.0)) for c, f in zip(counts, flights)) / 60.0)
+
+
+def _source(log: FlightLog) -> str:
+    return str(log.meta.get("source", "unknown"))
+
+
+def build_dataset(
+    logs: Sequence[FlightLog],
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+) -> Dataset:
+    """Labels and model inputs for a list of flights (biases estimated together).
+
+    Args:
+        logs: flights (time-aligned FlightLogs).
+        free_air_radius_m: free-air radius for the bias estimate (see labels).
+        lowpass_hz: optional low-pass cut-off for the labels (off by default).
+
+    Raises:
+        DataError: no flights, or no valid samples.
+    """
+    logs = list(logs)
+    if not logs:
+        raise DataError("dataset: no flights given")
+    labels, biases, notes = labels_from_logs(
+        logs, free_air_radius_m=free_air_radius_m, lowpass_hz=lowpass_hz
+    )
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "R", "y", "fid", "t", "ytm")}
+    flights: list[dict[str, Any]] = []
+    any_true = any(TRUE_FIELD_KEY in log.extra for log in logs)
+    for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True)):
+        keep = valid_mask(log)
+        dp = log.follower_pos_m - log.leader_pos_m
+        x = np.concatenate([dp, log.leader_vel_mps, log.follower_vel_mps], axis=1)
+        parts["x"].append(x[keep])
+        parts["R"].append(quat_to_rotmat(log.leader_quat)[keep])
+        parts["y"].append(lab[keep])
+        parts["fid"].append(np.full(int(keep.sum()), i, dtype=np.int64))
+        parts["t"].append(log.t_s[keep])
+        if any_true:
+            true = log.extra.get(TRUE_FIELD_KEY)
+            if true is None:
+                true = np.full((log.n_samples, 3), np.nan)
+            true = np.asarray(true, dtype=float)
+            if true.shape != (log.n_samples, 3):
+                raise DataError(
+                    f"{log.name}: extra {TRUE_FIELD_KEY!r} has shape {true.shape}, "
+                    f"expected {(log.n_samples, 3)}"
+                )
+            parts["ytm"].append(true[keep])
+        flights.append({
+            "name": log.name,
+            "source": _source(log),
+            "n_samples": int(keep.sum()),
+            "duration_s": round(log.duration_s, 6),
+            "dt_s": _dt(log.t_s),
+            "bias_mps2": [float(b) for b in bias.bias_mps2],
+            "bias_source": bias.source,
+            "n_free_air": bias.n_free_air,
+        })
+    if not sum(len(f) for f in parts["fid"]):
+        raise DataError("dataset: no valid samples in the given flights")
+    meta = {
+        "flights": flights,
+        "sources": sorted({_source(log) for log in logs}),
+        "labels": {
+            "definition": "a_obs - u_1:3 - per-flight free-air median bias",
+            "units": "m/s^2 NED",
+            "free_air_radius_m": free_air_radius_m,
+            "lowpass_hz": lowpass_hz,
+        },
+        "warnings": notes,
+    }
+    return Dataset(
+        x=np.concatenate(parts["x"]), leader_R=np.concatenate(parts["R"]),
+        y=np.concatenate(parts["y"]), flight_id=np.concatenate(parts["fid"]),
+        t_s=np.concatenate(parts["t"]),
+        y_true_mean=np.concatenate(parts["ytm"]) if any_true else None,
+        meta=meta,
+    )
+
+
+def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
+    """Concatenate datasets (flight ids offset; metadata merged)."""
+    datasets = list(datasets)
+    if not datasets:
+        raise DataError("dataset: nothing to concatenate")
+    if len(datasets) == 1:
+        return datasets[0]
+    flights: list[dict] = []
+    fids, ytm = [], []
+    any_true = any(d.y_true_mean is not None for d in datasets)
+    for d in datasets:
+        fids.append(d.flight_id + len(flights))
+        flights.extend(dict(f) for f in d.meta["flights"])
+        if any_true:
+            ytm.append(d.y_true_mean if d.y_true_mean is not None else np.full((d.n, 3), np.nan))
+    meta = {
+        "flights": flights,
+        "sources": sorted({s for d in datasets for s in d.meta.get("sources", [])}),
+        "labels": [d.meta.get("labels") for d in datasets],
+        "warnings": [w for d in datasets for w in d.meta.get("warnings", [])],
+    }
+    return Dataset(
+        x=np.concatenate([d.x for d in datasets]),
+        leader_R=np.concatenate([d.leader_R for d in datasets]),
+        y=np.concatenate([d.y for d in datasets]),
+        flight_id=np.concatenate(fids),
+        t_s=np.concatenate([d.t_s for d in datasets]),
+        y_true_mean=np.concatenate(ytm) if any_true else None,
+        meta=meta,
+    )
+
+
+def save_dataset(path: str | Path, ds: Dataset) -> Path:
+    """Write ``ds`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact."""
+    path = Path(path)
+    if path.suffix != ".npz":
+        path = path.with_name(path.name + ".npz")
+    arrays: dict[str, np.ndarray] = {
+        "format": np.array(DATASET_FORMAT),
+        "version": np.array(DATASET_VERSION),
+        "x": ds.x, "leader_R": ds.leader_R, "y": ds.y, "flight_id": ds.flight_id, "t_s": ds.t_s,
+        "meta": np.array(json.dumps(ds.meta)),
+    }
+    if ds.y_true_mean is not None:
+        arrays["y_true_mean"] = ds.y_true_mean
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _npz_format(path: Path) -> str | None:
+    """The ``format`` string of an npz file, or None (raises DataError if unreadable)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return str(data["format"]) if "format" in data.files else None
+    except FileNotFoundError:
+        raise DataError(f"{path}: file not found") from None
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as err:
+        raise DataError(f"{path}: not a readable .npz file ({err})") from None
+
+
+def load_dataset(path: str | Path) -> Dataset:
+    """Read a dataset file written by :func:`save_dataset`.
+
+    Raises:
+        DataError: missing, corrupt, not a dataset, newer version, or inconsistent contents.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            keys = set(data.files)
+            if "format" not in keys or str(data["format"]) != DATASET_FORMAT:
+                raise DataError(f"{path}: not an aerodock dataset file")
+            version = int(data["version"])
+            if version > DATASET_VERSION:
+                raise DataError(
+                    f"{path}: dataset format version {version} is newer than this aerodock "
+                    f"({DATASET_VERSION}); upgrade aerodock"
+                )
+            missing = [k for k in ("x", "leader_R", "y", "flight_id", "t_s", "meta")
+                       if k not in keys]
+            if missing:
+                raise DataError(f"{path}: dataset lacks {', '.join(missing)}")
+            arrays = {k: data[k] for k in ("x", "leader_R", "y", "flight_id", "t_s")}
+            ytm = data["y_true_mean"] if "y_true_mean" in keys else None
+            meta = json.loads(str(data["meta"]))
+    except FileNotFoundError:
+        raise DataError(f"{path}: file not found") from None
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
+        if isinstance(err, DataError):
+            raise
+        raise DataError(f"{path}: corrupt or unreadable dataset file ({err})") from None
+    for name in ("x", "leader_R", "y", "t_s"):
+        if not np.all(np.isfinite(arrays[name])):
+            raise DataError(f"{path}: {name} contains NaN or infinite values")
+    if not isinstance(meta, dict):
+        raise DataError(f"{path}: dataset metadata is not a JSON object")
+    try:
+        ds = Dataset(**arrays, y_true_mean=ytm, meta=meta)
+    except DataError as err:
+        raise DataError(f"{path}: {str(err).removeprefix('dataset: ')}") from None
+    return ds
+
+
+def load_data_paths(
+    paths: Sequence[str | Path],
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+) -> Dataset:
+    """One Dataset from FlightLog files, dataset files and folders of them.
+
+    Each path is a FlightLog file (``format == "aerodock-flightlog"``), a dataset file
+    (``"aerodock-dataset"``), or a folder, searched recursively for ``*.npz`` files of either
+    kind (hidden files are skipped). All FlightLogs are labelled together (so flights without
+    free-air samples can borrow the others' bias), then joined with the loaded datasets.
+
+    Raises:
+        DataError: a missing path, an empty folder, or a file that is neither kind (one line,
+            naming the file).
+    """
+    if not paths:
+        raise DataError("no data paths given")
+    logs: list[FlightLog] = []
+    datasets: list[Dataset] = []
+    sources: list[str] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            files = sorted(
+                p for p in path.rglob("*.npz")
+                if not any(part.startswith(".") for part in p.relative_to(path).parts)
+            )
+            if not files:
+                raise DataError(f"{path}: folder holds no .npz FlightLog or dataset files")
+        elif path.exists():
+            files = [path]
+        else:
+            raise DataError(f"{path}: no such file or folder")
+        for file in files:
+            fmt = _npz_format(file)
+            if fmt == FLIGHTLOG_FORMAT:
+                try:
+                    logs.extend(load_flightlogs(file))
+                except FlightLogError as err:
+                    raise DataError(str(err)) from None
+            elif fmt == DATASET_FORMAT:
+                datasets.append(load_dataset(file))
+            else:
+                raise DataError(f"{file}: not an aerodock FlightLog or dataset file")
+            sources.append(str(file))
+    if logs:
+        try:
+            datasets.insert(0, build_dataset(
+                logs, free_air_radius_m=free_air_radius_m, lowpass_hz=lowpass_hz
+            ))
+        except (FlightLogError, ValueError) as err:
+            raise DataError(str(err)) from None
+    ds = concat_datasets(datasets)
+    return Dataset(
+        x=ds.x, leader_R=ds.leader_R, y=ds.y, flight_id=ds.flight_id, t_s=ds.t_s,
+        y_true_mean=ds.y_true_mean, meta={**ds.meta, "files": sources},
+    )
+
+
+def _flight_counts(ds: Dataset) -> tuple[np.ndarray, np.ndarray]:
+    ids, counts = np.unique(ds.flight_id, return_counts=True)
+    return ids, counts
+
+
+def flight_split_ids(
+    ds: Dataset, val_fraction: float, rng: np.random.Generator, *, tries: int = 64
+) -> np.ndarray | None:
+    """Flight ids for a validation set holding about ``val_fraction`` of the samples.
+
+    Random flight orders are filled greedily and the subset closest to the target is kept.
+    Returns None when there are fewer than two flights (no flight split is possible).
+    """
+    ids, counts = _flight_counts(ds)
+    if len(ids) < 2:
+        return None
+    target = val_fraction * counts.sum()
+    best: np.ndarray | None = None
+    best_err = np.inf
+    for _ in range(tries):
+        order = rng.permutation(len(ids))
+        chosen, total = [], 0
+        for k in order:
+            if total + counts[k] <= 1.25 * target or not chosen:
+                chosen.append(k)
+                total += counts[k]
+            if total >= target:
+                break
+        if len(chosen) == len(ids):
+            chosen = chosen[:-1]
+            total = counts[chosen].sum()
+        err = abs(total - target)
+        if err < best_err:
+            best, best_err = ids[np.array(chosen)], err
+    return best
+
+
+def split_by_flight(
+    ds: Dataset, val_fraction: float = 0.2, rng: np.random.Generator | None = None
+) -> tuple[Dataset, Dataset]:
+    """Split into (train, held-out) by whole flights, about ``val_fraction`` of the samples held out.
+
+    No flight appears in both parts; each part has at least one flight.
+
+    Raises:
+        DataError: fewer than two flights.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    if not 0.0 < val_fraction < 1.0:
+        raise ValueError(f"val_fraction must be in (0, 1), got {val_fraction}")
+    val_ids = flight_split_ids(ds, val_fraction, rng)
+    if val_ids is None:
+        raise DataError("dataset: splitting by flight needs at least two flights")
+    in_val = np.isin(ds.flight_id, val_ids)
+    return ds.subset(~in_val), ds.subset(in_val)
+
+
+def time_block_split_mask(
+    ds: Dataset, val_fraction: float, rng: np.random.Generator, *, block_s: float = 5.0
+) -> np.ndarray:
+    """Boolean (n,) validation mask of whole contiguous time blocks (within each flight).
+
+    Blocks of ``block_s`` seconds (shortened so that there are at least 10 blocks) are shuffled and
+    taken until ``val_fraction`` of the samples is reached; blocks far longer than the wake's
+    turbulence correlation time keep train and validation samples nearly independent.
+    """
+    span = sum(
+        float(np.ptp(ds.t_s[ds.flight_id == k])) for k in np.unique(ds.flight_id)
+    )
+    block_s = max(min(block_s, span / 10.0), 1e-9)
+    blocks = np.zeros(ds.n, dtype=np.int64)
+    n_blocks = 0
+    for k in np.unique(ds.flight_id):
+        sel = ds.flight_id == k
+        t = ds.t_s[sel]
+        b = np.floor((t - t.min()) / block_s).astype(np.int64)
+        _, b = np.unique(b, return_inverse=True)
+        blocks[sel] = b.reshape(-1) + n_blocks
+        n_blocks += int(b.max()) + 1
+    counts = np.bincount(blocks, minlength=n_blocks)
+    target = val_fraction * ds.n
+    chosen, total = [], 0
+    for k in rng.permutation(n_blocks):
+        if total >= target or len(chosen) == n_blocks - 1:
+            break
+        chosen.append(k)
+        total += counts[k]
+    return np.isin(blocks, chosen)
+
+
+def take_minutes(
+    ds: Dataset, minutes: float, rng: np.random.Generator, *, mode: str = "flights"
+) -> Dataset:
+    """A subset holding ``minutes`` of flight time, as whole flights or contiguous chunks.
+
+    Args:
+        ds: the data.
+        minutes: requested flight time; all of ``ds`` if it holds no more than that.
+        rng: random generator (which flights, where the chunks start).
+        mode: ``"flights"`` (default): whole flights in random order, the last one cut to a
+            contiguous chunk at a random offset to hit the requested time. ``"stratified"``:
+            one contiguous chunk from every flight, each the same fraction of its flight (keeps
+            the mix of separations of the full data, e.g. every curriculum stage).
+
+    Raises:
+        ValueError: ``minutes`` not positive, or unknown mode.
+    """
+    if not minutes > 0:
+        raise ValueError(f"minutes must be positive, got {minutes}")
+    if mode not in ("flights", "stratified"):
+        raise ValueError(f"unknown mode {mode!r} (expected 'flights' or 'stratified')")
+    if minutes >= ds.minutes:
+        return ds
+    ids = np.unique(ds.flight_id)
+    dt = np.array([float(ds.meta["flights"][k].get("dt_s", 0.0)) for k in ids])
+    index_of = {k: np.flatnonzero(ds.flight_id == k) for k in ids}
+    chosen: list[np.ndarray] = []
+
+    def chunk(k: int, n_take: int) -> np.ndarray:
+        idx = index_of[k]
+        idx = idx[np.argsort(ds.t_s[idx], kind="stable")]
+        n_take = max(1, min(n_take, len(idx)))
+        start = int(rng.integers(0, len(idx) - n_take + 1))
+        return idx[start:start + n_take]
+
+    if mode == "stratified":
+        frac = minutes / ds.minutes
+        for k in ids:
+            chosen.append(chunk(k, int(round(frac * len(index_of[k])))))
+    else:
+        remaining_s = minutes * 60.0
+        for j in rng.permutation(len(ids)):
+            k = ids[j]
+            flight_s = len(index_of[k]) * dt[j]
+            if flight_s <= remaining_s:
+                chosen.append(index_of[k])
+                remaining_s -= flight_s
+            else:
+                n_take = int(round(remaining_s / dt[j])) if dt[j] > 0 else len(index_of[k])
+                if n_take > 0:
+                    chosen.append(chunk(k, n_take))
+                remaining_s = 0.0
+            if remaining_s <= 0.0:
+                break
+    return ds.subset(np.sort(np.concatenate(chosen)))

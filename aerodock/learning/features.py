@@ -1,0 +1,258 @@
+"""SO(2)-invariant feature maps (the paper's Eq. ``featuremap``) and their extended variant.
+
+Notation (the paper's): the model input is ``x = [dp, v_A, v_B]`` in R^9 with
+``dp = p_B - p_A`` (follower minus leader, world NED, m), ``v_A`` and ``v_B`` the leader's and the
+follower's velocities (world NED, m/s). ``R_A`` (``leader_R``) maps the leader's body frame to the
+world; its columns ``a1, a2, a3`` are the leader's body x, y, z axes in world coordinates
+(``a3`` points *down* through the rotor disc for a level leader). ``S_A = span{a1, a2}`` is the
+leader's rotor plane. For a world vector ``w``, ``R_A^T w`` are its leader-body coordinates: the
+first two are the coordinates of ``proj_S_A(w)`` in the basis ``(a1, a2)``, the third is
+``[R^A_E w]_3 = a3 . w``, the component along the leader's axis.
+
+Paper feature map ``h: R^9 -> R^6`` (kind ``"so2"``), in this order::
+
+    h = ( cos(angle between proj dp and proj v_B),  |proj dp|,  |proj v_B|,
+          a3 . dp,  a3 . v_B,  |proj v_A| )
+
+and ``phi`` is the angle of ``proj dp`` from ``a1`` in ``S_A``. Writing ``rho = |proj dp|``, the
+model predicts invariant components and rotates the planar part back with ``phi``::
+
+    f = f_r * s(rho) (cos phi a1 + sin phi a2) + f_a a3                         ("so2")
+    f = s(rho) (f_r (cos phi a1 + sin phi a2) + f_t (-sin phi a1 + cos phi a2)) + f_a a3
+                                                                                ("so2-ext")
+
+Degenerate inputs. Two regularisations with small epsilons keep everything finite and smooth and
+make the equivariance exact everywhere, including on the leader's axis:
+
+* ``s(rho) = rho / sqrt(rho^2 + EPS_POS_M^2)``: the radial unit vector is computed as
+  ``proj dp / sqrt(rho^2 + EPS_POS_M^2)``. Away from the axis (``rho >> 1 mm``) it is the unit
+  vector ``(cos phi, sin phi)`` (``s = 0.995`` at 1 cm); on the axis it is 0, so the predicted
+  planar force vanishes there, as it must by symmetry (otherwise it would depend on the arbitrary
+  choice of ``phi`` at ``proj dp = 0``).
+* the cosine is ``proj dp . proj v_B / (sqrt(rho^2 + EPS_POS_M^2) sqrt(|proj v_B|^2 +
+  EPS_VEL_MPS^2))``: equal to the paper's cosine to within 0.5 % once ``rho > 1 cm`` and
+  ``|proj v_B| > 0.1 m/s``, and 0 (no preferred direction) when either projection vanishes.
+  ``EPS_VEL_MPS = 0.01 m/s`` is the motion-capture velocity noise level, below which the
+  direction of ``v_B`` is noise anyway.
+
+``phi`` itself (``phi_rad``) is ``atan2`` of the planar coordinates, defined as 0 on the axis; it
+is reported for analysis; the models use the equivalent soft unit vectors above.
+
+Extended features (kind ``"so2-ext"``, 10 features). The paper's unsigned cosine cannot tell on
+which side of ``proj dp`` the follower's velocity lies, so a model on ``h`` cannot express a
+tangential planar force (e.g. the wake skewing sideways when the follower moves across it). The
+extension replaces the cosine by the signed pair (cos, sin) of the angle from ``proj dp`` to
+``proj v_B`` and adds the leader's velocity relative to ``phi`` (the wake trails behind a moving
+leader)::
+
+    ( cos_B, sin_B, |proj dp|, |proj v_B|, a3 . dp, a3 . v_B,
+      |proj v_A|, cos_A, sin_A, a3 . v_A )
+
+with the same regularisation (``sin_B = (proj dp x proj v_B)_3 / (...)``, and likewise for
+``v_A``). All of them are invariant under rotations about ``a3``.
+
+Kind ``"mlp"`` (the baseline) uses ``x`` itself, in the world frame, with an identity output map.
+
+The implementations below are written once, generically, and run on NumPy arrays (the runtime)
+or torch tensors (training, ONNX export), so the two agree by construction. This module does not
+import torch at module level.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+FEATURE_VERSION = 1
+EPS_POS_M = 1e-3
+EPS_VEL_MPS = 1e-2
+
+KINDS = ("so2", "so2-ext", "mlp", "zero")
+N_FEATURES = {"so2": 6, "so2-ext": 10, "mlp": 9, "zero": 0}
+N_OUTPUTS = {"so2": 2, "so2-ext": 3, "mlp": 3, "zero": 0}
+FEATURE_NAMES: dict[str, tuple[str, ...]] = {
+    "so2": (
+        "cos_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps", "rho_vA_mps",
+    ),
+    "so2-ext": (
+        "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
+        "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
+    ),
+    "mlp": (
+        "dp_n_m", "dp_e_m", "dp_d_m", "vA_n_mps", "vA_e_mps", "vA_d_mps",
+        "vB_n_mps", "vB_e_mps", "vB_d_mps",
+    ),
+    "zero": (),
+}
+OUTPUT_NAMES: dict[str, tuple[str, ...]] = {
+    "so2": ("f_radial_mps2", "f_axial_mps2"),
+    "so2-ext": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2"),
+    "mlp": ("f_n_mps2", "f_e_mps2", "f_d_mps2"),
+    "zero": (),
+}
+# Lower bounds on the standard deviations used to standardise each feature (in the feature's
+# units). A feature that barely varies in the training data (the leader always hovering: |v_A| of
+# a few mm/s) must not be blown up to hundreds of standard deviations when it does vary in use.
+_POS_FLOOR_M, _VEL_FLOOR_MPS, _ANGLE_FLOOR = 0.05, 0.05, 0.1
+SCALE_FLOOR: dict[str, tuple[float, ...]] = {
+    "so2": (_ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M, _VEL_FLOOR_MPS,
+            _VEL_FLOOR_MPS),
+    "so2-ext": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
+                _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
+    "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
+    "zero": (),
+}
+
+
+def check_kind(kind: str) -> str:
+    """Return ``kind`` if it is a known model kind.
+
+    Raises:
+        ValueError: unknown kind.
+    """
+    if kind not in KINDS:
+        raise ValueError(f"unknown model kind {kind!r} (expected one of {', '.join(KINDS)})")
+    return kind
+
+
+def _body(w: Any, rot: Any) -> Any:
+    """Leader-body coordinates ``R^T w`` of world vectors ``w`` (n, 3), for arrays or tensors."""
+    return (rot * w[..., :, None]).sum(-2)
+
+
+def _feature_map_generic(
+    kind: str, x: Any, rot: Any, stack: Callable[..., Any], eps_pos_m: float, eps_vel_mps: float
+) -> tuple[Any, Any]:
+    """Features ``z`` (n, F) and output map ``M`` (n, 3, K) for one array library.
+
+    The world-frame prediction is ``f = M @ c`` where ``c`` (n, K) are the network's outputs.
+    Only arithmetic, ``** 0.5``, slicing, ``sum`` and ``stack`` are used so that NumPy, torch and
+    the ONNX exporter all see the same operations.
+    """
+    dp_b = _body(x[..., 0:3], rot)
+    va_b = _body(x[..., 3:6], rot)
+    vb_b = _body(x[..., 6:9], rot)
+    px, py, pz = dp_b[..., 0], dp_b[..., 1], dp_b[..., 2]
+    ax, ay, az = va_b[..., 0], va_b[..., 1], va_b[..., 2]
+    bx, by, bz = vb_b[..., 0], vb_b[..., 1], vb_b[..., 2]
+    rho2 = px * px + py * py
+    rho = rho2**0.5
+    rho_soft = (rho2 + eps_pos_m * eps_pos_m) ** 0.5
+    ur_x, ur_y = px / rho_soft, py / rho_soft  # soft unit radial vector in (a1, a2) coordinates
+    vb2 = bx * bx + by * by
+    va2 = ax * ax + ay * ay
+    vb_soft = (vb2 + eps_vel_mps * eps_vel_mps) ** 0.5
+    cos_b = (ur_x * bx + ur_y * by) / vb_soft
+    a1, a2, a3 = rot[..., :, 0], rot[..., :, 1], rot[..., :, 2]
+    e_r = a1 * ur_x[..., None] + a2 * ur_y[..., None]  # world, |e_r| = s(rho)
+    if kind == "so2":
+        z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
+        out_map = stack([e_r, a3], -1)
+    elif kind == "so2-ext":
+        va_soft = (va2 + eps_vel_mps * eps_vel_mps) ** 0.5
+        sin_b = (ur_x * by - ur_y * bx) / vb_soft
+        cos_a = (ur_x * ax + ur_y * ay) / va_soft
+        sin_a = (ur_x * ay - ur_y * ax) / va_soft
+        z = stack([cos_b, sin_b, rho, vb2**0.5, pz, bz, va2**0.5, cos_a, sin_a, az], -1)
+        e_t = a2 * ur_x[..., None] - a1 * ur_y[..., None]
+        out_map = stack([e_r, e_t, a3], -1)
+    else:
+        raise ValueError(f"no feature map for model kind {kind!r}")
+    return z, out_map
+
+
+def _check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    x = np.asarray(x, dtype=float)
+    leader_r = np.asarray(leader_r, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 9:
+        raise ValueError(f"x must have shape (n, 9), got {x.shape}")
+    if leader_r.shape != (x.shape[0], 3, 3):
+        raise ValueError(f"leader_R must have shape ({x.shape[0]}, 3, 3), got {leader_r.shape}")
+    return x, leader_r
+
+
+def feature_map(
+    kind: str,
+    x: np.ndarray,
+    leader_R: np.ndarray,
+    *,
+    eps_pos_m: float = EPS_POS_M,
+    eps_vel_mps: float = EPS_VEL_MPS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """NumPy features and output map of a model kind.
+
+    Args:
+        kind: ``"so2"``, ``"so2-ext"`` or ``"mlp"``.
+        x: (n, 9) ``[dp, v_A, v_B]``, world NED.
+        leader_R: (n, 3, 3) leader attitude, body to world.
+        eps_pos_m: radial regularisation (see the module docstring).
+        eps_vel_mps: velocity-direction regularisation.
+
+    Returns:
+        ``(z, M)``: features (n, F) and the output map (n, 3, K) taking the network's K outputs
+        to the world-frame force, ``f = M @ c``. For ``"mlp"``, ``z = x`` and ``M = I``.
+    """
+    x, leader_R = _check_inputs(x, leader_R)
+    if kind == "mlp":
+        return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
+    return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps)
+
+
+def feature_map_torch(
+    kind: str,
+    x: Any,
+    leader_R: Any,
+    *,
+    eps_pos_m: float = EPS_POS_M,
+    eps_vel_mps: float = EPS_VEL_MPS,
+) -> tuple[Any, Any]:
+    """Torch version of :func:`feature_map` (same operations; tensors in, tensors out)."""
+    import torch
+
+    if kind == "mlp":
+        eye = torch.eye(3, dtype=x.dtype, device=x.device)
+        return x, eye.expand(x.shape[0], 3, 3)
+    return _feature_map_generic(kind, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps)
+
+
+def so2_features(
+    x: np.ndarray,
+    leader_R: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's ``h(x)`` (n, 6) and ``phi(x)`` (n,), radians in ``[-pi, pi]``.
+
+    Args:
+        x: (n, 9) ``[dp, v_A, v_B]``, world NED.
+        leader_R: (n, 3, 3) leader attitude, body to world.
+    """
+    z, _ = feature_map("so2", x, leader_R)
+    return z, phi_rad(x, leader_R)
+
+
+def so2_ext_features(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    """The extended invariant features (n, 10) of kind ``"so2-ext"`` (see the module docstring)."""
+    return feature_map("so2-ext", x, leader_R)[0]
+
+
+def phi_rad(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    """Angle (n,) of ``proj dp`` from ``a1`` in the leader's rotor plane; 0 on the leader's axis."""
+    x, leader_R = _check_inputs(x, leader_R)
+    dp_b = _body(x[:, 0:3], leader_R)
+    return np.arctan2(dp_b[:, 1], dp_b[:, 0])
+
+
+def invariant_components(
+    kind: str,
+    x: np.ndarray,
+    leader_R: np.ndarray,
+    y: np.ndarray,
+) -> np.ndarray:
+    """World-frame forces ``y`` (n, 3) expressed in a kind's output components (n, K).
+
+    Uses ``c = M^T y`` (exact for the orthonormal columns of ``M`` away from the leader's axis);
+    used to standardise the network's outputs.
+    """
+    _, out_map = feature_map(kind, x, leader_R)
+    return np.einsum("nik,ni->nk", out_map, np.asarray(y, dtype=float))

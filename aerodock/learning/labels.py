@@ -1,0 +1,211 @@
+"""Training labels: the follower's observed minus commanded acceleration, de-biased.
+
+The paper estimates the downwash force on the follower as ``f_ext = a_obs - u_1:3`` and treats the
+other differences between commanded and observed acceleration (thrust-scale errors, mounting,
+model mismatch) as constant biases that exist with or without the leader's wake (its footnote 2).
+This module removes that bias per flight:
+
+* raw label ``a_obs - u_1:3`` (m/s², NED), optionally low-pass filtered (zero-phase Butterworth,
+  off by default: the network already averages turbulence out, and filtering blurs the wake's edge);
+* *free-air* samples are those where the follower cannot be in the leader's wake: its horizontal
+  distance from the leader exceeds ``free_air_radius_m`` (0.6 m by default, several wake radii at
+  the curriculum's separations) or it is above the leader (``dp_z < 0``, NED);
+* a flight's bias is the per-axis median of its free-air raw labels; a flight with no free-air
+  samples borrows the median over the other flights' free-air samples of the same call; if there
+  are none at all, the bias is 0 and a warning is recorded.
+
+A FlightLog may carry ``extra["label_valid"]`` (T,), truthy where a sample is a valid label (e.g.
+False after the follower has docked and hangs on the cables): invalid samples are excluded from
+the bias estimate and, in :mod:`aerodock.learning.dataset`, from the data set.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerodock.flightlog import FlightLog
+
+FREE_AIR_RADIUS_M = 0.6
+VALID_KEY = "label_valid"
+
+
+class LabelWarning(UserWarning):
+    """A label could not be de-biased as intended (e.g. a flight with no free-air samples)."""
+
+
+@dataclass(frozen=True)
+class BiasEstimate:
+    """Constant bias removed from one flight's labels.
+
+    Attributes:
+        bias_mps2: (3,) bias, NED, m/s².
+        source: ``"own"`` (this flight's free-air samples), ``"pooled"`` (other flights'),
+            ``"given"`` (passed in) or ``"none"`` (no free-air samples anywhere: 0).
+        n_free_air: number of this flight's free-air samples.
+    """
+
+    bias_mps2: np.ndarray
+    source: str
+    n_free_air: int
+
+
+def valid_mask(log: FlightLog) -> np.ndarray:
+    """Boolean (T,) mask of samples usable as labels (``extra["label_valid"]``, else all)."""
+    if VALID_KEY not in log.extra:
+        return np.ones(log.n_samples, dtype=bool)
+    mask = np.asarray(log.extra[VALID_KEY])
+    if mask.shape != (log.n_samples,):
+        raise ValueError(f"{log.name}: extra {VALID_KEY!r} must have shape ({log.n_samples},)")
+    return mask.astype(bool)
+
+
+def free_air_mask(log: FlightLog, free_air_radius_m: float = FREE_AIR_RADIUS_M) -> np.ndarray:
+    """Boolean (T,) mask of samples where the follower is out of the leader's wake.
+
+    Out of the wake: horizontal distance (world north-east plane) greater than
+    ``free_air_radius_m``, or the follower above the leader (``dp_z < 0`` in NED).
+    Samples marked invalid (``extra["label_valid"]``) are never free-air samples.
+    """
+    dp = log.follower_pos_m - log.leader_pos_m
+    horizontal = np.hypot(dp[:, 0], dp[:, 1])
+    return ((horizontal > free_air_radius_m) | (dp[:, 2] < 0.0)) & valid_mask(log)
+
+
+def raw_labels(
+    log: FlightLog, *, lowpass_hz: float | None = None, lowpass_order: int = 2
+) -> np.ndarray:
+    """``a_obs - u_1:3`` (T, 3), m/s², NED, optionally low-pass filtered.
+
+    Args:
+        log: the flight.
+        lowpass_hz: cut-off of a zero-phase Butterworth filter; ``None`` (default) for none.
+        lowpass_order: filter order.
+
+    Raises:
+        ValueError: a cut-off at or above the Nyquist frequency, or not positive.
+    """
+    diff = log.follower_obs_accel_mps2 - log.follower_cmd_accel_mps2
+    if lowpass_hz is None:
+        return diff
+    return lowpass(diff, log.t_s, lowpass_hz, order=lowpass_order, where=log.name)
+
+
+def lowpass(
+    signal: np.ndarray, t_s: np.ndarray, cutoff_hz: float, *, order: int = 2, where: str = "signal"
+) -> np.ndarray:
+    """Zero-phase Butterworth low-pass of ``signal`` (T, k) sampled at times ``t_s`` (T,).
+
+    The sample rate is taken from the median time step. Too-short signals are returned unfiltered
+    with a :class:`LabelWarning`.
+    """
+    from scipy.signal import butter, sosfiltfilt
+
+    if not cutoff_hz > 0:
+        raise ValueError(f"{where}: low-pass cut-off must be positive, got {cutoff_hz}")
+    if len(t_s) < 2:
+        return signal.copy()
+    fs = 1.0 / float(np.median(np.diff(t_s)))
+    if cutoff_hz >= fs / 2:
+        raise ValueError(
+            f"{where}: low-pass cut-off {cutoff_hz} Hz is not below the Nyquist frequency "
+            f"{fs / 2:.4g} Hz"
+        )
+    sos = butter(order, cutoff_hz, btype="low", fs=fs, output="sos")
+    padlen = 3 * (2 * len(sos) + 1)
+    if len(t_s) <= padlen:
+        warnings.warn(f"{where}: too short to low-pass filter; left unfiltered", LabelWarning,
+                      stacklevel=2)
+        return signal.copy()
+    return sosfiltfilt(sos, signal, axis=0)
+
+
+def estimate_biases(
+    logs: list[FlightLog],
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+    raw: list[np.ndarray] | None = None,
+) -> tuple[list[BiasEstimate], list[str]]:
+    """Per-flight constant biases and the warnings their estimation raised.
+
+    Args:
+        logs: flights (estimated together so that a flight without free-air samples can borrow
+            the others').
+        free_air_radius_m: see :func:`free_air_mask`.
+        lowpass_hz: low-pass cut-off applied to the raw labels first (see :func:`raw_labels`).
+        raw: precomputed raw labels, one (T, 3) array per log.
+
+    Returns:
+        ``(biases, warnings)``: one :class:`BiasEstimate` per log, and human-readable warnings.
+    """
+    if raw is None:
+        raw = [raw_labels(log, lowpass_hz=lowpass_hz) for log in logs]
+    masks = [free_air_mask(log, free_air_radius_m) for log in logs]
+    notes: list[str] = []
+    out: list[BiasEstimate] = []
+    for i, (log, lab, mask) in enumerate(zip(logs, raw, masks, strict=True)):
+        n_free = int(mask.sum())
+        if n_free:
+            out.append(BiasEstimate(np.median(lab[mask], axis=0), "own", n_free))
+            continue
+        others = [r[m] for j, (r, m) in enumerate(zip(raw, masks, strict=True)) if j != i]
+        pooled = np.concatenate(others) if others else np.zeros((0, 3))
+        if len(pooled):
+            out.append(BiasEstimate(np.median(pooled, axis=0), "pooled", 0))
+            notes.append(
+                f"{log.name}: no free-air samples (horizontal distance > {free_air_radius_m} m or "
+                "above the leader); used the median of the other flights' free-air samples"
+            )
+        else:
+            out.append(BiasEstimate(np.zeros(3), "none", 0))
+            notes.append(
+                f"{log.name}: no free-air samples in this or any other flight; labels not "
+                "de-biased (bias 0)"
+            )
+    return out, notes
+
+
+def labels_from_logs(
+    logs: list[FlightLog],
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
+    """De-biased labels for several flights at once (biases pooled as described above).
+
+    Returns:
+        ``(labels, biases, warnings)``: one (T_i, 3) array and one :class:`BiasEstimate` per
+        log, and human-readable warnings (also what :func:`build_dataset` records).
+    """
+    raw = [raw_labels(log, lowpass_hz=lowpass_hz) for log in logs]
+    biases, notes = estimate_biases(logs, free_air_radius_m=free_air_radius_m, raw=raw)
+    return [r - b.bias_mps2 for r, b in zip(raw, biases, strict=True)], biases, notes
+
+
+def labels_from_log(
+    log: FlightLog,
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+    bias_mps2: np.ndarray | None = None,
+) -> np.ndarray:
+    """De-biased labels ``a_obs - u_1:3 - bias`` (T, 3), m/s², NED, for one flight.
+
+    Args:
+        log: the flight.
+        free_air_radius_m: see :func:`free_air_mask`.
+        lowpass_hz: optional low-pass cut-off (see :func:`raw_labels`); off by default.
+        bias_mps2: (3,) bias to remove; by default the median of the flight's free-air labels.
+            With no free-air samples the bias is 0 and a :class:`LabelWarning` is issued (use
+            :func:`labels_from_logs` to borrow other flights' free-air samples instead).
+    """
+    raw = raw_labels(log, lowpass_hz=lowpass_hz)
+    if bias_mps2 is not None:
+        return raw - np.asarray(bias_mps2, dtype=float).reshape(3)
+    (bias,), notes = estimate_biases([log], free_air_radius_m=free_air_radius_m, raw=[raw])
+    for note in notes:
+        warnings.warn(note, LabelWarning, stacklevel=2)
+    return raw - bias.bias_mps2

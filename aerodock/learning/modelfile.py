@@ -1,0 +1,328 @@
+"""Model files: a directory with ``weights.npz`` (plain float arrays) and ``model.json``.
+
+Safe by construction: weights are read with ``np.load(allow_pickle=False)`` and metadata with
+``json``; nothing is ever unpickled, so a model file from an untrusted source cannot run code.
+NumPy-only (the runtime uses it without PyTorch).
+
+``model.json`` holds: ``format`` (``"aerodock-model"``), ``version``, ``kind`` (``so2``,
+``so2-ext``, ``mlp``, ``zero``), ``feature_version``, ``units`` (``"m/s^2 NED"``), the feature
+regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``, ``activation``,
+``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features, ``out_mean``/
+``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names), ``training`` (data
+summary, seed, epochs, validation loss, training time, ...) and ``aerodock_version``.
+
+``weights.npz`` holds ``W0, b0, W1, b1, ...``: ``W{i}`` has shape ``(layer_sizes[i+1],
+layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``. The network
+computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_std + out_mean``.
+
+Both files are replaced atomically (temp file + ``os.replace``), weights first; the SHA-256 in
+``model.json`` detects a weights file that does not belong to it.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import io
+import json
+import os
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.learning.features import (
+    EPS_POS_M,
+    EPS_VEL_MPS,
+    FEATURE_NAMES,
+    FEATURE_VERSION,
+    KINDS,
+    N_FEATURES,
+    N_OUTPUTS,
+    OUTPUT_NAMES,
+)
+
+MODEL_FORMAT = "aerodock-model"
+MODEL_VERSION = 1
+MODEL_JSON = "model.json"
+WEIGHTS_NPZ = "weights.npz"
+ACTIVATIONS = ("tanh", "silu")
+UNITS = "m/s^2 NED"
+
+
+class ModelFileError(ValueError):
+    """A model directory is missing, corrupt or does not match this aerodock; one-line message."""
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """Everything needed to rebuild a model's computation (besides the weights).
+
+    Attributes:
+        kind: ``"so2"``, ``"so2-ext"``, ``"mlp"`` or ``"zero"``.
+        layer_sizes: ``(F, hidden..., K)``; empty for ``"zero"``.
+        activation: hidden-layer activation, ``"tanh"`` or ``"silu"``.
+        in_mean: (F,) feature means.
+        in_std: (F,) feature scales.
+        out_mean: (K,) output offsets.
+        out_std: (K,) output scales.
+        spectral_norm: whether training used spectral normalisation (weights are stored
+            already normalised).
+        eps_pos_m: feature regularisation (see :mod:`aerodock.learning.features`).
+        eps_vel_mps: feature regularisation.
+        feature_version: version of the feature definitions.
+    """
+
+    kind: str
+    layer_sizes: tuple[int, ...] = ()
+    activation: str = "tanh"
+    in_mean: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    in_std: np.ndarray = field(default_factory=lambda: np.ones(0))
+    out_mean: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    out_std: np.ndarray = field(default_factory=lambda: np.ones(0))
+    spectral_norm: bool = False
+    eps_pos_m: float = EPS_POS_M
+    eps_vel_mps: float = EPS_VEL_MPS
+    feature_version: int = FEATURE_VERSION
+
+    def weight_shapes(self) -> list[tuple[tuple[int, int], tuple[int]]]:
+        """Expected ``(W shape, b shape)`` per layer."""
+        s = self.layer_sizes
+        return [((s[i + 1], s[i]), (s[i + 1],)) for i in range(len(s) - 1)]
+
+
+def _atomic_write_bytes(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _aerodock_version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("aerodock")
+    except Exception:  # not installed: running from a source tree
+        return "unknown"
+
+
+def _f32_list(a: np.ndarray) -> list[float]:
+    """Values rounded to float32 (what the torch model uses) as exact JSON floats."""
+    return [float(v) for v in np.asarray(a, dtype=np.float32)]
+
+
+def save_model_dir(
+    path: str | Path,
+    spec: ModelSpec,
+    weights: list[tuple[np.ndarray, np.ndarray]],
+    *,
+    training: dict[str, Any] | None = None,
+) -> Path:
+    """Write a model directory (created if needed); returns its path.
+
+    Args:
+        path: the directory.
+        spec: the model's spec.
+        weights: ``[(W0, b0), (W1, b1), ...]`` in torch's ``Linear`` layout.
+        training: JSON-ready training summary recorded in ``model.json``.
+
+    Raises:
+        ValueError: weights that do not match ``spec``.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{path}: exists and is not a directory")
+    expected = spec.weight_shapes()
+    if len(weights) != len(expected) or any(
+        np.shape(w) != ws or np.shape(b) != bs for (w, b), (ws, bs) in zip(weights, expected)
+    ):
+        raise ValueError(f"weights do not match layer sizes {list(spec.layer_sizes)}")
+    path.mkdir(parents=True, exist_ok=True)
+    doc: dict[str, Any] = {
+        "format": MODEL_FORMAT,
+        "version": MODEL_VERSION,
+        "kind": spec.kind,
+        "feature_version": spec.feature_version,
+        "units": UNITS,
+        "input": "x (n, 9) = [dp = p_follower - p_leader, v_leader, v_follower] (m, m/s, NED); "
+                 "leader_R (n, 3, 3) leader attitude, body to world",
+        "output": "f_ext (n, 3): predicted downwash acceleration on the follower, m/s^2, NED",
+        "features": {
+            "names": list(FEATURE_NAMES[spec.kind]),
+            "eps_pos_m": spec.eps_pos_m,
+            "eps_vel_mps": spec.eps_vel_mps,
+        },
+        "outputs": list(OUTPUT_NAMES[spec.kind]),
+        "layer_sizes": [int(s) for s in spec.layer_sizes],
+        "activation": spec.activation,
+        "spectral_norm": bool(spec.spectral_norm),
+        "normalisation": {
+            "in_mean": _f32_list(spec.in_mean), "in_std": _f32_list(spec.in_std),
+            "out_mean": _f32_list(spec.out_mean), "out_std": _f32_list(spec.out_std),
+        },
+        "training": training or {},
+        "aerodock_version": _aerodock_version(),
+        "created_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+    }
+    if expected:
+        arrays = {}
+        for i, (w, b) in enumerate(weights):
+            arrays[f"W{i}"] = np.asarray(w, dtype=np.float32)
+            arrays[f"b{i}"] = np.asarray(b, dtype=np.float32)
+        buf = io.BytesIO()
+        np.savez(buf, **arrays)
+        blob = buf.getvalue()
+        doc["weights"] = {
+            "file": WEIGHTS_NPZ, "sha256": hashlib.sha256(blob).hexdigest(),
+            "arrays": sorted(arrays), "dtype": "float32",
+        }
+        _atomic_write_bytes(path / WEIGHTS_NPZ, blob)
+    else:
+        doc["weights"] = None
+    _atomic_write_bytes(path / MODEL_JSON, (json.dumps(doc, indent=2) + "\n").encode())
+    return path
+
+
+def _floats(doc: dict, key: str, n: int, where: Path) -> np.ndarray:
+    try:
+        arr = np.asarray(doc[key], dtype=float)
+    except (KeyError, TypeError, ValueError):
+        raise ModelFileError(f"{where}: normalisation.{key} missing or not numbers") from None
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)):
+        raise ModelFileError(f"{where}: normalisation.{key} must be {n} finite numbers")
+    return arr
+
+
+def load_model_dir(
+    path: str | Path,
+) -> tuple[ModelSpec, list[tuple[np.ndarray, np.ndarray]], dict[str, Any]]:
+    """Read and check a model directory.
+
+    Returns:
+        ``(spec, weights, doc)``: the spec, ``[(W, b), ...]`` as float64 arrays, and the whole
+        ``model.json`` document.
+
+    Raises:
+        ModelFileError: one line naming the file: missing, corrupt, wrong format or version,
+            unknown kind or activation, feature version mismatch, shapes that do not match,
+            non-finite values, or a weights file that does not belong to ``model.json``.
+    """
+    path = Path(path)
+    if path.is_file() and path.name == MODEL_JSON:
+        path = path.parent
+    jpath = path / MODEL_JSON
+    if not path.is_dir():
+        raise ModelFileError(f"{path}: model directory not found")
+    if not jpath.is_file():
+        raise ModelFileError(f"{jpath}: not found (not an aerodock model directory)")
+    try:
+        doc = json.loads(jpath.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ModelFileError(f"{jpath}: corrupt model.json ({err})") from None
+    if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT:
+        raise ModelFileError(f"{jpath}: not an aerodock model file")
+    version = doc.get("version")
+    if not isinstance(version, int) or version < 1:
+        raise ModelFileError(f"{jpath}: bad version {version!r}")
+    if version > MODEL_VERSION:
+        raise ModelFileError(
+            f"{jpath}: model format version {version} is newer than this aerodock "
+            f"({MODEL_VERSION}); upgrade aerodock"
+        )
+    kind = doc.get("kind")
+    if kind not in KINDS:
+        raise ModelFileError(f"{jpath}: unknown model kind {kind!r}")
+    if doc.get("feature_version") != FEATURE_VERSION:
+        raise ModelFileError(
+            f"{jpath}: feature version {doc.get('feature_version')!r} does not match this "
+            f"aerodock ({FEATURE_VERSION})"
+        )
+    if doc.get("units") != UNITS:
+        raise ModelFileError(f"{jpath}: units {doc.get('units')!r}, expected {UNITS!r}")
+    if kind == "zero":
+        return ModelSpec(kind="zero"), [], doc
+    sizes = doc.get("layer_sizes")
+    if (not isinstance(sizes, list) or len(sizes) < 2
+            or not all(isinstance(s, int) and s > 0 for s in sizes)):
+        raise ModelFileError(f"{jpath}: layer_sizes must be a list of positive integers")
+    if sizes[0] != N_FEATURES[kind] or sizes[-1] != N_OUTPUTS[kind]:
+        raise ModelFileError(
+            f"{jpath}: layer_sizes {sizes} do not fit kind {kind!r} "
+            f"({N_FEATURES[kind]} features, {N_OUTPUTS[kind]} outputs)"
+        )
+    activation = doc.get("activation")
+    if activation not in ACTIVATIONS:
+        raise ModelFileError(f"{jpath}: unknown activation {activation!r}")
+    norm = doc.get("normalisation")
+    if not isinstance(norm, dict):
+        raise ModelFileError(f"{jpath}: normalisation missing")
+    feats = doc.get("features") or {}
+    try:
+        eps_pos = float(feats.get("eps_pos_m", EPS_POS_M))
+        eps_vel = float(feats.get("eps_vel_mps", EPS_VEL_MPS))
+    except (TypeError, ValueError, AttributeError):
+        raise ModelFileError(f"{jpath}: features.eps_* must be numbers") from None
+    if not (eps_pos > 0 and eps_vel > 0 and np.isfinite(eps_pos) and np.isfinite(eps_vel)):
+        raise ModelFileError(f"{jpath}: features.eps_* must be positive")
+    spec = ModelSpec(
+        kind=kind, layer_sizes=tuple(sizes), activation=activation,
+        in_mean=_floats(norm, "in_mean", sizes[0], jpath),
+        in_std=_floats(norm, "in_std", sizes[0], jpath),
+        out_mean=_floats(norm, "out_mean", sizes[-1], jpath),
+        out_std=_floats(norm, "out_std", sizes[-1], jpath),
+        spectral_norm=bool(doc.get("spectral_norm", False)),
+        eps_pos_m=eps_pos, eps_vel_mps=eps_vel,
+    )
+    if np.any(spec.in_std <= 0):
+        raise ModelFileError(f"{jpath}: normalisation.in_std must be positive")
+    return spec, _load_weights(path, spec, doc), doc
+
+
+def _load_weights(
+    path: Path, spec: ModelSpec, doc: dict[str, Any]
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    wpath = path / WEIGHTS_NPZ
+    winfo = doc.get("weights")
+    if not isinstance(winfo, dict):
+        raise ModelFileError(f"{path / MODEL_JSON}: weights entry missing")
+    try:
+        blob = wpath.read_bytes()
+    except FileNotFoundError:
+        raise ModelFileError(f"{wpath}: not found") from None
+    except OSError as err:
+        raise ModelFileError(f"{wpath}: unreadable ({err})") from None
+    sha = winfo.get("sha256")
+    if sha is not None and hashlib.sha256(blob).hexdigest() != sha:
+        raise ModelFileError(
+            f"{wpath}: does not match {MODEL_JSON} (SHA-256 differs): corrupt or mixed up"
+        )
+    weights = []
+    try:
+        with np.load(io.BytesIO(blob), allow_pickle=False) as data:
+            for i, (wshape, bshape) in enumerate(spec.weight_shapes()):
+                for name, shape in ((f"W{i}", wshape), (f"b{i}", bshape)):
+                    if name not in data.files:
+                        raise ModelFileError(f"{wpath}: array {name} missing")
+                    arr = data[name]
+                    if arr.shape != shape:
+                        raise ModelFileError(
+                            f"{wpath}: {name} has shape {arr.shape}, expected {shape}"
+                        )
+                    if arr.dtype.kind != "f" or not np.all(np.isfinite(arr)):
+                        raise ModelFileError(f"{wpath}: {name} must hold finite floats")
+                weights.append(
+                    (data[f"W{i}"].astype(np.float64), data[f"b{i}"].astype(np.float64))
+                )
+    except ModelFileError:
+        raise
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
+        raise ModelFileError(f"{wpath}: corrupt weights file ({err})") from None
+    return weights

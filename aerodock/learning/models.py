@@ -1,0 +1,242 @@
+"""PyTorch downwash models: the paper's SO(2) model, its extension, a plain MLP, and zero.
+
+All models map ``x = [dp, v_A, v_B]`` (n, 9) and the leader's attitude ``leader_R`` (n, 3, 3) to
+the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A model is::
+
+    z, M = features(x, leader_R)                        # aerodock.learning.features
+    c = MLP((z - in_mean) / in_std) * out_std + out_mean   # K invariant components
+    f = M @ c                                           # back to the world frame
+
+* :class:`SO2Model` (kind ``"so2"``, the paper): ``z = h(x)`` (6 features), ``c = (f_radial,
+  f_axial)``, ``f = f_radial e_r + f_axial a3``, ``e_r`` the direction of ``proj dp`` (angle
+  ``phi`` in the rotor plane). With the paper's unsigned cosine a tangential component has no
+  well-defined sign, so the paper model has none.
+* :class:`SO2ExtModel` (``"so2-ext"``): 10 signed invariant features, ``c = (f_radial,
+  f_tangential, f_axial)``, ``f = f_radial e_r + f_tangential e_t + f_axial a3``.
+* :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame.
+* :class:`ZeroModel` (``"zero"``): always 0.
+
+Network: fully connected, two hidden layers of 64 by default, **tanh** activations. tanh is smooth
+(so is the learnt force, which the LQR feed-forward differentiates through the closed loop) and
+bounded: far outside the training data the prediction saturates instead of growing linearly, a
+safety property for a model running inside a controller. Optional spectral normalisation of every
+layer bounds the network's Lipschitz constant (in standardised units), as in Neural-Lander style
+learnt-residual controllers. Input standardisation and output scaling are buffers of the module
+and are saved with it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import torch
+from torch import nn
+
+from aerodock.learning.features import (
+    EPS_POS_M,
+    EPS_VEL_MPS,
+    N_FEATURES,
+    N_OUTPUTS,
+    SCALE_FLOOR,
+    check_kind,
+    feature_map_torch,
+)
+from aerodock.learning.modelfile import ModelSpec, load_model_dir
+
+DEFAULT_HIDDEN = (64, 64)
+DEFAULT_ACTIVATION = "tanh"
+
+
+def _activation(name: str) -> nn.Module:
+    if name == "tanh":
+        return nn.Tanh()
+    if name == "silu":
+        return nn.SiLU()
+    raise ValueError(f"unknown activation {name!r} (expected 'tanh' or 'silu')")
+
+
+class DownwashModel(nn.Module):
+    """Base class: features, standardised MLP, output map (see the module docstring)."""
+
+    kind = ""
+
+    def __init__(
+        self,
+        hidden: Sequence[int] = DEFAULT_HIDDEN,
+        *,
+        activation: str = DEFAULT_ACTIVATION,
+        spectral_norm: bool = False,
+        eps_pos_m: float = EPS_POS_M,
+        eps_vel_mps: float = EPS_VEL_MPS,
+    ) -> None:
+        """Build an untrained (randomly initialised) model.
+
+        Args:
+            hidden: hidden layer widths.
+            activation: ``"tanh"`` (default) or ``"silu"``.
+            spectral_norm: spectrally normalise every linear layer while training.
+            eps_pos_m: feature regularisation (see :mod:`aerodock.learning.features`).
+            eps_vel_mps: feature regularisation.
+        """
+        super().__init__()
+        n_in, n_out = N_FEATURES[self.kind], N_OUTPUTS[self.kind]
+        self.layer_sizes = (n_in, *[int(h) for h in hidden], n_out)
+        self.activation = activation
+        self.spectral_norm = spectral_norm
+        self.eps_pos_m = eps_pos_m
+        self.eps_vel_mps = eps_vel_mps
+        self.act = _activation(activation)
+        linears = []
+        for a, b in zip(self.layer_sizes[:-1], self.layer_sizes[1:]):
+            lin = nn.Linear(a, b)
+            if spectral_norm:
+                lin = nn.utils.parametrizations.spectral_norm(lin)
+            linears.append(lin)
+        self.linears = nn.ModuleList(linears)
+        self.register_buffer("in_mean", torch.zeros(n_in))
+        self.register_buffer("in_std", torch.ones(n_in))
+        self.register_buffer("out_mean", torch.zeros(n_out))
+        self.register_buffer("out_std", torch.ones(n_out))
+
+    def features(self, x: torch.Tensor, leader_R: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Features ``z`` (n, F) and output map ``M`` (n, 3, K)."""
+        return feature_map_torch(
+            self.kind, x, leader_R, eps_pos_m=self.eps_pos_m, eps_vel_mps=self.eps_vel_mps
+        )
+
+    def components(self, z: torch.Tensor) -> torch.Tensor:
+        """Network outputs ``c`` (n, K) for raw features ``z`` (n, F)."""
+        h = (z - self.in_mean) / self.in_std
+        for lin in self.linears[:-1]:
+            h = self.act(lin(h))
+        return self.linears[-1](h) * self.out_std + self.out_mean
+
+    def head(self, z: torch.Tensor, out_map: torch.Tensor) -> torch.Tensor:
+        """World-frame prediction (n, 3) from precomputed features and output map."""
+        return (out_map * self.components(z)[:, None, :]).sum(-1)
+
+    def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
+        """Predicted downwash acceleration (n, 3), m/s², NED."""
+        return self.head(*self.features(x, leader_R))
+
+    @torch.no_grad()
+    def set_normalisation(self, z: np.ndarray, c: np.ndarray) -> None:
+        """Standardisation statistics from training features ``z`` (n, F) and targets ``c`` (n, K).
+
+        Feature scales are floored (``features.SCALE_FLOOR``) so that a feature that hardly
+        varies in training is not magnified when it does vary in use.
+        """
+        z = np.asarray(z, dtype=float)
+        c = np.asarray(c, dtype=float)
+        in_std = np.maximum(z.std(axis=0), np.asarray(SCALE_FLOOR[self.kind]))
+        out_std = np.maximum(c.std(axis=0), 1e-3)
+        for name, val in (("in_mean", z.mean(axis=0)), ("in_std", in_std),
+                          ("out_mean", c.mean(axis=0)), ("out_std", out_std)):
+            buf = getattr(self, name)
+            buf.copy_(torch.as_tensor(val.astype(np.float32), dtype=buf.dtype))
+
+    def spec(self) -> ModelSpec:
+        """The :class:`ModelSpec` describing this model (for saving)."""
+        return ModelSpec(
+            kind=self.kind, layer_sizes=self.layer_sizes, activation=self.activation,
+            in_mean=self.in_mean.detach().cpu().double().numpy(),
+            in_std=self.in_std.detach().cpu().double().numpy(),
+            out_mean=self.out_mean.detach().cpu().double().numpy(),
+            out_std=self.out_std.detach().cpu().double().numpy(),
+            spectral_norm=self.spectral_norm, eps_pos_m=self.eps_pos_m,
+            eps_vel_mps=self.eps_vel_mps,
+        )
+
+    @torch.no_grad()
+    def weights(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Effective ``[(W, b), ...]`` as float64 arrays (spectral normalisation applied).
+
+        Call in eval mode: spectral normalisation then uses its stored singular vectors without
+        a power-iteration step, so the weights are exactly those the model computes with.
+        """
+        return [(lin.weight.detach().cpu().double().numpy().copy(),
+                 lin.bias.detach().cpu().double().numpy().copy()) for lin in self.linears]
+
+
+class SO2Model(DownwashModel):
+    """The paper's model: MLP on ``h(x)`` predicting ``(f_radial, f_axial)``."""
+
+    kind = "so2"
+
+
+class SO2ExtModel(DownwashModel):
+    """Extended SO(2) model: signed features, predicts ``(f_radial, f_tangential, f_axial)``."""
+
+    kind = "so2-ext"
+
+
+class MLPModel(DownwashModel):
+    """Baseline: plain MLP on ``x`` (world frame) predicting the world-frame force."""
+
+    kind = "mlp"
+
+
+class ZeroModel(nn.Module):
+    """The zero model (no downwash compensation)."""
+
+    kind = "zero"
+
+    def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
+        """Zeros (n, 3)."""
+        return torch.zeros(x.shape[0], 3, dtype=x.dtype, device=x.device)
+
+    def spec(self) -> ModelSpec:
+        """The zero model's spec."""
+        return ModelSpec(kind="zero")
+
+    def weights(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """No weights."""
+        return []
+
+
+MODEL_CLASSES: dict[str, type[nn.Module]] = {
+    "so2": SO2Model, "so2-ext": SO2ExtModel, "mlp": MLPModel, "zero": ZeroModel,
+}
+
+
+def build_model(
+    kind: str,
+    *,
+    hidden: Sequence[int] = DEFAULT_HIDDEN,
+    activation: str = DEFAULT_ACTIVATION,
+    spectral_norm: bool = False,
+) -> nn.Module:
+    """An untrained model of ``kind`` (initialised from torch's global RNG)."""
+    check_kind(kind)
+    if kind == "zero":
+        return ZeroModel()
+    return MODEL_CLASSES[kind](hidden, activation=activation, spectral_norm=spectral_norm)
+
+
+def model_from_spec(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]) -> nn.Module:
+    """A torch model (float32, eval mode, no spectral-norm parametrisation) with given weights."""
+    if spec.kind == "zero":
+        return ZeroModel().eval()
+    model = MODEL_CLASSES[spec.kind](
+        spec.layer_sizes[1:-1], activation=spec.activation, spectral_norm=False,
+        eps_pos_m=spec.eps_pos_m, eps_vel_mps=spec.eps_vel_mps,
+    )
+    model.spectral_norm = spec.spectral_norm
+    with torch.no_grad():
+        for lin, (w, b) in zip(model.linears, weights, strict=True):
+            lin.weight.copy_(torch.as_tensor(w))
+            lin.bias.copy_(torch.as_tensor(b))
+        for name in ("in_mean", "in_std", "out_mean", "out_std"):
+            getattr(model, name).copy_(torch.as_tensor(getattr(spec, name)))
+    return model.eval()
+
+
+def load_torch_model(path: str) -> nn.Module:
+    """A model directory as a torch module (float32, eval mode).
+
+    Raises:
+        ModelFileError: missing, corrupt or mismatched model files.
+    """
+    spec, weights, _ = load_model_dir(path)
+    return model_from_spec(spec, weights)

@@ -1,0 +1,447 @@
+"""The docking mission: a per-trial state machine flown by N trials at once.
+
+Phases (``Phase``): ``APPROACH`` (minimum-jerk to the predicted docking point at the horizon,
+re-planned when the prediction moves) -> ``TERMINAL`` (stiffer gains, triggers armed) -> the gate
+resolves: ``CAPTURED`` (post-dock: the follower cuts thrust to a fraction and the leader carries
+it) or ``MISSED`` -> back off; ``ABORT`` (timeout, leader state lost for longer than
+``leader_lost_s``, or a tracking error that brings the follower's top towards the leader) ->
+back off below and away; then ``DONE``. The reference never brings the follower's top closer to
+the leader than ``clearance_m``.
+
+:func:`run_campaign` flies one campaign (N trials, one seed) and returns per-trial outcomes,
+summary statistics, optional traces for figures and optional FlightLogs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+from typing import Any
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.control.compensation import (
+    AccelPredictor,
+    Compensation,
+    OraclePredictor,
+)
+from aerodock.control.controller import PositionController, Reference
+from aerodock.downwash import BodyState, build_field
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import rotmat_to_quat
+from aerodock.gripper import GateState
+from aerodock.planning.docking import DockGeometry, docking_point_m
+from aerodock.planning.minjerk import MinJerk, minjerk
+from aerodock.sim import Observation, World
+
+
+class Phase(IntEnum):
+    """Per-trial mission phase."""
+
+    APPROACH = 0
+    TERMINAL = 1
+    CAPTURED = 2
+    MISSED = 3
+    ABORT = 4
+    DONE = 5
+
+
+class AbortReason(IntEnum):
+    """Why a trial aborted (0: it did not)."""
+
+    NONE = 0
+    TIMEOUT = 1
+    LEADER_LOST = 2
+    UNSAFE_TRACKING = 3
+
+
+@dataclass(frozen=True)
+class MissionSpec:
+    """One campaign's set-up."""
+
+    trials: int = 50
+    offset_m: float | None = None  # cable length d_p (None: config's platform.cable_length_m)
+    leader_speed_mps: float = 0.0
+    leader_fixed: bool = False
+    compensation: Compensation = Compensation.OBSERVER
+    seed: int = 0
+    start_azimuths_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
+    leader_dropout_s: tuple[float, float] | None = None  # (start, duration): fault injection
+    passive_trigger: bool = True
+    active_trigger: bool = True
+
+
+@dataclass
+class CampaignResult:
+    """Outcomes of one campaign: per-trial arrays, a summary, and optional traces / logs."""
+
+    spec: MissionSpec
+    success: np.ndarray
+    slipped: np.ndarray
+    missed: np.ndarray
+    aborted: np.ndarray
+    abort_reason: np.ndarray
+    clearance_violation: np.ndarray
+    min_clearance_m: np.ndarray
+    capture_time_s: np.ndarray
+    err_down_m: np.ndarray  # mean |vertical tracking error| over the terminal window
+    err_3d_m: np.ndarray
+    err_down_int_ms: np.ndarray  # integral of |vertical error| over the final 0.5 s (paper's table)
+    err_3d_int_ms: np.ndarray
+    ff_down_int_mps: np.ndarray  # integral of the predicted vertical force over the final 0.5 s
+    arrival_s: float
+    trace: dict[str, np.ndarray] = field(default_factory=dict)
+    logs: list[FlightLog] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        """Success rate with a Wilson 95 % interval and error statistics (JSON-ready)."""
+        n = int(self.success.size)
+        k = int(self.success.sum())
+        lo, hi = wilson_interval(k, n)
+        return {
+            "trials": n,
+            "docked": k,
+            "success_rate": k / n,
+            "success_wilson95": [lo, hi],
+            "slip_throughs": int(self.slipped.sum()),
+            "missed": int(self.missed.sum()),
+            "aborts": int(self.aborted.sum()),
+            "abort_reasons": {r.name.lower(): int((self.abort_reason == r).sum())
+                              for r in AbortReason if r != AbortReason.NONE},
+            "clearance_violations": int(self.clearance_violation.sum()),
+            "min_clearance_m": float(np.min(self.min_clearance_m)),
+            "terminal_err_down_median_m": float(np.median(self.err_down_m)),
+            "terminal_err_down_mean_m": float(np.mean(self.err_down_m)),
+            "terminal_err_3d_median_m": float(np.median(self.err_3d_m)),
+            "terminal_err_3d_mean_m": float(np.mean(self.err_3d_m)),
+            "err_down_int_0p5s_ms": float(np.mean(self.err_down_int_ms)),
+            "err_3d_int_0p5s_ms": float(np.mean(self.err_3d_int_ms)),
+            "ff_down_int_0p5s_mps": float(np.mean(self.ff_down_int_mps)),
+        }
+
+
+def wilson_interval(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """Wilson score interval for a binomial proportion ``k / n`` (95 % by default)."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    denom = 1 + z**2 / n
+    centre = (p + z**2 / (2 * n)) / denom
+    half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
+    return (float(max(0.0, centre - half)), float(min(1.0, centre + half)))
+
+
+def _merge_plans(old: MinJerk, new: MinJerk, mask: np.ndarray) -> MinJerk:
+    """Per-trial choice between two plans (``new`` where ``mask``)."""
+    out = {}
+    for name in ("coeffs", "t0_s", "duration_s", "p0", "v0", "a0", "pf", "vf"):
+        a, b = getattr(old, name), getattr(new, name)
+        m = mask.reshape((-1,) + (1,) * (np.ndim(a) - 1))
+        out[name] = np.where(m, b, a)
+    return replace(old, **out)
+
+
+def _bodies(obs: Observation, thrust_n: float, mass_kg: float) -> BodyState:
+    n = obs.p.shape[0]
+    return BodyState(obs.p, obs.v, obs.R, np.full(n, thrust_n), np.full(n, mass_kg))
+
+
+def run_campaign(
+    cfg: Config,
+    spec: MissionSpec,
+    predictor: AccelPredictor | None = None,
+    record: str = "summary",
+    progress: Callable[[float], None] | None = None,
+) -> CampaignResult:
+    """Fly ``spec.trials`` docking missions at once.
+
+    Args:
+        cfg: configuration.
+        spec: the campaign.
+        predictor: the feed-forward model for ``Compensation.MODEL``.
+        record: ``"summary"`` (outcomes only), ``"trace"`` (+ positions for figures) or
+            ``"full"`` (+ one FlightLog per trial).
+        progress: called with the fraction of the mission time done.
+    """
+    if spec.trials < 1:
+        raise ValueError(f"--trials must be >= 1, got {spec.trials}")
+    if record not in ("summary", "trace", "full"):
+        raise ValueError(f"record must be summary, trace or full, got {record!r}")
+    if spec.offset_m is not None:
+        if not spec.offset_m > 0:
+            raise ValueError(f"--offset must be > 0 m, got {spec.offset_m}")
+        cfg = cfg.with_overrides({"platform": {"cable_length_m": float(spec.offset_m)}})
+    comp = Compensation(spec.compensation)
+    if comp == Compensation.MODEL and predictor is None:
+        raise ValueError("compensation 'model' needs a trained model (--model DIR)")
+    rng = np.random.default_rng(spec.seed)
+    n = spec.trials
+    m = cfg.mission
+    world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
+    if comp == Compensation.ORACLE:
+        predictor = OraclePredictor(world.field)
+    geom = DockGeometry.from_config(cfg)
+    world.gripper_params = replace(world.gripper_params,
+                                   passive=world.gripper_params.passive and spec.passive_trigger,
+                                   active=world.gripper_params.active and spec.active_trigger)
+    gp = world.gripper_params
+    mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+    moving = spec.leader_speed_mps != 0.0 and not spec.leader_fixed
+    arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s
+    hold_s = cfg.planner.hold_s if moving else 0.0
+    active_at_s = arrival_s + (0.5 if moving else m.active_trigger_delay_s)
+    timeout_s = max(m.timeout_s, arrival_s + hold_s + 1.0)
+    end_s = timeout_s + m.backoff_s
+
+    # Initial conditions: leader hovering (or already cruising north), follower below and away.
+    leader_p0 = np.tile([0.0, 0.0, -m.leader_altitude_m], (n, 1))
+    dock0 = docking_point_m(leader_p0, np.zeros((n, 3)), geom)
+    az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[np.arange(n) % len(
+        spec.start_azimuths_deg)]
+    start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
+                              np.full(n, m.start_below_m)], 1)
+    start += m.start_jitter_m * rng.standard_normal((n, 3))
+    world.reset(leader_p0, start)
+    lead_vel = np.array([spec.leader_speed_mps, 0.0, 0.0]) if moving else np.zeros(3)
+    if moving:
+        world.leader = replace(world.leader, v=np.tile(lead_vel, (n, 1)))
+        world.bar = replace(world.bar, v=np.tile(lead_vel, (n, 1)))
+
+    leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
+    follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
+    leader_ctl.reset(world.leader.p, world.leader.v)
+    follower_ctl.reset(world.follower.p, world.follower.v)
+    zeros = np.zeros((n, 3))
+    plan = minjerk(start, zeros, zeros, docking_point_m(leader_p0, world.leader.v, geom,
+                                                        arrival_s),
+                   world.leader.v, zeros, arrival_s, 0.0)
+
+    phase = np.full(n, Phase.APPROACH, dtype=np.int8)
+    abort_reason = np.zeros(n, dtype=np.int8)
+    phase_t = np.zeros(n)  # when the current phase began
+    capture_t = np.full(n, np.nan)
+    leader_last_fresh_t = 0.0
+    last_leader_obs: Observation | None = None
+    min_clear = np.full(n, np.inf)
+    win0 = arrival_s - 0.5
+    err_sum = np.zeros((n, 2))
+    err_cnt = np.zeros(n)
+    ff_int = np.zeros(n)
+    dt_c = world.dt_control_s
+    steps = int(np.ceil(end_s / dt_c))
+    trace_keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
+    trace: dict[str, list] = {k: [] for k in trace_keys} if record != "summary" else {}
+    log_rows: dict[str, list] = {} if record != "full" else {
+        k: [] for k in ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean",
+                        "ref", "ff", "phase", "bar")
+    }
+    world.observed_accel()  # start the accelerometer's averaging window
+    for k in range(steps):
+        t = k * dt_c
+        obs_l, obs_f = world.observe()
+        # Leader state comes over the network: a dropout freezes it (fault injection).
+        lost = spec.leader_dropout_s is not None and (
+            spec.leader_dropout_s[0] <= t < spec.leader_dropout_s[0] + spec.leader_dropout_s[1]
+        )
+        if lost and last_leader_obs is not None:
+            obs_l_f = last_leader_obs
+        else:
+            obs_l_f = obs_l
+            leader_last_fresh_t = t
+            last_leader_obs = obs_l
+        # --- leader: its own controller, hovering or cruising north ---
+        lref = Reference(leader_p0 + lead_vel * t, np.tile(lead_vel, (n, 1)), zeros,
+                         np.zeros(n), np.zeros(n))
+        lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, lref)
+
+        # --- follower: phases ---
+        active = (phase == Phase.APPROACH) | (phase == Phase.TERMINAL)
+        target_now = docking_point_m(obs_l_f.p, obs_l_f.v, geom)
+        if t < arrival_s - 0.3:
+            target_arr = docking_point_m(obs_l_f.p, obs_l_f.v, geom, arrival_s - t)
+            moved = np.linalg.norm(target_arr - plan.pf, axis=1) > cfg.planner.replan_threshold_m
+            need = active & moved
+            if np.any(need):
+                p_r, v_r, a_r = plan.sample(t)
+                new = minjerk(p_r, v_r, a_r, target_arr, obs_l_f.v, zeros, arrival_s - t, t)
+                plan = _merge_plans(plan, new, need)
+        p_ref, v_ref, a_ref = plan.sample(t)
+        holding = active & (t >= arrival_s)
+        p_ref = np.where(holding[:, None], target_now, p_ref)
+        v_ref = np.where(holding[:, None], obs_l_f.v, v_ref)
+        a_ref = np.where(holding[:, None], 0.0, a_ref)
+        # Safety: the reference keeps the follower's top clearance_m + margin below the leader.
+        top_limit = obs_l_f.p[:, 2] + m.clearance_m + 0.05 + gp.mount_height_m
+        p_ref = p_ref.copy()
+        p_ref[:, 2] = np.where(active, np.maximum(p_ref[:, 2], top_limit), p_ref[:, 2])
+
+        phase = np.where((phase == Phase.APPROACH) & (t >= arrival_s - m.terminal_s),
+                         Phase.TERMINAL, phase).astype(np.int8)
+        # Aborts.
+        err = obs_f.p - p_ref
+        up_err = -err[:, 2]
+        unsafe = (phase == Phase.TERMINAL) & (
+            (up_err > m.abort_tracking_m / 2)
+            | ((np.linalg.norm(err, axis=1) > m.abort_tracking_m) & (up_err > 0))
+        )
+        leader_lost = (t - leader_last_fresh_t) > m.leader_lost_s
+        timeout = t >= timeout_s
+        gate = world.gripper.gate
+        abort_now = active & (gate == GateState.OPEN) & (unsafe | leader_lost | timeout)
+        abort_reason = np.where(
+            abort_now & (abort_reason == 0),
+            np.where(leader_lost, AbortReason.LEADER_LOST,
+                     np.where(timeout, AbortReason.TIMEOUT, AbortReason.UNSAFE_TRACKING)),
+            abort_reason,
+        ).astype(np.int8)
+        captured_now = (gate == GateState.CAPTURED) & (phase != Phase.CAPTURED) & (
+            phase != Phase.DONE)
+        missed_now = (gate == GateState.MISSED) & active
+        capture_t = np.where(captured_now, t, capture_t)
+        backoff_now = (abort_now | missed_now) & ~captured_now
+        if np.any(backoff_now):
+            away = obs_f.p[:, :2] - obs_l_f.p[:, :2]
+            norm = np.linalg.norm(away, axis=1, keepdims=True)
+            away = np.where(norm > 1e-3, away / np.maximum(norm, 1e-9), [1.0, 0.0])
+            goal = obs_f.p + m.backoff_distance_m * np.concatenate(
+                [away, np.ones((n, 1))], axis=1)
+            p_r, v_r, a_r = plan.sample(t)
+            back = minjerk(obs_f.p, obs_f.v, zeros, goal, zeros, zeros, m.backoff_s, t)
+            plan = _merge_plans(plan, back, backoff_now)
+        phase = np.where(captured_now, Phase.CAPTURED, phase)
+        phase = np.where(missed_now & ~captured_now, Phase.MISSED, phase)
+        phase = np.where(abort_now & ~captured_now & ~missed_now, Phase.ABORT, phase)
+        phase_t = np.where(captured_now | backoff_now, t, phase_t)
+        finished = (
+            ((phase == Phase.CAPTURED) & (t - phase_t >= m.post_dock_s))
+            | (((phase == Phase.MISSED) | (phase == Phase.ABORT)) & (t - phase_t >= m.backoff_s))
+        )
+        phase = np.where(finished, Phase.DONE, phase).astype(np.int8)
+        backing = (phase == Phase.MISSED) | (phase == Phase.ABORT)
+        if np.any(backing):
+            pb, vb, ab = plan.sample(t)
+            p_ref = np.where(backing[:, None], pb, p_ref)
+            v_ref = np.where(backing[:, None], vb, v_ref)
+            a_ref = np.where(backing[:, None], ab, a_ref)
+        done_free = (phase == Phase.DONE) & ~world.captured
+        p_ref = np.where(done_free[:, None], plan.pf, p_ref)
+        v_ref = np.where(done_free[:, None], 0.0, v_ref)
+        a_ref = np.where(done_free[:, None], 0.0, a_ref)
+
+        # Compensation and control.
+        ff = None
+        if predictor is not None:
+            if comp == Compensation.ORACLE:
+                lead_b, fol_b = world.body_states()
+            else:
+                lead_b = _bodies(obs_l_f, mass * g, mass)
+                fol_b = _bodies(obs_f, mass * g, mass)
+            ff = predictor.predict_bodies(lead_b, fol_b)
+        terminal = (phase == Phase.TERMINAL) | holding
+        yaw0 = np.zeros(n)
+        fref = Reference(p_ref, v_ref, a_ref, yaw0, yaw0)
+        fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, fref, terminal, ff)
+        close = (t >= active_at_s) & active
+        world.follower_thrust_fraction = np.where(
+            (phase == Phase.CAPTURED) | ((phase == Phase.DONE) & world.captured),
+            m.post_dock_thrust_fraction, 1.0)
+
+        # Metrics (true state).
+        true_err = world.follower.p - p_ref
+        in_win = (t >= win0) & (t < arrival_s) & active
+        err_sum[:, 0] += np.where(in_win, np.abs(true_err[:, 2]), 0.0)
+        err_sum[:, 1] += np.where(in_win, np.linalg.norm(true_err, axis=1), 0.0)
+        err_cnt += in_win
+        if ff is not None:
+            ff_int += np.where(in_win, ff[:, 2] * dt_c, 0.0)
+        arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
+        min_clear = np.minimum(min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
+
+        if record != "summary":
+            trace["t_s"].append(t)
+            trace["follower_p"].append(world.follower.p.copy())
+            trace["leader_p"].append(world.leader.p.copy())
+            trace["bar_p"].append(world.bar.p.copy())
+            trace["ref_p"].append(p_ref.copy())
+            trace["phase"].append(phase.copy())
+            trace["ff"].append(fout.feedforward_mps2.copy())
+            trace["gate"].append(world.gripper.gate.copy())
+        if record == "full":
+            fmean = world.true_mean_field_mps2()
+            log_rows["t"].append(t)
+            log_rows["lp"].append(obs_l.p)
+            log_rows["lv"].append(obs_l.v)
+            log_rows["lq"].append(rotmat_to_quat(obs_l.R))
+            log_rows["fp"].append(obs_f.p)
+            log_rows["fv"].append(obs_f.v)
+            log_rows["fq"].append(rotmat_to_quat(obs_f.R))
+            log_rows["u"].append(fout.applied_accel_mps2)
+            log_rows["thrust"].append(fout.command.thrust_n * world.follower_thrust_fraction)
+            log_rows["fmean"].append(fmean)
+            log_rows["ref"].append(p_ref.copy())
+            log_rows["ff"].append(fout.feedforward_mps2)
+            log_rows["phase"].append(phase.copy())
+            log_rows["bar"].append(world.bar.p.copy())
+
+        world.advance(lout.command, fout.command, close)
+        if record == "full":
+            log_rows["aobs"].append(world.observed_accel())
+        if progress is not None and k % 20 == 0:
+            progress(min(1.0, (k + 1) / steps))
+        if np.all(phase == Phase.DONE):
+            break
+    if progress is not None:
+        progress(1.0)
+
+    gate = world.gripper.gate
+    success = gate == GateState.CAPTURED
+    cnt = np.maximum(err_cnt, 1)
+    result = CampaignResult(
+        spec=spec,
+        success=success,
+        slipped=world.gripper.slipped.copy(),
+        missed=(gate == GateState.MISSED),
+        aborted=abort_reason != AbortReason.NONE,
+        abort_reason=abort_reason,
+        clearance_violation=min_clear < m.clearance_m,
+        min_clearance_m=min_clear,
+        capture_time_s=capture_t,
+        err_down_m=err_sum[:, 0] / cnt,
+        err_3d_m=err_sum[:, 1] / cnt,
+        err_down_int_ms=err_sum[:, 0] * dt_c,
+        err_3d_int_ms=err_sum[:, 1] * dt_c,
+        ff_down_int_mps=ff_int,
+        arrival_s=arrival_s,
+    )
+    if record != "summary":
+        result.trace = {k: np.asarray(v) for k, v in trace.items()}
+    if record == "full":
+        result.logs = _flightlogs(log_rows, cfg, spec, n)
+    return result
+
+
+def _flightlogs(rows: dict[str, list], cfg: Config, spec: MissionSpec, n: int) -> list[FlightLog]:
+    arr = {k: np.asarray(v) for k, v in rows.items()}  # (T, n, ...)
+    mass = cfg.vehicle.mass_kg
+    logs = []
+    for i in range(n):
+        meta = {
+            "name": f"dock-seed{spec.seed}-trial{i:04d}", "source": "aerodock-sim",
+            "frame": "NED", "label_basis": "command", "leader_mass_kg": mass,
+            "follower_mass_kg": mass, "compensation": str(Compensation(spec.compensation).value),
+            "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
+            "seed": spec.seed, "trial": i,
+        }
+        logs.append(FlightLog(
+            t_s=arr["t"], leader_pos_m=arr["lp"][:, i], leader_vel_mps=arr["lv"][:, i],
+            leader_quat=arr["lq"][:, i], follower_pos_m=arr["fp"][:, i],
+            follower_vel_mps=arr["fv"][:, i], follower_quat=arr["fq"][:, i],
+            follower_cmd_accel_mps2=arr["u"][:, i], follower_thrust_n=arr["thrust"][:, i],
+            follower_obs_accel_mps2=arr["aobs"][:, i], meta=meta,
+            extra={"true_field_mean_mps2": arr["fmean"][:, i], "ref_pos_m": arr["ref"][:, i],
+                   "feedforward_mps2": arr["ff"][:, i], "phase": arr["phase"][:, i],
+                   "bar_pos_m": arr["bar"][:, i]},
+        ))
+    return logs
