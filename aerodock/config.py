@@ -35,7 +35,7 @@ _STRICTLY_POSITIVE = {
     "gripper.contact_stiffness_npm",
     "control.observer_bias_tau_s", "control.yaw_rate_max_radps",
     "planner.horizon_hover_s", "planner.horizon_moving_s", "planner.replan_threshold_m",
-    "mission.timeout_s", "mission.leader_lost_s", "mission.abort_tracking_m",
+    "mission.dock_window_s", "mission.leader_lost_s", "mission.abort_tracking_m",
     "mission.start_radius_m", "mission.leader_altitude_m",
 }
 _SIGNED: set[str] = set()

@@ -95,6 +95,15 @@ def rotate_planar(vec_xy: np.ndarray, angle_rad: np.ndarray) -> np.ndarray:
     return np.stack([c * x - s * y, s * x + c * y], axis=-1)
 
 
+def dot_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of ``(n, k)`` arrays, ``(n,)``.
+
+    A plain multiply-and-sum: unlike BLAS or einsum, each row's rounding does not depend on the
+    batch size, so a batch of N trials reproduces N single trials bit for bit.
+    """
+    return (a * b).sum(axis=-1)
+
+
 def wrap_angle(angle_rad: np.ndarray) -> np.ndarray:
     """Wrap angles to ``[-pi, pi)``."""
     return (np.asarray(angle_rad) + np.pi) % (2 * np.pi) - np.pi

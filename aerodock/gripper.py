@@ -22,6 +22,7 @@ from enum import IntEnum
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.geometry import dot_rows
 
 
 class GateState(IntEnum):
@@ -118,15 +119,15 @@ def bar_in_gripper(
     up = -follower_R[:, :, 2]
     arm = follower_p + up * params.mount_height_m
     rel = bar_p - arm
-    height = np.einsum("ni,ni->n", rel, up)
+    height = dot_rows(rel, up)
     horizontal = rel - height[:, None] * up
     bar_axis = np.stack([np.cos(bar_yaw_rad), np.sin(bar_yaw_rad), np.zeros_like(bar_yaw_rad)], 1)
-    along = np.einsum("ni,ni->n", horizontal, bar_axis)
+    along = dot_rows(horizontal, bar_axis)
     perp = np.linalg.norm(horizontal - along[:, None] * bar_axis, axis=1)
     in_mouth = (perp <= params.aperture_m / 2.0) & (np.abs(along) <= params.bar_half_length_m)
     inside = in_mouth & (height <= params.gate_height_m)
     penetration = params.bar_radius_m - height
-    rate = -np.einsum("ni,ni->n", bar_v - follower_v, up)
+    rate = -dot_rows(bar_v - follower_v, up)
     force = params.contact_stiffness_npm * penetration + params.contact_damping_nspm * rate
     force = np.where(in_mouth & (penetration > 0), np.maximum(force, 0.0), 0.0)
     return force, inside, up

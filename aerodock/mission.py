@@ -34,6 +34,7 @@ from aerodock.geometry import rotmat_to_quat
 from aerodock.gripper import GateState
 from aerodock.planning.docking import DockGeometry, docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
+from aerodock.rng import TrialRNG
 from aerodock.sim import Observation, World
 
 
@@ -67,6 +68,7 @@ class MissionSpec:
     leader_fixed: bool = False
     compensation: Compensation = Compensation.OBSERVER
     seed: int = 0
+    first_trial: int = 0  # trial i draws from stream (seed, first_trial + i)
     start_azimuths_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
     leader_dropout_s: tuple[float, float] | None = None  # (start, duration): fault injection
     passive_trigger: bool = True
@@ -176,7 +178,7 @@ def run_campaign(
     comp = Compensation(spec.compensation)
     if comp == Compensation.MODEL and predictor is None:
         raise ValueError("compensation 'model' needs a trained model (--model DIR)")
-    rng = np.random.default_rng(spec.seed)
+    rng = TrialRNG(spec.seed, spec.trials, spec.first_trial)
     n = spec.trials
     m = cfg.mission
     world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
@@ -192,14 +194,14 @@ def run_campaign(
     arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s
     hold_s = cfg.planner.hold_s if moving else 0.0
     active_at_s = arrival_s + (0.5 if moving else m.active_trigger_delay_s)
-    timeout_s = max(m.timeout_s, arrival_s + hold_s + 1.0)
+    timeout_s = arrival_s + hold_s + m.dock_window_s
     end_s = timeout_s + m.backoff_s
 
     # Initial conditions: leader hovering (or already cruising north), follower below and away.
     leader_p0 = np.tile([0.0, 0.0, -m.leader_altitude_m], (n, 1))
     dock0 = docking_point_m(leader_p0, np.zeros((n, 3)), geom)
-    az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[np.arange(n) % len(
-        spec.start_azimuths_deg)]
+    az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[
+        (spec.first_trial + np.arange(n)) % len(spec.start_azimuths_deg)]
     start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
                               np.full(n, m.start_below_m)], 1)
     start += m.start_jitter_m * rng.standard_normal((n, 3))
@@ -225,12 +227,11 @@ def run_campaign(
     leader_last_fresh_t = 0.0
     last_leader_obs: Observation | None = None
     min_clear = np.full(n, np.inf)
-    win0 = arrival_s - 0.5
-    err_sum = np.zeros((n, 2))
-    err_cnt = np.zeros(n)
-    ff_int = np.zeros(n)
     dt_c = world.dt_control_s
     steps = int(np.ceil(end_s / dt_c))
+    # Terminal window: the 0.5 s before the approach ends (arrival, or the gate starting to close).
+    approach_end = np.full(n, arrival_s)
+    hist = np.full((steps, n, 3), np.nan)  # |e_down|, |e_3d|, predicted down force
     trace_keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
     trace: dict[str, list] = {k: [] for k in trace_keys} if record != "summary" else {}
     log_rows: dict[str, list] = {} if record != "full" else {
@@ -343,19 +344,19 @@ def run_campaign(
         yaw0 = np.zeros(n)
         fref = Reference(p_ref, v_ref, a_ref, yaw0, yaw0)
         fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, fref, terminal, ff)
-        close = (t >= active_at_s) & active
+        close = (t >= active_at_s) & active & _bar_will_be_inside(
+            obs_f, obs_l_f, geom, gp, gp.latency_s + gp.close_time_s)
         world.follower_thrust_fraction = np.where(
             (phase == Phase.CAPTURED) | ((phase == Phase.DONE) & world.captured),
             m.post_dock_thrust_fraction, 1.0)
 
         # Metrics (true state).
         true_err = world.follower.p - p_ref
-        in_win = (t >= win0) & (t < arrival_s) & active
-        err_sum[:, 0] += np.where(in_win, np.abs(true_err[:, 2]), 0.0)
-        err_sum[:, 1] += np.where(in_win, np.linalg.norm(true_err, axis=1), 0.0)
-        err_cnt += in_win
-        if ff is not None:
-            ff_int += np.where(in_win, ff[:, 2] * dt_c, 0.0)
+        hist[k, :, 0] = np.abs(true_err[:, 2])
+        hist[k, :, 1] = np.linalg.norm(true_err, axis=1)
+        hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
+        ended = (~active | (world.gripper.gate != GateState.OPEN)) & (approach_end > t)
+        approach_end = np.where(ended, t, approach_end)
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
         min_clear = np.minimum(min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
 
@@ -397,7 +398,10 @@ def run_campaign(
 
     gate = world.gripper.gate
     success = gate == GateState.CAPTURED
-    cnt = np.maximum(err_cnt, 1)
+    t_grid = np.arange(steps)[:, None] * dt_c
+    in_win = (t_grid >= approach_end - 0.5) & (t_grid < approach_end)
+    win = np.where(in_win[..., None], hist, 0.0)
+    cnt = np.maximum(in_win.sum(0), 1)
     result = CampaignResult(
         spec=spec,
         success=success,
@@ -408,11 +412,11 @@ def run_campaign(
         clearance_violation=min_clear < m.clearance_m,
         min_clearance_m=min_clear,
         capture_time_s=capture_t,
-        err_down_m=err_sum[:, 0] / cnt,
-        err_3d_m=err_sum[:, 1] / cnt,
-        err_down_int_ms=err_sum[:, 0] * dt_c,
-        err_3d_int_ms=err_sum[:, 1] * dt_c,
-        ff_down_int_mps=ff_int,
+        err_down_m=win[..., 0].sum(0) / cnt,
+        err_3d_m=win[..., 1].sum(0) / cnt,
+        err_down_int_ms=win[..., 0].sum(0) * dt_c,
+        err_3d_int_ms=win[..., 1].sum(0) * dt_c,
+        ff_down_int_mps=win[..., 2].sum(0) * dt_c,
         arrival_s=arrival_s,
     )
     if record != "summary":
@@ -422,17 +426,35 @@ def run_campaign(
     return result
 
 
+def _bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeometry,
+                        gp, lead_time_s: float) -> np.ndarray:
+    """Active-trigger condition: will the (predicted) bar sit well inside the gate when it closes?
+
+    The follower cannot see the bar; it predicts it from the leader's state (hanging straight
+    down) and extrapolates both vehicles by ``lead_time_s`` (software latency + servo travel), so
+    the trigger compensates the known latencies. Margins keep it away from the gate's edges.
+    """
+    rel_v = leader.v - follower.v
+    bar = leader.p + np.array([0.0, 0.0, geom.anchor_below_leader_m + geom.cable_length_m])
+    arm = follower.p - follower.R[:, :, 2] * gp.mount_height_m
+    rel = bar - arm + rel_v * lead_time_s
+    height = -rel[:, 2]
+    lateral = np.linalg.norm(rel[:, :2], axis=1)
+    return (lateral < 0.6 * gp.aperture_m / 2) & (height > -gp.bar_radius_m) & (
+        height < 0.7 * gp.gate_height_m)
+
+
 def _flightlogs(rows: dict[str, list], cfg: Config, spec: MissionSpec, n: int) -> list[FlightLog]:
     arr = {k: np.asarray(v) for k, v in rows.items()}  # (T, n, ...)
     mass = cfg.vehicle.mass_kg
     logs = []
     for i in range(n):
         meta = {
-            "name": f"dock-seed{spec.seed}-trial{i:04d}", "source": "aerodock-sim",
+            "name": f"dock-seed{spec.seed}-trial{spec.first_trial + i:04d}", "source": "aerodock-sim",
             "frame": "NED", "label_basis": "command", "leader_mass_kg": mass,
             "follower_mass_kg": mass, "compensation": str(Compensation(spec.compensation).value),
             "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
-            "seed": spec.seed, "trial": i,
+            "seed": spec.seed, "trial": spec.first_trial + i,
         }
         logs.append(FlightLog(
             t_s=arr["t"], leader_pos_m=arr["lp"][:, i], leader_vel_mps=arr["lv"][:, i],

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.geometry import dot_rows
 
 
 @dataclass(frozen=True)
@@ -110,11 +111,12 @@ def step_bar(
     free[:, 2] += params.gravity_mps2
     # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
     taut = dist >= length - 1e-6
-    radial_v = np.einsum("ni,ni->n", rel_v, unit)
-    tangential_v2 = np.einsum("ni,ni->n", rel_v, rel_v) - radial_v**2
-    lam = np.einsum("ni,ni->n", unit, free - anchor_a) + tangential_v2 / length
+    radial_v = dot_rows(rel_v, unit)
+    tangential_v2 = dot_rows(rel_v, rel_v) - radial_v**2
+    lam = dot_rows(unit, free - anchor_a) + tangential_v2 / length
     lam = np.where(taut, np.maximum(lam, 0.0), 0.0)
     accel = free - lam[:, None] * unit
+    cable_force = (mass_kg * lam)[:, None] * unit
     v = bar.v + accel * dt_s
     p = bar.p + v * dt_s
     # Project back onto the sphere and remove outward radial velocity (inextensible cables).
@@ -122,12 +124,12 @@ def step_bar(
     dist = np.linalg.norm(rel, axis=1)
     over = dist > length
     if np.any(over):
-        unit = rel / np.maximum(dist, 1e-9)[:, None]
-        p = np.where(over[:, None], anchor_p + unit * length, p)
-        out_v = np.einsum("ni,ni->n", v - anchor_v, unit)
-        v = np.where((over & (out_v > 0))[:, None], v - out_v[:, None] * unit, v)
+        unit_new = rel / np.maximum(dist, 1e-9)[:, None]
+        p = np.where(over[:, None], anchor_p + unit_new * length, p)
+        out_v = dot_rows(v - anchor_v, unit_new)
+        v = np.where((over & (out_v > 0))[:, None], v - out_v[:, None] * unit_new, v)
     yaw_err = (bar.yaw_rad - leader_yaw_rad + np.pi) % (2 * np.pi) - np.pi
     yaw_acc = -params.yaw_omega2 * np.sin(yaw_err) - params.yaw_damping * bar.yaw_rate_radps
     yaw_rate = bar.yaw_rate_radps + yaw_acc * dt_s
     new = replace(bar, p=p, v=v, yaw_rad=bar.yaw_rad + yaw_rate * dt_s, yaw_rate_radps=yaw_rate)
-    return new, (mass_kg * lam)[:, None] * unit
+    return new, cable_force

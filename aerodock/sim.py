@@ -32,6 +32,7 @@ from aerodock.gripper import (
     step_gripper,
 )
 from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
+from aerodock.rng import TrialRNG
 from aerodock.vehicle import (
     AttitudeCommand,
     VehicleParams,
@@ -66,12 +67,13 @@ class World:
     Args:
         cfg: configuration.
         n: number of trials.
-        rng: the only source of randomness.
+        rng: the only source of randomness; a :class:`aerodock.rng.TrialRNG` makes every trial's
+            numbers independent of the batch size.
         field: downwash field (default: the configured one).
         leader_fixed: hold the leader on a rigid stand at hover thrust (cable-length study).
     """
 
-    def __init__(self, cfg: Config, n: int, rng: np.random.Generator,
+    def __init__(self, cfg: Config, n: int, rng: np.random.Generator | TrialRNG,
                  field: DownwashField | None = None, leader_fixed: bool = False):
         if n < 1:
             raise ValueError(f"number of trials must be >= 1, got {n}")

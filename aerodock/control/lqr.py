@@ -117,7 +117,8 @@ def lqr_command(
     k = np.asarray(gain, dtype=float)
     if k.shape[-2:] != (N_INPUT, N_STATE) or k.ndim not in (2, 3):
         raise ValueError(f"gain must be (4, 7) or (n, 4, 7), got {k.shape}")
-    u = -np.einsum("...ij,...j->...i", k, err)
+    # Broadcast-and-sum (not BLAS): a trial's result does not depend on the batch size.
+    u = -(k * err[:, None, :]).sum(-1)
     accel = u[:, 0:3] + np.broadcast_to(np.asarray(ref_accel_mps2, dtype=float), (n, 3))
     yaw_rate = u[:, 3] + np.broadcast_to(np.asarray(ref_yaw_rate_radps, dtype=float), (n,))
     return accel, yaw_rate

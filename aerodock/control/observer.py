@@ -120,9 +120,12 @@ class BiasObserver:
                 saturation (e.g. the forward map of the saturated attitude and thrust), or
                 the saturation will be learnt as a disturbance.
         """
-        x = self.state @ self._f.T + np.asarray(u_applied_mps2, dtype=float)[..., None] * self._g
+        # Broadcast-and-sum instead of BLAS matmul: each trial's numbers then do not depend on
+        # the batch size (BLAS blocking changes rounding with the shape).
+        x = (self.state[..., None, :] * self._f).sum(-1) + np.asarray(
+            u_applied_mps2, dtype=float)[..., None] * self._g
         innov = np.stack([p_meas - x[..., 0], v_meas - x[..., 1]], axis=-1)  # (n, 3, 2)
-        self.state = x + innov @ self.gain.T
+        self.state = x + (innov[..., None, :] * self.gain).sum(-1)
 
     @property
     def bias_mps2(self) -> np.ndarray:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.downwash.base import BodyState
+from aerodock.geometry import dot_rows
 
 _LN2 = np.log(2.0)
 # max over x of x * exp(-ln2 x^2): the planar profile's peak, used to normalise planar_ratio.
@@ -117,13 +118,13 @@ class RoundJetField:
         thrust = np.maximum(leader.thrust_n, 0.0)
         w0 = 2.0 * np.sqrt(thrust / (2.0 * self.air_density_kgpm3 * self.disk_area_m2))
         rel = points_m - leader.p
-        depth = np.einsum("ni,ni->n", rel, axis)
+        depth = dot_rows(rel, axis)
         s = np.maximum(depth, 0.0)
         lc = self.core_length_m
         centre_speed = w0 * lc / (s + lc)
         # Wake skew: convection time from the rotor to depth s, tau = int_0^s ds'/w_c(s').
         tau = (s + s**2 / (2.0 * lc)) / np.maximum(w0, 1e-6)
-        v_perp = leader.v - np.einsum("ni,ni->n", leader.v, axis)[:, None] * axis
+        v_perp = leader.v - dot_rows(leader.v, axis)[:, None] * axis
         radial = rel - depth[:, None] * axis + v_perp * tau[:, None]
         r = np.linalg.norm(radial, axis=1)
         half_width = self.half_width0_m + self.spread_rate * s
@@ -133,7 +134,7 @@ class RoundJetField:
 
     def _accel(self, leader, p_m, v_mps, mass_kg, noise) -> np.ndarray:
         axis, radial, speed, r, force_half_radius = self._wake(leader, p_m)
-        w_rel = speed - np.einsum("ni,ni->n", v_mps, axis) * (speed > 0)
+        w_rel = speed - dot_rows(v_mps, axis) * (speed > 0)
         k = self.ingest_coeff * self.air_density_kgpm3 * self.disk_area_m2 / mass_kg
         axial = k * w_rel * np.abs(w_rel)
         x = r / force_half_radius
@@ -154,6 +155,6 @@ class RoundJetField:
                     bar_area_m2: float) -> np.ndarray:
         """(n, 3) mean drag force of the wake on the docking bar, N, NED."""
         axis, _, speed, _, _ = self._wake(leader, bar_p_m)
-        w_rel = speed - np.einsum("ni,ni->n", bar_v_mps, axis) * (speed > 0)
+        w_rel = speed - dot_rows(bar_v_mps, axis) * (speed > 0)
         drag = 0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2
         return (drag * w_rel * np.abs(w_rel))[:, None] * axis

@@ -90,7 +90,8 @@ def _load(path: Path) -> Any:
         from pyulog import ULog
         from pyulog.exceptions import ULogException
     except ImportError:  # pragma: no cover - the ingest extra is not installed
-        raise IngestError(path, "reading ULog needs pyulog: pip install 'aerodock[ingest]'") from None
+        raise IngestError(path, "reading ULog needs pyulog: pip install 'aerodock[ingest]'") \
+            from None
     if not path.exists():
         raise IngestError(path, "file not found")
     if path.is_file() and path.stat().st_size == 0:

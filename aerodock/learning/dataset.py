@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
+from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.geometry import quat_to_rotmat
 from aerodock.learning.labels import FREE_AIR_RADIUS_M, labels_from_logs, valid_mask
 
@@ -461,7 +461,7 @@ def flight_split_ids(
 def split_by_flight(
     ds: Dataset, val_fraction: float = 0.2, rng: np.random.Generator | None = None
 ) -> tuple[Dataset, Dataset]:
-    """Split into (train, held-out) by whole flights, about ``val_fraction`` of the samples held out.
+    """Split into (train, held-out) by whole flights, about ``val_fraction`` of samples held out.
 
     No flight appears in both parts; each part has at least one flight.
 

@@ -28,6 +28,7 @@ and are saved with it.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -99,7 +100,9 @@ class DownwashModel(nn.Module):
         self.register_buffer("out_mean", torch.zeros(n_out))
         self.register_buffer("out_std", torch.ones(n_out))
 
-    def features(self, x: torch.Tensor, leader_R: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def features(
+        self, x: torch.Tensor, leader_R: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """Features ``z`` (n, F) and output map ``M`` (n, 3, K)."""
         return feature_map_torch(
             self.kind, x, leader_R, eps_pos_m=self.eps_pos_m, eps_vel_mps=self.eps_vel_mps
@@ -232,7 +235,7 @@ def model_from_spec(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]
     return model.eval()
 
 
-def load_torch_model(path: str) -> nn.Module:
+def load_torch_model(path: str | Path) -> nn.Module:
     """A model directory as a torch module (float32, eval mode).
 
     Raises:

@@ -212,7 +212,7 @@ def train_model(
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
                 opt.step()
-                total += float(loss) * len(b)
+                total += float(loss.detach()) * len(b)
             train_loss = total / n_tr
             model.eval()
             val_loss = None

@@ -1,0 +1,570 @@
+"""Reader for ROS 2 bags (``.db3`` and ``.mcap``, or a bag folder) through ``rosbags``.
+
+One bag holds one flight of both vehicles. A *mapping* (a TOML file or a dict) says which topic
+carries what; every key is optional and defaults to :data:`DEFAULT_MAPPING`, which matches a
+Freyja-like setup with the paper's vehicle names (leader ``alpha``, follower ``bravo``)::
+
+    frame = "enu"        # standard ROS messages: "enu" (REP-103: ENU world, FLU body) or "ned"
+                         # (NED world, FRD body). Freyja messages are NED by definition.
+    time = "header"      # "header": header.stamp (messages without one use the bag time);
+                         # "bag": the bag's receive time for every message
+    odom_twist = "body"  # nav_msgs/Odometry twist frame: "body" (REP-105 child frame) or "world"
+    max_gap_s = 0.25     # samples where the leader or command has a longer gap are dropped
+
+    [leader]
+    state = "/alpha/current_state"   # CurrentState | Odometry | PoseStamped | PoseWithCov...
+    twist = ""                       # TwistStamped (world frame) with a PoseStamped state
+    command = ""                     # optional; gives extra["leader_thrust_n"]
+    # mass_kg = 0.7
+
+    [follower]
+    state = "/bravo/current_state"
+    twist = ""
+    command = ["/bravo/controller_debug", "/bravo/rpyt_command"]  # first present is used
+    reference = "/bravo/reference_state"   # optional, kept as extra["follower_ref_*"]
+    imu = "/bravo/imu"                     # optional sensor_msgs/Imu; else d/dt of velocity
+    # mass_kg = 0.7
+
+Message types understood (detected from the bag):
+
+- state: ``freyja_msgs/msg/CurrentState`` (``state_vector`` = pn, pe, pd, vn, ve, vd, roll, pitch,
+  yaw, ...), ``nav_msgs/msg/Odometry``, ``geometry_msgs/msg/PoseStamped`` or
+  ``geometry_msgs/msg/PoseWithCovarianceStamped`` (velocity from ``twist`` if given, else the
+  time derivative of the position);
+- command, label basis ``"command"``: ``freyja_msgs/msg/ControllerDebug`` (``lqr_u[0:3]`` is
+  ``u - g e3``, NED), ``geometry_msgs/msg/Vector3Stamped`` or ``geometry_msgs/msg/AccelStamped``
+  (the commanded acceleration ``u_1:3``, zero at hover, world frame);
+- attitude-thrust command: ``freyja_msgs/msg/CtrlCommand`` (roll, pitch in rad relative to the
+  current heading, thrust in N), turned into ``u = g e3 - R(roll, pitch, yaw) e3 T / m`` with the
+  follower's heading from its state: needs the follower mass;
+- IMU: ``sensor_msgs/msg/Imu`` ``linear_acceleration`` (body specific force), rotated with the
+  state's attitude: ``a = R f + g e3``.
+
+Freyja's message definitions are built in; other custom types are read from the bag when it
+stores their definitions (rosbag2 version 8+ and MCAP do).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import E3, euler_to_rotmat, quat_to_rotmat, rotmat_to_quat
+from aerodock.ingest.common import (
+    ENU_TO_NED,
+    FLIP_YZ,
+    GRAVITY_MPS2,
+    IDENTITY,
+    bracket_gap_s,
+    check_finite,
+    check_mass,
+    check_time,
+    check_time_unit,
+    convert_rotations,
+    convert_vectors,
+    differentiate,
+    resample_hold,
+    resample_linear,
+    resample_quat,
+    specific_force_to_accel,
+    thrust_accel,
+)
+from aerodock.ingest.errors import IngestError, ingest_warning
+
+SOURCE = "rosbag"
+DEFAULT_MASS_KG = 1.0
+
+DEFAULT_MAPPING: dict[str, Any] = {
+    "frame": "enu",
+    "time": "header",
+    "odom_twist": "body",
+    "max_gap_s": 0.25,
+    "leader": {
+        "state": "/alpha/current_state",
+        "twist": "",
+        "command": "",
+        "mass_kg": None,
+    },
+    "follower": {
+        "state": "/bravo/current_state",
+        "twist": "",
+        "command": ["/bravo/controller_debug", "/bravo/rpyt_command"],
+        "reference": "/bravo/reference_state",
+        "imu": "/bravo/imu",
+        "mass_kg": None,
+    },
+}
+# Topics of the default mapping that may be absent; a topic the user names must be present.
+_OPTIONAL_KEYS = ("twist", "reference", "imu", "command")
+
+# Freyja (github.com/unl-nimbus-lab/Freyja) message definitions, freyja_msgs.
+FREYJA_MSGS: dict[str, str] = {
+    "freyja_msgs/msg/CurrentState": (
+        "std_msgs/Header header\nfloat64[13] state_vector\nuint8 state_valid\n"
+    ),
+    "freyja_msgs/msg/ReferenceState": (
+        "std_msgs/Header header\nfloat64 pn\nfloat64 pe\nfloat64 pd\nfloat64 vn\nfloat64 ve\n"
+        "float64 vd\nfloat64 yaw\nfloat64 an\nfloat64 ae\nfloat64 ad\n"
+    ),
+    "freyja_msgs/msg/CtrlCommand": (
+        "float64 roll\nfloat64 pitch\nfloat64 yaw\nfloat64 thrust\nuint8 ctrl_mode\n"
+    ),
+    "freyja_msgs/msg/ControllerDebug": (
+        "uint8 CTRL_OK=1\nuint8 BIAS_EN=2\nuint8 FLAT_FF=4\nuint8 MASS_CR=8\n"
+        "std_msgs/Header header\nfloat32[4] lqr_u\nfloat32[4] biasv\nfloat32[7] errv\n"
+        "uint8 flags\n"
+    ),
+}
+
+STATE_TYPES = (
+    "freyja_msgs/msg/CurrentState", "nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+)
+ACCEL_COMMAND_TYPES = (
+    "freyja_msgs/msg/ControllerDebug", "geometry_msgs/msg/Vector3Stamped",
+    "geometry_msgs/msg/AccelStamped",
+)
+ATTITUDE_THRUST_TYPES = ("freyja_msgs/msg/CtrlCommand",)
+
+
+# --------------------------------------------------------------------------------------------
+# Mapping
+# --------------------------------------------------------------------------------------------
+
+
+def load_mapping(mapping: Mapping[str, Any] | str | Path | None) -> tuple[dict[str, Any], set]:
+    """The default mapping overridden by ``mapping`` (a dict or a TOML file).
+
+    Returns:
+        ``(mapping, explicit)``: the merged mapping, and the ``"role.key"`` names the user set.
+
+    Raises:
+        IngestError: unreadable TOML, unknown keys, or values of the wrong kind.
+    """
+    where = "mapping"
+    if mapping is None:
+        user: dict[str, Any] = {}
+    elif isinstance(mapping, Mapping):
+        user = dict(mapping)
+    else:
+        where = str(mapping)
+        try:
+            with open(mapping, "rb") as fh:
+                user = tomllib.load(fh)
+        except FileNotFoundError:
+            raise IngestError(where, "mapping file not found") from None
+        except tomllib.TOMLDecodeError as err:
+            raise IngestError(where, f"invalid TOML ({err})") from None
+    merged = copy.deepcopy(DEFAULT_MAPPING)
+    explicit: set[str] = set()
+    for key, value in user.items():
+        if key not in DEFAULT_MAPPING:
+            raise IngestError(where, f"unknown key {key!r} (known: {', '.join(DEFAULT_MAPPING)})")
+        if key in ("leader", "follower"):
+            if not isinstance(value, Mapping):
+                raise IngestError(where, f"[{key}] must be a table")
+            for sub, sub_value in value.items():
+                if sub not in DEFAULT_MAPPING[key]:
+                    raise IngestError(where, f"unknown key {key}.{sub!r} "
+                                             f"(known: {', '.join(DEFAULT_MAPPING[key])})")
+                merged[key][sub] = sub_value
+                explicit.add(f"{key}.{sub}")
+        else:
+            merged[key] = value
+    for key, allowed in (("frame", ("enu", "ned")), ("time", ("header", "bag")),
+                         ("odom_twist", ("body", "world"))):
+        merged[key] = str(merged[key]).lower()
+        if merged[key] not in allowed:
+            raise IngestError(where, f"{key} = {merged[key]!r}; use {' or '.join(allowed)}")
+    for role in ("leader", "follower"):
+        for key, value in merged[role].items():
+            if key == "mass_kg":
+                if value is not None:
+                    merged[role][key] = check_mass(value, where, f"{role}.mass_kg")
+            elif key == "command":
+                topics = [value] if isinstance(value, str) else value
+                if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
+                    raise IngestError(where, f"{role}.command must be a topic or a list of them")
+                merged[role][key] = [t for t in topics if t]
+            elif not isinstance(value, str):
+                raise IngestError(where, f"{role}.{key} must be a topic name (a string)")
+        if not merged[role]["state"]:
+            raise IngestError(where, f"{role}.state (the {role}'s state topic) is required")
+    if not merged["follower"]["command"]:
+        raise IngestError(where, "follower.command (the commanded acceleration or attitude-"
+                                 "thrust topic) is required")
+    return merged, explicit
+
+
+# --------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Stream:
+    """One topic: header (or bag) times in seconds, bag times, message type, messages."""
+
+    topic: str
+    msgtype: str
+    t_s: np.ndarray
+    bag_t_s: np.ndarray
+    msgs: list[Any]
+
+
+def _typestore_for(connections: list[Any]) -> Any:
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    from rosbags.typesys.base import TypesysError
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    for conn in connections:
+        if conn.msgtype in store.fielddefs:
+            continue
+        data = getattr(conn.msgdef, "data", "")
+        if data and getattr(conn.msgdef.format, "name", "") == "MSG":
+            try:
+                store.register(get_types_from_msg(data, conn.msgtype))
+            except TypesysError:
+                pass
+    for name, text in FREYJA_MSGS.items():
+        if name not in store.fielddefs:
+            store.register(get_types_from_msg(text, name))
+    return store
+
+
+def _stamp_ns(msg: Any) -> int | None:
+    header = getattr(msg, "header", None)
+    if header is None:
+        return None
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+def _read_streams(path: Path, topics: set[str], use_header: bool) -> tuple[dict[str, Stream],
+                                                                             list[str]]:
+    try:
+        from rosbags.rosbag2 import Reader
+        from rosbags.rosbag2.errors import ReaderError
+    except ImportError:  # pragma: no cover - the ingest extra is not installed
+        raise IngestError(path, "reading ROS 2 bags needs rosbags: pip install "
+                                "'aerodock[ingest]'") from None
+    if not path.exists():
+        raise IngestError(path, "file not found")
+    if path.is_file() and path.stat().st_size == 0:
+        raise IngestError(path, "empty file")
+    streams: dict[str, Stream] = {}
+    try:
+        with Reader(path) as reader:
+            present = sorted({c.topic for c in reader.connections})
+            wanted = [c for c in reader.connections if c.topic in topics]
+            store = _typestore_for(wanted)
+            raw: dict[str, tuple[str, list[int], list[int | None], list[Any]]] = {}
+            for conn, bag_ns, data in reader.messages(connections=wanted):
+                if conn.msgtype not in store.fielddefs:
+                    raise IngestError(path, f"topic {conn.topic}: unknown message type "
+                                            f"{conn.msgtype} and no definition in the bag")
+                msg = store.deserialize_cdr(data, conn.msgtype)
+                entry = raw.setdefault(conn.topic, (conn.msgtype, [], [], []))
+                entry[1].append(bag_ns)
+                entry[2].append(_stamp_ns(msg) if use_header else None)
+                entry[3].append(msg)
+    except IngestError:
+        raise
+    except (ReaderError, FileNotFoundError) as err:
+        raise IngestError(path, f"not a readable ROS 2 bag ({err})") from None
+    except Exception as err:  # rosbags raises assorted errors on corrupt storage
+        raise IngestError(path, f"corrupt ROS 2 bag ({type(err).__name__}: {err})") from None
+    for topic, (msgtype, bag_ns, stamp_ns, msgs) in raw.items():
+        bag_ns_arr = np.asarray(bag_ns, dtype=float)
+        if all(s is not None for s in stamp_ns):
+            stamps = np.asarray(stamp_ns, dtype=float)
+            column = f"{topic} header.stamp"
+            if np.all(stamps == 0):
+                raise IngestError(path, f"{column} is zero in every message: set time = "
+                                        "\"bag\" in the mapping")
+        else:
+            stamps, column = bag_ns_arr, f"{topic} bag time"
+        check_time(stamps, str(path), column=column, row_name="message")
+        check_time_unit(stamps, "ns", str(path), column=column)
+        streams[topic] = Stream(topic, msgtype, stamps * 1e-9, bag_ns_arr * 1e-9, msgs)
+    return streams, present
+
+
+def _require(streams: dict[str, Stream], present: list[str], topic: str, what: str,
+             path: Path) -> Stream:
+    if topic not in streams:
+        listed = ", ".join(present[:8]) + (" ..." if len(present) > 8 else "")
+        if topic in present:
+            raise IngestError(path, f"topic {topic} ({what}) has no messages")
+        raise IngestError(path, f"missing topic {topic} ({what}); the bag has: {listed or 'none'}")
+    return streams[topic]
+
+
+def _frames(mapping: dict[str, Any], msgtype: str) -> tuple[np.ndarray, np.ndarray]:
+    if msgtype.startswith("freyja_msgs/") or mapping["frame"] == "ned":
+        return IDENTITY, IDENTITY
+    return ENU_TO_NED, FLIP_YZ
+
+
+def _vec(v: Any) -> list[float]:
+    return [v.x, v.y, v.z]
+
+
+def _state(stream: Stream, twist: Stream | None, mapping: dict[str, Any],
+           path: Path) -> dict[str, np.ndarray]:
+    """Position, velocity (NED), attitude (quaternion, rotation) of a state topic."""
+    kind = stream.msgtype
+    world, body = _frames(mapping, kind)
+    where = f"{path}: {stream.topic}"
+    if kind == "freyja_msgs/msg/CurrentState":
+        sv = np.array([np.asarray(m.state_vector, dtype=float)[:9] for m in stream.msgs])
+        check_finite({"state_vector": sv}, where, row_name="message")
+        pos, vel = sv[:, 0:3], sv[:, 3:6]
+        rot = euler_to_rotmat(sv[:, 6], sv[:, 7], sv[:, 8])
+    elif kind in STATE_TYPES:
+        poses = [m.pose.pose if kind != "geometry_msgs/msg/PoseStamped" else m.pose
+                 for m in stream.msgs]
+        pos_src = np.array([_vec(p.position) for p in poses])
+        quat_src = np.array([[p.orientation.w, p.orientation.x, p.orientation.y,
+                              p.orientation.z] for p in poses])
+        check_finite({"position": pos_src, "orientation": quat_src}, where, row_name="message")
+        norms = np.linalg.norm(quat_src, axis=1)
+        if np.any(np.abs(norms - 1.0) > 0.1):
+            i = int(np.argmax(np.abs(norms - 1.0) > 0.1))
+            raise IngestError(where, f"orientation of message {i} has norm {norms[i]:.3g}, "
+                                     "not a unit quaternion")
+        rot_src = quat_to_rotmat(quat_src)
+        pos = convert_vectors(world, pos_src)
+        rot = convert_rotations(world, rot_src, body)
+        if kind == "nav_msgs/msg/Odometry":
+            lin = np.array([_vec(m.twist.twist.linear) for m in stream.msgs])
+            check_finite({"twist.linear": lin}, where, row_name="message")
+            if mapping["odom_twist"] == "body":
+                lin = np.einsum("tij,tj->ti", rot_src, lin)
+            vel = convert_vectors(world, lin)
+        elif twist is not None:
+            if twist.msgtype != "geometry_msgs/msg/TwistStamped":
+                raise IngestError(path, f"topic {twist.topic} is {twist.msgtype}; a twist topic "
+                                        "must be geometry_msgs/msg/TwistStamped")
+            lin = np.array([_vec(m.twist.linear) for m in twist.msgs])
+            check_finite({"twist.linear": lin}, f"{path}: {twist.topic}", row_name="message")
+            vel = resample_linear(twist.t_s, convert_vectors(world, lin),
+                                  np.clip(stream.t_s, twist.t_s[0], twist.t_s[-1]))
+        else:
+            vel = differentiate(stream.t_s, pos)
+    else:
+        raise IngestError(path, f"topic {stream.topic} is {kind}; a state topic must be one of "
+                                f"{', '.join(t.split('/')[-1] for t in STATE_TYPES)}")
+    return {"t": stream.t_s, "pos": pos, "vel": vel, "rot": rot, "quat": rotmat_to_quat(rot)}
+
+
+def _command(stream: Stream, mapping: dict[str, Any], path: Path) -> dict[str, Any]:
+    """Commanded acceleration (NED, zero at hover) or attitude-thrust samples of a topic."""
+    kind = stream.msgtype
+    world, _ = _frames(mapping, kind)
+    where = f"{path}: {stream.topic}"
+    if kind == "freyja_msgs/msg/ControllerDebug":
+        u = np.array([np.asarray(m.lqr_u, dtype=float)[:3] for m in stream.msgs]) + \
+            GRAVITY_MPS2 * E3
+        check_finite({"lqr_u": u}, where, row_name="message")
+        return {"kind": "accel", "t": stream.t_s, "accel": u}
+    if kind in ("geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/AccelStamped"):
+        vecs = np.array([_vec(m.vector if kind.endswith("Vector3Stamped") else m.accel.linear)
+                         for m in stream.msgs])
+        check_finite({"acceleration": vecs}, where, row_name="message")
+        return {"kind": "accel", "t": stream.t_s, "accel": convert_vectors(world, vecs)}
+    if kind in ATTITUDE_THRUST_TYPES:
+        rpt = np.array([[m.roll, m.pitch, m.thrust] for m in stream.msgs], dtype=float)
+        check_finite({"roll/pitch/thrust": rpt}, where, row_name="message")
+        return {"kind": "attitude-thrust", "t": stream.t_s, "rpt": rpt}
+    known = ", ".join(t.split("/")[-1] for t in ACCEL_COMMAND_TYPES + ATTITUDE_THRUST_TYPES)
+    raise IngestError(path, f"topic {stream.topic} is {kind}; a command topic must be one of "
+                            f"{known}")
+
+
+def _mass(mapping: dict[str, Any], role: str, option: float | None, path: Path,
+          needed: bool) -> tuple[float, bool]:
+    if option is not None:
+        return check_mass(option, path, "--mass-kg"), False
+    if mapping[role]["mass_kg"] is not None:
+        return float(mapping[role]["mass_kg"]), False
+    if needed:
+        raise IngestError(path, f"the {role}'s attitude-thrust command needs its mass: set "
+                                f"{role}.mass_kg in the mapping or pass --mass-kg")
+    return DEFAULT_MASS_KG, True
+
+
+def _command_topic(role_map: dict[str, Any], streams: dict[str, Stream], present: list[str],
+                   path: Path, role: str, required: bool) -> Stream | None:
+    for topic in role_map["command"]:
+        if topic in streams:
+            return streams[topic]
+    if required:
+        _require(streams, present, role_map["command"][0] if len(role_map["command"]) == 1
+                 else " or ".join(role_map["command"]), f"{role} command", path)
+    return None
+
+
+def read_rosbag(path: Path, *, mapping: Mapping[str, Any] | str | Path | None = None,
+                mass_kg: float | None = None) -> FlightLog:
+    """Read one ROS 2 bag (a ``.db3``/``.mcap`` file or a bag folder) into a FlightLog.
+
+    Args:
+        path: The bag.
+        mapping: Topic mapping (dict or TOML file) over :data:`DEFAULT_MAPPING`.
+        mass_kg: Mass of both vehicles, overriding the mapping.
+
+    Raises:
+        IngestError: unreadable or empty bag, missing topics, unsupported message types, NaNs,
+            bad stamps (duplicated, non-monotonic, zero, wrong unit), too little overlap.
+    """
+    path = Path(path)
+    cfg, explicit = load_mapping(mapping)
+    leader_map, follower_map = cfg["leader"], cfg["follower"]
+    topics = {leader_map["state"], follower_map["state"]}
+    for role_map in (leader_map, follower_map):
+        topics.update(t for k in _OPTIONAL_KEYS for t in ([role_map.get(k)] if k != "command"
+                                                           else role_map[k]) if t)
+    streams, present = _read_streams(path, topics, cfg["time"] == "header")
+    if not present:
+        raise IngestError(path, "empty bag: no topics")
+    for role in ("leader", "follower"):
+        for key in ("twist", "reference", "imu"):
+            topic = cfg[role].get(key)
+            if topic and f"{role}.{key}" in explicit:
+                _require(streams, present, topic, f"{role} {key}", path)
+
+    def optional(role: str, key: str) -> Stream | None:
+        topic = cfg[role].get(key)
+        return streams.get(topic) if topic else None
+
+    leader = _state(_require(streams, present, leader_map["state"], "leader state", path),
+                    optional("leader", "twist"), cfg, path)
+    follower = _state(_require(streams, present, follower_map["state"], "follower state", path),
+                      optional("follower", "twist"), cfg, path)
+    cmd_stream = _command_topic(follower_map, streams, present, path, "follower", True)
+    assert cmd_stream is not None
+    cmd = _command(cmd_stream, cfg, path)
+    leader_cmd_stream = _command_topic(leader_map, streams, present, path, "leader",
+                                       "leader.command" in explicit)
+    leader_cmd = _command(leader_cmd_stream, cfg, path) if leader_cmd_stream else None
+    imu = optional("follower", "imu")
+
+    # Common window of every stream used; the follower state's stamps are the time base.
+    spans = [leader["t"], follower["t"], cmd["t"]] + ([imu.t_s] if imu else []) + \
+        ([leader_cmd["t"]] if leader_cmd else [])
+    start = max(float(s[0]) for s in spans)
+    end = min(float(s[-1]) for s in spans)
+    t_f = follower["t"]
+    inside = (t_f >= start) & (t_f <= end)
+    keep = inside & (bracket_gap_s(leader["t"], t_f) <= cfg["max_gap_s"]) & \
+        (t_f - resample_hold(cmd["t"], cmd["t"], t_f) <= cfg["max_gap_s"])
+    n_keep = int(keep.sum())
+    longest = max(float(s[-1] - s[0]) for s in spans)
+    if n_keep < 2 or (end - start) < 0.5 * longest:
+        raise IngestError(path, f"topics of different lengths: the follower state, leader state "
+                                f"and command overlap for {max(end - start, 0):.2f} s of "
+                                f"{longest:.2f} s")
+    t = t_f[keep]
+    rot_f = follower["rot"][keep]
+
+    f_mass, f_assumed = _mass(cfg, "follower", mass_kg, path, cmd["kind"] == "attitude-thrust")
+    l_mass, l_assumed = _mass(cfg, "leader", mass_kg, path, bool(
+        leader_cmd and leader_cmd["kind"] == "attitude-thrust"))
+    cmd_accel, thrust_n = _command_accel(cmd, t, follower, rot_f, f_mass)
+    if imu is not None:
+        if imu.msgtype != "sensor_msgs/msg/Imu":
+            raise IngestError(path, f"topic {imu.topic} is {imu.msgtype}; the IMU topic must "
+                                    "be sensor_msgs/msg/Imu")
+        _, body = _frames(cfg, imu.msgtype)
+        force = np.array([_vec(m.linear_acceleration) for m in imu.msgs])
+        check_finite({"linear_acceleration": force}, f"{path}: {imu.topic}", row_name="message")
+        obs = specific_force_to_accel(rot_f, resample_linear(imu.t_s, force @ body.T, t))
+        obs_source = f"imu {imu.topic}"
+    else:
+        obs = differentiate(t, follower["vel"][keep])
+        obs_source = "differentiated follower velocity"
+
+    extra: dict[str, np.ndarray] = {}
+    if leader_cmd is not None:
+        extra["leader_thrust_n"] = _command_accel(leader_cmd, t, leader, resample_quat_rot(
+            leader, t), l_mass)[1]
+    ref = optional("follower", "reference")
+    if ref is not None and ref.msgtype == "freyja_msgs/msg/ReferenceState":
+        vals = np.array([[m.pn, m.pe, m.pd, m.vn, m.ve, m.vd, m.an, m.ae, m.ad]
+                         for m in ref.msgs], dtype=float)
+        if np.all(np.isfinite(vals)) and ref.t_s[0] <= t[-1]:
+            held = resample_hold(ref.t_s, vals, t)
+            extra.update({"follower_ref_pos_m": held[:, 0:3], "follower_ref_vel_mps": held[:, 3:6],
+                          "follower_ref_accel_mps2": held[:, 6:9]})
+    lat = {role: float(np.median(s.bag_t_s - s.t_s)) for role, s in
+           (("leader", streams[leader_map["state"]]), ("follower", streams[follower_map["state"]]))}
+    if abs(lat["leader"] - lat["follower"]) > 0.1:
+        warnings.warn(ingest_warning(
+            path, f"leader and follower stamps reach the bag {lat['leader']:.3f} s and "
+            f"{lat['follower']:.3f} s late: their clocks may not agree"), stacklevel=2)
+    if f_assumed:
+        warnings.warn(ingest_warning(
+            path, f"no follower mass: assuming {DEFAULT_MASS_KG:g} kg for follower_thrust_n "
+            "(set follower.mass_kg or --mass-kg)"), stacklevel=2)
+    meta = {
+        "name": path.stem if path.is_file() else path.name,
+        "source": SOURCE,
+        "frame": "NED",
+        "label_basis": "command",
+        "command_topic": cmd_stream.topic,
+        "command_type": cmd_stream.msgtype,
+        "command_kind": cmd["kind"],
+        "obs_accel_source": obs_source,
+        "leader_mass_kg": l_mass,
+        "follower_mass_kg": f_mass,
+        "mass_assumed": f_assumed or l_assumed,
+        "source_frame": cfg["frame"],
+        "time": cfg["time"],
+        "file": str(path),
+        "t_origin_s": float(t[0]),
+        "dropped_samples": int(inside.sum() - n_keep),
+        "stamp_latency_s": lat,
+        "mapping": {"leader": leader_map, "follower": follower_map},
+        "gravity_mps2": GRAVITY_MPS2,
+    }
+    return FlightLog(
+        t_s=t - t[0],
+        leader_pos_m=resample_linear(leader["t"], leader["pos"], t),
+        leader_vel_mps=resample_linear(leader["t"], leader["vel"], t),
+        leader_quat=resample_quat(leader["t"], leader["quat"], t),
+        follower_pos_m=follower["pos"][keep],
+        follower_vel_mps=follower["vel"][keep],
+        follower_quat=follower["quat"][keep],
+        follower_cmd_accel_mps2=cmd_accel,
+        follower_thrust_n=thrust_n,
+        follower_obs_accel_mps2=obs,
+        meta=meta,
+        extra=extra,
+    )
+
+
+def resample_quat_rot(state: dict[str, np.ndarray], t: np.ndarray) -> np.ndarray:
+    """A state's attitude at times ``t``, as rotation matrices."""
+    return quat_to_rotmat(resample_quat(state["t"], state["quat"], t))
+
+
+def _command_accel(cmd: dict[str, Any], t: np.ndarray, state: dict[str, np.ndarray],
+                   rot: np.ndarray, mass_kg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Commanded acceleration (NED) and collective thrust (N) at times ``t``."""
+    if cmd["kind"] == "accel":
+        accel = resample_hold(cmd["t"], cmd["accel"], t)
+        return accel, mass_kg * np.linalg.norm(GRAVITY_MPS2 * E3 - accel, axis=1)
+    rpt = resample_hold(cmd["t"], cmd["rpt"], t)
+    # Freyja's roll and pitch are relative to the current heading: R = Rz(yaw) Ry(pitch) Rx(roll).
+    heading = np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
+    rot_cmd = euler_to_rotmat(rpt[:, 0], rpt[:, 1], heading)
+    return thrust_accel(rot_cmd, rpt[:, 2], mass_kg), rpt[:, 2]
+

@@ -1,0 +1,251 @@
+"""Typer command functions for the learning half: ``train``, ``evaluate``, ``export``.
+
+The integrator registers them on the ``aerodock`` app::
+
+    from aerodock.learning import commands as learn_cmds
+    app.command("train")(learn_cmds.train_command)
+    app.command("evaluate")(learn_cmds.evaluate_command)
+    app.command("export")(learn_cmds.export_command)
+
+Bad input (missing/corrupt data or model files, unknown model kind, too little data) prints
+``error: <one line>`` on stderr and exits with code 2, without a traceback. Progress goes to
+stderr, so ``--json`` output on stdout stays machine-readable. PyTorch is imported only by the
+commands that need it (``train``, ``export``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Any, NoReturn
+
+import typer
+
+TRAINABLE = ("so2", "so2-ext", "mlp", "zero")
+
+DataOpt = Annotated[
+    list[Path],
+    typer.Option(
+        "--data",
+        help="FlightLog file, dataset file, or folder of them; repeat --data for several.",
+    ),
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print the numbers as JSON on stdout.")]
+
+
+def _fail(message: str) -> NoReturn:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(2)
+
+
+def _one_line(err: BaseException) -> str:
+    text = str(err).strip()
+    return text.splitlines()[0] if text else type(err).__name__
+
+
+def _echo_json(obj: Any) -> None:
+    typer.echo(json.dumps(obj, indent=2, default=str))
+
+
+def _load_data(paths: list[Path]) -> Any:
+    from aerodock.learning.dataset import DataError, load_data_paths
+
+    try:
+        return load_data_paths(paths)
+    except (DataError, OSError, ValueError) as err:
+        _fail(_one_line(err))
+
+
+def _fmt(v: float | None, digits: int = 3) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return f"{v:.{digits}f}"
+
+
+def train_command(
+    data: DataOpt,
+    out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
+    model: Annotated[
+        str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, mlp (or zero).")
+    ] = "so2",
+    minutes: Annotated[
+        float | None,
+        typer.Option("--minutes", help="Train on only this many minutes of the data."),
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
+    spectral_norm: Annotated[
+        bool, typer.Option("--spectral-norm", help="Spectrally normalise the layers.")
+    ] = False,
+    max_epochs: Annotated[int, typer.Option("--max-epochs", help="Epoch limit.")] = 200,
+    as_json: JsonOpt = False,
+) -> None:
+    """Train a downwash model on flight logs and write it to a model directory."""
+    import numpy as np
+
+    if model not in TRAINABLE:
+        _fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
+    if minutes is not None and not minutes > 0:
+        _fail(f"--minutes must be positive, got {minutes}")
+    if max_epochs < 1:
+        _fail(f"--max-epochs must be at least 1, got {max_epochs}")
+    if out.exists() and not out.is_dir():
+        _fail(f"{out}: exists and is not a directory")
+    ds = _load_data(data)
+    available = ds.minutes
+    if minutes is not None:
+        from aerodock.learning.dataset import take_minutes
+
+        ds = take_minutes(ds, minutes, np.random.default_rng(seed))
+    try:
+        import torch
+
+        from aerodock.learning.train import train_model
+    except ImportError:
+        _fail("training needs PyTorch: pip install 'aerodock[learn]'")
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
+    console = Console(stderr=True)
+    with Progress(
+        TextColumn("[bold]train {task.fields[kind]}"), BarColumn(),
+        TextColumn("epoch {task.completed}/{task.total}"),
+        TextColumn("{task.fields[loss]}"), TimeElapsedColumn(),
+        console=console, transient=True,
+    ) as bar:
+        task = bar.add_task("train", total=max_epochs, kind=model, loss="")
+
+        def progress(epoch: int, total: int, train_loss: float, val_loss: float | None) -> None:
+            loss = f"val RMSE {math.sqrt(val_loss):.3f} m/s²" if val_loss is not None else ""
+            bar.update(task, completed=epoch, loss=loss)
+
+        try:
+            trained = train_model(model, ds, seed=seed, spectral_norm=spectral_norm,
+                                  max_epochs=max_epochs, progress=progress)
+        except ValueError as err:
+            _fail(_one_line(err))
+    try:
+        path = trained.save(out)
+    except (OSError, ValueError) as err:
+        _fail(f"{out}: cannot write model ({_one_line(err)})")
+    info = trained.info
+    result = {
+        "model_dir": str(path),
+        "kind": model,
+        "seed": seed,
+        "n_samples": ds.n,
+        "n_flights": ds.n_flights,
+        "minutes": round(ds.minutes, 4),
+        "minutes_available": round(available, 4),
+        "split": info.get("split"),
+        "epochs": info.get("epochs"),
+        "best_epoch": info.get("best_epoch"),
+        "stopped": info.get("stopped"),
+        "train_rmse_mps2": info.get("train_rmse_mps2"),
+        "val_rmse_mps2": info.get("val_rmse_mps2"),
+        "train_time_s": info.get("train_time_s"),
+        "warnings": ds.meta.get("warnings", []),
+    }
+    if as_json:
+        _echo_json(result)
+        return
+    for note in result["warnings"]:
+        typer.echo(f"warning: {note}", err=True)
+    typer.echo(
+        f"trained {model} on {ds.n} samples ({ds.minutes:.2f} min, {ds.n_flights} flights) in "
+        f"{_fmt(result['train_time_s'], 1)} s, {result['epochs']} epochs ({result['stopped']}); "
+        f"validation RMSE {_fmt(result['val_rmse_mps2'])} m/s² ({result['split']} split)"
+    )
+    typer.echo(f"wrote {path}")
+
+
+def _metrics_table(title: str, region: dict[str, Any]) -> Any:
+    from rich.table import Table
+
+    table = Table(title=f"{title} ({region['n']} samples)", title_justify="left")
+    cols = [("model", region["model"]), ("zero model", region["zero"])]
+    if region.get("error_floor"):
+        cols.append(("error floor", region["error_floor"]))
+    table.add_column("metric")
+    for name, _ in cols:
+        table.add_column(name, justify="right")
+    for axis in ("x", "y", "z", "overall"):
+        table.add_row(f"RMSE {axis} [m/s²]", *[_fmt(m["rmse_mps2"][axis]) for _, m in cols])
+    for axis in ("x", "y", "z", "overall"):
+        table.add_row(f"R² {axis}", *[_fmt(m["r2"][axis]) for _, m in cols])
+    return table
+
+
+def evaluate_command(
+    model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
+    data: DataOpt,
+    lateral_radius: Annotated[
+        float, typer.Option("--lateral-radius", help="Interaction region radius, m.")
+    ] = 0.2,
+    as_json: JsonOpt = False,
+) -> None:
+    """Evaluate a trained model on held-out flights, beside the zero model."""
+    from aerodock.learning.evaluate import evaluate
+    from aerodock.learning.modelfile import ModelFileError
+    from aerodock.learning.runtime import Predictor
+
+    if not lateral_radius > 0:
+        _fail(f"--lateral-radius must be positive, got {lateral_radius}")
+    try:
+        predictor = Predictor.load(model)
+    except ModelFileError as err:
+        _fail(_one_line(err))
+    ds = _load_data(data)
+    result = evaluate(predictor, ds, lateral_radius_m=lateral_radius)
+    result["model_dir"] = str(model)
+    if as_json:
+        _echo_json(result)
+        return
+    from rich.console import Console
+
+    console = Console()
+    console.print(f"model {model} ({result['model']}) on {ds.n} samples "
+                  f"({ds.minutes:.2f} min, {ds.n_flights} flights)")
+    console.print(_metrics_table("all samples", result["all"]))
+    console.print(_metrics_table(f"interaction region: {result['interaction_region']}",
+                                 result["interaction"]))
+
+
+def export_command(
+    model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
+    out: Annotated[Path, typer.Option("--out", help="ONNX file to write.")],
+    as_json: JsonOpt = False,
+) -> None:
+    """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output (n,3))."""
+    from aerodock.learning.modelfile import ModelFileError
+    from aerodock.learning.runtime import Predictor
+
+    try:
+        predictor = Predictor.load(model)
+    except ModelFileError as err:
+        _fail(_one_line(err))
+    if out.is_dir():
+        _fail(f"{out}: is a directory; give a file name such as model.onnx")
+    try:
+        from aerodock.learning.export import check_onnx, export_onnx
+    except ImportError:
+        _fail("ONNX export needs PyTorch and onnx: pip install 'aerodock[learn,export]'")
+    try:
+        path = export_onnx(model, out)
+    except ModelFileError as err:
+        _fail(_one_line(err))
+    except (OSError, RuntimeError) as err:
+        _fail(f"{out}: export failed ({_one_line(err)})")
+    try:
+        max_diff: float | None = check_onnx(path, predictor)
+    except ImportError:
+        max_diff = None
+    result = {"model_dir": str(model), "kind": predictor.kind, "onnx": str(path),
+              "max_abs_diff_vs_numpy_mps2": max_diff}
+    if as_json:
+        _echo_json(result)
+        return
+    check = ("not checked (onnxruntime not installed)" if max_diff is None
+             else f"max |onnxruntime - numpy| = {max_diff:.2e} m/s²")
+    typer.echo(f"wrote {path} ({check})")

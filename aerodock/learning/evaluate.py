@@ -1,0 +1,108 @@
+"""Held-out evaluation of a downwash model against the labels, beside the zero model.
+
+Metrics (all in m/s², NED axes x = north, y = east, z = down):
+
+* ``rmse_mps2``: root mean square error per axis, and ``overall`` = sqrt of the mean over the
+  three axes (the RMS of one error component);
+* ``r2``: coefficient of determination per axis, and ``overall`` = 1 - (sum of squared errors
+  over all axes) / (sum of squared deviations of the labels from their per-axis means); None when
+  undefined (fewer than two samples or constant labels). The zero model's R² is <= 0.
+
+Each is reported over all samples and over the *interaction region*: follower below the leader
+(``dp_z > 0``) within ``lateral_radius_m`` (0.2 m) horizontally, where the downwash matters.
+With simulated data (``y_true_mean``), the *error floor* is the same metrics for the simulator's
+true mean field used as the prediction: no model of the mean can beat it, because what remains is
+turbulence and sensor noise. ``model_vs_true_mean`` measures how well the model recovers the mean
+field itself.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from aerodock.learning.dataset import INTERACTION_RADIUS_M, Dataset
+
+AXES = ("x", "y", "z")
+
+
+class SupportsPredict(Protocol):
+    """Anything with a batched ``predict(x (n, 9), leader_R (n, 3, 3)) -> (n, 3)``."""
+
+    def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+        """Predicted acceleration (n, 3)."""
+        ...
+
+
+def regression_metrics(pred: np.ndarray, y: np.ndarray) -> dict[str, Any]:
+    """RMSE and R² per axis and overall of predictions ``pred`` (n, 3) for labels ``y`` (n, 3)."""
+    pred = np.asarray(pred, dtype=float)
+    y = np.asarray(y, dtype=float)
+    n = int(y.shape[0])
+    if n == 0:
+        none = {a: None for a in (*AXES, "overall")}
+        return {"n": 0, "rmse_mps2": dict(none), "r2": dict(none)}
+    sse = np.sum((pred - y) ** 2, axis=0)
+    sst = np.sum((y - y.mean(axis=0)) ** 2, axis=0)
+    rmse = np.sqrt(sse / n)
+
+    def r2(e: float, t: float) -> float | None:
+        return None if n < 2 or t <= 1e-12 * max(n, 1) else float(1.0 - e / t)
+
+    return {
+        "n": n,
+        "rmse_mps2": {**{a: float(v) for a, v in zip(AXES, rmse)},
+                      "overall": float(np.sqrt(sse.sum() / (3 * n)))},
+        "r2": {**{a: r2(e, t) for a, e, t in zip(AXES, sse, sst)},
+               "overall": r2(float(sse.sum()), float(sst.sum()))},
+    }
+
+
+def _region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str, Any]:
+    y = ds.y[mask]
+    out: dict[str, Any] = {
+        "n": int(mask.sum()),
+        "model": regression_metrics(pred[mask], y),
+        "zero": regression_metrics(np.zeros_like(y), y),
+        "error_floor": None,
+        "model_vs_true_mean": None,
+    }
+    if ds.y_true_mean is not None:
+        true = ds.y_true_mean[mask]
+        ok = np.all(np.isfinite(true), axis=1)
+        if ok.any():
+            out["error_floor"] = regression_metrics(true[ok], y[ok])
+            out["model_vs_true_mean"] = regression_metrics(pred[mask][ok], true[ok])
+    return out
+
+
+def evaluate(
+    predictor: SupportsPredict, ds: Dataset, *, lateral_radius_m: float = INTERACTION_RADIUS_M
+) -> dict[str, Any]:
+    """Evaluate ``predictor`` on ``ds`` (JSON-ready dict).
+
+    Args:
+        predictor: a :class:`~aerodock.learning.runtime.Predictor` (or anything with a batched
+            ``predict``).
+        ds: held-out data.
+        lateral_radius_m: horizontal radius of the interaction region.
+
+    Returns:
+        ``{"model": kind, "n_samples", "minutes", "interaction_region": description,
+        "all": region, "interaction": region}``, where each region holds ``n``, ``model`` and
+        ``zero`` metrics (see :func:`regression_metrics`), ``error_floor`` and
+        ``model_vs_true_mean`` (None without ``y_true_mean``).
+    """
+    pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
+    if pred.shape != ds.y.shape:
+        raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
+    return {
+        "model": getattr(predictor, "kind", type(predictor).__name__),
+        "n_samples": ds.n,
+        "minutes": round(ds.minutes, 4),
+        "interaction_region": f"dp_z > 0 (follower below the leader) and horizontal distance "
+                              f"<= {lateral_radius_m} m",
+        "all": _region(pred, ds, np.ones(ds.n, dtype=bool)),
+        "interaction": _region(pred, ds, ds.interaction_mask(lateral_radius_m)),
+    }

@@ -1,0 +1,212 @@
+"""Sample efficiency: held-out error against minutes of training data, per model kind.
+
+For every requested amount of data and every seed, one training subset is drawn
+(:func:`~aerodock.learning.dataset.take_minutes`; the same subset for every model kind, so the
+comparison is paired), each kind is trained on it and evaluated on the held-out set. Amounts
+larger than the data available are skipped and recorded. Results go to ``sample_efficiency.json``
+and a figure ``sample_efficiency.png`` (log minutes vs held-out RMSE, mean ± sd over seeds, one
+line per kind, the zero model and, with simulated data, the error floor as horizontal lines).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.learning.dataset import Dataset, take_minutes
+from aerodock.learning.evaluate import evaluate
+from aerodock.learning.features import check_kind
+from aerodock.learning.runtime import ZeroPredictor
+from aerodock.learning.train import train_model
+
+JSON_NAME = "sample_efficiency.json"
+FIGURE_NAME = "sample_efficiency.png"
+KIND_LABELS = {"so2": "SO(2) (paper)", "so2-ext": "SO(2) extended", "mlp": "plain MLP"}
+
+
+def _mean_sd(values: list[float]) -> tuple[float, float]:
+    arr = np.asarray(values, dtype=float)
+    return float(arr.mean()), float(arr.std(ddof=1)) if len(arr) > 1 else 0.0
+
+
+def sample_efficiency(
+    train_ds: Dataset,
+    test_ds: Dataset,
+    kinds: Sequence[str] = ("so2", "so2-ext", "mlp"),
+    minutes: Sequence[float] = (0.5, 1, 2, 5, 10),
+    seeds: Sequence[int] = (0, 1, 2),
+    *,
+    out_dir: str | Path | None = None,
+    metric: str = "all",
+    mode: str = "stratified",
+    train_kwargs: dict[str, Any] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> dict[str, Any]:
+    """Train every kind on growing amounts of data and evaluate on ``test_ds``.
+
+    Args:
+        train_ds: data to draw the training subsets from.
+        test_ds: held-out data (e.g. other flights, see
+            :func:`~aerodock.learning.dataset.split_by_flight`).
+        kinds: model kinds.
+        minutes: amounts of training data (minutes of flight); larger than available: skipped.
+        seeds: one subset and one training run per seed.
+        out_dir: where to write the JSON and the PNG figure (None: write nothing).
+        metric: region plotted, ``"all"`` or ``"interaction"`` (both are recorded).
+        mode: subset mode of :func:`take_minutes` (default ``"stratified"``: a chunk of every
+            flight, so small subsets keep the full data's range of separations).
+        train_kwargs: extra keyword arguments for :func:`train_model`.
+        progress: called as ``progress(description, done, total)`` after every run.
+
+    Returns:
+        JSON-ready results: ``minutes`` used, ``skipped_minutes``, ``zero`` and ``error_floor``
+        RMSEs, and per kind ``rmse_mean``/``rmse_sd`` (plotted metric), the same for both
+        regions, and every run.
+    """
+    for kind in kinds:
+        check_kind(kind)
+    if metric not in ("all", "interaction"):
+        raise ValueError(f"metric must be 'all' or 'interaction', got {metric!r}")
+    if not seeds:
+        raise ValueError("at least one seed is needed")
+    available = train_ds.minutes
+    used = sorted(float(m) for m in minutes if float(m) <= available * (1 + 1e-6))
+    skipped = sorted(float(m) for m in minutes if float(m) > available * (1 + 1e-6))
+    zero = evaluate(ZeroPredictor(), test_ds)
+    floor = {r: zero[r]["error_floor"] for r in ("all", "interaction")}
+    result: dict[str, Any] = {
+        "metric": metric,
+        "metric_description": "held-out RMSE, m/s^2 (RMS over the three NED components); "
+                              f"region {zero['interaction_region']!r} for 'interaction'",
+        "mode": mode,
+        "minutes_available": round(available, 4),
+        "minutes": used,
+        "skipped_minutes": skipped,
+        "skip_reason": (f"more than the {available:.2f} minutes of training data available"
+                        if skipped else None),
+        "seeds": [int(s) for s in seeds],
+        "n_test": test_ds.n,
+        "n_test_interaction": zero["interaction"]["n"],
+        "zero": {r: zero[r]["zero"]["rmse_mps2"]["overall"] for r in ("all", "interaction")},
+        "error_floor": {r: (f["rmse_mps2"]["overall"] if f else None) for r, f in floor.items()},
+        "models": {k: {"runs": []} for k in kinds},
+    }
+    total = len(used) * len(seeds) * len(kinds)
+    done = 0
+    kwargs = dict(train_kwargs or {})
+    for m in used:
+        for seed in seeds:
+            subset = take_minutes(train_ds, m, np.random.default_rng(10_000 + int(seed)),
+                                  mode=mode)
+            for kind in kinds:
+                trained = train_model(kind, subset, seed=int(seed), **kwargs)
+                ev = evaluate(trained.predictor(), test_ds)
+                result["models"][kind]["runs"].append({
+                    "minutes": m, "minutes_used": round(subset.minutes, 4), "seed": int(seed),
+                    "n_train": subset.n,
+                    "rmse_all": ev["all"]["model"]["rmse_mps2"]["overall"],
+                    "rmse_interaction": ev["interaction"]["model"]["rmse_mps2"]["overall"],
+                    "r2_all": ev["all"]["model"]["r2"]["overall"],
+                    "epochs": trained.info.get("epochs"),
+                    "split": trained.info.get("split"),
+                    "train_time_s": trained.info.get("train_time_s"),
+                })
+                done += 1
+                if progress is not None:
+                    progress(f"{kind} {m:g} min seed {seed}", done, total)
+    for kind in kinds:
+        entry = result["models"][kind]
+        for region in ("all", "interaction"):
+            means, sds = [], []
+            for m in used:
+                vals = [r[f"rmse_{region}"] for r in entry["runs"] if r["minutes"] == m]
+                vals = [v for v in vals if v is not None]
+                mean, sd = _mean_sd(vals) if vals else (float("nan"), float("nan"))
+                means.append(mean)
+                sds.append(sd)
+            entry[f"rmse_{region}_mean"] = means
+            entry[f"rmse_{region}_sd"] = sds
+        entry["rmse_mean"] = entry[f"rmse_{metric}_mean"]
+        entry["rmse_sd"] = entry[f"rmse_{metric}_sd"]
+    if out_dir is not None:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        result["figure"] = str(plot_sample_efficiency(result, out / FIGURE_NAME))
+        result["json"] = str(out / JSON_NAME)
+        _write_json(out / JSON_NAME, result)
+    return _nan_to_none(result)
+
+
+def _write_json(path: Path, doc: dict[str, Any]) -> None:
+    text = json.dumps(_nan_to_none(doc), indent=2) + "\n"
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _nan_to_none(obj: Any) -> Any:
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _nan_to_none(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_nan_to_none(v) for v in obj]
+    return obj
+
+
+def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:
+    """Draw the sample-efficiency figure (PNG, Agg backend, no pyplot state) and return its path."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    path = Path(path)
+    metric = result["metric"]
+    fig = Figure(figsize=(6.0, 4.0), dpi=120)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    mins = np.asarray(result["minutes"], dtype=float)
+    markers = iter("osD^v<>")
+    for kind, entry in result["models"].items():
+        if not len(mins):
+            break
+        mean = np.asarray(entry["rmse_mean"], dtype=float)
+        sd = np.asarray(entry["rmse_sd"], dtype=float)
+        ax.errorbar(mins, mean, yerr=sd, marker=next(markers, "o"), capsize=3,
+                    label=KIND_LABELS.get(kind, kind))
+    zero = result["zero"].get(metric)
+    if zero is not None:
+        ax.axhline(zero, color="0.3", linestyle="--", label="zero model")
+    floor = (result.get("error_floor") or {}).get(metric)
+    if floor is not None:
+        ax.axhline(floor, color="0.6", linestyle=":", label="error floor (true mean field)")
+    ax.set_xscale("log")
+    if len(mins):
+        ax.set_xticks(mins)
+        ax.set_xticklabels([f"{m:g}" for m in mins])
+    ax.set_xlabel("training data, minutes of flight")
+    region = "all held-out samples" if metric == "all" else "interaction region"
+    ax.set_ylabel(f"held-out RMSE, m/s² ({region})")
+    ax.set_title("Sample efficiency (mean ± sd over seeds)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".png")
+    os.close(fd)
+    try:
+        fig.savefig(tmp, format="png")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
