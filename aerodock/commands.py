@@ -1,1 +1,157 @@
-"""Registers the commands that live beside their subpackages on the ``aerodock`` app."""
+"""Commands registered on the ``aerodock`` app beside the field commands of ``cli``:
+``dock``, ``demo`` and the learning, ingestion and benchmark commands of their subpackages."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from aerodock.cli import ConfigOpt, JsonOpt, SeedOpt, _config, app, fail, print_json
+from aerodock.control.compensation import Compensation
+
+err_console = Console(stderr=True)
+
+
+def progress_bar() -> Progress:
+    """A Rich progress bar on stderr (stdout stays clean for --json)."""
+    return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+                    TimeElapsedColumn(), console=err_console, transient=True)
+
+
+def _load_predictor(model: Path | None, comp: Compensation):
+    if comp != Compensation.MODEL:
+        return None
+    if model is None:
+        fail("--compensation model needs --model DIR (a trained model)")
+    from aerodock.learning.runtime import Predictor
+
+    return Predictor.load(model)
+
+
+@app.command("dock")
+def dock(
+    trials: Annotated[int, typer.Option(help="Number of docking trials (one batch).")] = 50,
+    offset: Annotated[float | None, typer.Option(help="Cable length d_p, m.")] = None,
+    leader_speed: Annotated[float, typer.Option(help="Leader speed (north), m/s.")] = 0.0,
+    leader_fixed: Annotated[bool, typer.Option(help="Leader on a rigid stand.")] = False,
+    compensation: Annotated[Compensation, typer.Option(help="Follower compensation.")] = (
+        Compensation.OBSERVER),
+    model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
+    seed: SeedOpt = 0,
+    save_logs: Annotated[Path | None, typer.Option(help="Write the FlightLogs to DIR.")] = None,
+    config: ConfigOpt = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
+    from aerodock.flightlog import save_flightlogs
+    from aerodock.mission import MissionSpec, run_campaign
+
+    cfg = _config(config)
+    if trials < 1:
+        fail(f"--trials must be >= 1, got {trials}")
+    predictor = _load_predictor(model, compensation)
+    spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
+                       leader_fixed=leader_fixed, compensation=compensation, seed=seed)
+    with progress_bar() as bar:
+        task = bar.add_task(f"docking x{trials} ({compensation.value})", total=1.0)
+        result = run_campaign(cfg, spec, predictor,
+                              record="full" if save_logs is not None else "summary",
+                              progress=lambda f: bar.update(task, completed=f))
+    summary = result.summary()
+    summary.update({"compensation": compensation.value, "offset_m": offset
+                    or cfg.platform.cable_length_m, "leader_speed_mps": leader_speed,
+                    "leader_fixed": leader_fixed, "seed": seed})
+    if save_logs is not None:
+        path = save_flightlogs(save_logs / f"dock-{compensation.value}-seed{seed}.npz",
+                               result.logs)
+        summary["logs"] = str(path)
+    if as_json:
+        print_json(summary)
+        return
+    table = Table(title=f"docking, d_p = {summary['offset_m']:g} m, {compensation.value}")
+    table.add_column("figure")
+    table.add_column("value", justify="right")
+    lo, hi = summary["success_wilson95"]
+    table.add_row("docked", f"{summary['docked']}/{trials} = {summary['success_rate']:.0%} "
+                  f"(95 % CI {lo:.0%}-{hi:.0%})")
+    table.add_row("terminal error down, median", f"{summary['terminal_err_down_median_m']:.3f} m")
+    table.add_row("terminal error 3D, median", f"{summary['terminal_err_3d_median_m']:.3f} m")
+    table.add_row("slip-throughs", str(summary["slip_throughs"]))
+    table.add_row("missed (gate closed empty)", str(summary["missed"]))
+    table.add_row("aborts", f"{summary['aborts']} {summary['abort_reasons']}")
+    table.add_row("clearance violations", str(summary["clearance_violations"]))
+    Console().print(table)
+    if save_logs is not None:
+        typer.echo(f"wrote {summary['logs']}")
+
+
+@app.command("demo")
+def demo(
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/demo"),
+    trials: Annotated[int, typer.Option(help="Trials per campaign.")] = 20,
+    config: ConfigOpt = None,
+) -> None:
+    """A short tour: the wake, and docking with and without downwash compensation (figures)."""
+    from aerodock.downwash import build_field
+    from aerodock.downwash.probe import plot_field_slice
+    from aerodock.mission import MissionSpec, run_campaign
+    from aerodock.plots import plot_altitudes, plot_trajectories, plot_vertical_error
+
+    cfg = _config(config)
+    out.mkdir(parents=True, exist_ok=True)
+    field = build_field(cfg)
+    typer.echo(f"wrote {plot_field_slice(field.mean_acceleration, out / 'field.png', cfg.vehicle.mass_kg, cfg.sim.gravity_mps2)}")
+    traces, results = {}, {}
+    for comp in (Compensation.OBSERVER, Compensation.ORACLE):
+        res = run_campaign(cfg, MissionSpec(trials=trials, compensation=comp, seed=0),
+                           record="trace")
+        traces[comp.value], results[comp.value] = res.trace, res
+        s = res.summary()
+        typer.echo(f"{comp.value:>9}: docked {s['docked']}/{trials}, terminal error down "
+                   f"{s['terminal_err_down_median_m']:.3f} m (median)")
+    arrival = results["oracle"].arrival_s
+    typer.echo(f"wrote {plot_vertical_error(traces, out / 'vertical_error.png', arrival, 'Follower vertical tracking error, d_p = 0.36 m')}")
+    ora = results["oracle"]
+    typer.echo(f"wrote {plot_trajectories(ora.trace, out / 'trajectories.png', 'Docking approaches (oracle compensation)', ora.success)}")
+    obs = results["observer"]
+    picks = {}
+    if ora.success.any():
+        picks["docked (oracle)"] = int(ora.success.argmax())
+    if (~obs.success).any():
+        picks["missed (observer only)"] = int((~obs.success).argmax())
+    both = {"t_s": ora.trace["t_s"]}
+    # Altitude figure from two campaigns: stack the chosen trials side by side.
+    import numpy as np
+
+    t_len = min(len(ora.trace["t_s"]), len(obs.trace["t_s"]))
+    for key in ("leader_p", "follower_p", "ref_p"):
+        both[key] = np.concatenate([ora.trace[key][:t_len], obs.trace[key][:t_len]], axis=1)
+    both["t_s"] = ora.trace["t_s"][:t_len]
+    sel = {k: (i if "oracle" in k else trials + i) for k, i in picks.items()}
+    typer.echo(f"wrote {plot_altitudes(both, sel, out / 'altitudes.png', 'Altitude of both vehicles')}")
+
+
+def _register_subpackages() -> None:
+    """Commands of optional subpackages; skipped (with a clear message on use) if absent."""
+    try:
+        from aerodock.ingest.command import ingest_command
+
+        app.command("ingest")(ingest_command)
+    except ImportError:
+        pass
+    try:
+        from aerodock.learning.commands import evaluate_command, export_command, train_command
+
+        app.command("train")(train_command)
+        app.command("evaluate")(evaluate_command)
+        app.command("export")(export_command)
+    except ImportError:
+        pass
+
+
+_register_subpackages()

@@ -213,7 +213,8 @@ def run_campaign(
 
     leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
     follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
-    leader_ctl.reset(world.leader.p, world.leader.v)
+    # The leader knows it carries the bar: its observer starts from the static cable load.
+    leader_ctl.reset(world.leader.p, world.leader.v, world.cable_force_n / mass)
     follower_ctl.reset(world.follower.p, world.follower.v)
     zeros = np.zeros((n, 3))
     plan = minjerk(start, zeros, zeros, docking_point_m(leader_p0, world.leader.v, geom,
@@ -255,7 +256,10 @@ def run_campaign(
         # --- leader: its own controller, hovering or cruising north ---
         lref = Reference(leader_p0 + lead_vel * t, np.tile(lead_vel, (n, 1)), zeros,
                          np.zeros(n), np.zeros(n))
-        lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, lref)
+        # Docking status is shared: the leader feeds forward the payload the follower sheds.
+        payload = np.where(world.captured, (1.0 - m.post_dock_thrust_fraction) * g, 0.0)
+        lff = np.stack([np.zeros(n), np.zeros(n), payload], axis=1)
+        lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, lref, feedforward_mps2=lff)
 
         # --- follower: phases ---
         active = (phase == Phase.APPROACH) | (phase == Phase.TERMINAL)
@@ -344,11 +348,20 @@ def run_campaign(
         yaw0 = np.zeros(n)
         fref = Reference(p_ref, v_ref, a_ref, yaw0, yaw0)
         fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, fref, terminal, ff)
+        hanging = world.captured
+        if np.any(hanging):
+            # Docked: level attitude; thrust is the configured fraction of the weight plus the
+            # follower's own prediction of the wake (the position loop would fight the cables).
+            cmd = fout.command
+            hang_thrust = mass * (m.post_dock_thrust_fraction * g
+                                  + np.maximum(fout.feedforward_mps2[:, 2], 0.0))
+            fout = replace(fout, command=replace(
+                cmd, roll_rad=np.where(hanging, 0.0, cmd.roll_rad),
+                pitch_rad=np.where(hanging, 0.0, cmd.pitch_rad),
+                yaw_rate_radps=np.where(hanging, 0.0, cmd.yaw_rate_radps),
+                thrust_n=np.where(hanging, hang_thrust, cmd.thrust_n)))
         close = (t >= active_at_s) & active & _bar_will_be_inside(
             obs_f, obs_l_f, geom, gp, gp.latency_s + gp.close_time_s)
-        world.follower_thrust_fraction = np.where(
-            (phase == Phase.CAPTURED) | ((phase == Phase.DONE) & world.captured),
-            m.post_dock_thrust_fraction, 1.0)
 
         # Metrics (true state).
         true_err = world.follower.p - p_ref
@@ -379,7 +392,7 @@ def run_campaign(
             log_rows["fv"].append(obs_f.v)
             log_rows["fq"].append(rotmat_to_quat(obs_f.R))
             log_rows["u"].append(fout.applied_accel_mps2)
-            log_rows["thrust"].append(fout.command.thrust_n * world.follower_thrust_fraction)
+            log_rows["thrust"].append(fout.command.thrust_n)
             log_rows["fmean"].append(fmean)
             log_rows["ref"].append(p_ref.copy())
             log_rows["ff"].append(fout.feedforward_mps2)

@@ -84,6 +84,7 @@ def step_bar(
     anchor_p: np.ndarray,
     anchor_v: np.ndarray,
     anchor_a: np.ndarray,
+    anchor_p_next: np.ndarray,
     leader_yaw_rad: np.ndarray,
     force_n: np.ndarray,
     mass_kg: np.ndarray,
@@ -94,7 +95,9 @@ def step_bar(
 
     Args:
         bar: current state.
-        anchor_p, anchor_v, anchor_a: (n, 3) attachment point's position, velocity, acceleration.
+        anchor_p, anchor_v, anchor_a: (n, 3) attachment point's position, velocity and
+            acceleration at the start of the step.
+        anchor_p_next: (n, 3) attachment point at the end of the step (the leader has moved).
         leader_yaw_rad: (n,) leader yaw (the bifilar mode aligns the bar with it).
         force_n: (n, 3) every force on the hanging mass except gravity and the cables
             (downwash drag, gripper contact, and for a captured follower its thrust, drag, ...).
@@ -119,15 +122,17 @@ def step_bar(
     cable_force = (mass_kg * lam)[:, None] * unit
     v = bar.v + accel * dt_s
     p = bar.p + v * dt_s
-    # Project back onto the sphere and remove outward radial velocity (inextensible cables).
-    rel = p - anchor_p
+    # Inextensible cables: a bar under tension (or past the cable length) is put back on the
+    # sphere and keeps no radial velocity relative to the anchor.
+    rel = p - anchor_p_next
     dist = np.linalg.norm(rel, axis=1)
-    over = dist > length
-    if np.any(over):
+    hold = (dist > length) | (lam > 0)
+    if np.any(hold):
         unit_new = rel / np.maximum(dist, 1e-9)[:, None]
-        p = np.where(over[:, None], anchor_p + unit_new * length, p)
-        out_v = dot_rows(v - anchor_v, unit_new)
-        v = np.where((over & (out_v > 0))[:, None], v - out_v[:, None] * unit_new, v)
+        p = np.where(hold[:, None], anchor_p_next + unit_new * length, p)
+        radial = dot_rows(v - anchor_v, unit_new)
+        radial = np.where(lam > 0, radial, np.maximum(radial, 0.0))
+        v = np.where(hold[:, None], v - radial[:, None] * unit_new, v)
     yaw_err = (bar.yaw_rad - leader_yaw_rad + np.pi) % (2 * np.pi) - np.pi
     yaw_acc = -params.yaw_omega2 * np.sin(yaw_err) - params.yaw_damping * bar.yaw_rate_radps
     yaw_rate = bar.yaw_rate_radps + yaw_acc * dt_s

@@ -108,11 +108,12 @@ class World:
         self.follower_accel = np.zeros((n, 3))
         anchor = anchor_point(self.leader.p, self.leader.R, self.platform)
         self.bar = hanging_bar(anchor, self.leader.v, self.leader.rpy[:, 2], self.platform)
+        self.cable_force_n = np.tile([0.0, 0.0, self.platform.bar_mass_kg
+                                      * self.vehicle.gravity_mps2], (n, 1))
         self.gripper = calibrated_gripper(n, self.gripper_params, rng)
         self.field.reset(n, rng)
         self.t_s = 0.0
         self.step_index = 0
-        self.follower_thrust_fraction = np.ones(n)
         size = self._latency_steps + 1
         self._history = {
             "lp": np.repeat(self.leader.p[None], size, 0),
@@ -199,11 +200,15 @@ class World:
         follower_force = downwash * self._mass[:, None] - up * contact[:, None]
         bar_force += up * contact[:, None]
 
-        # Cable force on the leader comes from the bar step; use last step's (explicit coupling).
-        anchor = anchor_point(self.leader.p, lead_R, self.platform)
-        fol_cmd = replace(follower_cmd, thrust_n=follower_cmd.thrust_n
-                          * self.follower_thrust_fraction)
-        new_follower, fol_accel = step_vehicle(self.follower, fol_cmd, follower_force,
+        # Leader first, pulled by last step's cable force; then the bar hangs from its new anchor.
+        if self.leader_fixed:
+            hover = np.full(n, self.vehicle.hover_thrust_n)
+            new_leader = replace(self.leader, thrust_cmd_state_n=hover / self.leader.thrust_gain)
+            lead_accel = np.zeros((n, 3))
+        else:
+            new_leader, lead_accel = step_vehicle(self.leader, leader_cmd, self.cable_force_n,
+                                                  self.vehicle, dt, lead_R)
+        new_follower, fol_accel = step_vehicle(self.follower, follower_cmd, follower_force,
                                                self.vehicle, dt, fol_R)
         # A captured follower hangs from the bar: its forces go to the hanging mass.
         hang_mass = np.where(captured, self.platform.bar_mass_kg + self._mass,
@@ -213,17 +218,11 @@ class World:
                 :, None
             ]
             bar_force = bar_force + np.where(captured[:, None], fol_own, 0.0)
-        self.bar, cable_force = step_bar(
-            self.bar, anchor, self.leader.v, self.leader_accel, self.leader.rpy[:, 2], bar_force,
-            hang_mass, self.platform, dt,
+        self.bar, self.cable_force_n = step_bar(
+            self.bar, anchor_point(self.leader.p, lead_R, self.platform), self.leader.v,
+            lead_accel, anchor_point(new_leader.p, lead_R, self.platform),
+            self.leader.rpy[:, 2], bar_force, hang_mass, self.platform, dt,
         )
-        if self.leader_fixed:
-            hover = np.full(n, self.vehicle.hover_thrust_n)
-            new_leader = replace(self.leader, thrust_cmd_state_n=hover / self.leader.thrust_gain)
-            lead_accel = np.zeros((n, 3))
-        else:
-            new_leader, lead_accel = step_vehicle(self.leader, leader_cmd, cable_force,
-                                                  self.vehicle, dt, lead_R)
         if np.any(captured):
             offset = self.gripper_params.mount_height_m + self.gripper_params.bar_radius_m
             up_new = -new_follower.R[:, :, 2]

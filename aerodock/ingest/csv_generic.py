@@ -144,9 +144,10 @@ def read_csv(path: Path, *, frame: str | None = None, mass_kg: float | None = No
             i = int(np.argmax(np.abs(norm - 1.0) > 0.1))
             raise IngestError(where, f"{role}_qw..qz has norm {norm[i]:.3g} at line "
                                      f"{table.lines[i]}, not a unit quaternion")
-        rot = convert_rotations(world, quat_to_rotmat(quat), body)
+        if frame_name != "NED":
+            quat = rotmat_to_quat(convert_rotations(world, quat_to_rotmat(quat), body))
         states[role] = (convert_vectors(world, block(cols[0:3])),
-                        convert_vectors(world, block(cols[3:6])), rotmat_to_quat(rot))
+                        convert_vectors(world, block(cols[3:6])), quat)
     t_s = table.column(TIME_COLUMN)
     cmd = convert_vectors(world, block(CMD_COLUMNS))
 

@@ -211,13 +211,14 @@ def load_mapping(mapping: Mapping[str, Any] | str | Path | None) -> tuple[dict[s
 
 @dataclass
 class Stream:
-    """One topic: header (or bag) times in seconds, bag times, message type, messages."""
+    """One topic: header (or bag) times and bag times, s from ``origin_s``; type; messages."""
 
     topic: str
     msgtype: str
     t_s: np.ndarray
     bag_t_s: np.ndarray
     msgs: list[Any]
+    origin_s: float = 0.0
 
 
 def _typestore_for(connections: list[Any]) -> Any:
@@ -281,19 +282,27 @@ def _read_streams(path: Path, topics: set[str], use_header: bool) -> tuple[dict[
         raise IngestError(path, f"not a readable ROS 2 bag ({err})") from None
     except Exception as err:  # rosbags raises assorted errors on corrupt storage
         raise IngestError(path, f"corrupt ROS 2 bag ({type(err).__name__}: {err})") from None
-    for topic, (msgtype, bag_ns, stamp_ns, msgs) in raw.items():
-        bag_ns_arr = np.asarray(bag_ns, dtype=float)
+    # Stamps are ~1.7e18 ns: subtract a common integer origin before going to float seconds.
+    stamps_ns: dict[str, tuple[np.ndarray, np.ndarray, str]] = {}
+    for topic, (_, bag_ns, stamp_ns, _) in raw.items():
+        bag_arr = np.asarray(bag_ns, dtype=np.int64)
         if all(s is not None for s in stamp_ns):
-            stamps = np.asarray(stamp_ns, dtype=float)
+            stamps = np.asarray(stamp_ns, dtype=np.int64)
             column = f"{topic} header.stamp"
             if np.all(stamps == 0):
                 raise IngestError(path, f"{column} is zero in every message: set time = "
                                         "\"bag\" in the mapping")
         else:
-            stamps, column = bag_ns_arr, f"{topic} bag time"
-        check_time(stamps, str(path), column=column, row_name="message")
-        check_time_unit(stamps, "ns", str(path), column=column)
-        streams[topic] = Stream(topic, msgtype, stamps * 1e-9, bag_ns_arr * 1e-9, msgs)
+            stamps, column = bag_arr, f"{topic} bag time"
+        stamps_ns[topic] = (stamps, bag_arr, column)
+    origin = min((int(s[0]) for s, _, _ in stamps_ns.values() if len(s)), default=0)
+    for topic, (stamps, bag_arr, column) in stamps_ns.items():
+        rel = (stamps - origin).astype(float)
+        check_time(rel, str(path), column=column, row_name="message")
+        check_time_unit(rel, "ns", str(path), column=column)
+        msgtype, msgs = raw[topic][0], raw[topic][3]
+        streams[topic] = Stream(topic, msgtype, rel * 1e-9, (bag_arr - origin) * 1e-9, msgs,
+                                origin * 1e-9)
     return streams, present
 
 
@@ -529,7 +538,7 @@ def read_rosbag(path: Path, *, mapping: Mapping[str, Any] | str | Path | None = 
         "source_frame": cfg["frame"],
         "time": cfg["time"],
         "file": str(path),
-        "t_origin_s": float(t[0]),
+        "t_origin_s": float(t[0]) + streams[follower_map["state"]].origin_s,
         "dropped_samples": int(inside.sum() - n_keep),
         "stamp_latency_s": lat,
         "mapping": {"leader": leader_map, "follower": follower_map},

@@ -1,0 +1,107 @@
+"""Figures drawn from recorded runs (matplotlib, Agg backend, PNG). Dynamics never import this."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    _plt().close(fig)
+    return path
+
+
+def plot_vertical_error(traces: dict[str, dict[str, np.ndarray]], path: Path, arrival_s: float,
+                        title: str) -> Path:
+    """Vertical tracking error (true follower minus reference, down positive) vs time.
+
+    One panel line per campaign (e.g. per compensation): mean with ±1 sd shaded, over the trials
+    still approaching (APPROACH/TERMINAL phases).
+    """
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for label, tr in traces.items():
+        t = tr["t_s"]
+        err = tr["follower_p"][:, :, 2] - tr["ref_p"][:, :, 2]
+        approaching = tr["phase"] <= 1
+        err = np.where(approaching, err, np.nan)
+        ok = np.sum(approaching, axis=1) >= max(1, approaching.shape[1] // 4)
+        with np.errstate(invalid="ignore"):
+            mean = np.nanmean(np.where(ok[:, None], err, np.nan), axis=1)
+            sd = np.nanstd(np.where(ok[:, None], err, np.nan), axis=1)
+        (line,) = ax.plot(t, mean, label=label)
+        ax.fill_between(t, mean - sd, mean + sd, color=line.get_color(), alpha=0.25)
+    ax.axvline(arrival_s, color="k", ls=":", lw=1, label="planned arrival")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("vertical error, down positive [m]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_altitudes(tr: dict[str, np.ndarray], trials: dict[str, int], path: Path,
+                   title: str) -> Path:
+    """Altitude (up positive) of leader and follower for selected trials (e.g. docked / missed)."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(trials), figsize=(5.5 * len(trials), 4), squeeze=False)
+    for ax, (label, i) in zip(axes[0], trials.items(), strict=True):
+        t = tr["t_s"]
+        ax.plot(t, -tr["leader_p"][:, i, 2], label="leader (Alpha)")
+        ax.plot(t, -tr["follower_p"][:, i, 2], label="follower (Bravo)")
+        ax.plot(t, -tr["ref_p"][:, i, 2], "--", lw=1, label="follower reference")
+        ax.set_title(f"{label} (trial {i})")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("altitude [m]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_trajectories(tr: dict[str, np.ndarray], path: Path, title: str,
+                      success: np.ndarray | None = None) -> Path:
+    """Side (north-altitude) and top views of the follower's paths with the leader's spread."""
+    plt = _plt()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.8))
+    n = tr["follower_p"].shape[1]
+    for i in range(n):
+        p = tr["follower_p"][:, i]
+        colour = None if success is None else ("tab:green" if success[i] else "tab:red")
+        ax1.plot(p[:, 0], -p[:, 2], lw=0.8, color=colour, alpha=0.7)
+        ax2.plot(p[:, 1], p[:, 0], lw=0.8, color=colour, alpha=0.7)
+    lp = tr["leader_p"].reshape(-1, 3)
+    mean, sd = lp.mean(0), lp.std(0)
+    ax1.errorbar(mean[0], -mean[2], xerr=sd[0], yerr=sd[2], fmt="k^", ms=9, capsize=4,
+                 label="leader mean ± sd")
+    ax2.add_patch(plt.Circle((mean[1], mean[0]), max(sd[0], sd[1], 0.005), color="k",
+                             alpha=0.3))
+    ax2.plot(mean[1], mean[0], "k^", ms=9)
+    ax1.set_xlabel("north [m]")
+    ax1.set_ylabel("altitude [m]")
+    ax1.set_title("side view (green: docked, red: not)" if success is not None else "side view")
+    ax1.legend(fontsize=8)
+    ax2.set_xlabel("east [m]")
+    ax2.set_ylabel("north [m]")
+    ax2.set_aspect("equal")
+    ax2.set_title("top view")
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return _save(fig, path)
