@@ -141,14 +141,13 @@ def read_vehicle_file(path: Path, *, time_unit: str = "auto") -> VehicleTrack:
     where = str(path)
 
     t_raw = col["time"]
-    check_time(t_raw, where, column=table.columns[wanted["time"] or 0], row_name="line",
-               rows=table.lines)
+    time_column = table.columns[wanted["time"] or 0]
+    check_time(t_raw, where, column=time_column, row_name="line", rows=table.lines)
     if time_unit == "auto":
-        unit = detect_time_unit(t_raw, where, column=table.columns[wanted["time"] or 0],
-                                expected_dt_s=EXPECTED_DT_S)
+        unit = detect_time_unit(t_raw, where, column=time_column, expected_dt_s=EXPECTED_DT_S)
     elif time_unit in TIME_UNITS:
         unit = time_unit
-        check_time_unit(t_raw, unit, where, column="time")
+        check_time_unit(t_raw, unit, where, column=time_column)
     else:
         raise IngestError(path, f"unknown time unit {time_unit!r}; use auto, s, ms, us or ns")
 

@@ -140,7 +140,9 @@ ATTITUDE_THRUST_TYPES = ("freyja_msgs/msg/CtrlCommand",)
 # --------------------------------------------------------------------------------------------
 
 
-def load_mapping(mapping: Mapping[str, Any] | str | Path | None) -> tuple[dict[str, Any], set]:
+def load_mapping(
+    mapping: Mapping[str, Any] | str | Path | None,
+) -> tuple[dict[str, Any], set[str]]:
     """The default mapping overridden by ``mapping`` (a dict or a TOML file).
 
     Returns:
@@ -487,7 +489,7 @@ def read_rosbag(path: Path, *, mapping: Mapping[str, Any] | str | Path | None = 
     f_mass, f_assumed = _mass(cfg, "follower", mass_kg, path, cmd["kind"] == "attitude-thrust")
     l_mass, l_assumed = _mass(cfg, "leader", mass_kg, path, bool(
         leader_cmd and leader_cmd["kind"] == "attitude-thrust"))
-    cmd_accel, thrust_n = _command_accel(cmd, t, follower, rot_f, f_mass)
+    cmd_accel, thrust_n = _command_accel(cmd, t, rot_f, f_mass)
     if imu is not None:
         if imu.msgtype != "sensor_msgs/msg/Imu":
             raise IngestError(path, f"topic {imu.topic} is {imu.msgtype}; the IMU topic must "
@@ -498,13 +500,13 @@ def read_rosbag(path: Path, *, mapping: Mapping[str, Any] | str | Path | None = 
         obs = specific_force_to_accel(rot_f, resample_linear(imu.t_s, force @ body.T, t))
         obs_source = f"imu {imu.topic}"
     else:
-        obs = differentiate(t, follower["vel"][keep])
+        obs = differentiate(follower["t"], follower["vel"])[keep]
         obs_source = "differentiated follower velocity"
 
     extra: dict[str, np.ndarray] = {}
     if leader_cmd is not None:
-        extra["leader_thrust_n"] = _command_accel(leader_cmd, t, leader, resample_quat_rot(
-            leader, t), l_mass)[1]
+        leader_rot = quat_to_rotmat(resample_quat(leader["t"], leader["quat"], t))
+        extra["leader_thrust_n"] = _command_accel(leader_cmd, t, leader_rot, l_mass)[1]
     ref = optional("follower", "reference")
     if ref is not None and ref.msgtype == "freyja_msgs/msg/ReferenceState":
         vals = np.array([[m.pn, m.pe, m.pd, m.vn, m.ve, m.vd, m.an, m.ae, m.ad]
@@ -560,14 +562,12 @@ def read_rosbag(path: Path, *, mapping: Mapping[str, Any] | str | Path | None = 
     )
 
 
-def resample_quat_rot(state: dict[str, np.ndarray], t: np.ndarray) -> np.ndarray:
-    """A state's attitude at times ``t``, as rotation matrices."""
-    return quat_to_rotmat(resample_quat(state["t"], state["quat"], t))
+def _command_accel(cmd: dict[str, Any], t: np.ndarray, rot: np.ndarray,
+                   mass_kg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Commanded acceleration (NED) and collective thrust (N) at times ``t``.
 
-
-def _command_accel(cmd: dict[str, Any], t: np.ndarray, state: dict[str, np.ndarray],
-                   rot: np.ndarray, mass_kg: float) -> tuple[np.ndarray, np.ndarray]:
-    """Commanded acceleration (NED) and collective thrust (N) at times ``t``."""
+    ``rot`` is the vehicle's attitude at ``t``: an attitude-thrust command takes its heading.
+    """
     if cmd["kind"] == "accel":
         accel = resample_hold(cmd["t"], cmd["accel"], t)
         return accel, mass_kg * np.linalg.norm(GRAVITY_MPS2 * E3 - accel, axis=1)

@@ -18,6 +18,8 @@ Topics (time stamps in µs, PX4 frames: NED world, FRD body):
   basis is ``"thrust"``: ``cmd = g e3 + R thrust_body g / hover``.
 - Observed acceleration: ``vehicle_acceleration.xyz`` (body specific force, ``R f + g e3``) or
   else ``vehicle_local_position.ax, ay, az`` (NED, gravity removed).
+- ``vehicle_land_detected.landed``, if logged, gives ``extra["label_valid"]`` (False on the
+  ground, where the support force, not the air, explains ``a_obs - cmd``).
 
 Clocks: each log's stamps count from its own boot. Two logs are put on one clock through GPS
 time (``vehicle_gps_position``/``sensor_gps`` ``time_utc_usec``) when both have it, else their
@@ -64,7 +66,7 @@ THRUST_TOPICS = (
 )
 TOPICS = (
     "vehicle_local_position", "vehicle_attitude", "vehicle_acceleration",
-    "hover_thrust_estimate", "vehicle_gps_position", "sensor_gps",
+    "hover_thrust_estimate", "vehicle_gps_position", "sensor_gps", "vehicle_land_detected",
     *(topic for topic, _ in THRUST_TOPICS),
 )
 
@@ -83,6 +85,7 @@ class UlogTrack:
     obs_accel_mps2: np.ndarray
     utc_offset_s: float | None
     meta: dict[str, Any] = field(default_factory=dict)
+    label_valid: np.ndarray | None = None
 
 
 def _load(path: Path) -> Any:
@@ -202,6 +205,13 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     obs = specific_force_to_accel(rot, acc) if accel_source == "vehicle_acceleration" else acc
 
     utc_offset = _utc_offset_s(datasets)
+    label_valid = None
+    land = datasets.get("vehicle_land_detected")
+    if land is not None and "landed" in land and len(land["timestamp"]):
+        # On the ground the support force, not the air, explains a_obs - cmd: not a label.
+        t_land = np.asarray(land["timestamp"], dtype=float) * 1e-6
+        order = np.argsort(t_land, kind="stable")
+        label_valid = resample_hold(t_land[order], np.asarray(land["landed"])[order] == 0, t)
     meta = {
         "file": where,
         "thrust_topic": f"{thrust_src[0]}.{thrust_src[1]}",
@@ -211,6 +221,7 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
         "mass_assumed": mass_assumed,
         "clock_utc_offset_s": utc_offset,
         "px4_version": str(ulog.msg_info_dict.get("ver_sw_branch", "")),
+        "landed_fraction": None if label_valid is None else float(np.mean(~label_valid)),
     }
     if "xy_valid" in datasets["vehicle_local_position"]:
         valid = np.asarray(datasets["vehicle_local_position"]["xy_valid"])[keep]
@@ -222,7 +233,7 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     return UlogTrack(
         path=path, t_s=t, pos_m=lp[keep, :3], vel_mps=lp[keep, 3:], quat=q, cmd_accel_mps2=cmd,
         thrust_n=mass * thrust_norm * accel_per_unit, obs_accel_mps2=obs, utc_offset_s=utc_offset,
-        meta=meta,
+        meta=meta, label_valid=label_valid,
     )
 
 
@@ -308,7 +319,7 @@ def pair_tracks(leader: UlogTrack, follower: UlogTrack, *, min_overlap_fraction:
         follower_thrust_n=follower.thrust_n[keep],
         follower_obs_accel_mps2=follower.obs_accel_mps2[keep],
         meta=meta,
-        extra={"leader_thrust_n": resample_linear(t_leader, leader.thrust_n, t)},
+        extra=_extra(follower, keep, resample_linear(t_leader, leader.thrust_n, t)),
     )
 
 
@@ -344,8 +355,16 @@ def single_track(follower: UlogTrack, *,
         follower_thrust_n=follower.thrust_n,
         follower_obs_accel_mps2=follower.obs_accel_mps2,
         meta=meta,
-        extra={"leader_thrust_n": np.zeros(n)},
+        extra=_extra(follower, np.ones(n, dtype=bool), np.zeros(n)),
     )
+
+
+def _extra(follower: UlogTrack, keep: np.ndarray, leader_thrust_n: np.ndarray
+           ) -> dict[str, np.ndarray]:
+    extra = {"leader_thrust_n": leader_thrust_n}
+    if follower.label_valid is not None:
+        extra["label_valid"] = follower.label_valid[keep]
+    return extra
 
 
 def _meta(follower: UlogTrack, name: str) -> dict[str, Any]:
@@ -359,6 +378,7 @@ def _meta(follower: UlogTrack, name: str) -> dict[str, Any]:
         "thrust_topic": follower.meta["thrust_topic"],
         "thrust_model": follower.meta["thrust_model"],
         "obs_accel_source": follower.meta["obs_accel_source"],
+        "landed_fraction": follower.meta["landed_fraction"],
         "gravity_mps2": GRAVITY_MPS2,
     }
 

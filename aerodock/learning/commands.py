@@ -98,15 +98,12 @@ def train_command(
 
         ds = take_minutes(ds, minutes, np.random.default_rng(seed))
     try:
-        import torch
-
         from aerodock.learning.train import train_model
     except ImportError:
         _fail("training needs PyTorch: pip install 'aerodock[learn]'")
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    torch.set_num_threads(max(1, min(2, torch.get_num_threads())))
     console = Console(stderr=True)
     with Progress(
         TextColumn("[bold]train {task.fields[kind]}"), BarColumn(),

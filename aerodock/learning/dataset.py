@@ -39,7 +39,7 @@ class DataError(ValueError):
     """Training/evaluation data could not be read or built; the message names the file."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Dataset:
     """Samples of model input, leader attitude and label (batch-first, world NED, SI).
 
@@ -370,18 +370,22 @@ def load_data_paths(
 
     Each path is a FlightLog file (``format == "aerodock-flightlog"``), a dataset file
     (``"aerodock-dataset"``), or a folder, searched recursively for ``*.npz`` files of either
-    kind (hidden files are skipped). All FlightLogs are labelled together (so flights without
-    free-air samples can borrow the others' bias), then joined with the loaded datasets.
+    kind (hidden files are skipped, and so are other ``.npz`` files such as a model's
+    ``weights.npz``: they are listed in ``meta["skipped_files"]``). A file given twice is read
+    once. All FlightLogs are labelled together (so flights without free-air samples can borrow
+    the others' bias), then joined with the loaded datasets.
 
     Raises:
-        DataError: a missing path, an empty folder, or a file that is neither kind (one line,
-            naming the file).
+        DataError: a missing path, a folder without FlightLog or dataset files, an unreadable
+            file, or a file given explicitly that is neither kind (one line, naming the file).
     """
     if not paths:
         raise DataError("no data paths given")
     logs: list[FlightLog] = []
     datasets: list[Dataset] = []
     sources: list[str] = []
+    skipped: list[str] = []
+    seen: dict[Path, bool] = {}  # resolved path -> is an aerodock FlightLog/dataset file
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
@@ -389,14 +393,22 @@ def load_data_paths(
                 p for p in path.rglob("*.npz")
                 if not any(part.startswith(".") for part in p.relative_to(path).parts)
             )
-            if not files:
-                raise DataError(f"{path}: folder holds no .npz FlightLog or dataset files")
         elif path.exists():
             files = [path]
         else:
             raise DataError(f"{path}: no such file or folder")
+        n_used = 0
         for file in files:
+            key = file.resolve()
+            if key in seen:
+                n_used += seen[key]
+                continue
             fmt = _npz_format(file)
+            seen[key] = fmt in (FLIGHTLOG_FORMAT, DATASET_FORMAT)
+            if not seen[key] and path.is_dir():
+                skipped.append(str(file))
+                continue
+            n_used += 1
             if fmt == FLIGHTLOG_FORMAT:
                 try:
                     logs.extend(load_flightlogs(file))
@@ -407,6 +419,8 @@ def load_data_paths(
             else:
                 raise DataError(f"{file}: not an aerodock FlightLog or dataset file")
             sources.append(str(file))
+        if path.is_dir() and not n_used:
+            raise DataError(f"{path}: folder holds no FlightLog or dataset .npz files")
     if logs:
         try:
             datasets.insert(0, build_dataset(
@@ -417,7 +431,8 @@ def load_data_paths(
     ds = concat_datasets(datasets)
     return Dataset(
         x=ds.x, leader_R=ds.leader_R, y=ds.y, flight_id=ds.flight_id, t_s=ds.t_s,
-        y_true_mean=ds.y_true_mean, meta={**ds.meta, "files": sources},
+        y_true_mean=ds.y_true_mean,
+        meta={**ds.meta, "files": sources, "skipped_files": skipped},
     )
 
 

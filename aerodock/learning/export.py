@@ -19,7 +19,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from aerodock.learning.models import load_torch_model
+from aerodock.learning.models import load_torch_model, model_from_spec
 
 ONNX_OPSET = 17
 INPUT_NAMES = ("x", "leader_R")
@@ -40,10 +40,13 @@ class _KeepInputs(nn.Module):
 
 
 def _as_module(model: Any) -> nn.Module:
-    if isinstance(model, nn.Module):
-        return model
+    """A plain float32 module: rebuilt from the effective weights, so spectral-norm
+    parametrisations (not exportable) are folded in and the caller's module is left alone."""
     if hasattr(model, "model") and isinstance(model.model, nn.Module):  # TrainedModel
-        return model.model
+        model = model.model
+    if isinstance(model, nn.Module):
+        model.eval()
+        return model_from_spec(model.spec(), model.weights())
     return load_torch_model(model)
 
 
@@ -58,9 +61,7 @@ def export_onnx(model: Any, out: str | Path, *, opset: int = ONNX_OPSET) -> Path
     Raises:
         ModelFileError: ``model`` is a directory with missing, corrupt or mismatched files.
     """
-    module = _as_module(model)
-    module.eval()
-    module = module.float()
+    module = _as_module(model).float().eval()
     if getattr(module, "kind", "") in ("mlp", "zero"):
         module = _KeepInputs(module).eval()
     out = Path(out)

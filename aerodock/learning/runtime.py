@@ -68,6 +68,8 @@ def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray
 class Predictor:
     """A trained downwash model, NumPy only.
 
+    ``predict_one`` reuses preallocated buffers: one Predictor per thread (loading is cheap).
+
     Attributes:
         kind: ``"so2"``, ``"so2-ext"``, ``"mlp"`` or ``"zero"``.
         spec: the model's :class:`~aerodock.learning.modelfile.ModelSpec`.
