@@ -137,21 +137,14 @@ def demo(
 
 
 def _register_subpackages() -> None:
-    """Commands of optional subpackages; skipped (with a clear message on use) if absent."""
-    try:
-        from aerodock.ingest.command import ingest_command
+    """Commands that live beside their subpackages."""
+    from aerodock.ingest.command import ingest_command
+    from aerodock.learning.commands import evaluate_command, export_command, train_command
 
-        app.command("ingest")(ingest_command)
-    except ImportError:
-        pass
-    try:
-        from aerodock.learning.commands import evaluate_command, export_command, train_command
-
-        app.command("train")(train_command)
-        app.command("evaluate")(evaluate_command)
-        app.command("export")(export_command)
-    except ImportError:
-        pass
+    app.command("ingest")(ingest_command)
+    app.command("train")(train_command)
+    app.command("evaluate")(evaluate_command)
+    app.command("export")(export_command)
 
 
 _register_subpackages()
