@@ -148,3 +148,33 @@ def _register_subpackages() -> None:
 
 
 _register_subpackages()
+
+
+@app.command("collect")
+def collect(
+    out: Annotated[Path, typer.Option(help="Folder for the FlightLogs and stage models.")],
+    model: Annotated[str | None, typer.Option(help="Model kind trained at each stage.")] = None,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Curriculum data collection: each stage trains, deploys and flies 0.3 m closer."""
+    from aerodock.learning.curriculum import run_curriculum
+
+    cfg = _config(config)
+    if model is not None and model not in ("so2", "so2-ext", "mlp"):
+        fail(f"--model must be so2, so2-ext or mlp, got {model!r}")
+
+    def say(msg: str) -> None:
+        err_console.print(f"[dim]{msg}[/dim]")
+
+    summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say)
+    if as_json:
+        print_json(summary)
+        return
+    for st in summary["stages"]:
+        lo, hi = st["depth_band_m"]
+        typer.echo(f"stage {st['stage']}: {lo:.2f}-{hi:.2f} m, {st['flights']} flights, "
+                   f"{st['minutes']:.2f} min, val RMSE {st['val_rmse_mps2']:.3f} m/s²")
+    typer.echo(f"{summary['minutes']:.1f} min of flight in {summary['wall_s']:.0f} s; "
+               f"logs in {out}/stageK.npz, final model in {summary['final_model']}")

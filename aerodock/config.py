@@ -37,12 +37,15 @@ _STRICTLY_POSITIVE = {
     "planner.horizon_hover_s", "planner.horizon_moving_s", "planner.replan_threshold_m",
     "mission.dock_window_s", "mission.leader_lost_s", "mission.abort_tracking_m",
     "mission.start_radius_m", "mission.leader_altitude_m",
+    "curriculum.stage_step_m", "curriculum.min_depth_m", "curriculum.flights_per_stage",
+    "curriculum.free_air_m",
 }
 _SIGNED: set[str] = set()
-_CHOICES = {"gripper.trigger": {"passive", "active", "both"}}
+_CHOICES = {"gripper.trigger": {"passive", "active", "both"},
+            "curriculum.model": {"so2", "so2-ext", "mlp"}}
 _LENGTHS = {
     "control.q_diag": 7, "control.r_diag": 4,
-    "control.terminal_q_diag": 7, "control.terminal_r_diag": 4,
+    "control.terminal_q_diag": 7, "control.terminal_r_diag": 4, "curriculum.stage0_depth_m": 2,
 }
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
 

@@ -30,10 +30,10 @@ from aerodock.control.compensation import (
 from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import rotmat_to_quat
 from aerodock.gripper import GateState
 from aerodock.planning.docking import DockGeometry, docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
+from aerodock.recorder import FlightRecorder
 from aerodock.rng import TrialRNG
 from aerodock.sim import Observation, World
 
@@ -235,10 +235,7 @@ def run_campaign(
     hist = np.full((steps, n, 3), np.nan)  # |e_down|, |e_3d|, predicted down force
     trace_keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
     trace: dict[str, list] = {k: [] for k in trace_keys} if record != "summary" else {}
-    log_rows: dict[str, list] = {} if record != "full" else {
-        k: [] for k in ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean",
-                        "ref", "ff", "phase", "bar")
-    }
+    recorder = FlightRecorder() if record == "full" else None
     world.observed_accel()  # start the accelerometer's averaging window
     for k in range(steps):
         t = k * dt_c
@@ -382,26 +379,11 @@ def run_campaign(
             trace["phase"].append(phase.copy())
             trace["ff"].append(fout.feedforward_mps2.copy())
             trace["gate"].append(world.gripper.gate.copy())
-        if record == "full":
-            fmean = world.true_mean_field_mps2()
-            log_rows["t"].append(t)
-            log_rows["lp"].append(obs_l.p)
-            log_rows["lv"].append(obs_l.v)
-            log_rows["lq"].append(rotmat_to_quat(obs_l.R))
-            log_rows["fp"].append(obs_f.p)
-            log_rows["fv"].append(obs_f.v)
-            log_rows["fq"].append(rotmat_to_quat(obs_f.R))
-            log_rows["u"].append(fout.applied_accel_mps2)
-            log_rows["thrust"].append(fout.command.thrust_n)
-            log_rows["fmean"].append(fmean)
-            log_rows["ref"].append(p_ref.copy())
-            log_rows["ff"].append(fout.feedforward_mps2)
-            log_rows["phase"].append(phase.copy())
-            log_rows["bar"].append(world.bar.p.copy())
-
+        if recorder is not None:
+            recorder.before_step(t, world, obs_l, obs_f, fout, p_ref, phase)
         world.advance(lout.command, fout.command, close)
-        if record == "full":
-            log_rows["aobs"].append(world.observed_accel())
+        if recorder is not None:
+            recorder.after_step(world)
         if progress is not None and k % 20 == 0:
             progress(min(1.0, (k + 1) / steps))
         if np.all(phase == Phase.DONE):
@@ -434,8 +416,16 @@ def run_campaign(
     )
     if record != "summary":
         result.trace = {k: np.asarray(v) for k, v in trace.items()}
-    if record == "full":
-        result.logs = _flightlogs(log_rows, cfg, spec, n)
+    if recorder is not None:
+        mass = cfg.vehicle.mass_kg
+        result.logs = recorder.flightlogs(lambda i: {
+            "name": f"dock-seed{spec.seed}-trial{spec.first_trial + i:04d}",
+            "source": "aerodock-sim", "frame": "NED", "label_basis": "command",
+            "leader_mass_kg": mass, "follower_mass_kg": mass,
+            "compensation": Compensation(spec.compensation).value,
+            "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
+            "seed": spec.seed, "trial": spec.first_trial + i,
+        })
     return result
 
 
@@ -455,28 +445,3 @@ def _bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGe
     lateral = np.linalg.norm(rel[:, :2], axis=1)
     return (lateral < 0.6 * gp.aperture_m / 2) & (height > -gp.bar_radius_m) & (
         height < 0.7 * gp.gate_height_m)
-
-
-def _flightlogs(rows: dict[str, list], cfg: Config, spec: MissionSpec, n: int) -> list[FlightLog]:
-    arr = {k: np.asarray(v) for k, v in rows.items()}  # (T, n, ...)
-    mass = cfg.vehicle.mass_kg
-    logs = []
-    for i in range(n):
-        meta = {
-            "name": f"dock-seed{spec.seed}-trial{spec.first_trial + i:04d}", "source": "aerodock-sim",
-            "frame": "NED", "label_basis": "command", "leader_mass_kg": mass,
-            "follower_mass_kg": mass, "compensation": str(Compensation(spec.compensation).value),
-            "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
-            "seed": spec.seed, "trial": spec.first_trial + i,
-        }
-        logs.append(FlightLog(
-            t_s=arr["t"], leader_pos_m=arr["lp"][:, i], leader_vel_mps=arr["lv"][:, i],
-            leader_quat=arr["lq"][:, i], follower_pos_m=arr["fp"][:, i],
-            follower_vel_mps=arr["fv"][:, i], follower_quat=arr["fq"][:, i],
-            follower_cmd_accel_mps2=arr["u"][:, i], follower_thrust_n=arr["thrust"][:, i],
-            follower_obs_accel_mps2=arr["aobs"][:, i], meta=meta,
-            extra={"true_field_mean_mps2": arr["fmean"][:, i], "ref_pos_m": arr["ref"][:, i],
-                   "feedforward_mps2": arr["ff"][:, i], "phase": arr["phase"][:, i],
-                   "bar_pos_m": arr["bar"][:, i]},
-        ))
-    return logs

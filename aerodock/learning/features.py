@@ -30,7 +30,7 @@ make the equivariance exact everywhere, including on the leader's axis:
   planar force vanishes there, as it must by symmetry (otherwise it would depend on the arbitrary
   choice of ``phi`` at ``proj dp = 0``).
 * the cosine is ``proj dp . proj v_B / (sqrt(rho^2 + EPS_POS_M^2) sqrt(|proj v_B|^2 +
-  EPS_VEL_MPS^2))``: equal to the paper's cosine to within 0.5 % once ``rho > 1 cm`` and
+  EPS_VEL_MPS^2))``: equal to the paper's cosine to within 1 % once ``rho > 1 cm`` and
   ``|proj v_B| > 0.1 m/s``, and 0 (no preferred direction) when either projection vanishes.
   ``EPS_VEL_MPS = 0.01 m/s`` is the motion-capture velocity noise level, below which the
   direction of ``v_B`` is noise anyway.

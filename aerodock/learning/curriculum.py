@@ -1,0 +1,202 @@
+"""Curriculum data collection in the simulated world (the paper's "Curriculum for learning").
+
+Stage 0 flies the follower 1.5-1.8 m below the leader with the nominal controller (bias observer
+on); each stage trains a model on everything collected so far, deploys it as the follower's
+feed-forward, and collects the next stage 0.3 m closer, down to about 0.5 m. Every flight excites
+the wake: it starts in free air (so the labels' constant bias can be estimated), sweeps laterally
+through the wake, holds near the axis, moves vertically, and leaves to free air again; the leader
+hovers or drifts slowly so that leader speed is represented.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.control.compensation import AccelPredictor
+from aerodock.control.controller import PositionController, Reference
+from aerodock.downwash import BodyState, build_field
+from aerodock.flightlog import FlightLog, save_flightlogs
+from aerodock.planning.minjerk import minjerk
+from aerodock.recorder import FlightRecorder
+from aerodock.rng import TrialRNG
+from aerodock.sim import World
+
+# (duration_s, waypoint index moved to); waypoint 0 is the start. Rest-to-rest segments.
+_SEGMENTS = ((1.0, 0), (3.0, 1), (1.5, 2), (1.5, 2), (1.5, 3), (1.0, 3), (2.0, 4), (1.0, 4))
+FLIGHT_S = float(sum(d for d, _ in _SEGMENTS))
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One curriculum stage: the depth band flown below the leader."""
+
+    index: int
+    depth_min_m: float
+    depth_max_m: float
+
+
+def curriculum_stages(cfg: Config) -> list[Stage]:
+    """Stages from ``[curriculum]``: 0.3 m closer each time, down to ``min_depth_m``."""
+    c = cfg.curriculum
+    lo, hi = c.stage0_depth_m
+    stages = []
+    k = 0
+    while hi - k * c.stage_step_m > c.min_depth_m + 1e-9:
+        top = hi - k * c.stage_step_m
+        stages.append(Stage(k, max(c.min_depth_m, lo - k * c.stage_step_m), top))
+        k += 1
+    return stages
+
+
+def _waypoints(n: int, rng: TrialRNG, depth_min: float, depth_max: float,
+               free_air_m: float) -> np.ndarray:
+    """(5, n, 3) waypoints relative to the leader: free air, sweep across, near-axis hold at two
+    depths, exit to free air."""
+    theta = rng.uniform(0.0, 2 * np.pi, size=n)
+    depths = rng.uniform(depth_min, depth_max, size=(n, 3))
+    r_hold = rng.uniform(0.0, 0.2, size=n)
+    phi = rng.uniform(0.0, 2 * np.pi, size=n)
+
+    def at(r, ang, depth):
+        return np.stack([r * np.cos(ang), r * np.sin(ang), depth], axis=1)
+
+    return np.stack([
+        at(np.full(n, free_air_m), theta, depths[:, 0]),
+        at(np.full(n, free_air_m), theta + np.pi, depths[:, 0]),
+        at(r_hold, phi, depths[:, 1]),
+        at(r_hold, phi, depths[:, 2]),
+        at(np.full(n, free_air_m), theta + np.pi / 2, depths[:, 2]),
+    ])
+
+
+def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_max_m: float,
+                       seed: int, predictor: AccelPredictor | None = None,
+                       name: str = "flight", first_trial: int = 0) -> list[FlightLog]:
+    """Fly ``n_flights`` wake-excitation flights at once and return their FlightLogs.
+
+    Args:
+        cfg: configuration.
+        n_flights: flights (a batch).
+        depth_min_m, depth_max_m: depth band below the leader.
+        seed: random seed (each flight has its own stream).
+        predictor: feed-forward model (None: bias observer only, the nominal controller).
+        name: prefix of the flights' names.
+        first_trial: index of the first flight (for per-flight random streams).
+    """
+    n = n_flights
+    rng = TrialRNG(seed, n, first_trial)
+    c = cfg.curriculum
+    world = World(cfg, n, rng, field=build_field(cfg))
+    wps = _waypoints(n, rng, depth_min_m, depth_max_m, c.free_air_m)
+    drifting = rng.random(n) < c.drift_fraction
+    speed = np.where(drifting, rng.uniform(0.0, c.leader_drift_max_mps, size=n), 0.0)
+    heading = rng.uniform(0.0, 2 * np.pi, size=n)
+    lead_v = np.stack([speed * np.cos(heading), speed * np.sin(heading), np.zeros(n)], axis=1)
+    lead_p0 = np.tile([0.0, 0.0, -cfg.mission.leader_altitude_m], (n, 1))
+    world.reset(lead_p0, lead_p0 + wps[0])
+    mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+    lead_ctl = PositionController(cfg, n, use_observer=True)
+    fol_ctl = PositionController(cfg, n, use_observer=True)
+    lead_ctl.reset(world.leader.p, world.leader.v, world.cable_force_n / mass)
+    fol_ctl.reset(world.follower.p, world.follower.v)
+    z = np.zeros((n, 3))
+    zero_n = np.zeros(n)
+    # Segment plans (shared timing, per-flight waypoints).
+    plans, t0 = [], 0.0
+    prev = 0
+    for duration, target in _SEGMENTS:
+        plans.append((t0, t0 + duration, minjerk(wps[prev], z, z, wps[target], z, z, duration,
+                                                 t0)))
+        t0 += duration
+        prev = target
+    recorder = FlightRecorder()
+    world.observed_accel()
+    steps = int(round(FLIGHT_S / world.dt_control_s))
+    seg = 0
+    for k in range(steps):
+        t = k * world.dt_control_s
+        while seg < len(plans) - 1 and t >= plans[seg][1]:
+            seg += 1
+        obs_l, obs_f = world.observe()
+        lout = lead_ctl.step(obs_l.p, obs_l.v, obs_l.rpy,
+                             Reference(lead_p0 + lead_v * t, lead_v, z, zero_n, zero_n))
+        rel_p, rel_v, rel_a = plans[seg][2].sample(t)
+        ref = Reference(lead_p0 + lead_v * t + rel_p, lead_v + rel_v, rel_a, zero_n, zero_n)
+        ff = None
+        if predictor is not None:
+            ff = predictor.predict_bodies(
+                BodyState(obs_l.p, obs_l.v, obs_l.R, np.full(n, mass * g), np.full(n, mass)),
+                BodyState(obs_f.p, obs_f.v, obs_f.R, np.full(n, mass * g), np.full(n, mass)))
+        fout = fol_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, ref, None, ff)
+        recorder.before_step(t, world, obs_l, obs_f, fout, ref.p, np.full(n, seg))
+        world.advance(lout.command, fout.command)
+        recorder.after_step(world)
+    return recorder.flightlogs(lambda i: {
+        "name": f"{name}-{first_trial + i:03d}", "source": "aerodock-sim", "frame": "NED",
+        "label_basis": "command", "leader_mass_kg": mass, "follower_mass_kg": mass,
+        "depth_band_m": [depth_min_m, depth_max_m], "leader_speed_mps": float(speed[i]),
+        "compensation": "observer" if predictor is None else "observer+model", "seed": seed,
+    })
+
+
+def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | None = None,
+                   progress: Callable[[str], None] | None = None,
+                   train_kwargs: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Collect the curriculum into ``out_dir`` (``stageK.npz`` FlightLogs and
+    ``models/stageK`` model dirs, plus ``models/final`` trained on everything).
+
+    Returns a JSON-ready summary (stages, minutes, per-stage validation loss, timings).
+    """
+    from aerodock.learning.dataset import build_dataset
+    from aerodock.learning.train import train_model
+
+    c = cfg.curriculum
+    kind = model_kind or c.model
+    out_dir = Path(out_dir)
+    (out_dir / "models").mkdir(parents=True, exist_ok=True)
+    logs: list[FlightLog] = []
+    predictor = None
+    summary: dict[str, Any] = {"stages": [], "model": kind, "seed": seed}
+    started = time.perf_counter()
+    kwargs = dict(train_kwargs or {})
+    stages = curriculum_stages(cfg)
+    trained = None
+    for stage in stages:
+        t0 = time.perf_counter()
+        if progress:
+            progress(f"stage {stage.index}: flying {c.flights_per_stage} flights at "
+                     f"{stage.depth_min_m:.2f}-{stage.depth_max_m:.2f} m"
+                     + (" with the stage model" if predictor is not None else ""))
+        stage_logs = excitation_flights(
+            cfg, int(c.flights_per_stage), stage.depth_min_m, stage.depth_max_m,
+            seed + 1000 * stage.index, predictor, name=f"stage{stage.index}",
+        )
+        save_flightlogs(out_dir / f"stage{stage.index}.npz", stage_logs)
+        logs.extend(stage_logs)
+        fly_s = time.perf_counter() - t0
+        if progress:
+            progress(f"stage {stage.index}: training {kind} on {len(logs)} flights")
+        t1 = time.perf_counter()
+        trained = train_model(kind, build_dataset(logs), seed=seed, **kwargs)
+        trained.save(out_dir / "models" / f"stage{stage.index}")
+        predictor = trained.predictor()
+        summary["stages"].append({
+            "stage": stage.index, "depth_band_m": [stage.depth_min_m, stage.depth_max_m],
+            "flights": len(stage_logs), "minutes": sum(lg.duration_s for lg in stage_logs) / 60,
+            "fly_s": fly_s, "train_s": time.perf_counter() - t1,
+            "val_rmse_mps2": trained.info.get("val_rmse_mps2"),
+        })
+    if trained is not None:
+        trained.save(out_dir / "models" / "final")
+    summary["minutes"] = sum(lg.duration_s for lg in logs) / 60
+    summary["flights"] = len(logs)
+    summary["wall_s"] = time.perf_counter() - started
+    summary["final_model"] = str(out_dir / "models" / "final")
+    return summary
