@@ -178,3 +178,26 @@ def collect(
                    f"{st['minutes']:.2f} min, val RMSE {st['val_rmse_mps2']:.3f} m/s²")
     typer.echo(f"{summary['minutes']:.1f} min of flight in {summary['wall_s']:.0f} s; "
                f"logs in {out}/stageK.npz, final model in {summary['final_model']}")
+
+
+@app.command("reproduce")
+def reproduce(
+    quick: Annotated[bool, typer.Option(help="A smaller run (a few minutes).")] = False,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+) -> None:
+    """The paper's experiments end to end: results.json, report.md and figures/."""
+    from aerodock.experiments.reproduce import run_reproduce
+
+    cfg = _config(config)
+    shared = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+    here = Path.cwd().parent / "shared" / "data"
+    data = here if here.is_dir() else shared
+
+    def say(msg: str) -> None:
+        err_console.print(msg)
+
+    results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data)
+    typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
+               f"{results['timings_s']['total_s']:.0f} s)")

@@ -1,0 +1,1 @@
+"""The paper's experiments: ``reproduce`` (simulation), ``real_data`` (Neural-Swarm), report."""

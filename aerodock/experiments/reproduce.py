@@ -1,0 +1,281 @@
+"""``aerodock reproduce``: the paper's experiments end to end, in simulation, with the learnt model.
+
+1. curriculum data collection and training (the paper's SO(2) model) and the sample-efficiency
+   study (SO(2), extended SO(2), plain MLP);
+2. the cable-length study (leader on a rigid stand, six offsets, with and without the model);
+3. docking with the leader hovering (d_p = 0.36 m, four start locations);
+4. the leader in motion at 0.25 m/s (meet at 6 s, hold formation for 5 s);
+5. the real-data study on the Neural-Swarm flights, when ``../shared/data`` is present;
+then ``results.json``, ``report.md`` and ``figures/`` (written by :mod:`aerodock.experiments.report`).
+
+"Without model" is the paper's LQG baseline (bias observer); "with model" adds the learnt model's
+feed-forward. The oracle (true mean field) is run as an upper bound.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.control.compensation import Compensation
+from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
+
+CABLE_OFFSETS_M = (0.36, 0.47, 0.64, 0.87, 1.11, 1.35)
+
+
+@dataclass(frozen=True)
+class RunSize:
+    """How big each experiment is (``--quick`` or full)."""
+
+    cable_reps: int
+    hover_trials: int
+    moving_trials: int
+    se_minutes: tuple[float, ...]
+    se_seeds: tuple[int, ...]
+    se_pool_flights: int
+    test_flights_per_stage: int
+    se_max_time_s: float | None
+
+
+QUICK = RunSize(cable_reps=4, hover_trials=40, moving_trials=20, se_minutes=(0.5, 1, 2, 5),
+                se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0)
+FULL = RunSize(cable_reps=10, hover_trials=200, moving_trials=100,
+               se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
+               test_flights_per_stage=4, se_max_time_s=None)
+
+
+def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
+    """Mean |vertical error| (follower vs its reference) in [t0, t1) over approaching trials."""
+    t = trace["t_s"]
+    sel = (t >= t0) & (t < t1)
+    err = np.abs(trace["follower_p"][sel, :, 2] - trace["ref_p"][sel, :, 2])
+    ok = trace["phase"][sel] <= Phase.TERMINAL
+    per_trial = np.array([np.mean(err[ok[:, i], i]) if ok[:, i].any() else np.nan
+                          for i in range(err.shape[1])])
+    good = per_trial[np.isfinite(per_trial)]
+    return {"window_s": [t0, t1], "mean_abs_err_down_m": float(np.mean(good)) if good.size
+            else None, "sd_m": float(np.std(good)) if good.size else None,
+            "trials": int(good.size)}
+
+
+def _campaign_record(res: CampaignResult) -> dict[str, Any]:
+    s = res.summary()
+    s["arrival_s"] = res.arrival_s
+    return s
+
+
+def _traces_subset(res: CampaignResult, keep: int) -> dict[str, np.ndarray]:
+    return {k: (v[:, :keep] if v.ndim >= 2 else v) for k, v in res.trace.items()}
+
+
+def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
+                  say: Callable[[str], None] = print,
+                  shared_data: Path | None = None) -> dict[str, Any]:
+    """Run every experiment and write ``results.json``, ``report.md`` and ``figures/``."""
+    from aerodock.experiments.report import write_report
+    from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
+    from aerodock.learning.dataset import build_dataset, save_dataset
+    from aerodock.learning.evaluate import evaluate
+    from aerodock.learning.runtime import Predictor
+    from aerodock.learning.sample_efficiency import sample_efficiency
+
+    size = QUICK if quick else FULL
+    out_dir = Path(out_dir)
+    fig_dir = out_dir / "figures"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    timings: dict[str, float] = {}
+    traces: dict[str, Any] = {}
+    results: dict[str, Any] = {
+        "aerodock_reproduce": {"quick": quick, "seed": seed, "config": cfg.source,
+                               "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
+                                          f"Python {platform.python_version()}"},
+        "units": {"errors": "m", "integrals_over_0.5s": "m*s (errors), m/s (force)",
+                  "accelerations": "m/s^2, NED (down positive)", "rates": "fraction"},
+    }
+
+    # 1. Curriculum + training ---------------------------------------------------------------
+    t0 = time.perf_counter()
+    say("1/5 curriculum data collection and training")
+    data_dir = out_dir / "data"
+    curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m))
+    model_dir = Path(curriculum["final_model"])
+    predictor = Predictor.load(model_dir)
+    test_logs = []
+    for st in curriculum_stages(cfg):
+        test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
+                                        st.depth_max_m, seed + 7919 + st.index,
+                                        name=f"test{st.index}")
+    test_ds = build_dataset(test_logs)
+    save_dataset(data_dir / "heldout.npz", test_ds)
+    from aerodock.flightlog import load_flightlogs
+
+    train_logs = [lg for st in curriculum_stages(cfg)
+                  for lg in load_flightlogs(data_dir / f"stage{st.index}.npz")]
+    if size.se_pool_flights:
+        # More flights (nominal controller + final model) so that 10 minutes exist to draw from.
+        for st in curriculum_stages(cfg):
+            train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
+                                             st.depth_max_m, seed + 4241 + st.index, predictor,
+                                             name=f"pool{st.index}")
+    heldout_eval = evaluate(predictor, test_ds)
+    results["learning"] = {
+        "curriculum": curriculum,
+        "heldout": heldout_eval,
+        "rmse_ratio_to_floor": {
+            region: heldout_eval[region]["model"]["rmse_mps2"]["overall"]
+            / heldout_eval[region]["error_floor"]["rmse_mps2"]["overall"]
+            for region in ("all", "interaction")
+        },
+    }
+    timings["curriculum_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    say("    sample efficiency (so2, so2-ext, mlp)")
+    se = sample_efficiency(
+        build_dataset(train_logs), test_ds, kinds=("so2", "so2-ext", "mlp"),
+        minutes=size.se_minutes, seeds=size.se_seeds, out_dir=fig_dir,
+        train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
+    )
+    results["sample_efficiency"] = se
+    timings["sample_efficiency_s"] = time.perf_counter() - t0
+
+    # 2. Cable-length study -----------------------------------------------------------------
+    t0 = time.perf_counter()
+    say("2/5 cable-length study (leader on a rigid stand)")
+    cable: dict[str, Any] = {"offsets_m": list(CABLE_OFFSETS_M), "repetitions": size.cable_reps,
+                             "without_model": [], "with_model": []}
+    cable_traces: dict[str, dict[float, dict[str, np.ndarray]]] = {"without": {}, "with": {}}
+    for offset in CABLE_OFFSETS_M:
+        for key, comp in (("without", Compensation.OBSERVER), ("with", Compensation.MODEL)):
+            res = run_campaign(cfg, MissionSpec(
+                trials=size.cable_reps, offset_m=offset, leader_fixed=True, compensation=comp,
+                seed=seed, start_azimuths_deg=(0.0,)), predictor, record="trace")
+            rec = _campaign_record(res)
+            rec["offset_m"] = offset
+            rec["result"] = "dock" if rec["success_rate"] >= 0.5 else "miss"
+            cable[f"{key}_model"].append(rec)
+            cable_traces[key][offset] = res.trace
+    results["cable_study"] = cable
+    traces["cable"] = cable_traces
+    timings["cable_study_s"] = time.perf_counter() - t0
+
+    # 3. Hover docking ----------------------------------------------------------------------
+    t0 = time.perf_counter()
+    say(f"3/5 docking with the leader hovering ({size.hover_trials} trials per mode)")
+    hover: dict[str, Any] = {"offset_m": 0.36, "aperture_m": cfg.gripper.aperture_m,
+                             "trials": size.hover_trials}
+    hover_res: dict[str, CampaignResult] = {}
+    for key, comp in (("without_model", Compensation.OBSERVER),
+                      ("with_model", Compensation.MODEL), ("oracle", Compensation.ORACLE)):
+        res = run_campaign(cfg, MissionSpec(trials=size.hover_trials, offset_m=0.36,
+                                            compensation=comp, seed=seed + 1), predictor,
+                           record="trace")
+        hover[key] = _campaign_record(res)
+        hover_res[key] = res
+    w, m = hover["without_model"], hover["with_model"]
+    hover["terminal_error_reduction_x"] = (w["terminal_err_down_median_m"]
+                                           / max(m["terminal_err_down_median_m"], 1e-9))
+    results["hover_docking"] = hover
+    traces["hover"] = {k: _trace_keep(v) for k, v in hover_res.items()}
+    timings["hover_s"] = time.perf_counter() - t0
+
+    # 4. Leader in motion --------------------------------------------------------------------
+    t0 = time.perf_counter()
+    say(f"4/5 leader in motion at 0.25 m/s ({size.moving_trials} trials per mode)")
+    moving: dict[str, Any] = {"leader_speed_mps": 0.25, "meet_s": cfg.planner.horizon_moving_s,
+                              "hold_s": cfg.planner.hold_s, "trials": size.moving_trials}
+    moving_traces = {}
+    meet, hold = cfg.planner.horizon_moving_s, cfg.planner.hold_s
+    for key, comp in (("without_model", Compensation.OBSERVER),
+                      ("with_model", Compensation.MODEL)):
+        dock_res = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
+                                                 leader_speed_mps=0.25, compensation=comp,
+                                                 seed=seed + 2), predictor)
+        # Formation tracking as in the paper's figure: same flights with the gripper disarmed.
+        track = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
+                                              leader_speed_mps=0.25, compensation=comp,
+                                              seed=seed + 2, passive_trigger=False,
+                                              active_trigger=False), predictor, record="trace")
+        rec = _campaign_record(dock_res)
+        rec["altitude_error_approach"] = _window_mean(track.trace, meet - 2.0, meet)
+        rec["altitude_error_hold"] = _window_mean(track.trace, meet, meet + hold)
+        moving[key] = rec
+        moving_traces[key] = track.trace
+    results["moving_leader"] = moving
+    traces["moving"] = moving_traces
+    timings["moving_s"] = time.perf_counter() - t0
+
+    # 5. Real data ----------------------------------------------------------------------------
+    t0 = time.perf_counter()
+    real_dir = None if shared_data is None else shared_data / "neural-swarm" / "swap_ss"
+    if real_dir is not None and real_dir.is_dir():
+        say("5/5 real-data study (Neural-Swarm, leave flights out)")
+        from aerodock.experiments.real_data import real_data_study
+
+        results["real_data"] = real_data_study(real_dir, fig_dir, quick=quick, seed=seed)
+    else:
+        say("5/5 real-data study skipped (../shared/data/neural-swarm not found)")
+        results["real_data"] = None
+    timings["real_data_s"] = time.perf_counter() - t0
+
+    results["timings_s"] = timings
+    results["timings_s"]["total_s"] = time.perf_counter() - started
+    say("writing results.json, report.md and figures/")
+    figures = write_report(results, traces, out_dir, cfg)
+    results["figures"] = figures
+    _write_json_atomic(out_dir / "results.json", results)
+    return results
+
+
+def _trace_keep(res: CampaignResult) -> dict[str, Any]:
+    tr = dict(res.trace)
+    tr["success"] = res.success
+    tr["arrival_s"] = res.arrival_s
+    return tr
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(type(obj).__name__)
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-safe copy: arrays to lists, non-finite floats to None."""
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _clean(obj.tolist())
+    if isinstance(obj, np.generic):
+        return _clean(obj.item())
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def _write_json_atomic(path: Path, obj: Any) -> None:
+    obj = _clean(obj)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".results.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(obj, fh, indent=2, default=_json_default, allow_nan=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
