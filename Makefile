@@ -16,7 +16,7 @@ $(STAMP): $(BIN)/python pyproject.toml
 	rm -f $(VENV)/.installed-* && touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/aerodock demo
+	$(BIN)/aerodock reproduce --quick --out out/demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

@@ -1,5 +1,5 @@
-"""Commands registered on the ``aerodock`` app beside the field commands of ``cli``:
-``dock``, ``demo`` and the learning, ingestion and benchmark commands of their subpackages."""
+"""Commands registered on the ``aerodock`` app beside the field commands of ``cli``: ``dock``,
+``collect``, ``reproduce`` and the commands of the learning, ingestion and benchmark code."""
 
 from __future__ import annotations
 
@@ -19,8 +19,9 @@ err_console = Console(stderr=True)
 
 def progress_bar() -> Progress:
     """A Rich progress bar on stderr (stdout stays clean for --json)."""
-    return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-                    TimeElapsedColumn(), console=err_console, transient=True)
+    return Progress(TextColumn("{task.description}"), BarColumn(),
+                    TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
+                    console=err_console, transient=True)
 
 
 def _load_predictor(model: Path | None, comp: Compensation):
@@ -88,52 +89,6 @@ def dock(
     Console().print(table)
     if save_logs is not None:
         typer.echo(f"wrote {summary['logs']}")
-
-
-@app.command("demo")
-def demo(
-    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/demo"),
-    trials: Annotated[int, typer.Option(help="Trials per campaign.")] = 20,
-    config: ConfigOpt = None,
-) -> None:
-    """A short tour: the wake, and docking with and without downwash compensation (figures)."""
-    from aerodock.downwash import build_field
-    from aerodock.downwash.probe import plot_field_slice
-    from aerodock.mission import MissionSpec, run_campaign
-    from aerodock.plots import plot_altitudes, plot_trajectories, plot_vertical_error
-
-    cfg = _config(config)
-    out.mkdir(parents=True, exist_ok=True)
-    field = build_field(cfg)
-    typer.echo(f"wrote {plot_field_slice(field.mean_acceleration, out / 'field.png', cfg.vehicle.mass_kg, cfg.sim.gravity_mps2)}")
-    traces, results = {}, {}
-    for comp in (Compensation.OBSERVER, Compensation.ORACLE):
-        res = run_campaign(cfg, MissionSpec(trials=trials, compensation=comp, seed=0),
-                           record="trace")
-        traces[comp.value], results[comp.value] = res.trace, res
-        s = res.summary()
-        typer.echo(f"{comp.value:>9}: docked {s['docked']}/{trials}, terminal error down "
-                   f"{s['terminal_err_down_median_m']:.3f} m (median)")
-    arrival = results["oracle"].arrival_s
-    typer.echo(f"wrote {plot_vertical_error(traces, out / 'vertical_error.png', arrival, 'Follower vertical tracking error, d_p = 0.36 m')}")
-    ora = results["oracle"]
-    typer.echo(f"wrote {plot_trajectories(ora.trace, out / 'trajectories.png', 'Docking approaches (oracle compensation)', ora.success)}")
-    obs = results["observer"]
-    picks = {}
-    if ora.success.any():
-        picks["docked (oracle)"] = int(ora.success.argmax())
-    if (~obs.success).any():
-        picks["missed (observer only)"] = int((~obs.success).argmax())
-    both = {"t_s": ora.trace["t_s"]}
-    # Altitude figure from two campaigns: stack the chosen trials side by side.
-    import numpy as np
-
-    t_len = min(len(ora.trace["t_s"]), len(obs.trace["t_s"]))
-    for key in ("leader_p", "follower_p", "ref_p"):
-        both[key] = np.concatenate([ora.trace[key][:t_len], obs.trace[key][:t_len]], axis=1)
-    both["t_s"] = ora.trace["t_s"][:t_len]
-    sel = {k: (i if "oracle" in k else trials + i) for k, i in picks.items()}
-    typer.echo(f"wrote {plot_altitudes(both, sel, out / 'altitudes.png', 'Altitude of both vehicles')}")
 
 
 def _register_subpackages() -> None:

@@ -24,36 +24,6 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def plot_vertical_error(traces: dict[str, dict[str, np.ndarray]], path: Path, arrival_s: float,
-                        title: str) -> Path:
-    """Vertical tracking error (true follower minus reference, down positive) vs time.
-
-    One panel line per campaign (e.g. per compensation): mean with ±1 sd shaded, over the trials
-    still approaching (APPROACH/TERMINAL phases).
-    """
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for label, tr in traces.items():
-        t = tr["t_s"]
-        err = tr["follower_p"][:, :, 2] - tr["ref_p"][:, :, 2]
-        approaching = tr["phase"] <= 1
-        err = np.where(approaching, err, np.nan)
-        ok = np.sum(approaching, axis=1) >= max(1, approaching.shape[1] // 4)
-        with np.errstate(invalid="ignore"):
-            mean = np.nanmean(np.where(ok[:, None], err, np.nan), axis=1)
-            sd = np.nanstd(np.where(ok[:, None], err, np.nan), axis=1)
-        (line,) = ax.plot(t, mean, label=label)
-        ax.fill_between(t, mean - sd, mean + sd, color=line.get_color(), alpha=0.25)
-    ax.axvline(arrival_s, color="k", ls=":", lw=1, label="planned arrival")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("vertical error, down positive [m]")
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    return _save(fig, path)
-
-
 def plot_altitudes(tr: dict[str, np.ndarray], trials: dict[str, int], path: Path,
                    title: str) -> Path:
     """Altitude (up positive) of leader and follower for selected trials (e.g. docked / missed)."""

@@ -95,7 +95,8 @@ def fig_planar_forces(tr: dict[str, Any], fig_dir: Path) -> Path:
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.8))
     ax1.plot(p[:, 1], p[:, 0], color="tab:blue", label="follower path")
     ax1.quiver(p[step, 1], p[step, 0], ff[step, 1], ff[step, 0], color="tab:red", angles="xy",
-               scale_units="xy", scale=4, width=0.004, label="predicted planar force (1 m ≙ 4 m/s²)")
+               scale_units="xy", scale=4, width=0.004,
+               label="predicted planar force (1 m ≙ 4 m/s²)")
     ax1.plot(tr["leader_p"][0, i, 1], tr["leader_p"][0, i, 0], "k^", ms=10, label="leader")
     ax1.set_xlabel("east [m]")
     ax1.set_ylabel("north [m]")

@@ -6,7 +6,7 @@
 3. docking with the leader hovering (d_p = 0.36 m, four start locations);
 4. the leader in motion at 0.25 m/s (meet at 6 s, hold formation for 5 s);
 5. the real-data study on the Neural-Swarm flights, when ``../shared/data`` is present;
-then ``results.json``, ``report.md`` and ``figures/`` (written by :mod:`aerodock.experiments.report`).
+then ``results.json``, ``report.md`` and ``figures/`` (:mod:`aerodock.experiments.report`).
 
 "Without model" is the paper's LQG baseline (bias observer); "with model" adds the learnt model's
 feed-forward. The oracle (true mean field) is run as an upper bound.
