@@ -24,9 +24,14 @@ def rng():
     return np.random.default_rng(12345)
 
 
-def shared_data(*parts: str) -> Path:
-    """Path into ../shared/data, skipping the test when it is absent (a user's clone)."""
-    path = SHARED.joinpath("data", *parts)
-    if not path.exists():
-        pytest.skip(f"shared data not present: {path}")
-    return path
+@pytest.fixture
+def shared_data():
+    """``shared_data(*parts)``: a path into ../shared/data; skips when absent (a user's clone)."""
+
+    def get(*parts: str) -> Path:
+        path = SHARED.joinpath("data", *parts)
+        if not path.exists():
+            pytest.skip(f"shared data not present: {path}")
+        return path
+
+    return get
