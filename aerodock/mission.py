@@ -184,6 +184,8 @@ def run_campaign(
     world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
     if comp == Compensation.ORACLE:
         predictor = OraclePredictor(world.field)
+    elif comp != Compensation.MODEL:
+        predictor = None  # a model given alongside 'none' or 'observer' is not flown
     geom = DockGeometry.from_config(cfg)
     world.gripper_params = replace(world.gripper_params,
                                    passive=world.gripper_params.passive and spec.passive_trigger,

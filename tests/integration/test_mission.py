@@ -110,3 +110,16 @@ def test_bad_mission_arguments(cfg):
         run_campaign(cfg, MissionSpec(trials=1, offset_m=-1.0))
     with pytest.raises(ValueError, match="model"):
         run_campaign(cfg, MissionSpec(trials=1, compensation="model"))
+
+
+def test_predictor_is_flown_only_with_model_compensation(cfg):
+    from aerodock.control.compensation import OraclePredictor
+    from aerodock.downwash import build_field
+
+    oracle_like = OraclePredictor(build_field(cfg))
+    spec = dict(trials=4, seed=9)
+    with_obs = run_campaign(cfg, MissionSpec(compensation="observer", **spec), oracle_like)
+    plain = run_campaign(cfg, MissionSpec(compensation="observer", **spec))
+    as_model = run_campaign(cfg, MissionSpec(compensation="model", **spec), oracle_like)
+    assert np.array_equal(with_obs.err_down_m, plain.err_down_m)
+    assert not np.array_equal(as_model.err_down_m, plain.err_down_m)
