@@ -25,6 +25,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check aerodock tests bench
 
 bench: $(STAMP)
+	$(BIN)/python -m pip install --quiet --no-deps rotorpy torchdiffeq roma
 	$(BIN)/aerodock bench
 
 clean:

@@ -93,9 +93,11 @@ def dock(
 
 def _register_subpackages() -> None:
     """Commands that live beside their subpackages."""
+    from aerodock.bench import bench_command
     from aerodock.ingest.command import ingest_command
     from aerodock.learning.commands import evaluate_command, export_command, train_command
 
+    app.command("bench")(bench_command)
     app.command("ingest")(ingest_command)
     app.command("train")(train_command)
     app.command("evaluate")(evaluate_command)

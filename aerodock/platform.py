@@ -2,20 +2,19 @@
 
 The cables hang from two points ``cable_spacing_m`` apart and hold the bar at its ends, so they stay
 parallel: the bar translates like a spherical pendulum of length ``d_p`` about the anchor (swinging
-in both directions) and yaws like a bifilar (torsion) pendulum, ``omega_yaw^2 = g (s/2)^2 / (L k^2)``
-with ``k^2 = l^2 / 12`` for a uniform bar of length ``l``. The cables only pull: a bar pushed up
-(by the gripper) goes slack and falls back. After capture the follower hangs from the bar and the
-same constraint carries its weight to the leader.
+in both directions) and yaws like a bifilar (torsion) pendulum,
+``omega_yaw^2 = g (s/2)^2 / (L k^2)`` with ``k^2 = l^2 / 12`` for a uniform bar of length ``l``.
+The cables only pull: a bar pushed up (by the gripper) goes slack and falls back. After capture
+the follower hangs from the bar and the same constraint carries its weight to the leader.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.geometry import dot_rows
 
 
 @dataclass(frozen=True)
@@ -108,33 +107,63 @@ def step_bar(
     length = params.cable_length_m
     rel = bar.p - anchor_p
     rel_v = bar.v - anchor_v
-    dist = np.linalg.norm(rel, axis=1)
+    dist = _norm3(rel)
     unit = rel / np.maximum(dist, 1e-9)[:, None]
-    free = force_n / mass_kg[:, None] - params.swing_damping * rel_v
+    free = force_n / mass_kg[:, None]
+    free -= params.swing_damping * rel_v
     free[:, 2] += params.gravity_mps2
     # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
     taut = dist >= length - 1e-6
-    radial_v = dot_rows(rel_v, unit)
-    tangential_v2 = dot_rows(rel_v, rel_v) - radial_v**2
-    lam = dot_rows(unit, free - anchor_a) + tangential_v2 / length
-    lam = np.where(taut, np.maximum(lam, 0.0), 0.0)
+    radial_v = _dot3(rel_v, unit)
+    tangential_v2 = _dot3(rel_v, rel_v) - radial_v**2
+    lam = _dot3(unit, free - anchor_a)
+    lam += tangential_v2 / length
+    lam = np.maximum(lam, 0.0) if taut.all() else np.where(taut, np.maximum(lam, 0.0), 0.0)
     accel = free - lam[:, None] * unit
     cable_force = (mass_kg * lam)[:, None] * unit
-    v = bar.v + accel * dt_s
-    p = bar.p + v * dt_s
+    v = accel * dt_s
+    v += bar.v
+    p = v * dt_s
+    p += bar.p
     # Inextensible cables: a bar under tension (or past the cable length) is put back on the
     # sphere and keeps no radial velocity relative to the anchor.
     rel = p - anchor_p_next
-    dist = np.linalg.norm(rel, axis=1)
-    hold = (dist > length) | (lam > 0)
-    if np.any(hold):
+    dist = _norm3(rel)
+    tense = lam > 0
+    hold = (dist > length) | tense
+    if hold.any():
+        every = hold.all()  # the usual case: skip the selections
         unit_new = rel / np.maximum(dist, 1e-9)[:, None]
-        p = np.where(hold[:, None], anchor_p_next + unit_new * length, p)
-        radial = dot_rows(v - anchor_v, unit_new)
-        radial = np.where(lam > 0, radial, np.maximum(radial, 0.0))
-        v = np.where(hold[:, None], v - radial[:, None] * unit_new, v)
-    yaw_err = (bar.yaw_rad - leader_yaw_rad + np.pi) % (2 * np.pi) - np.pi
-    yaw_acc = -params.yaw_omega2 * np.sin(yaw_err) - params.yaw_damping * bar.yaw_rate_radps
-    yaw_rate = bar.yaw_rate_radps + yaw_acc * dt_s
-    new = replace(bar, p=p, v=v, yaw_rad=bar.yaw_rad + yaw_rate * dt_s, yaw_rate_radps=yaw_rate)
-    return new, cable_force
+        on_sphere = unit_new * length
+        on_sphere += anchor_p_next
+        p = on_sphere if every else np.where(hold[:, None], on_sphere, p)
+        radial = _dot3(v - anchor_v, unit_new)
+        if not tense.all():
+            radial = np.where(tense, radial, np.maximum(radial, 0.0))
+        no_radial = v - radial[:, None] * unit_new
+        v = no_radial if every else np.where(hold[:, None], no_radial, v)
+    yaw_err = bar.yaw_rad - leader_yaw_rad
+    yaw_err += np.pi
+    yaw_err %= 2 * np.pi
+    yaw_err -= np.pi
+    yaw_acc = -params.yaw_omega2 * np.sin(yaw_err)
+    yaw_acc -= params.yaw_damping * bar.yaw_rate_radps
+    yaw_rate = yaw_acc * dt_s
+    yaw_rate += bar.yaw_rate_radps
+    yaw = yaw_rate * dt_s
+    yaw += bar.yaw_rad
+    return BarState(p, v, yaw, yaw_rate), cable_force
+
+
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of (n, 3) arrays: ``geometry.dot_rows`` bit for bit, faster."""
+    ab = a * b
+    return ab[:, 0] + ab[:, 1] + ab[:, 2]
+
+
+def _norm3(a: np.ndarray) -> np.ndarray:
+    """Row norms of an (n, 3) array: ``np.linalg.norm(a, axis=1)`` bit for bit, faster."""
+    aa = a * a
+    out = aa[:, 0] + aa[:, 1]
+    out += aa[:, 2]
+    return np.sqrt(out, out=out)

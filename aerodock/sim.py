@@ -16,13 +16,12 @@ The physics pipeline of one step (the downwash is one stage of it, as in crazyfl
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
-from aerodock.geometry import euler_to_rotmat
 from aerodock.gripper import (
     GateState,
     GripperParams,
@@ -35,10 +34,13 @@ from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_ba
 from aerodock.rng import TrialRNG
 from aerodock.vehicle import (
     AttitudeCommand,
+    CommandTargets,
     VehicleParams,
     VehicleState,
+    command_targets,
     hover_state,
-    step_vehicle,
+    rpy_to_rotmat,
+    step_vehicle_targets,
 )
 
 
@@ -58,7 +60,7 @@ class Observation:
     @property
     def R(self) -> np.ndarray:  # noqa: N802
         """(n, 3, 3) body-to-world rotation."""
-        return euler_to_rotmat(self.rpy[:, 0], self.rpy[:, 1], self.rpy[:, 2])
+        return rpy_to_rotmat(self.rpy)
 
 
 class World:
@@ -90,6 +92,12 @@ class World:
         self.dt_control_s = self.substeps * self.dt_s
         self._latency_steps = int(round(cfg.mocap.latency_s / self.dt_s))
         self._mass = np.full(n, self.vehicle.mass_kg)
+        # Constant arrays of the hot loop (never modified in place).
+        self._mass_col = self._mass[:, None]
+        self._bar_mass = np.full(n, self.platform.bar_mass_kg)
+        self._no_close = np.zeros(n, dtype=bool)
+        self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
+        self._both_state: tuple[VehicleState, VehicleState, VehicleState] | None = None
         self.t_s = 0.0
         self.step_index = 0
 
@@ -114,15 +122,10 @@ class World:
         self.field.reset(n, rng)
         self.t_s = 0.0
         self.step_index = 0
-        size = self._latency_steps + 1
-        self._history = {
-            "lp": np.repeat(self.leader.p[None], size, 0),
-            "lv": np.repeat(self.leader.v[None], size, 0),
-            "ly": np.repeat(self.leader.rpy[None], size, 0),
-            "fp": np.repeat(self.follower.p[None], size, 0),
-            "fv": np.repeat(self.follower.v[None], size, 0),
-            "fy": np.repeat(self.follower.rpy[None], size, 0),
-        }
+        # Ring buffer of the last latency_steps + 1 true states (the arrays themselves: states
+        # are never modified in place, every step makes new ones).
+        first = self._snapshot()
+        self._history = [first] * (self._latency_steps + 1)
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = 0.0
         self.last_downwash_mps2 = np.zeros((n, 3))
@@ -147,7 +150,7 @@ class World:
         """Motion-capture measurements of (leader, follower), delayed and noisy."""
         cfg = self.cfg.mocap
         k = (self.step_index - self._latency_steps) % (self._latency_steps + 1)
-        h = self._history
+        lp, lv, ly, fp, fv, fy = self._history[k]
         n = self.n
 
         def noisy(p, v, rpy):
@@ -157,7 +160,7 @@ class World:
                 rpy=rpy.copy(),
             )
 
-        return noisy(h["lp"][k], h["lv"][k], h["ly"][k]), noisy(h["fp"][k], h["fv"][k], h["fy"][k])
+        return noisy(lp, lv, ly), noisy(fp, fv, fy)
 
     def observed_accel(self) -> np.ndarray:
         """(n, 3) the follower's mean kinematic acceleration since the last call, with noise."""
@@ -174,86 +177,132 @@ class World:
         return self.gripper.gate == GateState.CAPTURED
 
     # -- dynamics ------------------------------------------------------------------------------
+    # Both vehicles are stepped as one batch of 2n rows (leaders first): every operation is
+    # row-wise, so the numbers are those of two separate calls, at half the per-call overhead.
+    # ``self.leader`` and ``self.follower`` are views of that batch; a caller may still replace
+    # either (the batch is then rebuilt from them).
+
     def step(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand,
              close_command: np.ndarray | None = None) -> None:
         """Advance every trial by one physics step."""
-        dt = self.dt_s
-        n = self.n
-        lead_R = self.leader.R
-        fol_R = self.follower.R
-        captured = self.gripper.gate == GateState.CAPTURED
-        lead_body = BodyState(self.leader.p, self.leader.v, lead_R, self.leader.thrust_n,
-                              self._mass)
-        fol_body = BodyState(self.follower.p, self.follower.v, fol_R, self.follower.thrust_n,
-                             self._mass)
-        downwash = self.field.acceleration(lead_body, fol_body, dt)
-        self.last_downwash_mps2 = downwash
-        bar_force = np.zeros((n, 3))
-        bar_drag = getattr(self.field, "bar_force_n", None)
-        if bar_drag is not None:
-            bar_force += bar_drag(lead_body, self.bar.p, self.bar.v, self.platform.bar_area_m2)
-        contact, inside, up = bar_in_gripper(
-            self.follower.p, fol_R, self.follower.v, self.bar.p, self.bar.v, self.bar.yaw_rad,
-            self.gripper_params,
-        )
-        contact = np.where(captured, 0.0, contact)
-        follower_force = downwash * self._mass[:, None] - up * contact[:, None]
-        bar_force += up * contact[:, None]
-
-        # Leader first, pulled by last step's cable force; then the bar hangs from its new anchor.
-        if self.leader_fixed:
-            hover = np.full(n, self.vehicle.hover_thrust_n)
-            new_leader = replace(self.leader, thrust_cmd_state_n=hover / self.leader.thrust_gain)
-            lead_accel = np.zeros((n, 3))
-        else:
-            new_leader, lead_accel = step_vehicle(self.leader, leader_cmd, self.cable_force_n,
-                                                  self.vehicle, dt, lead_R)
-        new_follower, fol_accel = step_vehicle(self.follower, follower_cmd, follower_force,
-                                               self.vehicle, dt, fol_R)
-        # A captured follower hangs from the bar: its forces go to the hanging mass.
-        hang_mass = np.where(captured, self.platform.bar_mass_kg + self._mass,
-                             self.platform.bar_mass_kg)
-        if np.any(captured):
-            fol_own = (fol_accel - np.array([0.0, 0.0, self.vehicle.gravity_mps2])) * self._mass[
-                :, None
-            ]
-            bar_force = bar_force + np.where(captured[:, None], fol_own, 0.0)
-        self.bar, self.cable_force_n = step_bar(
-            self.bar, anchor_point(self.leader.p, lead_R, self.platform), self.leader.v,
-            lead_accel, anchor_point(new_leader.p, lead_R, self.platform),
-            self.leader.rpy[:, 2], bar_force, hang_mass, self.platform, dt,
-        )
-        if np.any(captured):
-            offset = self.gripper_params.mount_height_m + self.gripper_params.bar_radius_m
-            up_new = -new_follower.R[:, :, 2]
-            p_hang = self.bar.p - up_new * offset
-            new_follower = replace(
-                new_follower,
-                p=np.where(captured[:, None], p_hang, new_follower.p),
-                v=np.where(captured[:, None], self.bar.v, new_follower.v),
-            )
-            fol_accel = np.where(captured[:, None], (new_follower.v - self.follower.v) / dt,
-                                 fol_accel)
-        self.leader, self.follower = new_leader, new_follower
-        self.leader_accel, self.follower_accel = lead_accel, fol_accel
-        self.t_s = (self.step_index + 1) * dt
-        self.step_index += 1
-        sample = int(self.t_s * self.gripper_params.sensor_rate_hz + 1e-9) != int(
-            (self.t_s - dt) * self.gripper_params.sensor_rate_hz + 1e-9
-        )
-        close = np.zeros(n, dtype=bool) if close_command is None else close_command
-        self.gripper = step_gripper(self.gripper, self.t_s, contact, inside, sample, close,
-                                    self.gripper_params, self.rng)
-        k = self.step_index % (self._latency_steps + 1)
-        h = self._history
-        h["lp"][k], h["lv"][k], h["ly"][k] = self.leader.p, self.leader.v, self.leader.rpy
-        h["fp"][k], h["fv"][k], h["fy"][k] = self.follower.p, self.follower.v, self.follower.rpy
+        self._step(self._targets(leader_cmd, follower_cmd), close_command)
 
     def advance(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand,
                 close_command: np.ndarray | None = None) -> None:
         """One control period: ``substeps`` physics steps with zero-order-hold commands."""
+        targets = self._targets(leader_cmd, follower_cmd)  # clipped once per period
         for _ in range(self.substeps):
-            self.step(leader_cmd, follower_cmd, close_command)
+            self._step(targets, close_command)
+
+    def _targets(self, leader_cmd: AttitudeCommand,
+                 follower_cmd: AttitudeCommand) -> CommandTargets:
+        """Both vehicles' clipped commands as one batch (a fixed leader's rows are unused)."""
+        dt, n = self.dt_s, self.n
+        fol = command_targets(follower_cmd, self.vehicle, dt, n)
+        lead = fol if self.leader_fixed else command_targets(leader_cmd, self.vehicle, dt, n)
+        return CommandTargets(
+            np.concatenate([lead.roll_pitch_rad, fol.roll_pitch_rad]),
+            np.concatenate([np.broadcast_to(lead.yaw_step_rad, (n,)),
+                            np.broadcast_to(fol.yaw_step_rad, (n,))]),
+            np.concatenate([np.broadcast_to(lead.thrust_n, (n,)),
+                            np.broadcast_to(fol.thrust_n, (n,))]),
+        )
+
+    def _both(self) -> VehicleState:
+        """Leader and follower as one batch of 2n vehicles (rebuilt if either was replaced)."""
+        both = self._both_state
+        if both is None or both[0] is not self.leader or both[1] is not self.follower:
+            lead, fol = self.leader, self.follower
+            state = VehicleState(*(np.concatenate([getattr(lead, k), getattr(fol, k)])
+                                   for k in ("p", "v", "rpy", "thrust_cmd_state_n",
+                                             "thrust_gain")))
+            self._both_state = both = (lead, fol, state)
+        return both[2]
+
+    def _publish(self, both: VehicleState) -> None:
+        """Make ``both`` the current vehicles: ``self.leader``/``self.follower`` are its halves."""
+        n = self.n
+        self.leader = VehicleState(both.p[:n], both.v[:n], both.rpy[:n],
+                                   both.thrust_cmd_state_n[:n], both.thrust_gain[:n])
+        self.follower = VehicleState(both.p[n:], both.v[n:], both.rpy[n:],
+                                     both.thrust_cmd_state_n[n:], both.thrust_gain[n:])
+        self._both_state = (self.leader, self.follower, both)
+
+    def _snapshot(self) -> tuple[np.ndarray, ...]:
+        lead, fol = self.leader, self.follower
+        return lead.p, lead.v, lead.rpy, fol.p, fol.v, fol.rpy
+
+    def _step(self, targets: CommandTargets, close_command: np.ndarray | None) -> None:
+        dt = self.dt_s
+        n = self.n
+        both = self._both()
+        leader, follower = self.leader, self.follower
+        bar, gp, mass = self.bar, self.gripper_params, self._mass
+        rot = both.R
+        lead_R, fol_R = rot[:n], rot[n:]
+        thrust = both.thrust_n
+        captured = self.gripper.gate == GateState.CAPTURED.value
+        any_captured = bool(captured.any())
+        lead_body = BodyState(leader.p, leader.v, lead_R, thrust[:n], mass)
+        fol_body = BodyState(follower.p, follower.v, fol_R, thrust[n:], mass)
+        downwash = self.field.acceleration(lead_body, fol_body, dt)
+        self.last_downwash_mps2 = downwash
+        bar_drag = getattr(self.field, "bar_force_n", None)
+        bar_force = (None if bar_drag is None
+                     else bar_drag(lead_body, bar.p, bar.v, self.platform.bar_area_m2))
+        contact, inside, up = bar_in_gripper(
+            follower.p, fol_R, follower.v, bar.p, bar.v, bar.yaw_rad, gp,
+        )
+        if any_captured:
+            contact = np.where(captured, 0.0, contact)
+        push = up * contact[:, None]
+        ext = np.empty((2 * n, 3))
+        ext[:n] = self.cable_force_n  # the leader is pulled by last step's cable force
+        follower_force = np.multiply(downwash, self._mass_col, out=ext[n:])
+        follower_force -= push
+        bar_force = push if bar_force is None else bar_force + push
+
+        # Both vehicles; then the bar hangs from the leader's new anchor.
+        new, accel = step_vehicle_targets(both, targets, ext, self.vehicle, dt, rot)
+        if self.leader_fixed:  # on its stand: no motion, hover thrust
+            new.p[:n] = leader.p
+            new.v[:n] = leader.v
+            new.rpy[:n] = leader.rpy
+            np.divide(self.vehicle.hover_thrust_n, leader.thrust_gain,
+                      out=new.thrust_cmd_state_n[:n])
+            accel[:n] = 0.0
+        lead_accel, fol_accel = accel[:n], accel[n:]
+        # A captured follower hangs from the bar: its forces go to the hanging mass.
+        if any_captured:
+            hang_mass = np.where(captured, self.platform.bar_mass_kg + mass,
+                                 self.platform.bar_mass_kg)
+            fol_own = (fol_accel - self._gravity) * self._mass_col
+            bar_force = bar_force + np.where(captured[:, None], fol_own, 0.0)
+        else:
+            hang_mass = self._bar_mass
+        anchor_offset = lead_R[:, :, 2] * self.platform.anchor_below_leader_m  # anchor_point()
+        self.bar, self.cable_force_n = step_bar(
+            bar, leader.p + anchor_offset, leader.v, lead_accel, new.p[:n] + anchor_offset,
+            leader.rpy[:, 2], bar_force, hang_mass, self.platform, dt,
+        )
+        if any_captured:
+            offset = gp.mount_height_m + gp.bar_radius_m
+            up_new = -rpy_to_rotmat(new.rpy[n:])[:, :, 2]
+            p_hang = self.bar.p - up_new * offset
+            cap = captured[:, None]
+            np.copyto(new.p[n:], p_hang, where=cap)
+            np.copyto(new.v[n:], self.bar.v, where=cap)
+            np.copyto(fol_accel, (new.v[n:] - follower.v) / dt, where=cap)
+        self._publish(new)
+        self.leader_accel, self.follower_accel = lead_accel, fol_accel
+        self.t_s = (self.step_index + 1) * dt
+        self.step_index += 1
+        rate = gp.sensor_rate_hz
+        sample = int(self.t_s * rate + 1e-9) != int((self.t_s - dt) * rate + 1e-9)
+        close = self._no_close if close_command is None else close_command
+        self.gripper = step_gripper(self.gripper, self.t_s, contact, inside, sample, close, gp,
+                                    self.rng)
+        self._history[self.step_index % (self._latency_steps + 1)] = self._snapshot()
 
 
 def hover_command(params: VehicleParams, n: int) -> AttitudeCommand:

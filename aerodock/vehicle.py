@@ -8,12 +8,11 @@ bias that exists with or without a leader, like a mis-estimated hover throttle).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.geometry import euler_to_rotmat
 
 
 @dataclass(frozen=True)
@@ -71,7 +70,7 @@ class VehicleState:
     @property
     def R(self) -> np.ndarray:  # noqa: N802 - the rotation matrix is R by convention
         """(n, 3, 3) body-to-world rotation."""
-        return euler_to_rotmat(self.rpy[:, 0], self.rpy[:, 1], self.rpy[:, 2])
+        return rpy_to_rotmat(self.rpy)
 
     @property
     def thrust_n(self) -> np.ndarray:
@@ -91,7 +90,7 @@ class AttitudeCommand:
 
 def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | float = 0.0,
                 rng: np.random.Generator | None = None) -> VehicleState:
-    """Vehicles at rest at ``p_m`` (n, 3), thrust at hover; thrust gain errors drawn from ``rng``."""
+    """Vehicles at rest at ``p_m`` (n, 3), thrust at hover; thrust gain errors from ``rng``."""
     n = p_m.shape[0]
     rpy = np.zeros((n, 3))
     rpy[:, 2] = yaw_rad
@@ -102,6 +101,69 @@ def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | fl
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), rpy=rpy,
         thrust_cmd_state_n=np.full(n, params.hover_thrust_n) / gain, thrust_gain=gain,
     )
+
+
+def rpy_to_rotmat(rpy: np.ndarray) -> np.ndarray:
+    """(n, 3) roll, pitch, yaw to (n, 3, 3) rotations: :func:`~aerodock.geometry.euler_to_rotmat`.
+
+    The same numbers bit for bit (same products in the same order), with one ``cos`` and one
+    ``sin`` call for all three angles and no temporaries for the nine entries: the hot path.
+    """
+    c = np.cos(rpy)
+    s = np.sin(rpy)
+    cr, cp, cy = c[:, 0], c[:, 1], c[:, 2]
+    sr, sp, sy = s[:, 0], s[:, 1], s[:, 2]
+    rot = np.empty((rpy.shape[0], 3, 3))
+    mul = np.multiply
+    cysp = cy * sp
+    sysp = sy * sp
+    mul(cy, cp, out=rot[:, 0, 0])
+    np.subtract(cysp * sr, sy * cr, out=rot[:, 0, 1])
+    np.add(cysp * cr, sy * sr, out=rot[:, 0, 2])
+    mul(sy, cp, out=rot[:, 1, 0])
+    np.add(sysp * sr, cy * cr, out=rot[:, 1, 1])
+    np.subtract(sysp * cr, cy * sr, out=rot[:, 1, 2])
+    np.negative(sp, out=rot[:, 2, 0])
+    mul(cp, sr, out=rot[:, 2, 1])
+    mul(cp, cr, out=rot[:, 2, 2])
+    return rot
+
+
+def thrust_axis(rpy: np.ndarray) -> np.ndarray:
+    """(n, 3) body z axis in the world, ``R[:, :, 2]`` of :func:`rpy_to_rotmat` bit for bit."""
+    c = np.cos(rpy)
+    s = np.sin(rpy)
+    cr, cp, cy = c[:, 0], c[:, 1], c[:, 2]
+    sr, sp, sy = s[:, 0], s[:, 1], s[:, 2]
+    axis = np.empty_like(rpy)
+    np.add(cy * sp * cr, sy * sr, out=axis[:, 0])
+    np.subtract(sy * sp * cr, cy * sr, out=axis[:, 1])
+    np.multiply(cp, cr, out=axis[:, 2])
+    return axis
+
+
+@dataclass(frozen=True)
+class CommandTargets:
+    """An :class:`AttitudeCommand` clipped to the limits, ready for the inner loop.
+
+    Prepared once per control period by :func:`command_targets` (the command is held for all the
+    physics steps of the period).
+    """
+
+    roll_pitch_rad: np.ndarray  # (n, 2) clipped roll and pitch
+    yaw_step_rad: np.ndarray  # (n,) yaw rate times the physics step
+    thrust_n: np.ndarray  # (n,) clipped thrust
+
+
+def command_targets(cmd: AttitudeCommand, params: VehicleParams, dt_s: float,
+                    n: int) -> CommandTargets:
+    """Clip the commands of ``n`` vehicles to the tilt and thrust limits (:func:`step_vehicle`)."""
+    tilt = params.tilt_max_rad
+    rp = np.empty((n, 2))
+    np.clip(cmd.roll_rad, -tilt, tilt, out=rp[:, 0])
+    np.clip(cmd.pitch_rad, -tilt, tilt, out=rp[:, 1])
+    return CommandTargets(rp, cmd.yaw_rate_radps * dt_s,
+                          np.clip(cmd.thrust_n, 0.0, params.thrust_max_n))
 
 
 def step_vehicle(
@@ -122,26 +184,45 @@ def step_vehicle(
         dt_s: physics step.
         R: the rotation of ``state`` if already computed (saves work in the hot loop).
     """
-    if R is None:
-        R = state.R
-    thrust = state.thrust_n
-    accel = (
-        -R[:, :, 2] * (thrust / params.mass_kg)[:, None]
-        - (params.drag_coeff_kgps / params.mass_kg) * state.v
-        + ext_force_n / params.mass_kg
-    )
+    targets = command_targets(cmd, params, dt_s, state.n)
+    return step_vehicle_targets(state, targets, ext_force_n, params, dt_s, R)
+
+
+def step_vehicle_targets(
+    state: VehicleState,
+    targets: CommandTargets,
+    ext_force_n: np.ndarray,
+    params: VehicleParams,
+    dt_s: float,
+    R: np.ndarray | None = None,  # noqa: N803
+) -> tuple[VehicleState, np.ndarray]:
+    """:func:`step_vehicle` with the command already clipped (:func:`command_targets`)."""
+    m = params.mass_kg
+    # m a = m g e3 - R e3 T - c_d v + F_ext, evaluated as in the formula, left to right.
+    accel = np.negative(thrust_axis(state.rpy) if R is None else R[:, :, 2])
+    accel *= (state.thrust_cmd_state_n * state.thrust_gain / m)[:, None]
+    accel -= (params.drag_coeff_kgps / m) * state.v
+    accel += ext_force_n / m
     accel[:, 2] += params.gravity_mps2
-    v = state.v + accel * dt_s
-    p = state.p + v * dt_s
+    v = accel * dt_s
+    v += state.v
+    p = v * dt_s
+    p += state.p
     # Inner loop: first-order lags towards the limited commands.
-    tilt = params.tilt_max_rad
     alpha_att = dt_s / (params.tau_attitude_s + dt_s)
     alpha_thr = dt_s / (params.tau_thrust_s + dt_s)
-    rpy = state.rpy.copy()
-    rpy[:, 0] += alpha_att * (np.clip(cmd.roll_rad, -tilt, tilt) - rpy[:, 0])
-    rpy[:, 1] += alpha_att * (np.clip(cmd.pitch_rad, -tilt, tilt) - rpy[:, 1])
-    rpy[:, 2] = (rpy[:, 2] + cmd.yaw_rate_radps * dt_s + np.pi) % (2 * np.pi) - np.pi
-    thrust_state = state.thrust_cmd_state_n + alpha_thr * (
-        np.clip(cmd.thrust_n, 0.0, params.thrust_max_n) - state.thrust_cmd_state_n
-    )
-    return replace(state, p=p, v=v, rpy=rpy, thrust_cmd_state_n=thrust_state), accel
+    old = state.rpy
+    rpy = np.empty_like(old)
+    rp = old[:, :2]
+    step = targets.roll_pitch_rad - rp
+    step *= alpha_att
+    np.add(rp, step, out=rpy[:, :2])
+    yaw = old[:, 2] + targets.yaw_step_rad
+    yaw += np.pi
+    yaw %= 2 * np.pi
+    np.subtract(yaw, np.pi, out=rpy[:, 2])
+    tcs = state.thrust_cmd_state_n
+    thrust_state = targets.thrust_n - tcs
+    thrust_state *= alpha_thr
+    thrust_state += tcs
+    return VehicleState(p, v, rpy, thrust_state, state.thrust_gain), accel

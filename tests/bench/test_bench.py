@@ -1,0 +1,152 @@
+"""Benchmarks of the hot paths (pytest-benchmark) and checks of ``aerodock bench``'s plumbing.
+
+The benchmarks are light (a few bounded rounds) so that they also pass quickly under plain
+``pytest``; they time, they assert nothing about speed. ``aerodock bench`` is the full measurement.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from aerodock import bench
+from aerodock.rng import TrialRNG
+from aerodock.sim import World, hover_command
+
+
+@pytest.fixture(scope="module")
+def world64(cfg):
+    n = 64
+    world = World(cfg, n, TrialRNG(0, n))
+    lead = np.tile([0.0, 0.0, -2.5], (n, 1))
+    world.reset(lead, lead + [0.05, 0.0, 0.6])
+    return world, hover_command(world.vehicle, n)
+
+
+def test_bench_world_step_batch_64(benchmark, world64):
+    world, cmd = world64
+
+    def ten_steps():
+        for _ in range(10):
+            world.step(cmd, cmd)
+
+    benchmark.pedantic(ten_steps, rounds=5, iterations=1, warmup_rounds=1)
+    assert np.all(np.isfinite(world.follower.p))
+
+
+def test_bench_control_period_with_controllers_batch_64(benchmark, cfg):
+    loop = bench.SimLoop(cfg, 64)
+    benchmark.pedantic(loop.run, args=(2,), rounds=5, iterations=1, warmup_rounds=1)
+    assert np.all(np.isfinite(loop.world.follower.p))
+
+
+def test_bench_numpy_predictor_single_call(benchmark):
+    pytest.importorskip("aerodock.learning.runtime")
+    pred = bench._numpy_predictor(None)  # an untrained network: same cost as a trained one
+    x, rot = bench.predictor_inputs(1)
+    out = benchmark.pedantic(pred.predict_one, args=(x[0], rot[0]), rounds=20, iterations=10,
+                             warmup_rounds=1)
+    assert out.shape == (3,)
+
+
+# -- the bench module's plumbing -----------------------------------------------------------------
+def test_figure_is_median_with_spread():
+    fig = bench.figure([3.0, 1.0, 2.0], "s", "a note")
+    assert fig == {"value": 2.0, "min": 1.0, "max": 3.0, "repeats": 3, "unit": "s",
+                   "note": "a note"}
+    assert bench.unavailable("why", "s") == {"value": None, "unit": "s", "reason": "why"}
+
+
+def test_sim_loop_counts_vehicle_steps(cfg):
+    loop = bench.SimLoop(cfg, 3)
+    assert loop.vehicle_steps_per_period == 2 * 3 * loop.world.substeps
+    loop.run(2)
+    loop.run(1, controllers=False)
+    assert loop.world.step_index == 3 * loop.world.substeps
+
+
+def test_simulator_and_docking_figures(cfg):
+    sim = bench.bench_simulator(cfg, batches=(2,), quick=True)
+    for key in ("with_controllers", "physics_only"):
+        fig = sim["2"][key]
+        assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["repeats"] == 3
+        assert fig["min"] <= fig["value"] <= fig["max"]
+
+
+def test_predictor_figures_without_a_trained_model():
+    pytest.importorskip("aerodock.learning.runtime")
+    out = bench.bench_predictor(None, quick=True)
+    assert out["numpy"]["single_call_us"]["value"] > 0
+    assert out["numpy"]["batch1024_per_sample_us"]["value"] > 0
+    for rt in ("onnx", "torch"):  # nothing to export or run without a trained model
+        assert out[rt]["value"] is None and out[rt]["reason"]
+
+
+def test_memory_figure_from_a_subprocess():
+    out = bench.bench_memory(trials=2, traced=False)
+    assert out["peak_rss_mib"]["unit"] == "MiB"
+    assert out["peak_rss_mib"]["value"] >= out["rss_after_imports_mib"]["value"] > 10
+    assert out["campaign_wall_s"]["value"] > 0 and "traced_peak_mib" not in out
+
+
+def test_targets_report_met_unmet_and_unmeasured():
+    figs = {
+        "simulator": {"256": {"physics_only": {"value": 2e6}, "with_controllers": {"value": 9e5}}},
+        "predictor": {"numpy": {"single_call_us": {"value": 20.0}}},
+        "peer": {"ratios": {"single_trial": 25.0}},
+        "reproduce_quick_s": bench.unavailable("not available", "s"),
+    }
+    met = [t["met"] for t in bench.targets(figs)]
+    assert met == [True, False, True, True, None]
+
+
+def test_peer_reference_is_a_rest_to_rest_minimum_jerk_move():
+    dt = 1.0 / bench.PEER_PHYSICS_HZ
+    steps = bench._peer_steps(False)
+    ref = bench.peer_reference(steps + 1, dt)
+    assert np.allclose(ref["x"][0], 0.0) and np.allclose(ref["x"][-1], bench.PEER_MOVE_NED_M)
+    assert np.allclose(ref["x_dot"][[0, -1]], 0.0, atol=1e-12)
+    # velocity is the derivative of position, jerk that of acceleration
+    assert np.allclose(np.gradient(ref["x"], dt, axis=0)[1:-1], ref["x_dot"][1:-1], atol=1e-4)
+    assert np.allclose(np.gradient(ref["x_ddot"], dt, axis=0)[600:2000],
+                       ref["x_dddot"][600:2000], atol=1e-3)
+
+
+def test_peer_aerodock_tracks_the_move(cfg):
+    steps = bench._peer_steps(False)
+    ref = bench.peer_reference(steps, 1.0 / bench.PEER_PHYSICS_HZ)
+    err, physics_s = bench.peer_aerodock(cfg, 2, steps, ref)
+    assert err < 0.05 and physics_s > 0
+
+
+def test_peer_rotorpy_tracks_the_move_when_installed():
+    pytest.importorskip("rotorpy")
+    steps = 100
+    ref = bench.peer_reference(steps, 1.0 / bench.PEER_PHYSICS_HZ)
+    err, physics_s = bench.peer_rotorpy(steps, ref)
+    assert err < 0.01 and physics_s > 0
+
+
+def test_bench_command_help_and_table_rows():
+    app = typer.Typer()
+    app.command("bench")(bench.bench_command)
+    app.command("other")(lambda: None)  # two commands: `bench` stays a subcommand
+    result = CliRunner().invoke(app, ["bench", "--help"])
+    assert result.exit_code == 0 and "--json" in result.output and "--quick" in result.output
+    doc = {"figures": {
+        "simulator": {"1": {"with_controllers": bench.figure([1e4, 2e4, 3e4], "vehicle-steps/s"),
+                            "physics_only": bench.unavailable("why", "vehicle-steps/s")}},
+        "predictor": {"numpy": bench.unavailable("no runtime", "us")},
+        "peer": {"ratios": {"single_trial": 30.0}},
+    }}
+    rows = bench.table_rows(doc)
+    assert ("simulator, batch 1, with controllers", "20,000", "10,000 - 30,000 (x3)",
+            "vehicle-steps/s", "") in rows
+    assert ("simulator, batch 1, physics only", "null", "", "vehicle-steps/s", "why") in rows
+    assert any(r[0] == "predictor numpy" and r[1] == "null" for r in rows)
+    assert ("ratio: single trial", "30.0x", "", "", "") in rows
+    json.dumps(doc)  # JSON-ready
