@@ -8,7 +8,7 @@ no real vehicle has it).
 
 from __future__ import annotations
 
-from enum import Enum
+from enum import StrEnum
 from typing import Protocol
 
 import numpy as np
@@ -16,7 +16,7 @@ import numpy as np
 from aerodock.downwash.base import BodyState
 
 
-class Compensation(str, Enum):
+class Compensation(StrEnum):
     """What the follower subtracts from its desired acceleration before inversion."""
 
     NONE = "none"  # plain LQR

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.gripper import GateState, GripperParams, bar_in_gripper, calibrated_gripper, step_gripper
+from aerodock.gripper import (
+    GateState,
+    GripperParams,
+    bar_in_gripper,
+    calibrated_gripper,
+    step_gripper,
+)
 
 
 def _fly(params, bar_p0, bar_v, follower_p, seconds=0.4, dt=0.002, active_at=None):
