@@ -46,11 +46,14 @@ class FlightRecorder:
         r["ff"].append(out.feedforward_mps2)
         r["phase"].append(np.array(phase, copy=True))
         r["bar"].append(world.bar.p.copy())
-        r["valid"].append(~world.captured)  # hanging on the cables: not a downwash label
+        world.contact_seen[:] = False
 
     def after_step(self, world: World) -> None:
         """Record the accelerometer over the control period just flown."""
         self.rows["aobs"].append(world.observed_accel())
+        # Touching the bar or hanging on the cables: the residual is not downwash (a real
+        # pipeline flags the same samples from the gripper's strain gauge).
+        self.rows["valid"].append(~(world.contact_seen | world.captured))
 
     def flightlogs(self, meta: Callable[[int], dict[str, Any]]) -> list[FlightLog]:
         """One FlightLog per trial; ``meta(i)`` gives trial ``i``'s metadata."""

@@ -129,6 +129,7 @@ class World:
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = 0.0
         self.last_downwash_mps2 = np.zeros((n, 3))
+        self.contact_seen = np.zeros(n, dtype=bool)
 
     # -- views ---------------------------------------------------------------------------------
     def body_states(self) -> tuple[BodyState, BodyState]:
@@ -256,6 +257,8 @@ class World:
         if any_captured:
             contact = np.where(captured, 0.0, contact)
         push = up * contact[:, None]
+        # Any bar contact during this control period (the recorder flags those labels).
+        self.contact_seen |= contact > 0
         ext = np.empty((2 * n, 3))
         ext[:n] = self.cable_force_n  # the leader is pulled by last step's cable force
         follower_force = np.multiply(downwash, self._mass_col, out=ext[n:])
