@@ -100,7 +100,7 @@ def fig_planar_forces(tr: dict[str, Any], fig_dir: Path) -> Path:
     ax1.plot(tr["leader_p"][0, i, 1], tr["leader_p"][0, i, 0], "k^", ms=10, label="leader")
     ax1.set_xlabel("east [m]")
     ax1.set_ylabel("north [m]")
-    ax1.set_aspect("equal")
+    ax1.set_aspect("equal", adjustable="datalim")
     ax1.set_title("planar view")
     ax1.legend(fontsize=8)
     t = tr["t_s"][live]
