@@ -169,6 +169,7 @@ def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:
     """Draw the sample-efficiency figure (PNG, Agg backend, no pyplot state) and return its path."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     path = Path(path)
     metric = result["metric"]
@@ -191,6 +192,7 @@ def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:
     if floor is not None:
         ax.axhline(floor, color="0.6", linestyle=":", label="error floor (true mean field)")
     ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     if len(mins):
         ax.set_xticks(mins)
         ax.set_xticklabels([f"{m:g}" for m in mins])
