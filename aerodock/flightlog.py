@@ -34,14 +34,14 @@ Fields (T samples):
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import zipfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from aerodock.fileio import atomic_open
 
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
@@ -133,15 +133,8 @@ def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
             arrays[f"f{i}/{name}"] = getattr(log, name)
         for key, arr in log.extra.items():
             arrays[f"f{i}/extra/{key}"] = np.asarray(arr)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
     return path
 
 

@@ -96,12 +96,21 @@ def rotate_planar(vec_xy: np.ndarray, angle_rad: np.ndarray) -> np.ndarray:
 
 
 def dot_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot products of ``(n, k)`` arrays, ``(n,)``.
+    """Row-wise dot products of ``(n, 3)`` arrays, ``(n,)``.
 
-    A plain multiply-and-sum: unlike BLAS or einsum, each row's rounding does not depend on the
-    batch size, so a batch of N trials reproduces N single trials bit for bit.
+    Written out column by column: unlike BLAS or einsum, each row's rounding does not depend on
+    the batch size (a batch of N trials reproduces N single trials bit for bit), and it is fast.
     """
-    return (a * b).sum(axis=-1)
+    ab = a * b
+    return ab[:, 0] + ab[:, 1] + ab[:, 2]
+
+
+def norm_rows(a: np.ndarray) -> np.ndarray:
+    """Row norms of an ``(n, 3)`` array (``np.linalg.norm(a, axis=1)``, bit for bit, faster)."""
+    aa = a * a
+    out = aa[:, 0] + aa[:, 1]
+    out += aa[:, 2]
+    return np.sqrt(out, out=out)
 
 
 def wrap_angle(angle_rad: np.ndarray) -> np.ndarray:

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.geometry import dot_rows, norm_rows
 
 
 @dataclass(frozen=True)
@@ -107,16 +108,16 @@ def step_bar(
     length = params.cable_length_m
     rel = bar.p - anchor_p
     rel_v = bar.v - anchor_v
-    dist = _norm3(rel)
+    dist = norm_rows(rel)
     unit = rel / np.maximum(dist, 1e-9)[:, None]
     free = force_n / mass_kg[:, None]
     free -= params.swing_damping * rel_v
     free[:, 2] += params.gravity_mps2
     # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
     taut = dist >= length - 1e-6
-    radial_v = _dot3(rel_v, unit)
-    tangential_v2 = _dot3(rel_v, rel_v) - radial_v**2
-    lam = _dot3(unit, free - anchor_a)
+    radial_v = dot_rows(rel_v, unit)
+    tangential_v2 = dot_rows(rel_v, rel_v) - radial_v**2
+    lam = dot_rows(unit, free - anchor_a)
     lam += tangential_v2 / length
     lam = np.maximum(lam, 0.0) if taut.all() else np.where(taut, np.maximum(lam, 0.0), 0.0)
     accel = free - lam[:, None] * unit
@@ -128,7 +129,7 @@ def step_bar(
     # Inextensible cables: a bar under tension (or past the cable length) is put back on the
     # sphere and keeps no radial velocity relative to the anchor.
     rel = p - anchor_p_next
-    dist = _norm3(rel)
+    dist = norm_rows(rel)
     tense = lam > 0
     hold = (dist > length) | tense
     if hold.any():
@@ -137,7 +138,7 @@ def step_bar(
         on_sphere = unit_new * length
         on_sphere += anchor_p_next
         p = on_sphere if every else np.where(hold[:, None], on_sphere, p)
-        radial = _dot3(v - anchor_v, unit_new)
+        radial = dot_rows(v - anchor_v, unit_new)
         if not tense.all():
             radial = np.where(tense, radial, np.maximum(radial, 0.0))
         no_radial = v - radial[:, None] * unit_new
@@ -154,16 +155,3 @@ def step_bar(
     yaw += bar.yaw_rad
     return BarState(p, v, yaw, yaw_rate), cable_force
 
-
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot products of (n, 3) arrays: ``geometry.dot_rows`` bit for bit, faster."""
-    ab = a * b
-    return ab[:, 0] + ab[:, 1] + ab[:, 2]
-
-
-def _norm3(a: np.ndarray) -> np.ndarray:
-    """Row norms of an (n, 3) array: ``np.linalg.norm(a, axis=1)`` bit for bit, faster."""
-    aa = a * a
-    out = aa[:, 0] + aa[:, 1]
-    out += aa[:, 2]
-    return np.sqrt(out, out=out)

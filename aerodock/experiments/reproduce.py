@@ -17,7 +17,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -28,6 +27,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import Compensation
+from aerodock.fileio import atomic_open
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
 CABLE_OFFSETS_M = (0.36, 0.47, 0.64, 0.87, 1.11, 1.35)
@@ -244,16 +244,6 @@ def _trace_keep(res: CampaignResult) -> dict[str, Any]:
     return tr
 
 
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(type(obj).__name__)
-
-
 def _clean(obj: Any) -> Any:
     """JSON-safe copy: arrays to lists, non-finite floats to None."""
     if isinstance(obj, dict):
@@ -270,12 +260,5 @@ def _clean(obj: Any) -> Any:
 
 
 def _write_json_atomic(path: Path, obj: Any) -> None:
-    obj = _clean(obj)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".results.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(obj, fh, indent=2, default=_json_default, allow_nan=False)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "w") as fh:
+        json.dump(_clean(obj), fh, indent=2, allow_nan=False)

@@ -35,13 +35,12 @@ FlightLog survives a round trip.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import atomic_open
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import E3, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
@@ -253,16 +252,9 @@ def write_csv(log: FlightLog, path: Path) -> Path:
     data = np.concatenate(blocks, axis=1)
     meta = {k: v for k, v in log.meta.items() if k != "frame"}
     meta_line = json.dumps(meta, default=_json_default)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(f"# meta: {meta_line}\n{','.join(names)}\n")
-            np.savetxt(fh, data, delimiter=",", fmt="%.17g")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "w") as fh:
+        fh.write(f"# meta: {meta_line}\n{','.join(names)}\n")
+        np.savetxt(fh, data, delimiter=",", fmt="%.17g")
     return path
 
 

@@ -11,14 +11,13 @@ line per kind, the zero model and, with simulated data, the error floor as horiz
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import atomic_open
 from aerodock.learning.dataset import Dataset, take_minutes
 from aerodock.learning.evaluate import evaluate
 from aerodock.learning.features import check_kind
@@ -145,14 +144,8 @@ def sample_efficiency(
 
 def _write_json(path: Path, doc: dict[str, Any]) -> None:
     text = json.dumps(_nan_to_none(doc), indent=2) + "\n"
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "w") as fh:
+        fh.write(text)
 
 
 def _nan_to_none(obj: Any) -> Any:
@@ -203,12 +196,6 @@ def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".png")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "wb", suffix=".png") as fh:
+        fig.savefig(fh, format="png")
     return path
