@@ -130,7 +130,7 @@ def field_plot(
 
 def _register_optional() -> None:
     """Commands from the other subpackages (kept importable without their heavy deps)."""
-    from aerodock import commands  # noqa: F401  (registers dock, demo, ... on `app`)
+    from aerodock import commands  # noqa: F401  (registers dock, reproduce, ... on `app`)
 
 
 def main() -> None:
