@@ -14,6 +14,7 @@ import numpy as np
 import typer
 
 from aerodock.config import Config, load_config
+from aerodock.fileio import json_default
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -37,17 +38,8 @@ def fail(message: str, code: int = 2) -> None:
 
 def print_json(obj: Any) -> None:
     """Print ``obj`` as indented JSON on stdout."""
-    typer.echo(json.dumps(obj, indent=2, default=_json_default))
+    typer.echo(json.dumps(obj, indent=2, default=json_default))
 
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def _config(path: Path | None) -> Config:

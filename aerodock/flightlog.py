@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open
+from aerodock.fileio import atomic_open, json_default
 
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
@@ -128,7 +128,7 @@ def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
         "n_flights": np.array(len(logs)),
     }
     for i, log in enumerate(logs):
-        arrays[f"f{i}/meta"] = np.array(json.dumps(log.meta, default=_json_default))
+        arrays[f"f{i}/meta"] = np.array(json.dumps(log.meta, default=json_default))
         for name in FIELDS:
             arrays[f"f{i}/{name}"] = getattr(log, name)
         for key, arr in log.extra.items():
@@ -176,10 +176,3 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
             raise
         raise FlightLogError(f"{path}: corrupt or unreadable FlightLog file ({err})") from None
 
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"cannot store {type(obj).__name__} in FlightLog metadata")

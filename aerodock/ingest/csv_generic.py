@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open
+from aerodock.fileio import atomic_open, json_default
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import E3, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
@@ -251,16 +251,9 @@ def write_csv(log: FlightLog, path: Path) -> Path:
             raise IngestError(path, f"extra {key!r} has {arr.ndim} dimensions; CSV holds 1 or 2")
     data = np.concatenate(blocks, axis=1)
     meta = {k: v for k, v in log.meta.items() if k != "frame"}
-    meta_line = json.dumps(meta, default=_json_default)
+    meta_line = json.dumps(meta, default=json_default)
     with atomic_open(path, "w") as fh:
         fh.write(f"# meta: {meta_line}\n{','.join(names)}\n")
         np.savetxt(fh, data, delimiter=",", fmt="%.17g")
     return path
 
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    return str(obj)
