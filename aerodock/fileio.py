@@ -40,3 +40,19 @@ def json_default(obj: Any) -> Any:
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def check_npz_header(data: Any, path: Path, format_name: str, max_version: int, what: str,
+                     error: type[Exception]) -> set[str]:
+    """Check an opened ``.npz``'s ``format`` and ``version`` keys; returns its key set.
+
+    Raises ``error`` with a one-line message naming ``path`` for a foreign or newer file.
+    """
+    keys = set(data.files)
+    if "format" not in keys or str(data["format"]) != format_name:
+        raise error(f"{path}: not an aerodock {what} file")
+    version = int(data["version"])
+    if version > max_version:
+        raise error(f"{path}: {what} format version {version} is newer than this aerodock "
+                    f"({max_version}); upgrade aerodock")
+    return keys

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open, json_default
+from aerodock.fileio import atomic_open, check_npz_header, json_default
 
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
@@ -147,15 +147,8 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as data:
-            keys = set(data.files)
-            if "format" not in keys or str(data["format"]) != FORMAT_NAME:
-                raise FlightLogError(f"{path}: not an aerodock FlightLog file")
-            version = int(data["version"])
-            if version > FORMAT_VERSION:
-                raise FlightLogError(
-                    f"{path}: FlightLog format version {version} is newer than this aerodock "
-                    f"({FORMAT_VERSION}); upgrade aerodock"
-                )
+            keys = check_npz_header(data, path, FORMAT_NAME, FORMAT_VERSION, "FlightLog",
+                                    FlightLogError)
             logs = []
             for i in range(int(data["n_flights"])):
                 missing = [n for n in FIELDS if f"f{i}/{n}" not in keys]

@@ -80,37 +80,34 @@ def expand_paths(fmt: str, paths: list[Path]) -> list[Path]:
     return unique
 
 
+def _per_file(read_one: Callable[..., FlightLog]) -> Callable[..., list[FlightLog]]:
+    """A reader of many files from a reader of one (one flight per file), with progress."""
+
+    def read_all(paths: list[Path], *,
+                 progress: Callable[[int, int], None] | None = None,
+                 **options: Any) -> list[FlightLog]:
+        logs = []
+        for i, path in enumerate(paths):
+            logs.append(read_one(path, **options))
+            if progress:
+                progress(i + 1, len(paths))
+        return logs
+
+    # inspect.signature follows __wrapped__: read_logs checks options against read_one's.
+    read_all.__wrapped__ = read_one  # type: ignore[attr-defined]
+    return read_all
+
+
 def _reader(fmt: str) -> Callable[..., list[FlightLog]]:
     if fmt == "neural-swarm":
         from aerodock.ingest.neural_swarm import read_neural_swarm
         return read_neural_swarm
     if fmt == "csv":
         from aerodock.ingest.csv_generic import read_csv
-
-        def read_csv_files(paths: list[Path], *, frame: str | None = None,
-                           mass_kg: float | None = None,
-                           progress: Callable[[int, int], None] | None = None) -> list[FlightLog]:
-            logs = []
-            for i, path in enumerate(paths):
-                logs.append(read_csv(path, frame=frame, mass_kg=mass_kg))
-                if progress:
-                    progress(i + 1, len(paths))
-            return logs
-
-        return read_csv_files
+        return _per_file(read_csv)
     if fmt == "rosbag":
         from aerodock.ingest.rosbag import read_rosbag
-
-        def read_bags(paths: list[Path], *, mapping: Any = None, mass_kg: float | None = None,
-                      progress: Callable[[int, int], None] | None = None) -> list[FlightLog]:
-            logs = []
-            for i, path in enumerate(paths):
-                logs.append(read_rosbag(path, mapping=mapping, mass_kg=mass_kg))
-                if progress:
-                    progress(i + 1, len(paths))
-            return logs
-
-        return read_bags
+        return _per_file(read_rosbag)
     from aerodock.ingest.ulog import read_ulog
     return read_ulog
 

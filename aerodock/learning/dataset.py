@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open
+from aerodock.fileio import atomic_open, check_npz_header
 from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.geometry import quat_to_rotmat
@@ -318,15 +318,8 @@ def load_dataset(path: str | Path) -> Dataset:
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as data:
-            keys = set(data.files)
-            if "format" not in keys or str(data["format"]) != DATASET_FORMAT:
-                raise DataError(f"{path}: not an aerodock dataset file")
-            version = int(data["version"])
-            if version > DATASET_VERSION:
-                raise DataError(
-                    f"{path}: dataset format version {version} is newer than this aerodock "
-                    f"({DATASET_VERSION}); upgrade aerodock"
-                )
+            keys = check_npz_header(data, path, DATASET_FORMAT, DATASET_VERSION, "dataset",
+                                    DataError)
             missing = [k for k in ("x", "leader_R", "y", "flight_id", "t_s", "meta")
                        if k not in keys]
             if missing:

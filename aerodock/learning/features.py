@@ -163,7 +163,8 @@ def _feature_map_generic(
     return z, out_map
 
 
-def _check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Validate model inputs: ``x`` (n, 9) and ``leader_R`` (n, 3, 3), as float arrays."""
     x = np.asarray(x, dtype=float)
     leader_r = np.asarray(leader_r, dtype=float)
     if x.ndim != 2 or x.shape[1] != 9:
@@ -194,7 +195,7 @@ def feature_map(
         ``(z, M)``: features (n, F) and the output map (n, 3, K) taking the network's K outputs
         to the world-frame force, ``f = M @ c``. For ``"mlp"``, ``z = x`` and ``M = I``.
     """
-    x, leader_R = _check_inputs(x, leader_R)
+    x, leader_R = check_inputs(x, leader_R)
     if kind == "mlp":
         return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
     return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps)
@@ -238,7 +239,7 @@ def so2_ext_features(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
 
 def phi_rad(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
     """Angle (n,) of ``proj dp`` from ``a1`` in the leader's rotor plane; 0 on the leader's axis."""
-    x, leader_R = _check_inputs(x, leader_R)
+    x, leader_R = check_inputs(x, leader_R)
     dp_b = _body(x[:, 0:3], leader_R)
     return np.arctan2(dp_b[:, 1], dp_b[:, 0])
 

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash.base import BodyState
-from aerodock.learning.features import N_FEATURES, feature_map
+from aerodock.learning.features import N_FEATURES, check_inputs, feature_map
 from aerodock.learning.modelfile import ModelSpec, load_model_dir
 
 
@@ -43,15 +43,6 @@ def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
     h *= s
     return h
 
-
-def _check_xr(x: np.ndarray, leader_R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    x = np.asarray(x, dtype=float)
-    leader_R = np.asarray(leader_R, dtype=float)
-    if x.ndim != 2 or x.shape[1] != 9:
-        raise ValueError(f"x must have shape (n, 9), got {x.shape}")
-    if leader_R.shape != (x.shape[0], 3, 3):
-        raise ValueError(f"leader_R must have shape ({x.shape[0]}, 3, 3), got {leader_R.shape}")
-    return x, leader_R
 
 
 def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray, np.ndarray]:
@@ -128,7 +119,7 @@ class Predictor:
             x: (n, 9) ``[dp, v_A, v_B]`` (``dp = p_follower - p_leader``), NED, SI.
             leader_R: (n, 3, 3) leader attitude, body to world.
         """
-        x, leader_R = _check_xr(x, leader_R)
+        x, leader_R = check_inputs(x, leader_R)
         if self.kind == "mlp":
             z, out_map = x, None
         else:
@@ -228,7 +219,7 @@ class ZeroPredictor(Predictor):
 
     def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
         """Zeros (n, 3)."""
-        x, _ = _check_xr(x, leader_R)
+        x, _ = check_inputs(x, leader_R)
         return np.zeros((x.shape[0], 3))
 
     __call__ = predict
