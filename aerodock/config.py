@@ -27,6 +27,7 @@ _STRICTLY_POSITIVE_SUFFIXES = ("_kg", "_hz")
 _STRICTLY_POSITIVE = {
     "vehicle.diagonal_m", "vehicle.rotor_radius_m", "vehicle.n_rotors", "vehicle.tau_attitude_s",
     "vehicle.tau_thrust_s", "vehicle.tilt_max_deg", "vehicle.thrust_max_g",
+    "vehicle.rotor_thrust_coeff", "vehicle.motor_tau_s",
     "sim.gravity_mps2", "sim.air_density_kgpm3",
     "platform.cable_length_m", "platform.bar_length_m", "platform.bar_diameter_m",
     "platform.cable_spacing_m",
@@ -42,10 +43,13 @@ _STRICTLY_POSITIVE = {
 }
 _SIGNED: set[str] = set()
 _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
+            "vehicle.model": {"rigid-body", "point-mass"},
             "curriculum.model": {"so2", "so2-ext", "mlp"}}
 _LENGTHS = {
     "control.q_diag": 7, "control.r_diag": 4,
     "control.terminal_q_diag": 7, "control.terminal_r_diag": 4, "curriculum.stage0_depth_m": 2,
+    "vehicle.inertia_kgm2": 3, "autopilot.attitude_p": 3, "autopilot.rate_p": 3,
+    "autopilot.rate_i": 3, "autopilot.rate_max_dps": 3,
 }
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
 

@@ -16,12 +16,15 @@ The physics pipeline of one step (the downwash is one stage of it, as in crazyfl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
+from aerodock.fleet import Fleet, build_fleet, concat_states, split_state
+from aerodock.geometry import rotmat_to_euler
 from aerodock.gripper import (
     GateState,
     GripperParams,
@@ -34,13 +37,9 @@ from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_ba
 from aerodock.rng import TrialRNG
 from aerodock.vehicle import (
     AttitudeCommand,
-    CommandTargets,
     VehicleParams,
     VehicleState,
-    command_targets,
-    hover_state,
     rpy_to_rotmat,
-    step_vehicle_targets,
 )
 
 
@@ -67,7 +66,7 @@ class World:
     """N trials of the two-vehicle docking world.
 
     Args:
-        cfg: configuration.
+        cfg: configuration (``[vehicle] model`` chooses rigid-body or point-mass vehicles).
         n: number of trials.
         rng: the only source of randomness; a :class:`aerodock.rng.TrialRNG` makes every trial's
             numbers independent of the batch size.
@@ -83,6 +82,8 @@ class World:
         self.n = n
         self.rng = rng
         self.vehicle = VehicleParams.from_config(cfg)
+        self.fleet: Fleet = build_fleet(cfg)
+        self.rigid = self.fleet.has_torque
         self.platform = PlatformParams.from_config(cfg)
         self.gripper_params = GripperParams.from_config(cfg)
         self.field = field if field is not None else build_field(cfg)
@@ -97,7 +98,11 @@ class World:
         self._bar_mass = np.full(n, self.platform.bar_mass_kg)
         self._no_close = np.zeros(n, dtype=bool)
         self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
-        self._both_state: tuple[VehicleState, VehicleState, VehicleState] | None = None
+        imu = cfg.imu
+        self._gyro_sd = imu.gyro_noise_radps if self.rigid else 0.0
+        self._rotor_offsets = (self.fleet.params.rotor_offsets_m if self.rigid
+                               else np.zeros((1, 3)))
+        self._both_state: tuple[Any, Any, Any] | None = None
         self.t_s = 0.0
         self.step_index = 0
 
@@ -108,10 +113,14 @@ class World:
         """Both vehicles at rest at the given positions (n, 3), the bar hanging still."""
         n = self.n
         rng = self.rng
-        self.leader = hover_state(self.vehicle, np.broadcast_to(leader_p_m, (n, 3)),
-                                  leader_yaw_rad, None if self.leader_fixed else rng)
-        self.follower = hover_state(self.vehicle, np.broadcast_to(follower_p_m, (n, 3)),
-                                    follower_yaw_rad, rng)
+        sd = self.vehicle.thrust_gain_sd
+        ones = np.ones(n)
+        lead_gain = ones if self.leader_fixed or sd <= 0 else 1.0 + sd * rng.standard_normal(n)
+        fol_gain = ones if sd <= 0 else 1.0 + sd * rng.standard_normal(n)
+        self.leader = self.fleet.hover(np.broadcast_to(leader_p_m, (n, 3)), leader_yaw_rad,
+                                       lead_gain)
+        self.follower = self.fleet.hover(np.broadcast_to(follower_p_m, (n, 3)),
+                                         follower_yaw_rad, fol_gain)
         self.leader_accel = np.zeros((n, 3))
         self.follower_accel = np.zeros((n, 3))
         anchor = anchor_point(self.leader.p, self.leader.R, self.platform)
@@ -120,6 +129,9 @@ class World:
                                       * self.vehicle.gravity_mps2], (n, 1))
         self.gripper = calibrated_gripper(n, self.gripper_params, rng)
         self.field.reset(n, rng)
+        # The follower's accelerometer: a constant residual bias per trial (body frame).
+        self._accel_bias_body = (self.cfg.imu.accel_bias_sd_mps2 * rng.standard_normal((n, 3))
+                                 if self.rigid else np.zeros((n, 3)))
         self.t_s = 0.0
         self.step_index = 0
         # Ring buffer of the last latency_steps + 1 true states (the arrays themselves: states
@@ -128,8 +140,29 @@ class World:
         self._history = [first] * (self._latency_steps + 1)
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = 0.0
+        self._steps_at_last_accel = 0
         self.last_downwash_mps2 = np.zeros((n, 3))
         self.contact_seen = np.zeros(n, dtype=bool)
+        self.ground_contact = np.zeros(n, dtype=bool)
+
+    def set_velocities(self, leader_v_mps: np.ndarray | None = None,
+                       bar_v_mps: np.ndarray | None = None) -> None:
+        """Start the leader (and the bar) moving: (n, 3) or (3,) velocities, NED."""
+        n = self.n
+        if leader_v_mps is not None:
+            self.leader = replace(self.leader, v=np.array(np.broadcast_to(leader_v_mps, (n, 3))))
+        if bar_v_mps is not None:
+            self.bar = replace(self.bar, v=np.array(np.broadcast_to(bar_v_mps, (n, 3))))
+
+    def disarm_gate(self, mask: np.ndarray) -> None:
+        """Stop the gates of the trials in ``mask`` (n,) from closing (an aborted approach).
+
+        A gate that has not been triggered yet never closes; one already closing finishes.
+        """
+        g = self.gripper
+        idle = mask & (g.gate == GateState.OPEN) & np.isnan(g.servo_start_s)
+        if idle.any():
+            self.gripper = replace(g, servo_start_s=np.where(idle, np.inf, g.servo_start_s))
 
     # -- views ---------------------------------------------------------------------------------
     def body_states(self) -> tuple[BodyState, BodyState]:
@@ -148,29 +181,51 @@ class World:
         return mean(*self.body_states())
 
     def observe(self) -> tuple[Observation, Observation]:
-        """Motion-capture measurements of (leader, follower), delayed and noisy."""
+        """Motion-capture measurements of (leader, follower), delayed and noisy.
+
+        Positions and velocities from motion capture; the attitude is the flight computer's
+        estimate (true attitude plus ``imu.attitude_noise_rad`` with the rigid-body model).
+        """
         cfg = self.cfg.mocap
         k = (self.step_index - self._latency_steps) % (self._latency_steps + 1)
-        lp, lv, ly, fp, fv, fy = self._history[k]
+        lp, lv, lr, fp, fv, fr = self._history[k]
         n = self.n
+        att_sd = self.cfg.imu.attitude_noise_rad if self.rigid else 0.0
 
-        def noisy(p, v, rpy):
+        def noisy(p, v, rot):
+            rpy = np.stack(rotmat_to_euler(rot), axis=1) if rot.ndim == 3 else rot.copy()
+            if att_sd > 0:
+                rpy += att_sd * self.rng.standard_normal((n, 3))
             return Observation(
                 p=p + cfg.pos_noise_m * self.rng.standard_normal((n, 3)),
                 v=v + cfg.vel_noise_mps * self.rng.standard_normal((n, 3)),
-                rpy=rpy.copy(),
+                rpy=rpy,
             )
 
-        return noisy(lp, lv, ly), noisy(fp, fv, fy)
+        return noisy(lp, lv, lr), noisy(fp, fv, fr)
 
     def observed_accel(self) -> np.ndarray:
-        """(n, 3) the follower's mean kinematic acceleration since the last call, with noise."""
+        """(n, 3) the follower's accelerometer, world NED, averaged since the last call.
+
+        The mean kinematic acceleration over the window plus what the IMU adds: white noise
+        (``vehicle.accel_noise_mps2`` per physics sample) and, with the rigid-body model, motor
+        vibration (``imu.accel_vibration_mps2`` per sample at hover rotor speed, growing with the
+        square of the rotor speed) and the residual bias (constant in the body frame), both
+        averaged over the window's samples as the flight computer's filter does.
+        """
         dt = max(self.t_s - self._t_at_last_accel, 1e-9)
+        samples = max(self.step_index - self._steps_at_last_accel, 1)
         accel = (self.follower.v - self._v_at_last_accel) / dt
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = self.t_s
-        noise = self.vehicle.accel_noise_mps2 * self.rng.standard_normal((self.n, 3))
-        return accel + noise
+        self._steps_at_last_accel = self.step_index
+        sd = np.full(self.n, self.vehicle.accel_noise_mps2 ** 2)
+        if self.rigid:
+            load = self.follower.thrust_n / self.vehicle.hover_thrust_n
+            sd = sd + (self.cfg.imu.accel_vibration_mps2 * load) ** 2
+            accel = accel + np.matmul(self.follower.R, self._accel_bias_body[:, :, None])[:, :, 0]
+        sd = np.sqrt(sd / samples)
+        return accel + sd[:, None] * self.rng.standard_normal((self.n, 3))
 
     @property
     def captured(self) -> np.ndarray:
@@ -191,49 +246,47 @@ class World:
     def advance(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand,
                 close_command: np.ndarray | None = None) -> None:
         """One control period: ``substeps`` physics steps with zero-order-hold commands."""
-        targets = self._targets(leader_cmd, follower_cmd)  # clipped once per period
+        targets = self._targets(leader_cmd, follower_cmd)  # prepared once per period
         for _ in range(self.substeps):
             self._step(targets, close_command)
 
-    def _targets(self, leader_cmd: AttitudeCommand,
-                 follower_cmd: AttitudeCommand) -> CommandTargets:
-        """Both vehicles' clipped commands as one batch (a fixed leader's rows are unused)."""
-        dt, n = self.dt_s, self.n
-        fol = command_targets(follower_cmd, self.vehicle, dt, n)
-        lead = fol if self.leader_fixed else command_targets(leader_cmd, self.vehicle, dt, n)
-        return CommandTargets(
-            np.concatenate([lead.roll_pitch_rad, fol.roll_pitch_rad]),
-            np.concatenate([np.broadcast_to(lead.yaw_step_rad, (n,)),
-                            np.broadcast_to(fol.yaw_step_rad, (n,))]),
-            np.concatenate([np.broadcast_to(lead.thrust_n, (n,)),
-                            np.broadcast_to(fol.thrust_n, (n,))]),
-        )
+    def _targets(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand) -> Any:
+        """Both vehicles' commands as one batch (a fixed leader's rows are unused)."""
+        lead = follower_cmd if self.leader_fixed else leader_cmd
+        return self.fleet.targets(lead, follower_cmd, self._both(), self.n, self.dt_s)
 
-    def _both(self) -> VehicleState:
+    def _both(self) -> Any:
         """Leader and follower as one batch of 2n vehicles (rebuilt if either was replaced)."""
         both = self._both_state
         if both is None or both[0] is not self.leader or both[1] is not self.follower:
             lead, fol = self.leader, self.follower
-            state = VehicleState(*(np.concatenate([getattr(lead, k), getattr(fol, k)])
-                                   for k in ("p", "v", "rpy", "thrust_cmd_state_n",
-                                             "thrust_gain")))
+            state = concat_states(self.fleet, lead, fol)
             self._both_state = both = (lead, fol, state)
         return both[2]
 
-    def _publish(self, both: VehicleState) -> None:
+    def _publish(self, both: Any) -> None:
         """Make ``both`` the current vehicles: ``self.leader``/``self.follower`` are its halves."""
-        n = self.n
-        self.leader = VehicleState(both.p[:n], both.v[:n], both.rpy[:n],
-                                   both.thrust_cmd_state_n[:n], both.thrust_gain[:n])
-        self.follower = VehicleState(both.p[n:], both.v[n:], both.rpy[n:],
-                                     both.thrust_cmd_state_n[n:], both.thrust_gain[n:])
+        self.leader, self.follower = split_state(self.fleet, both, self.n)
         self._both_state = (self.leader, self.follower, both)
 
     def _snapshot(self) -> tuple[np.ndarray, ...]:
         lead, fol = self.leader, self.follower
+        if self.rigid:  # the attitude as a rotation; angles are computed when observed
+            return lead.p, lead.v, lead.R, fol.p, fol.v, fol.R
         return lead.p, lead.v, lead.rpy, fol.p, fol.v, fol.rpy
 
-    def _step(self, targets: CommandTargets, close_command: np.ndarray | None) -> None:
+    def _draw_gyro_noise(self) -> np.ndarray | None:
+        if not self._gyro_sd:
+            return None
+        n = self.n
+        draw = self.rng.standard_normal((n, 6))  # per trial: leader's then follower's gyro
+        noise = np.empty((2 * n, 3))
+        noise[:n] = draw[:, :3]
+        noise[n:] = draw[:, 3:]
+        noise *= self._gyro_sd
+        return noise
+
+    def _step(self, targets: Any, close_command: np.ndarray | None) -> None:
         dt = self.dt_s
         n = self.n
         both = self._both()
@@ -246,8 +299,10 @@ class World:
         any_captured = bool(captured.any())
         lead_body = BodyState(leader.p, leader.v, lead_R, thrust[:n], mass)
         fol_body = BodyState(follower.p, follower.v, fol_R, thrust[n:], mass)
-        downwash = self.field.acceleration(lead_body, fol_body, dt)
-        self.last_downwash_mps2 = downwash
+        # 1. Forces: the wake on the follower's rotors, on the bar; contact; cables.
+        wake_force, wake_torque = _follower_wrench(self.field, lead_body, fol_body,
+                                                  self._rotor_offsets, dt)
+        self.last_downwash_mps2 = wake_force / self._mass_col
         bar_drag = getattr(self.field, "bar_force_n", None)
         bar_force = (None if bar_drag is None
                      else bar_drag(lead_body, bar.p, bar.v, self.platform.bar_area_m2))
@@ -261,18 +316,24 @@ class World:
         self.contact_seen |= contact > 0
         ext = np.empty((2 * n, 3))
         ext[:n] = self.cable_force_n  # the leader is pulled by last step's cable force
-        follower_force = np.multiply(downwash, self._mass_col, out=ext[n:])
+        follower_force = np.add(wake_force, 0.0, out=ext[n:])
         follower_force -= push
         bar_force = push if bar_force is None else bar_force + push
+        torque = None
+        if self.rigid:
+            torque = np.zeros((2 * n, 3))
+            # The cables pull at the anchor, below the leader's centre of mass (body +z).
+            cable_body = np.matmul(self.cable_force_n[:, None, :], lead_R)[:, 0]
+            d = self.platform.anchor_below_leader_m
+            torque[:n, 0] = -d * cable_body[:, 1]
+            torque[:n, 1] = d * cable_body[:, 0]
+            if wake_torque is not None:
+                torque[n:] = wake_torque
 
-        # Both vehicles; then the bar hangs from the leader's new anchor.
-        new, accel = step_vehicle_targets(both, targets, ext, self.vehicle, dt, rot)
+        # 2. Vehicles (autopilots inside); then the bar hangs from the leader's new anchor.
+        new, accel = self.fleet.step(both, targets, ext, torque, dt, self._draw_gyro_noise())
         if self.leader_fixed:  # on its stand: no motion, hover thrust
-            new.p[:n] = leader.p
-            new.v[:n] = leader.v
-            new.rpy[:n] = leader.rpy
-            np.divide(self.vehicle.hover_thrust_n, leader.thrust_gain,
-                      out=new.thrust_cmd_state_n[:n])
+            new = self.fleet.hovering(new, both, slice(None, n))
             accel[:n] = 0.0
         lead_accel, fol_accel = accel[:n], accel[n:]
         # A captured follower hangs from the bar: its forces go to the hanging mass.
@@ -286,16 +347,23 @@ class World:
         anchor_offset = lead_R[:, :, 2] * self.platform.anchor_below_leader_m  # anchor_point()
         self.bar, self.cable_force_n = step_bar(
             bar, leader.p + anchor_offset, leader.v, lead_accel, new.p[:n] + anchor_offset,
-            leader.rpy[:, 2], bar_force, hang_mass, self.platform, dt,
+            leader.rpy[:, 2] if not self.rigid else _yaw(lead_R), bar_force, hang_mass,
+            self.platform, dt,
         )
         if any_captured:
             offset = gp.mount_height_m + gp.bar_radius_m
-            up_new = -rpy_to_rotmat(new.rpy[n:])[:, :, 2]
+            up_new = -new.R[n:, :, 2]
             p_hang = self.bar.p - up_new * offset
             cap = captured[:, None]
             np.copyto(new.p[n:], p_hang, where=cap)
             np.copyto(new.v[n:], self.bar.v, where=cap)
             np.copyto(fol_accel, (new.v[n:] - follower.v) / dt, where=cap)
+        # The ground (z = 0, NED): a vehicle that reaches it stops there (and is flagged).
+        below = new.p[:, 2] > 0.0
+        if below.any():
+            new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
+            new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
+            self.ground_contact |= below[n:] | below[:n]
         self._publish(new)
         self.leader_accel, self.follower_accel = lead_accel, fol_accel
         self.t_s = (self.step_index + 1) * dt
@@ -306,6 +374,22 @@ class World:
         self.gripper = step_gripper(self.gripper, self.t_s, contact, inside, sample, close, gp,
                                     self.rng)
         self._history[self.step_index % (self._latency_steps + 1)] = self._snapshot()
+
+
+def _follower_wrench(field: DownwashField, leader: BodyState, follower: BodyState,
+                     rotor_offsets_body_m: np.ndarray,
+                     dt: float) -> tuple[np.ndarray, np.ndarray | None]:
+    """Wake force (world) and torque (body) on the follower; a field without ``wrench`` acts at
+    the centre of mass."""
+    wrench = getattr(field, "wrench", None)
+    if wrench is not None:
+        return wrench(leader, follower, rotor_offsets_body_m, dt)
+    return field.acceleration(leader, follower, dt) * follower.mass_kg[:, None], None
+
+
+def _yaw(rot: np.ndarray) -> np.ndarray:
+    """(n,) yaw of (n, 3, 3) rotations (ZYX)."""
+    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
 
 
 def hover_command(params: VehicleParams, n: int) -> AttitudeCommand:

@@ -1,0 +1,116 @@
+"""The onboard autopilot of the rigid-body vehicle: attitude P -> body-rate PI -> mixer.
+
+Like ArduCopter's and PX4's multicopter controllers (attitude angle loop, rate loop, mixer with
+saturation handling), batch-first and pure:
+
+- :func:`attitude_target` turns the outer loop's command (roll, pitch, yaw rate, collective
+  thrust in N) into a desired rotation, once per control period (the command is held);
+- :func:`rate_setpoint`: attitude error ``e_R = vee(R_d^T R - R^T R_d) / 2`` (Lee et al.) times
+  the angle gain, plus the commanded yaw rate as feed-forward;
+- :func:`rate_control`: PI on the gyro's body rates (the gyro, not the true rates: its noise
+  enters here), giving desired angular accelerations, times the inertia;
+- :func:`mix`: collective thrust and body torques -> per-rotor thrusts for an X quadrotor, with
+  the saturation handling of an "airmode" mixer: when a rotor would exceed its limits the
+  collective is shifted so the torques (attitude) keep priority, then each rotor is clipped.
+
+Units: angles rad, rates rad/s, torques N m, thrusts N. Body frame FRD (x forward, y right, z
+down); the world is NED.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerodock.vehicle import rpy_to_rotmat
+
+
+@dataclass(frozen=True)
+class AutopilotGains:
+    """Gains of the attitude and rate loops (``[autopilot]`` in defaults.toml).
+
+    Attributes:
+        attitude_p: (3,) angle gain, rate setpoint per rad of attitude error, 1/s.
+        rate_p: (3,) rate gain, angular acceleration per rad/s of rate error, 1/s.
+        rate_i: (3,) rate integral gain, 1/s².
+        rate_integral_max_radps2: limit of the integral term's angular acceleration (anti-windup).
+        rate_max_radps: (3,) limit of the rate setpoint.
+    """
+
+    attitude_p: np.ndarray
+    rate_p: np.ndarray
+    rate_i: np.ndarray
+    rate_integral_max_radps2: float
+    rate_max_radps: np.ndarray
+
+
+def attitude_target(roll_rad: np.ndarray, pitch_rad: np.ndarray,
+                    yaw_setpoint_rad: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) desired body-to-world rotation from ZYX Euler angles (the outer loop's tilt)."""
+    return rpy_to_rotmat(np.stack([roll_rad, pitch_rad, yaw_setpoint_rad], axis=1))
+
+
+def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803
+                  gains: AutopilotGains) -> np.ndarray:
+    """(n, 3) body-rate setpoint, rad/s: angle P on the geometric attitude error + yaw feed-forward.
+
+    Args:
+        R: (n, 3, 3) current rotation (the autopilot's attitude estimate).
+        R_des: (n, 3, 3) desired rotation (:func:`attitude_target`).
+        yaw_rate_radps: (n,) commanded yaw rate (feed-forward about body z).
+        gains: loop gains.
+    """
+    # M = R_des^T R (a stack of 3x3 products: each trial's numbers do not depend on the batch).
+    m = np.matmul(R_des.transpose(0, 2, 1), R)
+    err = np.empty((R.shape[0], 3))
+    np.subtract(m[:, 2, 1], m[:, 1, 2], out=err[:, 0])
+    np.subtract(m[:, 0, 2], m[:, 2, 0], out=err[:, 1])
+    np.subtract(m[:, 1, 0], m[:, 0, 1], out=err[:, 2])
+    rate = err * (-0.5 * gains.attitude_p)
+    rate[:, 2] += yaw_rate_radps
+    return np.clip(rate, -gains.rate_max_radps, gains.rate_max_radps, out=rate)
+
+
+def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
+                 gains: AutopilotGains, inertia_kgm2: np.ndarray,
+                 dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """PI rate loop: returns (desired body torque (n, 3) N m, new integral state (n, 3) rad).
+
+    Args:
+        rate_sp_radps: (n, 3) rate setpoint.
+        gyro_radps: (n, 3) measured body rates.
+        integral: (n, 3) integral of the rate error, rad.
+        gains: loop gains.
+        inertia_kgm2: (3,) principal moments of inertia.
+        dt_s: loop period.
+    """
+    err = rate_sp_radps - gyro_radps
+    limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
+    new_int = np.clip(integral + err * dt_s, -limit, limit)
+    accel = err * gains.rate_p
+    accel += new_int * gains.rate_i
+    accel *= inertia_kgm2
+    return accel, new_int
+
+
+def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
+        rotor_thrust_max_n: float) -> np.ndarray:
+    """(n, k) per-rotor thrusts for collective thrust (n,) and body torques (n, 3).
+
+    ``mixer_inv`` (4, k) maps ``[T, tau_x, tau_y, tau_z]`` to rotor thrusts. Saturation: the
+    collective part is shifted (down when a rotor exceeds its maximum, up when one would go below
+    zero) so that the torque differences survive, then every rotor is clipped to
+    ``[0, rotor_thrust_max_n]``.
+    """
+    # Explicit column sums (no BLAS gemm: rounding would depend on the batch size).
+    f = thrust_n[:, None] * mixer_inv[0]
+    f += torque_nm[:, 0:1] * mixer_inv[1]
+    f += torque_nm[:, 1:2] * mixer_inv[2]
+    f += torque_nm[:, 2:3] * mixer_inv[3]
+    # Feasible collective shifts keep every rotor in [0, max]: s in [-min f, max - max f].
+    lo = -f.min(axis=1)
+    hi = rotor_thrust_max_n - f.max(axis=1)
+    shift = np.where(lo <= hi, np.minimum(np.maximum(lo, 0.0), hi), 0.5 * (lo + hi))
+    f += shift[:, None]
+    return np.clip(f, 0.0, rotor_thrust_max_n, out=f)

@@ -1,0 +1,297 @@
+"""Rigid-body quadrotor: attitude and body-rate dynamics, four rotors with motor lag, rotor drag.
+
+The vehicle DESIGN.md asks for, batch-first and pure (one call advances N vehicles)::
+
+    m dv/dt = m g e3 + R (F_rotor_drag - T e3) - c_D |v| v + F_ext            (world NED)
+    J dw/dt = tau_rotors + tau_ext - w x J w                                 (body FRD)
+    dR/dt   = R [w]x
+    d omega_i/dt = (omega_cmd_i - omega_i) / tau_motor,   f_i = k_T omega_i^2 (x thrust gain)
+
+with ``T = sum f_i``, rotor torques ``tau = sum r_i x (-f_i e3) + s_i c_tau f_i e3`` (X layout,
+spin directions as PX4's quad X), rotor drag ``F_rotor_drag = -k_d (sum omega_i) [v_bx, v_by,
+(k_z/k_d) v_bz]`` (the H-force of blades in edgewise flow, as RotorPy models it) and quadratic
+parasitic drag. External forces (downwash, cable, contact) arrive as a world force and a body
+torque about the centre of mass, so off-centre loads (the wake on each rotor disk, the cable
+anchor below the leader) tilt the vehicle.
+
+The autopilot (:mod:`aerodock.autopilot`) runs inside the step at the physics rate, on the gyro's
+noisy rates: it is part of the vehicle, as on the aircraft. Integration: angular velocity and
+velocity by explicit Euler on the current derivatives, position and attitude on the mean of old
+and new rates (trapezoid; attitude by the exact Rodrigues exponential, so ``R`` stays
+orthonormal), motor speeds by the exact first-order step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerodock.autopilot import AutopilotGains, attitude_target, mix, rate_control, rate_setpoint
+from aerodock.config import Config
+from aerodock.geometry import rotmat_to_euler
+from aerodock.vehicle import AttitudeCommand
+
+
+@dataclass(frozen=True)
+class RigidBodyParams:
+    """Constants of one rigid-body quadrotor type (``[vehicle]`` and ``[autopilot]``)."""
+
+    mass_kg: float
+    inertia_kgm2: np.ndarray  # (3,) principal moments, body FRD
+    rotor_offsets_m: np.ndarray  # (4, 3) rotor-disk centres, body FRD
+    rotor_spin: np.ndarray  # (4,) +1 counter-clockwise seen from above, -1 clockwise
+    rotor_radius_m: float
+    thrust_coeff: float  # k_T, N per (rad/s)^2
+    torque_ratio_m: float  # c_tau: yaw reaction torque per N of thrust
+    motor_tau_s: float
+    rotor_drag_coeff: float  # k_d, N per (m/s) per (rad/s), in-plane
+    rotor_drag_z_coeff: float  # k_z, the same along the rotor axis
+    parasitic_drag_coeff: float  # c_D, N per (m/s)^2
+    rotor_thrust_max_n: float
+    tilt_max_rad: float
+    gravity_mps2: float
+    gains: AutopilotGains
+    mixer_inv: np.ndarray  # (4, 4): [T, tau_x, tau_y, tau_z] -> rotor thrusts
+    rotor_torque_map: np.ndarray  # (4, 3): rotor thrusts -> body torque
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> RigidBodyParams:
+        """Bind ``[vehicle]``, ``[autopilot]`` and ``[sim]`` of ``cfg``."""
+        v, a = cfg.vehicle, cfg.autopilot
+        g = cfg.sim.gravity_mps2
+        n_rotors = int(v.n_rotors)
+        if n_rotors != 4:
+            raise ValueError(f"the rigid-body vehicle is a quadrotor: vehicle.n_rotors must be 4, "
+                             f"got {n_rotors} (use vehicle.model = 'point-mass')")
+        arm = v.diagonal_m / 2.0
+        angles = np.deg2rad([45.0, 135.0, 225.0, 315.0])  # FR, RR, RL, FL (x fwd, y right)
+        offsets = np.stack([arm * np.cos(angles), arm * np.sin(angles), np.zeros(4)], axis=1)
+        spin = np.array([1.0, -1.0, 1.0, -1.0])
+        # tau = r x (-f e3) = (-y f, x f, 0); yaw reaction s c_tau f.
+        torque_map = np.stack([-offsets[:, 1], offsets[:, 0], spin * v.rotor_torque_ratio_m],
+                              axis=1)
+        mixer = np.vstack([np.ones(4), torque_map.T])
+        gains = AutopilotGains(
+            attitude_p=np.asarray(a.attitude_p, dtype=float),
+            rate_p=np.asarray(a.rate_p, dtype=float), rate_i=np.asarray(a.rate_i, dtype=float),
+            rate_integral_max_radps2=float(a.rate_integral_max_radps2),
+            rate_max_radps=np.deg2rad(np.asarray(a.rate_max_dps, dtype=float)),
+        )
+        return cls(
+            mass_kg=v.mass_kg, inertia_kgm2=np.asarray(v.inertia_kgm2, dtype=float),
+            rotor_offsets_m=offsets, rotor_spin=spin, rotor_radius_m=v.rotor_radius_m,
+            thrust_coeff=v.rotor_thrust_coeff, torque_ratio_m=v.rotor_torque_ratio_m,
+            motor_tau_s=v.motor_tau_s, rotor_drag_coeff=v.rotor_drag_coeff,
+            rotor_drag_z_coeff=v.rotor_drag_z_coeff,
+            parasitic_drag_coeff=v.parasitic_drag_coeff,
+            rotor_thrust_max_n=v.thrust_max_g * v.mass_kg * g / 4.0,
+            tilt_max_rad=np.deg2rad(v.tilt_max_deg), gravity_mps2=g, gains=gains,
+            mixer_inv=np.linalg.inv(mixer).T.copy(), rotor_torque_map=torque_map,
+        )
+
+    @property
+    def hover_thrust_n(self) -> float:
+        """Thrust that balances gravity, N."""
+        return self.mass_kg * self.gravity_mps2
+
+    @property
+    def thrust_max_n(self) -> float:
+        """Collective thrust with every rotor at its maximum, N."""
+        return 4.0 * self.rotor_thrust_max_n
+
+
+@dataclass(frozen=True)
+class RigidBodyState:
+    """Batch of N rigid-body vehicles with their autopilots' state."""
+
+    p: np.ndarray  # (n, 3) m, world NED
+    v: np.ndarray  # (n, 3) m/s
+    R: np.ndarray  # (n, 3, 3) body to world
+    w: np.ndarray  # (n, 3) rad/s, body rates
+    rotor_speed: np.ndarray  # (n, 4) rad/s
+    rate_integral: np.ndarray  # (n, 3) rad, the rate loop's integrator
+    yaw_setpoint: np.ndarray  # (n,) rad, the autopilot's yaw target (integrated yaw rate)
+    thrust_gain: np.ndarray  # (n,) multiplicative thrust error (mis-estimated k_T), ~1
+    thrust_n: np.ndarray  # (n,) actual collective thrust, N (from the rotor speeds)
+
+    @property
+    def n(self) -> int:
+        """Batch size."""
+        return int(self.p.shape[0])
+
+    @property
+    def rpy(self) -> np.ndarray:
+        """(n, 3) ZYX Euler angles, rad."""
+        return np.stack(rotmat_to_euler(self.R), axis=1)
+
+
+def rotor_thrusts_n(rotor_speed: np.ndarray, thrust_gain: np.ndarray,
+                    params: RigidBodyParams) -> np.ndarray:
+    """(n, 4) actual thrust of each rotor, N, from rotor speeds (n, 4) and thrust gains (n,)."""
+    f = rotor_speed * rotor_speed
+    f *= (params.thrust_coeff * thrust_gain)[:, None]
+    return f
+
+
+def hover_rigid_state(params: RigidBodyParams, p_m: np.ndarray, yaw_rad: np.ndarray | float,
+                      thrust_gain: np.ndarray) -> RigidBodyState:
+    """Vehicles at rest at ``p_m`` (n, 3), level, rotors at the speed that balances gravity."""
+    n = p_m.shape[0]
+    yaw = np.broadcast_to(np.asarray(yaw_rad, dtype=float), (n,)).copy()
+    c, s = np.cos(yaw), np.sin(yaw)
+    rot = np.zeros((n, 3, 3))
+    rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
+    omega = np.sqrt(params.hover_thrust_n / 4.0 / (params.thrust_coeff * thrust_gain))
+    return RigidBodyState(
+        p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), R=rot, w=np.zeros((n, 3)),
+        rotor_speed=np.repeat(omega[:, None], 4, axis=1), rate_integral=np.zeros((n, 3)),
+        yaw_setpoint=yaw, thrust_gain=np.asarray(thrust_gain, dtype=float).copy(),
+        thrust_n=np.full(n, params.hover_thrust_n),
+    )
+
+
+@dataclass(frozen=True)
+class RigidTargets:
+    """An :class:`AttitudeCommand` prepared for the autopilot, held over a control period."""
+
+    R_des: np.ndarray  # (n, 3, 3) desired attitude  # noqa: N815
+    yaw_rate_radps: np.ndarray  # (n,)
+    thrust_n: np.ndarray  # (n,) collective, clipped to [0, thrust_max_n]
+
+
+def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
+                  params: RigidBodyParams, n: int) -> RigidTargets:
+    """Clip the command to the tilt and thrust limits; the attitude target at the current yaw
+    setpoint (the yaw rate is flown as feed-forward and integrated by :func:`step_rigid_body`)."""
+    tilt = params.tilt_max_rad
+    roll = np.broadcast_to(np.clip(cmd.roll_rad, -tilt, tilt), (n,))
+    pitch = np.broadcast_to(np.clip(cmd.pitch_rad, -tilt, tilt), (n,))
+    return RigidTargets(
+        attitude_target(roll, pitch, state.yaw_setpoint),
+        np.broadcast_to(np.asarray(cmd.yaw_rate_radps, dtype=float), (n,)),
+        np.broadcast_to(np.clip(cmd.thrust_n, 0.0, params.thrust_max_n), (n,)),
+    )
+
+
+def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
+                        gyro_radps: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3))."""
+    rate_sp = rate_setpoint(state.R, targets.R_des, targets.yaw_rate_radps, params.gains)
+    torque, integral = rate_control(rate_sp, gyro_radps, state.rate_integral, params.gains,
+                                    params.inertia_kgm2, dt_s)
+    f_cmd = mix(targets.thrust_n, torque, params.mixer_inv, params.rotor_thrust_max_n)
+    # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
+    return np.sqrt(f_cmd / params.thrust_coeff), integral
+
+
+def step_rigid_body(
+    state: RigidBodyState,
+    rotor_speed_cmd: np.ndarray,
+    ext_force_n: np.ndarray,
+    ext_torque_nm: np.ndarray | None,
+    params: RigidBodyParams,
+    dt_s: float,
+) -> tuple[RigidBodyState, np.ndarray]:
+    """Advance N vehicles by ``dt_s`` under rotor-speed commands; returns (state, accel (n, 3)).
+
+    Args:
+        state: current state (its autopilot fields are carried over unchanged).
+        rotor_speed_cmd: (n, 4) commanded rotor speeds, rad/s.
+        ext_force_n: (n, 3) external force at the centre of mass, world NED, N.
+        ext_torque_nm: (n, 3) external torque about the centre of mass, body FRD, N m (or None).
+        params: vehicle constants.
+        dt_s: physics step.
+    """
+    m = params.mass_kg
+    rot = state.R
+    omega = state.rotor_speed
+    f = rotor_thrusts_n(omega, state.thrust_gain, params)
+    thrust = f.sum(axis=1)
+    tmap = params.rotor_torque_map
+    torque = f[:, 0:1] * tmap[0]
+    torque += f[:, 1:2] * tmap[1]
+    torque += f[:, 2:3] * tmap[2]
+    torque += f[:, 3:4] * tmap[3]
+    if ext_torque_nm is not None:
+        torque += ext_torque_nm
+    # Body-frame forces: rotor drag (H-force) and thrust.
+    v = state.v
+    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
+    drag = omega.sum(axis=1)
+    force_body = v_body * (-params.rotor_drag_coeff * drag)[:, None]
+    force_body[:, 2] *= params.rotor_drag_z_coeff / max(params.rotor_drag_coeff, 1e-30)
+    force_body[:, 2] -= thrust
+    accel = np.matmul(rot, force_body[:, :, None])[:, :, 0]
+    if params.parasitic_drag_coeff:
+        speed = np.sqrt((v * v).sum(axis=1))
+        accel -= (params.parasitic_drag_coeff * speed)[:, None] * v
+    accel += ext_force_n
+    accel /= m
+    accel[:, 2] += params.gravity_mps2
+    # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
+    w = state.w
+    jw = w * params.inertia_kgm2
+    gyro = np.cross(w, jw)
+    w_dot = (torque - gyro) / params.inertia_kgm2
+    w_new = w + w_dot * dt_s
+    v_new = v + accel * dt_s
+    p_new = state.p + (v + v_new) * (0.5 * dt_s)
+    rot_new = _rotate(rot, (w + w_new) * (0.5 * dt_s))
+    alpha = 1.0 - np.exp(-dt_s / params.motor_tau_s)
+    omega_new = omega + (rotor_speed_cmd - omega) * alpha
+    thrust_new = rotor_thrusts_n(omega_new, state.thrust_gain, params).sum(axis=1)
+    return RigidBodyState(p_new, v_new, rot_new, w_new, omega_new, state.rate_integral,
+                          state.yaw_setpoint, state.thrust_gain, thrust_new), accel
+
+
+def step_with_autopilot(
+    state: RigidBodyState,
+    targets: RigidTargets,
+    ext_force_n: np.ndarray,
+    ext_torque_nm: np.ndarray | None,
+    params: RigidBodyParams,
+    dt_s: float,
+    gyro_noise_radps: np.ndarray | None = None,
+) -> tuple[RigidBodyState, np.ndarray]:
+    """One physics step of N vehicles flown by their autopilots: the autopilot reads the gyro
+    (true rates plus ``gyro_noise_radps``), commands the rotors, then :func:`step_rigid_body`.
+    Returns (state, acceleration (n, 3))."""
+    gyro = state.w if gyro_noise_radps is None else state.w + gyro_noise_radps
+    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s)
+    new, accel = step_rigid_body(state, speed_cmd, ext_force_n, ext_torque_nm, params, dt_s)
+    yaw_sp = targets.yaw_rate_radps * dt_s
+    yaw_sp += new.yaw_setpoint
+    yaw_sp += np.pi
+    yaw_sp %= 2 * np.pi
+    yaw_sp -= np.pi
+    return RigidBodyState(new.p, new.v, new.R, new.w, new.rotor_speed, integral, yaw_sp,
+                          new.thrust_gain, new.thrust_n), accel
+
+
+def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """``R exp([phi]x)`` for (n, 3, 3) ``R`` and (n, 3) body rotation vectors (Rodrigues)."""
+    theta2 = (phi * phi).sum(axis=1)
+    small = theta2 < 1e-12
+    theta = np.sqrt(theta2)
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I.
+    x, y, z = phi[:, 0], phi[:, 1], phi[:, 2]
+    d = np.empty_like(rot)
+    bp = b[:, None] * phi
+    outer = bp[:, :, None] * phi[:, None, :]
+    d[:] = outer
+    diag = 1.0 - b * theta2
+    d[:, 0, 0] += diag
+    d[:, 1, 1] += diag
+    d[:, 2, 2] += diag
+    ax, ay, az = a * x, a * y, a * z
+    d[:, 0, 1] -= az
+    d[:, 1, 0] += az
+    d[:, 0, 2] += ay
+    d[:, 2, 0] -= ay
+    d[:, 1, 2] -= ax
+    d[:, 2, 1] += ax
+    return np.matmul(rot, d)
