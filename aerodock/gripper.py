@@ -1,9 +1,10 @@
 """The follower's single-point gripper: contact arm, HX711-like strain sensor, servo-driven gate.
 
 Geometry: the contact arm sits ``mount_height_m`` above the follower's centre of mass (body -z).
-The bar is *inside the gate* when it passes through the mouth (perpendicular distance from the
-gripper axis to the bar line <= ``aperture_m / 2``, within the bar's length) and its centre is no
-more than ``gate_height_m`` above the arm. Contact is a stiff spring-damper between arm and bar.
+The bar is *inside the gate* when its whole section passes through the mouth (perpendicular
+distance from the gripper axis to the bar line <= ``aperture_m / 2`` minus the bar's radius,
+within the bar's length) and its centre lies between the arm and ``gate_height_m`` minus the bar's
+radius above it (and not more than its radius below: pushed through the arm). Contact is a stiff spring-damper between arm and bar.
 
 Sensing and actuation: the strain gauge is read at ``sensor_rate_hz`` with noise and a resting bias
 that is calibrated at start (mean of ``calibration_samples`` readings, so a small residual remains);
@@ -139,8 +140,12 @@ def bar_in_gripper(
     perp += d1 * d1
     perp += d2 * d2
     np.sqrt(perp, out=perp)
-    in_mouth = (perp <= params.aperture_m / 2.0) & (np.abs(along) <= params.bar_half_length_m)
-    inside = in_mouth & (height <= params.gate_height_m)
+    # The bar (radius r) fits through the mouth only with its whole section: centre within
+    # aperture/2 - r of the axis; the closed gate holds it between the arm (a bar pressed more
+    # than its radius into the arm's contact spring has passed below it) and the gate's top.
+    r = params.bar_radius_m
+    in_mouth = (perp <= params.aperture_m / 2.0 - r) & (np.abs(along) <= params.bar_half_length_m)
+    inside = in_mouth & (height <= params.gate_height_m - r) & (height > -r)
     penetration = params.bar_radius_m - height
     touching = in_mouth & (penetration > 0)
     if not touching.any():

@@ -33,8 +33,10 @@ from aerodock.flightlog import FlightLog
 from aerodock.gripper import GateState
 from aerodock.planning.docking import DockGeometry, docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
+from aerodock.platform import anchor_point, platform_segments, rotor_strike
 from aerodock.recorder import FlightRecorder
 from aerodock.rng import TrialRNG
+from aerodock.settle import settle
 from aerodock.sim import Observation, World
 
 
@@ -86,6 +88,8 @@ class CampaignResult:
     aborted: np.ndarray
     abort_reason: np.ndarray
     clearance_violation: np.ndarray
+    rotor_strike: np.ndarray  # the bar or a cable went through a rotor disk (a crash)
+    ground_contact: np.ndarray
     min_clearance_m: np.ndarray
     capture_time_s: np.ndarray
     err_down_m: np.ndarray  # mean |vertical tracking error| over the terminal window
@@ -113,6 +117,8 @@ class CampaignResult:
             "abort_reasons": {r.name.lower(): int((self.abort_reason == r).sum())
                               for r in AbortReason if r != AbortReason.NONE},
             "clearance_violations": int(self.clearance_violation.sum()),
+            "rotor_strikes": int(self.rotor_strike.sum()),
+            "ground_contacts": int(self.ground_contact.sum()),
             "min_clearance_m": float(np.min(self.min_clearance_m)),
             "terminal_err_down_median_m": float(np.median(self.err_down_m)),
             "terminal_err_down_mean_m": float(np.mean(self.err_down_m)),
@@ -207,21 +213,39 @@ def run_campaign(
     start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
                               np.full(n, m.start_below_m)], 1)
     start += m.start_jitter_m * rng.standard_normal((n, 3))
-    world.reset(leader_p0, start)
     lead_vel = np.array([spec.leader_speed_mps, 0.0, 0.0]) if moving else np.zeros(3)
+    lead_v = np.tile(lead_vel, (n, 1))
+    zeros = np.zeros((n, 3))
+    zero_n = np.zeros(n)
+    # Settled start: both fly (the leader cruising if it moves) for settle_s before t = 0.
+    settle_s = m.settle_s
+    world.reset(leader_p0 - lead_vel * settle_s, start - lead_vel * settle_s)
     if moving:
-        world.leader = replace(world.leader, v=np.tile(lead_vel, (n, 1)))
-        world.bar = replace(world.bar, v=np.tile(lead_vel, (n, 1)))
+        world.set_velocities(lead_v, lead_v)
+
+    def leader_ref(t: float) -> Reference:
+        return Reference(leader_p0 + lead_vel * t, lead_v, zeros, zero_n, zero_n)
+
+    def predict(obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
+        if predictor is None:
+            return None
+        if comp == Compensation.ORACLE:
+            return predictor.predict_bodies(*world.body_states())
+        return predictor.predict_bodies(_bodies(obs_l, mass * g, mass),
+                                        _bodies(obs_f, mass * g, mass))
 
     leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
     follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
-    # The leader knows it carries the bar: its observer starts from the static cable load.
-    leader_ctl.reset(world.leader.p, world.leader.v, world.cable_force_n / mass)
-    follower_ctl.reset(world.follower.p, world.follower.v)
-    zeros = np.zeros((n, 3))
-    plan = minjerk(start, zeros, zeros, docking_point_m(leader_p0, world.leader.v, geom,
-                                                        arrival_s),
-                   world.leader.v, zeros, arrival_s, 0.0)
+    settle(world, leader_ctl, follower_ctl, leader_ref,
+           lambda t: Reference(start + lead_vel * t, lead_v, zeros, zero_n, zero_n), settle_s,
+           predict)
+    plan = minjerk(start, lead_v, zeros, docking_point_m(leader_p0, lead_v, geom, arrival_s),
+                   lead_v, zeros, arrival_s, 0.0)
+    # The docking status reaches the leader over the network, status_delay_s late.
+    delay_ticks = int(round(m.status_delay_s / world.dt_control_s))
+    status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
+    strikes = np.zeros(n, dtype=bool)
+    rotor_r = cfg.vehicle.rotor_radius_m
 
     phase = np.full(n, Phase.APPROACH, dtype=np.int8)
     abort_reason = np.zeros(n, dtype=np.int8)
@@ -253,10 +277,11 @@ def run_campaign(
             leader_last_fresh_t = t
             last_leader_obs = obs_l
         # --- leader: its own controller, hovering or cruising north ---
-        lref = Reference(leader_p0 + lead_vel * t, np.tile(lead_vel, (n, 1)), zeros,
-                         np.zeros(n), np.zeros(n))
-        # Docking status is shared: the leader feeds forward the payload the follower sheds.
-        payload = np.where(world.captured, (1.0 - m.post_dock_thrust_fraction) * g, 0.0)
+        lref = leader_ref(t)
+        # Docking status is shared: the leader feeds forward the payload the follower sheds,
+        # once the follower's message arrives.
+        status_sent = status_sent[1:] + [world.captured.copy()]
+        payload = np.where(status_sent[0], (1.0 - m.post_dock_thrust_fraction) * g, 0.0)
         lff = np.stack([np.zeros(n), np.zeros(n), payload], axis=1)
         lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, lref, feedforward_mps2=lff)
 
@@ -294,6 +319,8 @@ def run_campaign(
         timeout = t >= timeout_s
         gate = world.gripper.gate
         abort_now = active & (gate == GateState.OPEN) & (unsafe | leader_lost | timeout)
+        if abort_now.any():
+            world.disarm_gate(abort_now)  # an aborted approach never closes the gate
         abort_reason = np.where(
             abort_now & (abort_reason == 0),
             np.where(leader_lost, AbortReason.LEADER_LOST,
@@ -335,14 +362,7 @@ def run_campaign(
         a_ref = np.where(done_free[:, None], 0.0, a_ref)
 
         # Compensation and control.
-        ff = None
-        if predictor is not None:
-            if comp == Compensation.ORACLE:
-                lead_b, fol_b = world.body_states()
-            else:
-                lead_b = _bodies(obs_l_f, mass * g, mass)
-                fol_b = _bodies(obs_f, mass * g, mass)
-            ff = predictor.predict_bodies(lead_b, fol_b)
+        ff = predict(obs_l_f, obs_f)
         terminal = (phase == Phase.TERMINAL) | holding
         yaw0 = np.zeros(n)
         fref = Reference(p_ref, v_ref, a_ref, yaw0, yaw0)
@@ -371,6 +391,13 @@ def run_campaign(
         approach_end = np.where(ended, t, approach_end)
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
         min_clear = np.minimum(min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
+        if world.rigid:
+            seg_a, seg_b = platform_segments(
+                anchor_point(world.leader.p, world.leader.R, world.platform),
+                obs_l.yaw_rad, world.bar, world.platform)
+            strikes |= rotor_strike(world.follower.p, world.follower.R,
+                                    world.fleet.params.rotor_offsets_m, rotor_r, seg_a, seg_b,
+                                    gp.bar_radius_m)
 
         if record != "summary":
             trace["t_s"].append(t)
@@ -394,7 +421,8 @@ def run_campaign(
         progress(1.0)
 
     gate = world.gripper.gate
-    success = gate == GateState.CAPTURED
+    collision = strikes | world.ground_contact
+    success = (gate == GateState.CAPTURED) & ~collision
     t_grid = np.arange(steps)[:, None] * dt_c
     in_win = (t_grid >= approach_end - 0.5) & (t_grid < approach_end)
     win = np.where(in_win[..., None], hist, 0.0)
@@ -407,6 +435,8 @@ def run_campaign(
         aborted=abort_reason != AbortReason.NONE,
         abort_reason=abort_reason,
         clearance_violation=min_clear < m.clearance_m,
+        rotor_strike=strikes,
+        ground_contact=world.ground_contact.copy(),
         min_clearance_m=min_clear,
         capture_time_s=capture_t,
         err_down_m=win[..., 0].sum(0) / cnt,

@@ -155,3 +155,48 @@ def step_bar(
     yaw += bar.yaw_rad
     return BarState(p, v, yaw, yaw_rate), cable_force
 
+
+
+def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,
+                      params: PlatformParams) -> tuple[np.ndarray, np.ndarray]:
+    """End points (a, b), each (n, 3 segments, 3), of the bar and its two cables.
+
+    The cables hang from points ``cable_spacing_m`` apart along the leader's yaw axis at the
+    anchor, to the bar's ends.
+    """
+    half = 0.5 * params.bar_length_m
+    axis_bar = np.stack([np.cos(bar.yaw_rad), np.sin(bar.yaw_rad),
+                         np.zeros_like(bar.yaw_rad)], axis=1)
+    axis_lead = np.stack([np.cos(leader_yaw_rad), np.sin(leader_yaw_rad),
+                          np.zeros_like(leader_yaw_rad)], axis=1)
+    end_1, end_2 = bar.p - half * axis_bar, bar.p + half * axis_bar
+    top_1 = anchor_p - 0.5 * params.cable_spacing_m * axis_lead
+    top_2 = anchor_p + 0.5 * params.cable_spacing_m * axis_lead
+    return np.stack([end_1, top_1, top_2], axis=1), np.stack([end_2, end_1, end_2], axis=1)
+
+
+def rotor_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
+                 rotor_offsets_body_m: np.ndarray, rotor_radius_m: float,
+                 seg_a: np.ndarray, seg_b: np.ndarray, bar_radius_m: float,
+                 disk_half_thickness_m: float = 0.01) -> np.ndarray:
+    """(n,) bool: the bar or a cable passes through one of the follower's rotor disks.
+
+    Each rotor disk is a thin cylinder (radius ``rotor_radius_m``, ``2 disk_half_thickness_m``
+    thick, the blades' sweep) about its centre; a segment (bar or cable, radius
+    ``bar_radius_m``) strikes it when the segment's point closest to the disk centre lies inside
+    that cylinder grown by the segment's radius.
+    """
+    centres = follower_p[:, None, :] + np.matmul(follower_R[:, None], rotor_offsets_body_m[
+        None, :, :, None])[..., 0]  # (n, k, 3)
+    axis = follower_R[:, :, 2][:, None, None, :]  # rotor axis, (n, 1, 1, 3)
+    a, b = seg_a[:, None], seg_b[:, None]  # (n, 1, s, 3)
+    c = centres[:, :, None]  # (n, k, 1, 3)
+    ab = b - a
+    t = ((c - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12)
+    closest = a + np.clip(t, 0.0, 1.0)[..., None] * ab
+    rel = closest - c
+    axial = (rel * axis).sum(-1)
+    radial = np.sqrt(np.maximum((rel * rel).sum(-1) - axial * axial, 0.0))
+    hit = (np.abs(axial) < disk_half_thickness_m + bar_radius_m) & (
+        radial < rotor_radius_m + bar_radius_m)
+    return hit.any(axis=(1, 2))

@@ -65,10 +65,12 @@ class PositionController:
         )
         self._last_input = None  # what the observer should see as the applied acceleration
 
-    def reset(self, p: np.ndarray, v: np.ndarray, bias_mps2: np.ndarray | None = None) -> None:
-        """Start from measured states (n, 3), optionally with a known bias (e.g. a payload)."""
+    def reset(self, p: np.ndarray, v: np.ndarray, bias_mps2: np.ndarray | None = None,
+              bias_sd_mps2: float | None = None) -> None:
+        """Start from measured states (n, 3), optionally with a bias guess and its uncertainty
+        (see :meth:`aerodock.control.observer.BiasObserver.reset`)."""
         if self.observer is not None:
-            self.observer.reset(p, v, bias_mps2)
+            self.observer.reset(p, v, bias_mps2, bias_sd_mps2)
         self._last_input = None
 
     def step(self, p_meas: np.ndarray, v_meas: np.ndarray, rpy_meas: np.ndarray,

@@ -87,6 +87,8 @@ class BiasObserver:
         p_prior = scipy.linalg.solve_discrete_are(self._f.T, h.T, q, r)
         self.gain = p_prior @ h.T @ np.linalg.inv(h @ p_prior @ h.T + r)
         self._error_dyn = (np.eye(3) - self.gain @ h) @ self._f
+        self._q, self._r, self._h = q, r, h
+        self._cov: np.ndarray | None = None  # time-varying covariance until it settles
         self.state = np.zeros((self.n, 3, 3))
 
     @property
@@ -95,14 +97,22 @@ class BiasObserver:
         rho = float(np.max(np.abs(np.linalg.eigvals(self._error_dyn))))
         return -self.dt_s / np.log(rho)
 
-    def reset(self, p: np.ndarray, v: np.ndarray, bias_mps2: np.ndarray | None = None) -> None:
+    def reset(self, p: np.ndarray, v: np.ndarray, bias_mps2: np.ndarray | None = None,
+              bias_sd_mps2: float | None = None) -> None:
         """Restart the estimates at the given position and velocity.
 
         Args:
             p: Position, ``(n, 3)``.
             v: Velocity, ``(n, 3)``.
             bias_mps2: Initial bias estimate, ``(n, 3)``; zero when omitted.
+            bias_sd_mps2: Uncertainty of that initial bias. Given, the filter starts from this
+                prior and runs the time-varying Kalman gain (fast at first, as a real filter
+                started on the ground is) until it meets the steady-state gain; omitted, the
+                steady-state gain from the first update.
         """
+        self._cov = None
+        if bias_sd_mps2 is not None:
+            self._cov = np.diag([self._r[0, 0], self._r[1, 1], float(bias_sd_mps2) ** 2])
         self.state = np.zeros((self.n, 3, 3))
         self.state[:, :, 0] = p
         self.state[:, :, 1] = v
@@ -122,7 +132,7 @@ class BiasObserver:
         """
         # Explicit column sums instead of BLAS matmul: each trial's numbers then do not depend
         # on the batch size (BLAS blocking changes rounding with the shape), and it is faster.
-        f, g, k = self._f, self._g, self.gain
+        f, g, k = self._f, self._g, self._next_gain()
         s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
         u = np.asarray(u_applied_mps2, dtype=float)
         x0 = f[0, 0] * s0 + f[0, 1] * s1 + f[0, 2] * s2 + g[0] * u
@@ -134,6 +144,18 @@ class BiasObserver:
         state[..., 1] = x1 + k[1, 0] * ip + k[1, 1] * iv
         state[..., 2] = x2 + k[2, 0] * ip + k[2, 1] * iv
         self.state = state
+
+    def _next_gain(self) -> np.ndarray:
+        """This update's Kalman gain: time-varying from the reset prior, then steady-state."""
+        if self._cov is None:
+            return self.gain
+        f, h = self._f, self._h
+        prior = f @ self._cov @ f.T + self._q
+        gain = prior @ h.T @ np.linalg.inv(h @ prior @ h.T + self._r)
+        self._cov = (np.eye(3) - gain @ h) @ prior
+        if np.max(np.abs(gain - self.gain)) < 1e-4 * np.max(np.abs(self.gain)):
+            self._cov = None  # settled: the steady-state gain from now on
+        return gain
 
     @property
     def bias_mps2(self) -> np.ndarray:

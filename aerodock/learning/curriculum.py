@@ -26,6 +26,7 @@ from aerodock.flightlog import FlightLog, save_flightlogs
 from aerodock.planning.minjerk import minjerk
 from aerodock.recorder import FlightRecorder
 from aerodock.rng import TrialRNG
+from aerodock.settle import settle
 from aerodock.sim import World
 
 # (duration_s, waypoint index moved to); waypoint 0 is the start. Rest-to-rest segments.
@@ -100,14 +101,28 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     heading = rng.uniform(0.0, 2 * np.pi, size=n)
     lead_v = np.stack([speed * np.cos(heading), speed * np.sin(heading), np.zeros(n)], axis=1)
     lead_p0 = np.tile([0.0, 0.0, -cfg.mission.leader_altitude_m], (n, 1))
-    world.reset(lead_p0, lead_p0 + wps[0])
+    settle_s = cfg.mission.settle_s
+    world.reset(lead_p0 - lead_v * settle_s, lead_p0 + wps[0] - lead_v * settle_s)
+    world.set_velocities(lead_v, lead_v)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_ctl = PositionController(cfg, n, use_observer=True)
     fol_ctl = PositionController(cfg, n, use_observer=True)
-    lead_ctl.reset(world.leader.p, world.leader.v, world.cable_force_n / mass)
-    fol_ctl.reset(world.follower.p, world.follower.v)
     z = np.zeros((n, 3))
     zero_n = np.zeros(n)
+
+    def feedforward(obs_l, obs_f):
+        if predictor is None:
+            return None
+        return predictor.predict_bodies(
+            BodyState(obs_l.p, obs_l.v, obs_l.R, np.full(n, mass * g), np.full(n, mass)),
+            BodyState(obs_f.p, obs_f.v, obs_f.R, np.full(n, mass * g), np.full(n, mass)))
+
+    # Settled start: leader (drifting if it drifts) and follower in formation at the first
+    # waypoint until the observers converge.
+    settle(world, lead_ctl, fol_ctl,
+           lambda t: Reference(lead_p0 + lead_v * t, lead_v, z, zero_n, zero_n),
+           lambda t: Reference(lead_p0 + lead_v * t + wps[0], lead_v, z, zero_n, zero_n),
+           settle_s, feedforward)
     # Segment plans (shared timing, per-flight waypoints).
     plans, t0 = [], 0.0
     prev = 0
@@ -129,11 +144,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
                              Reference(lead_p0 + lead_v * t, lead_v, z, zero_n, zero_n))
         rel_p, rel_v, rel_a = plans[seg][2].sample(t)
         ref = Reference(lead_p0 + lead_v * t + rel_p, lead_v + rel_v, rel_a, zero_n, zero_n)
-        ff = None
-        if predictor is not None:
-            ff = predictor.predict_bodies(
-                BodyState(obs_l.p, obs_l.v, obs_l.R, np.full(n, mass * g), np.full(n, mass)),
-                BodyState(obs_f.p, obs_f.v, obs_f.R, np.full(n, mass * g), np.full(n, mass)))
+        ff = feedforward(obs_l, obs_f)
         fout = fol_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, ref, None, ff)
         recorder.before_step(t, world, obs_l, obs_f, fout, ref.p, np.full(n, seg))
         world.advance(lout.command, fout.command)

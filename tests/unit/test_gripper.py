@@ -74,3 +74,20 @@ def test_resting_bias_is_calibrated(cfg):
     residual = state.bias_true_n - state.bias_est_n
     assert np.std(state.bias_true_n) > 0.1  # a real bias that would trigger without calibration
     assert np.max(np.abs(residual)) < params.contact_threshold_n / 2
+
+
+def test_capture_geometry_includes_the_bar_radius_and_a_lower_limit(cfg):
+    params = GripperParams.from_config(cfg)
+    r = params.bar_radius_m
+    half = params.aperture_m / 2
+    arm_z = -params.mount_height_m
+    R = np.repeat(np.eye(3)[None], 4, 0)  # noqa: N806
+    bars = np.array([
+        [0.0, half - r - 0.001, arm_z - 0.02],  # whole section inside the mouth
+        [0.0, half - r / 2, arm_z - 0.02],  # centre inside the aperture, section is not
+        [0.0, 0.0, arm_z - (params.gate_height_m - r / 2)],  # above the closed gate's reach
+        [0.0, 0.0, arm_z + 2 * r],  # below the arm: passed under the gripper
+    ])
+    _, inside, _ = bar_in_gripper(np.zeros((4, 3)), R, np.zeros((4, 3)), bars, np.zeros((4, 3)),
+                                  np.zeros(4), params)
+    assert inside.tolist() == [True, False, False, False]
