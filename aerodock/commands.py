@@ -43,16 +43,20 @@ def dock(
     compensation: Annotated[Compensation, typer.Option(help="Follower compensation.")] = (
         Compensation.OBSERVER),
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
+    controller: Annotated[str, typer.Option(
+        help="paper: Freyja's weights in every phase and the 4 s observer; tuned: the config's "
+             "weights (stiffer terminal phase by default).")] = "tuned",
     seed: SeedOpt = 0,
     save_logs: Annotated[Path | None, typer.Option(help="Write the FlightLogs to DIR.")] = None,
     config: ConfigOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
+    from aerodock.control.profiles import controller_config
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    cfg = _config(config)
+    cfg = controller_config(_config(config), controller)
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     predictor = _load_predictor(model, compensation)
@@ -64,7 +68,8 @@ def dock(
                               record="full" if save_logs is not None else "summary",
                               progress=lambda f: bar.update(task, completed=f))
     summary = result.summary()
-    summary.update({"compensation": compensation.value, "offset_m": offset
+    summary.update({"compensation": compensation.value, "controller": controller,
+                    "offset_m": offset
                     or cfg.platform.cable_length_m, "leader_speed_mps": leader_speed,
                     "leader_fixed": leader_fixed, "seed": seed})
     if save_logs is not None:
@@ -74,7 +79,8 @@ def dock(
     if as_json:
         print_json(summary)
         return
-    table = Table(title=f"docking, d_p = {summary['offset_m']:g} m, {compensation.value}")
+    table = Table(title=f"docking, d_p = {summary['offset_m']:g} m, {compensation.value}, "
+                        f"{controller} controller")
     table.add_column("figure")
     table.add_column("value", justify="right")
     lo, hi = summary["success_wilson95"]
@@ -86,6 +92,9 @@ def dock(
     table.add_row("missed (gate closed empty)", str(summary["missed"]))
     table.add_row("aborts", f"{summary['aborts']} {summary['abort_reasons']}")
     table.add_row("clearance violations", str(summary["clearance_violations"]))
+    table.add_row("rotor strikes / ground contacts",
+                  f"{summary['rotor_strikes']} / {summary['ground_contacts']}")
+    table.add_row("terminal tilt RMS, median", f"{summary['terminal_tilt_rms_deg_median']:.1f} deg")
     Console().print(table)
     if save_logs is not None:
         typer.echo(f"wrote {summary['logs']}")

@@ -4,7 +4,8 @@ Geometry: the contact arm sits ``mount_height_m`` above the follower's centre of
 The bar is *inside the gate* when its whole section passes through the mouth (perpendicular
 distance from the gripper axis to the bar line <= ``aperture_m / 2`` minus the bar's radius,
 within the bar's length) and its centre lies between the arm and ``gate_height_m`` minus the bar's
-radius above it (and not more than its radius below: pushed through the arm). Contact is a stiff spring-damper between arm and bar.
+radius above it (and not more than its radius below: pushed through the arm). Contact is a stiff
+spring-damper between arm and bar.
 
 Sensing and actuation: the strain gauge is read at ``sensor_rate_hz`` with noise and a resting bias
 that is calibrated at start (mean of ``calibration_samples`` readings, so a small residual remains);

@@ -97,6 +97,8 @@ class CampaignResult:
     err_down_int_ms: np.ndarray  # integral of |vertical error| over the final 0.5 s (paper's table)
     err_3d_int_ms: np.ndarray
     ff_down_int_mps: np.ndarray  # integral of the predicted vertical force over the final 0.5 s
+    tilt_rms_deg: np.ndarray  # RMS tilt of the follower over the terminal window
+    saturated_frac: np.ndarray  # fraction of the terminal window with the control saturated
     arrival_s: float
     trace: dict[str, np.ndarray] = field(default_factory=dict)
     logs: list[FlightLog] = field(default_factory=list)
@@ -127,6 +129,8 @@ class CampaignResult:
             "err_down_int_0p5s_ms": float(np.mean(self.err_down_int_ms)),
             "err_3d_int_0p5s_ms": float(np.mean(self.err_3d_int_ms)),
             "ff_down_int_0p5s_mps": float(np.mean(self.ff_down_int_mps)),
+            "terminal_tilt_rms_deg_median": float(np.median(self.tilt_rms_deg)),
+            "terminal_saturated_frac_mean": float(np.mean(self.saturated_frac)),
         }
 
 
@@ -258,7 +262,8 @@ def run_campaign(
     steps = int(np.ceil(end_s / dt_c))
     # Terminal window: the 0.5 s before the approach ends (arrival, or the gate starting to close).
     approach_end = np.full(n, arrival_s)
-    hist = np.full((steps, n, 3), np.nan)  # |e_down|, |e_3d|, predicted down force
+    # |e_down|, |e_3d|, predicted down force, tilt (deg), control saturated
+    hist = np.full((steps, n, 5), np.nan)
     trace_keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
     trace: dict[str, list] = {k: [] for k in trace_keys} if record != "summary" else {}
     recorder = FlightRecorder() if record == "full" else None
@@ -387,6 +392,8 @@ def run_campaign(
         hist[k, :, 0] = np.abs(true_err[:, 2])
         hist[k, :, 1] = np.linalg.norm(true_err, axis=1)
         hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
+        hist[k, :, 3] = np.rad2deg(np.arccos(np.clip(world.follower.R[:, 2, 2], -1.0, 1.0)))
+        hist[k, :, 4] = fout.saturated
         ended = (~active | (world.gripper.gate != GateState.OPEN)) & (approach_end > t)
         approach_end = np.where(ended, t, approach_end)
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
@@ -444,6 +451,8 @@ def run_campaign(
         err_down_int_ms=win[..., 0].sum(0) * dt_c,
         err_3d_int_ms=win[..., 1].sum(0) * dt_c,
         ff_down_int_mps=win[..., 2].sum(0) * dt_c,
+        tilt_rms_deg=np.sqrt((win[..., 3] ** 2).sum(0) / cnt),
+        saturated_frac=win[..., 4].sum(0) / cnt,
         arrival_s=arrival_s,
     )
     if record != "summary":

@@ -39,6 +39,7 @@ class ControlOutput:
     applied_accel_mps2: np.ndarray  # (n, 3) u_1:3 actually sent (after saturation): the log's cmd
     feedforward_mps2: np.ndarray  # (n, 3) f_ext_hat subtracted (zeros without a predictor)
     bias_mps2: np.ndarray  # (n, 3) b_hat subtracted (zeros without the observer)
+    saturated: np.ndarray  # (n,) bool: the tilt or thrust limit cut the desired acceleration
 
 
 class PositionController:
@@ -105,4 +106,6 @@ class PositionController:
         # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat.
         self._last_input = applied + ff
         yaw_rate = np.clip(yaw_rate, -self.yaw_rate_max, self.yaw_rate_max)
-        return ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias)
+        saturated = np.abs(applied - desired).max(axis=1) > 1e-6
+        return ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
+                             saturated)

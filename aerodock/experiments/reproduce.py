@@ -27,6 +27,8 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import Compensation
+from aerodock.control.profiles import controller_config
+from aerodock.experiments.controller_costs import controller_costs
 from aerodock.fileio import atomic_open
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
@@ -45,13 +47,15 @@ class RunSize:
     se_pool_flights: int
     test_flights_per_stage: int
     se_max_time_s: float | None
+    cost_trials: int
 
 
-QUICK = RunSize(cable_reps=4, hover_trials=40, moving_trials=20, se_minutes=(0.5, 1, 2, 5),
-                se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0)
+QUICK = RunSize(cable_reps=2, hover_trials=24, moving_trials=12, se_minutes=(0.5, 1, 2, 5),
+                se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0,
+                cost_trials=8)
 FULL = RunSize(cable_reps=10, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
-               test_flights_per_stage=4, se_max_time_s=None)
+               test_flights_per_stage=4, se_max_time_s=None, cost_trials=60)
 
 
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
@@ -76,6 +80,85 @@ def _campaign_record(res: CampaignResult) -> dict[str, Any]:
 
 def _traces_subset(res: CampaignResult, keep: int) -> dict[str, np.ndarray]:
     return {k: (v[:, :keep] if v.ndim >= 2 else v) for k, v in res.trace.items()}
+
+
+def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
+                         say: Callable[[str], None], label: str
+                         ) -> tuple[dict[str, Any], dict[str, Any], dict[str, float]]:
+    """The cable-length study, hover docking and the moving leader with one controller.
+
+    Returns (results by experiment, traces for the figures, timings).
+    """
+    results: dict[str, Any] = {}
+    traces: dict[str, Any] = {}
+    timings: dict[str, float] = {}
+    # 2. Cable-length study -----------------------------------------------------------------
+    t0 = time.perf_counter()
+    say(f"2/5 cable-length study (leader on a rigid stand), {label}")
+    cable: dict[str, Any] = {"offsets_m": list(CABLE_OFFSETS_M), "repetitions": size.cable_reps,
+                             "without_model": [], "with_model": []}
+    cable_traces: dict[str, dict[float, dict[str, np.ndarray]]] = {"without": {}, "with": {}}
+    for offset in CABLE_OFFSETS_M:
+        for key, comp in (("without", Compensation.OBSERVER), ("with", Compensation.MODEL)):
+            res = run_campaign(cfg, MissionSpec(
+                trials=size.cable_reps, offset_m=offset, leader_fixed=True, compensation=comp,
+                seed=seed, start_azimuths_deg=(0.0,)), predictor, record="trace")
+            rec = _campaign_record(res)
+            rec["offset_m"] = offset
+            rec["result"] = "dock" if rec["success_rate"] >= 0.5 else "miss"
+            cable[f"{key}_model"].append(rec)
+            cable_traces[key][offset] = res.trace
+    results["cable_study"] = cable
+    traces["cable"] = cable_traces
+    timings["cable_study_s"] = time.perf_counter() - t0
+
+    # 3. Hover docking ----------------------------------------------------------------------
+    t0 = time.perf_counter()
+    say(f"3/5 docking with the leader hovering ({size.hover_trials} trials per mode), {label}")
+    hover: dict[str, Any] = {"offset_m": 0.36, "aperture_m": cfg.gripper.aperture_m,
+                             "trials": size.hover_trials}
+    hover_res: dict[str, CampaignResult] = {}
+    for key, comp in (("without_model", Compensation.OBSERVER),
+                      ("with_model", Compensation.MODEL), ("oracle", Compensation.ORACLE)):
+        res = run_campaign(cfg, MissionSpec(trials=size.hover_trials, offset_m=0.36,
+                                            compensation=comp, seed=seed + 1), predictor,
+                           record="trace")
+        hover[key] = _campaign_record(res)
+        hover_res[key] = res
+    w, m = hover["without_model"], hover["with_model"]
+    hover["terminal_error_reduction_x"] = (w["terminal_err_down_median_m"]
+                                           / max(m["terminal_err_down_median_m"], 1e-9))
+    results["hover_docking"] = hover
+    traces["hover"] = {k: _trace_keep(v) for k, v in hover_res.items()}
+    timings["hover_s"] = time.perf_counter() - t0
+
+    # 4. Leader in motion --------------------------------------------------------------------
+    t0 = time.perf_counter()
+    say(f"4/5 leader in motion at 0.25 m/s ({size.moving_trials} trials per mode), {label}")
+    moving: dict[str, Any] = {"leader_speed_mps": 0.25, "meet_s": cfg.planner.horizon_moving_s,
+                              "hold_s": cfg.planner.hold_s, "trials": size.moving_trials}
+    moving_traces = {}
+    meet, hold = cfg.planner.horizon_moving_s, cfg.planner.hold_s
+    for key, comp in (("without_model", Compensation.OBSERVER),
+                      ("with_model", Compensation.MODEL)):
+        dock_res = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
+                                                 leader_speed_mps=0.25, compensation=comp,
+                                                 seed=seed + 2), predictor)
+        # Formation tracking as in the paper's figure: same flights with the gripper disarmed.
+        track = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
+                                              leader_speed_mps=0.25, compensation=comp,
+                                              seed=seed + 2, passive_trigger=False,
+                                              active_trigger=False), predictor, record="trace")
+        rec = _campaign_record(dock_res)
+        rec["altitude_error_approach"] = _window_mean(track.trace, meet - 2.0, meet)
+        rec["altitude_error_hold"] = _window_mean(track.trace, meet, meet + hold)
+        moving[key] = rec
+        moving_traces[key] = track.trace
+    results["moving_leader"] = moving
+    traces["moving"] = moving_traces
+    timings["moving_s"] = time.perf_counter() - t0
+
+    return results, traces, timings
 
 
 def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
@@ -149,71 +232,30 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     results["sample_efficiency"] = se
     timings["sample_efficiency_s"] = time.perf_counter() - t0
 
-    # 2. Cable-length study -----------------------------------------------------------------
+    # 2-4. Docking experiments: the paper's controller (the reproduction), then ours --------
+    paper_cfg = controller_config(cfg, "paper")
+    docking, traces_paper, times = _docking_experiments(paper_cfg, size, predictor, seed, say,
+                                                        "paper's controller")
+    results.update(docking)
+    traces.update(traces_paper)
+    timings.update(times)
+    tuned, _, times = _docking_experiments(controller_config(cfg, "tuned"), size, predictor, seed,
+                                           say, "tuned controller")
+    results["controllers"] = {
+        "paper": {"source": "Freyja's LQR weights in every phase, 4 s bias observer",
+                  "q_diag": list(paper_cfg.control.q_diag),
+                  "terminal_q_diag": list(paper_cfg.control.terminal_q_diag),
+                  "observer_bias_tau_s": paper_cfg.control.observer_bias_tau_s},
+        "tuned": {"source": "the configuration's weights (terminal gain schedule)",
+                  "q_diag": list(cfg.control.q_diag),
+                  "terminal_q_diag": list(cfg.control.terminal_q_diag),
+                  "observer_bias_tau_s": cfg.control.observer_bias_tau_s, **tuned},
+    }
+    timings.update({f"tuned_{k}": v for k, v in times.items()})
     t0 = time.perf_counter()
-    say("2/5 cable-length study (leader on a rigid stand)")
-    cable: dict[str, Any] = {"offsets_m": list(CABLE_OFFSETS_M), "repetitions": size.cable_reps,
-                             "without_model": [], "with_model": []}
-    cable_traces: dict[str, dict[float, dict[str, np.ndarray]]] = {"without": {}, "with": {}}
-    for offset in CABLE_OFFSETS_M:
-        for key, comp in (("without", Compensation.OBSERVER), ("with", Compensation.MODEL)):
-            res = run_campaign(cfg, MissionSpec(
-                trials=size.cable_reps, offset_m=offset, leader_fixed=True, compensation=comp,
-                seed=seed, start_azimuths_deg=(0.0,)), predictor, record="trace")
-            rec = _campaign_record(res)
-            rec["offset_m"] = offset
-            rec["result"] = "dock" if rec["success_rate"] >= 0.5 else "miss"
-            cable[f"{key}_model"].append(rec)
-            cable_traces[key][offset] = res.trace
-    results["cable_study"] = cable
-    traces["cable"] = cable_traces
-    timings["cable_study_s"] = time.perf_counter() - t0
-
-    # 3. Hover docking ----------------------------------------------------------------------
-    t0 = time.perf_counter()
-    say(f"3/5 docking with the leader hovering ({size.hover_trials} trials per mode)")
-    hover: dict[str, Any] = {"offset_m": 0.36, "aperture_m": cfg.gripper.aperture_m,
-                             "trials": size.hover_trials}
-    hover_res: dict[str, CampaignResult] = {}
-    for key, comp in (("without_model", Compensation.OBSERVER),
-                      ("with_model", Compensation.MODEL), ("oracle", Compensation.ORACLE)):
-        res = run_campaign(cfg, MissionSpec(trials=size.hover_trials, offset_m=0.36,
-                                            compensation=comp, seed=seed + 1), predictor,
-                           record="trace")
-        hover[key] = _campaign_record(res)
-        hover_res[key] = res
-    w, m = hover["without_model"], hover["with_model"]
-    hover["terminal_error_reduction_x"] = (w["terminal_err_down_median_m"]
-                                           / max(m["terminal_err_down_median_m"], 1e-9))
-    results["hover_docking"] = hover
-    traces["hover"] = {k: _trace_keep(v) for k, v in hover_res.items()}
-    timings["hover_s"] = time.perf_counter() - t0
-
-    # 4. Leader in motion --------------------------------------------------------------------
-    t0 = time.perf_counter()
-    say(f"4/5 leader in motion at 0.25 m/s ({size.moving_trials} trials per mode)")
-    moving: dict[str, Any] = {"leader_speed_mps": 0.25, "meet_s": cfg.planner.horizon_moving_s,
-                              "hold_s": cfg.planner.hold_s, "trials": size.moving_trials}
-    moving_traces = {}
-    meet, hold = cfg.planner.horizon_moving_s, cfg.planner.hold_s
-    for key, comp in (("without_model", Compensation.OBSERVER),
-                      ("with_model", Compensation.MODEL)):
-        dock_res = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
-                                                 leader_speed_mps=0.25, compensation=comp,
-                                                 seed=seed + 2), predictor)
-        # Formation tracking as in the paper's figure: same flights with the gripper disarmed.
-        track = run_campaign(cfg, MissionSpec(trials=size.moving_trials, offset_m=0.36,
-                                              leader_speed_mps=0.25, compensation=comp,
-                                              seed=seed + 2, passive_trigger=False,
-                                              active_trigger=False), predictor, record="trace")
-        rec = _campaign_record(dock_res)
-        rec["altitude_error_approach"] = _window_mean(track.trace, meet - 2.0, meet)
-        rec["altitude_error_hold"] = _window_mean(track.trace, meet, meet + hold)
-        moving[key] = rec
-        moving_traces[key] = track.trace
-    results["moving_leader"] = moving
-    traces["moving"] = moving_traces
-    timings["moving_s"] = time.perf_counter() - t0
+    say("    what each lever costs: observer time constant and terminal gains")
+    results["controller_costs"] = controller_costs(cfg, size.cost_trials, predictor, seed + 3)
+    timings["controller_costs_s"] = time.perf_counter() - t0
 
     # 5. Real data ----------------------------------------------------------------------------
     t0 = time.perf_counter()

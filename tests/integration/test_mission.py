@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -123,3 +125,50 @@ def test_predictor_is_flown_only_with_model_compensation(cfg):
     as_model = run_campaign(cfg, MissionSpec(compensation="model", **spec), oracle_like)
     assert np.array_equal(with_obs.err_down_m, plain.err_down_m)
     assert not np.array_equal(as_model.err_down_m, plain.err_down_m)
+
+
+def test_a_disarmed_gate_never_closes(cfg):
+    """An abort disarms the gate (World.disarm_gate): with the bar pressing on the arm and the
+    active trigger commanding, the disarmed trial's gate stays open; the armed one captures."""
+    from aerodock.gripper import GateState
+    from aerodock.sim import hover_command
+
+    n = 2
+    world = World(cfg, n, TrialRNG(12, n), leader_fixed=True)
+    lead = np.tile([0.0, 0.0, -2.5], (n, 1))
+    world.reset(lead, lead)  # placed below, then lifted onto the bar
+    gp = world.gripper_params
+    bar = world.bar.p.copy()
+    world.follower = replace(world.follower, p=bar + np.array([0.0, 0.0, gp.mount_height_m
+                                                               + gp.bar_radius_m - 0.002]))
+    world.disarm_gate(np.array([True, False]))
+    cmd = hover_command(world.vehicle, n)
+    for _ in range(30):
+        world.advance(cmd, cmd, np.ones(n, dtype=bool))
+    assert world.gripper.gate[0] == GateState.OPEN
+    assert world.gripper.gate[1] == GateState.CAPTURED
+
+
+def test_settled_start_converges_the_observers_without_truth(cfg):
+    """Before t = 0 both vehicles fly settle_s with observers reset from motion capture only:
+    the leader's bias estimate has found the bar's weight it carries."""
+    from aerodock.control.controller import PositionController
+    from aerodock.settle import settle
+
+    n = 6
+    world = World(cfg, n, TrialRNG(11, n))
+    lead_p = np.tile([0.0, 0.0, -2.5], (n, 1))
+    fol_p = lead_p + np.array([1.0, 0.0, 1.0])
+    world.reset(lead_p, fol_p)
+    lead_ctl = PositionController(cfg, n, use_observer=True)
+    fol_ctl = PositionController(cfg, n, use_observer=True)
+    z, zn = np.zeros((n, 3)), np.zeros(n)
+    settle(world, lead_ctl, fol_ctl, lambda t: Reference(lead_p, z, z, zn, zn),
+           lambda t: Reference(fol_p, z, z, zn, zn), cfg.mission.settle_s)
+    # the leader's bias: the bar (its weight and the wake's drag on it) pulls it down through the
+    # cables, its thrust-gain error adds a constant
+    cable_load = world.cable_force_n[:, 2] / cfg.vehicle.mass_kg
+    gain_err = (1.0 - world.leader.thrust_gain) * cfg.sim.gravity_mps2
+    expected = cable_load + gain_err
+    assert np.allclose(lead_ctl.observer.bias_mps2[:, 2], expected, atol=0.08)
+    assert np.allclose(world.leader.p, lead_p, atol=0.03)

@@ -96,3 +96,25 @@ def test_bad_arguments_raise():
         BiasObserver(2, DT, 0.0, 0.002, 0.02)
     with pytest.raises(ValueError):
         BiasObserver(2, -DT, TAU, 0.002, 0.02)
+
+
+def test_started_with_an_uninformative_prior_the_filter_converges_fast():
+    """A filter reset with a bias prior runs the time-varying Kalman gain: the bias is found in
+    a fraction of the steady-state time constant, then the gain settles to the steady state."""
+    dt, n = 0.01, 1
+    obs = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02)
+    steady = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02)
+    bias = np.array([[0.0, 0.3, 0.6]])
+    p, v = np.zeros((n, 3)), np.zeros((n, 3))
+    obs.reset(p, v, None, bias_sd_mps2=2.0)
+    steady.reset(p, v)
+    for _ in range(int(1.0 / dt)):  # 1 s: a quarter of the time constant
+        v = v + bias * dt
+        p = p + v * dt
+        obs.update(p, v, np.zeros((n, 3)))
+        steady.update(p, v, np.zeros((n, 3)))
+    assert np.allclose(obs.bias_mps2, bias, atol=0.05)
+    assert np.all(np.abs(steady.bias_mps2 - bias)[0, 1:] > 0.1)  # the steady-state gain is slow
+    for _ in range(int(30.0 / dt)):
+        obs.update(p, v, np.zeros((n, 3)))
+    assert obs._cov is None  # settled onto the steady-state gain

@@ -1,0 +1,35 @@
+"""Controller profiles: the paper's controller, and ours, as configurations of one controller.
+
+- ``paper``: what the paper flies (Freyja): its published LQR weights
+  ``Q = diag(1, 1, 8, 0.01, 0.01, 0.1, 1)``, ``R = diag(0.8, 0.8, 0.8, 1)`` in every phase (no
+  terminal gain schedule) and the slow bias observer (4 s). Used for every figure that stands
+  beside the paper's.
+- ``tuned``: the configuration as given (by default: stiffer terminal weights scheduled in the
+  last ``mission.terminal_s`` before arrival). A separate, named row wherever it is reported.
+"""
+
+from __future__ import annotations
+
+from aerodock.config import Config
+
+PAPER_Q_DIAG = (1.0, 1.0, 8.0, 0.01, 0.01, 0.1, 1.0)
+PAPER_R_DIAG = (0.8, 0.8, 0.8, 1.0)
+PAPER_OBSERVER_TAU_S = 4.0
+PROFILES = ("paper", "tuned")
+
+
+def controller_config(cfg: Config, profile: str) -> Config:
+    """``cfg`` with the follower's and leader's controller set to ``profile`` (see module doc).
+
+    Raises:
+        ValueError: unknown profile.
+    """
+    if profile == "tuned":
+        return cfg
+    if profile != "paper":
+        raise ValueError(f"controller must be one of {'|'.join(PROFILES)}, got {profile!r}")
+    return cfg.with_overrides({"control": {
+        "q_diag": list(PAPER_Q_DIAG), "r_diag": list(PAPER_R_DIAG),
+        "terminal_q_diag": list(PAPER_Q_DIAG), "terminal_r_diag": list(PAPER_R_DIAG),
+        "observer_bias_tau_s": PAPER_OBSERVER_TAU_S,
+    }}, source=f"{cfg.source} + paper's controller")
