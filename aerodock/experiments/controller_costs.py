@@ -34,8 +34,9 @@ def _point(cfg: Config, trials: int, comp: Compensation, predictor: AccelPredict
     return {k: summary[k] for k in _KEYS}
 
 
-def controller_costs(cfg: Config, trials: int, predictor: AccelPredictor | None,
-                     seed: int) -> dict[str, Any]:
+def controller_costs(cfg: Config, trials: int, predictor: AccelPredictor | None, seed: int,
+                     taus_s: tuple[float, ...] = OBSERVER_TAUS_S,
+                     mixes: tuple[float, ...] = TERMINAL_MIX) -> dict[str, Any]:
     """Run both sweeps; ``cfg``'s terminal weights are the 'tuned' end of the gain sweep.
 
     Returns ``{"observer_tau": [...], "terminal_gains": [...]}``, one record per point.
@@ -43,13 +44,13 @@ def controller_costs(cfg: Config, trials: int, predictor: AccelPredictor | None,
     paper = controller_config(cfg, "paper")
     out: dict[str, Any] = {"trials": trials, "offset_m": 0.36, "observer_tau": [],
                            "terminal_gains": []}
-    for tau in OBSERVER_TAUS_S:
+    for tau in taus_s:
         c = paper.with_overrides({"control": {"observer_bias_tau_s": tau}})
         rec = _point(c, trials, Compensation.OBSERVER, None, seed)
         out["observer_tau"].append({"observer_bias_tau_s": tau, "compensation": "observer",
                                     **rec})
     tuned_q = np.asarray(cfg.control.terminal_q_diag, dtype=float)
-    for mix in TERMINAL_MIX:
+    for mix in mixes:
         q = (1.0 - mix) * np.asarray(PAPER_Q_DIAG) + mix * tuned_q
         c = paper.with_overrides({"control": {"terminal_q_diag": [float(x) for x in q]}})
         for comp in (Compensation.OBSERVER, Compensation.MODEL):

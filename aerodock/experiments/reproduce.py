@@ -48,14 +48,17 @@ class RunSize:
     test_flights_per_stage: int
     se_max_time_s: float | None
     cost_trials: int
+    cost_taus_s: tuple[float, ...]
+    cost_mixes: tuple[float, ...]
 
 
 QUICK = RunSize(cable_reps=2, hover_trials=24, moving_trials=12, se_minutes=(0.5, 1, 2, 5),
                 se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0,
-                cost_trials=8)
+                cost_trials=8, cost_taus_s=(4.0, 1.0, 0.25), cost_mixes=(0.0, 1.0))
 FULL = RunSize(cable_reps=10, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
-               test_flights_per_stage=4, se_max_time_s=None, cost_trials=60)
+               test_flights_per_stage=4, se_max_time_s=None, cost_trials=60,
+               cost_taus_s=(4.0, 2.0, 1.0, 0.5, 0.25), cost_mixes=(0.0, 0.25, 0.5, 1.0, 2.0))
 
 
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
@@ -254,7 +257,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     timings.update({f"tuned_{k}": v for k, v in times.items()})
     t0 = time.perf_counter()
     say("    what each lever costs: observer time constant and terminal gains")
-    results["controller_costs"] = controller_costs(cfg, size.cost_trials, predictor, seed + 3)
+    results["controller_costs"] = controller_costs(cfg, size.cost_trials, predictor, seed + 3,
+                                                   size.cost_taus_s, size.cost_mixes)
     timings["controller_costs_s"] = time.perf_counter() - t0
 
     # 5. Real data ----------------------------------------------------------------------------

@@ -34,8 +34,19 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     # baseline's slow observer cannot cancel the wake within the docking window)
     assert (res["hover_docking"]["with_model"]["success_rate"]
             > res["hover_docking"]["without_model"]["success_rate"])
+    # the reproduction flies the paper's controller; ours is a separate, named row
+    ctl = res["controllers"]
+    assert ctl["paper"]["terminal_q_diag"] == ctl["paper"]["q_diag"]
+    assert ctl["paper"]["observer_bias_tau_s"] == 4.0
+    for exp in ("cable_study", "hover_docking", "moving_leader"):
+        assert exp in ctl["tuned"]
+    costs = res["controller_costs"]
+    assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 1.0, 0.25]
+    assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
     report = (out / "report.md").read_text()
     assert "Cable-length study" in report and "8/10" in report
+    assert "The paper's controller and ours, side by side" in report
+    assert "What each lever costs" in report
     for fig in res["figures"]:
         assert (out / fig).read_bytes()[:4] == b"\x89PNG", fig
         assert f"({fig})" in report
