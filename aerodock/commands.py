@@ -46,6 +46,8 @@ def dock(
     controller: Annotated[str, typer.Option(
         help="paper: Freyja's weights in every phase and the 4 s observer; tuned: the config's "
              "weights (stiffer terminal phase by default).")] = "tuned",
+    faults: Annotated[Path | None, typer.Option(
+        help="TOML file of [[fault]] entries injected into every trial (see examples/).")] = None,
     seed: SeedOpt = 0,
     save_logs: Annotated[Path | None, typer.Option(help="Write the FlightLogs to DIR.")] = None,
     config: ConfigOpt = None,
@@ -60,8 +62,12 @@ def dock(
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     predictor = _load_predictor(model, compensation)
+    from aerodock.faults import load_faults
+
+    injected = tuple(load_faults(faults)) if faults is not None else ()
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
-                       leader_fixed=leader_fixed, compensation=compensation, seed=seed)
+                       leader_fixed=leader_fixed, compensation=compensation, seed=seed,
+                       faults=injected)
     with progress_bar() as bar:
         task = bar.add_task(f"docking x{trials} ({compensation.value})", total=1.0)
         result = run_campaign(cfg, spec, predictor,
@@ -98,6 +104,52 @@ def dock(
     Console().print(table)
     if save_logs is not None:
         typer.echo(f"wrote {summary['logs']}")
+
+
+@app.command("faults")
+def faults_command(
+    fault_file: Annotated[Path, typer.Argument(help="TOML file of [[fault]] entries.")],
+    trials: Annotated[int, typer.Option(help="Trials per fault (one batch each).")] = 40,
+    compensation: Annotated[Compensation, typer.Option(help="Follower compensation.")] = (
+        Compensation.ORACLE),
+    model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
+    seed: SeedOpt = 0,
+    config: ConfigOpt = None,
+    markdown: Annotated[bool, typer.Option(help="Print the table as Markdown.")] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Fly one docking campaign per injected fault (and one without): docks, safe aborts,
+    clearance violations, collisions and NaN among the trials each fault struck."""
+    from aerodock.experiments.faults import fault_campaign, rows_markdown
+    from aerodock.faults import load_faults
+
+    cfg = _config(config)
+    if not 1 <= trials <= 4096:
+        fail(f"--trials must be in 1..4096, got {trials}")
+    faults = load_faults(fault_file)
+    predictor = _load_predictor(model, compensation)
+    with progress_bar() as bar:
+        task = bar.add_task("faults", total=len(faults) + 1)
+
+        def step(name: str) -> None:
+            bar.update(task, description=f"fault: {name}", advance=1)
+
+        rows = fault_campaign(cfg, faults, trials, seed, compensation, predictor, step)
+    if as_json:
+        print_json({"compensation": compensation.value, "seed": seed, "rows": rows})
+    elif markdown:
+        typer.echo(rows_markdown(rows))
+    else:
+        table = Table(title=f"fault campaign, {trials} trials per fault, {compensation.value}")
+        for col in ("fault", "struck", "docked", "missed", "safe aborts", "clearance viol.",
+                    "collisions", "NaN"):
+            table.add_column(col, justify="left" if col == "fault" else "right")
+        for r in rows:
+            table.add_row(r["fault"], str(r["struck"]), str(r["docked"]),
+                          str(r["missed_or_slipped"]), str(r["safe_aborts"]),
+                          str(r["clearance_violations"]), str(r["collisions"]),
+                          str(r["nan_trials"]))
+        Console().print(table)
 
 
 def _register_subpackages() -> None:

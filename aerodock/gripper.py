@@ -93,6 +93,8 @@ class GripperState:
     inside_at_start: np.ndarray  # (n,) bool: bar inside the gate when closing began
     slipped: np.ndarray  # (n,) bool: bar slipped through the closing gate
     resolved_s: np.ndarray  # (n,) when the gate finished closing (nan: not yet)
+    close_time_s: np.ndarray  # (n,) servo travel time (inf: a jammed servo never closes)
+    sensor_stuck_n: np.ndarray  # (n,) a faulty strain gauge reads this (nan: healthy)
 
     @property
     def captured(self) -> np.ndarray:
@@ -110,7 +112,8 @@ def calibrated_gripper(n: int, params: GripperParams, rng: np.random.Generator) 
     return GripperState(
         gate=np.zeros(n, dtype=np.int8), bias_true_n=bias, bias_est_n=est, reading_n=np.zeros(n),
         servo_start_s=nan, triggered_by_contact=false, inside_at_start=false.copy(),
-        slipped=false.copy(), resolved_s=nan.copy(),
+        slipped=false.copy(), resolved_s=nan.copy(), close_time_s=np.full(n, params.close_time_s),
+        sensor_stuck_n=nan.copy(),
     )
 
 
@@ -190,6 +193,9 @@ def step_gripper(
             contact_force_n.shape
         )
         reading = raw - state.bias_est_n
+        stuck = ~np.isnan(state.sensor_stuck_n)
+        if stuck.any():  # injected fault: a dead (0) or stuck strain gauge
+            reading = np.where(stuck, state.sensor_stuck_n, reading)
         if params.passive:
             sensed = untriggered & (reading > params.contact_threshold_n)
             fire = sensed
@@ -210,10 +216,11 @@ def step_gripper(
     slipped, resolved = state.slipped, state.resolved_s
     closing = gate == _CLOSING
     if closing.any():
-        done = closing & (t_s >= servo_start + params.close_time_s)
+        done = closing & (t_s >= servo_start + state.close_time_s)
         if done.any():
             gate = np.where(done, np.where(inside, _CAPTURED, _MISSED), gate).astype(np.int8)
             slipped = slipped | (done & ~inside & inside_at_start)
             resolved = np.where(done, t_s, resolved)
     return GripperState(gate, state.bias_true_n, state.bias_est_n, reading, servo_start,
-                        by_contact, inside_at_start, slipped, resolved)
+                        by_contact, inside_at_start, slipped, resolved, state.close_time_s,
+                        state.sensor_stuck_n)

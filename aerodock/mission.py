@@ -29,6 +29,7 @@ from aerodock.control.compensation import (
 )
 from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
+from aerodock.faults import Fault, FaultRuntime, draw_faults
 from aerodock.flightlog import FlightLog
 from aerodock.gripper import GateState
 from aerodock.planning.docking import DockGeometry, docking_point_m
@@ -58,6 +59,7 @@ class AbortReason(IntEnum):
     TIMEOUT = 1
     LEADER_LOST = 2
     UNSAFE_TRACKING = 3
+    GATE_FAULT = 4  # the gate did not finish closing long after it was commanded
 
 
 @dataclass(frozen=True)
@@ -72,7 +74,8 @@ class MissionSpec:
     seed: int = 0
     first_trial: int = 0  # trial i draws from stream (seed, first_trial + i)
     start_azimuths_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
-    leader_dropout_s: tuple[float, float] | None = None  # (start, duration): fault injection
+    leader_dropout_s: tuple[float, float] | None = None  # (start, duration): leader state lost
+    faults: tuple[Fault, ...] = ()  # injected faults (aerodock.faults), drawn per trial
     passive_trigger: bool = True
     active_trigger: bool = True
 
@@ -89,6 +92,8 @@ class CampaignResult:
     abort_reason: np.ndarray
     clearance_violation: np.ndarray
     rotor_strike: np.ndarray  # the bar or a cable went through a rotor disk (a crash)
+    nan_state: np.ndarray  # a non-finite state or metric (a numerical failure)
+    fault_hit: np.ndarray  # an injected fault struck the trial (every trial when none is set)
     ground_contact: np.ndarray
     min_clearance_m: np.ndarray
     capture_time_s: np.ndarray
@@ -120,6 +125,9 @@ class CampaignResult:
                               for r in AbortReason if r != AbortReason.NONE},
             "clearance_violations": int(self.clearance_violation.sum()),
             "rotor_strikes": int(self.rotor_strike.sum()),
+            "nan_trials": int(self.nan_state.sum()),
+            "safe_aborts": int((self.aborted & ~self.clearance_violation & ~self.rotor_strike
+                                & ~self.ground_contact & ~self.nan_state).sum()),
             "ground_contacts": int(self.ground_contact.sum()),
             "min_clearance_m": float(np.min(self.min_clearance_m)),
             "terminal_err_down_median_m": float(np.median(self.err_down_m)),
@@ -249,14 +257,18 @@ def run_campaign(
     delay_ticks = int(round(m.status_delay_s / world.dt_control_s))
     status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
     strikes = np.zeros(n, dtype=bool)
+    nan_seen = np.zeros(n, dtype=bool)
     rotor_r = cfg.vehicle.rotor_radius_m
 
     phase = np.full(n, Phase.APPROACH, dtype=np.int8)
     abort_reason = np.zeros(n, dtype=np.int8)
     phase_t = np.zeros(n)  # when the current phase began
     capture_t = np.full(n, np.nan)
-    leader_last_fresh_t = 0.0
-    last_leader_obs: Observation | None = None
+    faults = tuple(spec.faults)
+    if spec.leader_dropout_s is not None:
+        start, duration = spec.leader_dropout_s
+        faults += (Fault("leader dropout", "leader_state_lost", 1.0, (start, start), duration),)
+    fault_rt = FaultRuntime(draw_faults(faults, n, rng), n, world.dt_control_s)
     min_clear = np.full(n, np.inf)
     dt_c = world.dt_control_s
     steps = int(np.ceil(end_s / dt_c))
@@ -270,17 +282,11 @@ def run_campaign(
     world.observed_accel()  # start the accelerometer's averaging window
     for k in range(steps):
         t = k * dt_c
-        obs_l, obs_f = world.observe()
-        # Leader state comes over the network: a dropout freezes it (fault injection).
-        lost = spec.leader_dropout_s is not None and (
-            spec.leader_dropout_s[0] <= t < spec.leader_dropout_s[0] + spec.leader_dropout_s[1]
-        )
-        if lost and last_leader_obs is not None:
-            obs_l_f = last_leader_obs
-        else:
-            obs_l_f = obs_l
-            leader_last_fresh_t = t
-            last_leader_obs = obs_l
+        # What each controller sees (motion capture, and the leader's state over the network
+        # at the follower), after any injected fault; gripper and rotor faults go to the world.
+        obs_l, obs_f, obs_l_f = fault_rt.observations(t, *world.observe())
+        if faults:
+            fault_rt.apply_to_world(t, world)
         # --- leader: its own controller, hovering or cruising north ---
         lref = leader_ref(t)
         # Docking status is shared: the leader feeds forward the payload the follower sheds,
@@ -320,16 +326,23 @@ def run_campaign(
             (up_err > m.abort_tracking_m / 2)
             | ((np.linalg.norm(err, axis=1) > m.abort_tracking_m) & (up_err > 0))
         )
-        leader_lost = (t - leader_last_fresh_t) > m.leader_lost_s
+        leader_lost = (t - fault_rt.last_fresh_leader_t) > m.leader_lost_s
         timeout = t >= timeout_s
         gate = world.gripper.gate
-        abort_now = active & (gate == GateState.OPEN) & (unsafe | leader_lost | timeout)
+        # The software knows when it commanded the gate: one that has not closed long after
+        # (a jammed servo) is a fault.
+        gate_stuck = (gate == GateState.CLOSING) & (
+            world.t_s - world.gripper.servo_start_s > 4.0 * gp.close_time_s)
+        abort_now = active & (((gate == GateState.OPEN) & (unsafe | leader_lost | timeout))
+                              | gate_stuck)
         if abort_now.any():
             world.disarm_gate(abort_now)  # an aborted approach never closes the gate
         abort_reason = np.where(
             abort_now & (abort_reason == 0),
-            np.where(leader_lost, AbortReason.LEADER_LOST,
-                     np.where(timeout, AbortReason.TIMEOUT, AbortReason.UNSAFE_TRACKING)),
+            np.where(gate_stuck, AbortReason.GATE_FAULT,
+                     np.where(leader_lost, AbortReason.LEADER_LOST,
+                              np.where(timeout, AbortReason.TIMEOUT,
+                                       AbortReason.UNSAFE_TRACKING))),
             abort_reason,
         ).astype(np.int8)
         captured_now = (gate == GateState.CAPTURED) & (phase != Phase.CAPTURED) & (
@@ -398,6 +411,9 @@ def run_campaign(
         approach_end = np.where(ended, t, approach_end)
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
         min_clear = np.minimum(min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
+        nan_seen |= ~(np.isfinite(world.follower.p).all(axis=1)
+                      & np.isfinite(world.leader.p).all(axis=1)
+                      & np.isfinite(fout.command.thrust_n))
         if world.rigid:
             seg_a, seg_b = platform_segments(
                 anchor_point(world.leader.p, world.leader.R, world.platform),
@@ -443,6 +459,9 @@ def run_campaign(
         abort_reason=abort_reason,
         clearance_violation=min_clear < m.clearance_m,
         rotor_strike=strikes,
+        nan_state=nan_seen,
+        fault_hit=(np.any([d.hit for d in fault_rt.draws], axis=0) if fault_rt.draws
+                   else np.ones(n, dtype=bool)),
         ground_contact=world.ground_contact.copy(),
         min_clearance_m=min_clear,
         capture_time_s=capture_t,

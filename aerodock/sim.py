@@ -144,6 +144,15 @@ class World:
         self.last_downwash_mps2 = np.zeros((n, 3))
         self.contact_seen = np.zeros(n, dtype=bool)
         self.ground_contact = np.zeros(n, dtype=bool)
+        self._rotor_loss: np.ndarray | None = None
+
+    def set_rotor_loss(self, loss: np.ndarray) -> None:
+        """Injected fault: the follower's rotors lose these fractions (n, 4) of their thrust
+        (rigid-body model; the autopilot is not told, it can only react)."""
+        if not self.rigid:
+            raise ValueError("rotor thrust loss needs vehicle.model = 'rigid-body'")
+        loss = np.asarray(loss, dtype=float)
+        self._rotor_loss = loss if loss.any() else None
 
     def set_velocities(self, leader_v_mps: np.ndarray | None = None,
                        bar_v_mps: np.ndarray | None = None) -> None:
@@ -157,10 +166,11 @@ class World:
     def disarm_gate(self, mask: np.ndarray) -> None:
         """Stop the gates of the trials in ``mask`` (n,) from closing (an aborted approach).
 
-        A gate that has not been triggered yet never closes; one already closing finishes.
+        A gate still open never closes (a trigger waiting out the software latency is
+        cancelled); one already closing finishes.
         """
         g = self.gripper
-        idle = mask & (g.gate == GateState.OPEN) & np.isnan(g.servo_start_s)
+        idle = mask & (g.gate == GateState.OPEN)
         if idle.any():
             self.gripper = replace(g, servo_start_s=np.where(idle, np.inf, g.servo_start_s))
 
@@ -286,6 +296,17 @@ class World:
         noise *= self._gyro_sd
         return noise
 
+    def _lose_thrust(self, follower: Any, fol_R: np.ndarray, force: np.ndarray,  # noqa: N803
+                     torque: np.ndarray) -> None:
+        """Add the thrust the faulty rotors do not give, as a force and torque (in place)."""
+        params = self.fleet.params
+        lost = follower.rotor_speed * follower.rotor_speed
+        lost *= (params.thrust_coeff * follower.thrust_gain)[:, None]
+        lost *= self._rotor_loss
+        force += fol_R[:, :, 2] * lost.sum(axis=1)[:, None]  # less thrust along body -z
+        for i in range(lost.shape[1]):
+            torque -= lost[:, i:i + 1] * params.rotor_torque_map[i]
+
     def _step(self, targets: Any, close_command: np.ndarray | None) -> None:
         dt = self.dt_s
         n = self.n
@@ -329,6 +350,8 @@ class World:
             torque[:n, 1] = d * cable_body[:, 0]
             if wake_torque is not None:
                 torque[n:] = wake_torque
+            if self._rotor_loss is not None:
+                self._lose_thrust(follower, fol_R, follower_force, torque[n:])
 
         # 2. Vehicles (autopilots inside); then the bar hangs from the leader's new anchor.
         new, accel = self.fleet.step(both, targets, ext, torque, dt, self._draw_gyro_noise())

@@ -1,0 +1,61 @@
+"""Fault injection: the file format, and campaigns that stay safe when things go wrong."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from aerodock.control.compensation import Compensation
+from aerodock.experiments.faults import fault_campaign
+from aerodock.faults import Fault, FaultFileError, load_faults, parse_faults
+from aerodock.mission import AbortReason, MissionSpec, run_campaign
+
+
+def test_example_fault_file_loads():
+    faults = load_faults("examples/faults.toml")
+    assert len(faults) == 9
+    assert {f.kind for f in faults} >= {"servo_jammed", "rotor_thrust_loss", "latency_spike"}
+
+
+@pytest.mark.parametrize("doc, match", [
+    ({}, "no \\[\\[fault\\]\\]"),
+    ({"fault": [{"kind": "gremlins"}]}, "'kind' must be one of"),
+    ({"fault": [{"kind": "servo_slow", "magnitude": float("nan")}]}, "finite"),
+    ({"fault": [{"kind": "servo_slow", "probability": 2.0}]}, "probability"),
+    ({"fault": [{"kind": "servo_slow", "start_s": [3.0, 1.0]}]}, "start_s"),
+    ({"fault": [{"kind": "servo_slow", "colour": "red"}]}, "unknown key"),
+    ({"faults": []}, "unknown table"),
+])
+def test_bad_fault_files_are_refused_with_the_entry_named(doc, match):
+    with pytest.raises(FaultFileError, match=match):
+        parse_faults(doc, "f.toml")
+
+
+def test_fault_campaign_is_safe_and_counts_what_each_fault_does(cfg):
+    faults = [
+        Fault("leader state lost", "leader_state_lost", 1.0, (2.0, 3.0)),
+        Fault("servo jammed", "servo_jammed"),
+        Fault("rotor loses 30 %", "rotor_thrust_loss", 1.0, (2.0, 3.0), magnitude=0.3),
+    ]
+    rows = fault_campaign(cfg, faults, 6, 4, Compensation.ORACLE, None)
+    by = {r["fault"]: r for r in rows}
+    assert by["no fault"]["docked"] >= 5
+    for r in rows:
+        assert r["clearance_violations"] == 0 and r["nan_trials"] == 0
+        assert r["docked"] + r["aborts"] <= r["struck"]  # never both docked and aborted
+    lost = by["leader state lost"]
+    assert lost["safe_aborts"] >= 4 and lost["abort_reasons"]["leader_lost"] >= 4
+    jam = by["servo jammed"]
+    assert jam["docked"] == 0 and jam["abort_reasons"]["gate_fault"] >= 4
+
+
+def test_a_fault_strikes_only_the_drawn_trials(cfg):
+    half = Fault("sensor dead, half the trials", "contact_sensor_dead", probability=0.5)
+    res = run_campaign(cfg, MissionSpec(trials=12, compensation="oracle", seed=8,
+                                        faults=(half,)))
+    assert 0 < res.fault_hit.sum() < 12
+    again = run_campaign(cfg, MissionSpec(trials=12, compensation="oracle", seed=8,
+                                          faults=(half,)))
+    assert np.array_equal(res.fault_hit, again.fault_hit)
+    assert np.array_equal(res.success, again.success)
+    assert not (res.abort_reason == AbortReason.GATE_FAULT).any()
