@@ -219,12 +219,15 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
               "ratio to floor |", "|---|---|---|---|---|"]
     for region in ("all", "interaction"):
         d = ho[region]
-        lines.append(f"| {region} | {d['model']['rmse_mps2']['overall']:.3f} | "
-                     f"{d['zero']['rmse_mps2']['overall']:.3f} | "
-                     f"{d['error_floor']['rmse_mps2']['overall']:.3f} | "
-                     f"{lrn['rmse_ratio_to_floor'][region]:.2f} |")
+        floor = d.get("error_floor")
+        ratio = lrn["rmse_ratio_to_floor"][region]
+        lines.append(f"| {region} | {_fmt(d['model']['rmse_mps2']['overall'])} | "
+                     f"{_fmt(d['zero']['rmse_mps2']['overall'])} | "
+                     f"{_fmt(floor['rmse_mps2']['overall']) if floor else 'unavailable'} | "
+                     f"{_fmt(ratio, 2) if ratio is not None else 'unavailable'} |")
     lines += ["", "The error floor is the RMSE of the simulator's own mean field against the same "
-              "labels (turbulence and sensor noise no model can predict).", ""]
+              "labels (turbulence and sensor noise no model can predict).",
+              f"Mean field used for the floor: {lrn.get('error_floor_source', 'the field')}.", ""]
     se = r.get("sample_efficiency")
     if se:
         lines += _se_table(se, "Sample efficiency, simulated (held-out RMSE, m/s², mean ± sd "

@@ -132,11 +132,7 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     results["learning"] = {
         "curriculum": curriculum,
         "heldout": heldout_eval,
-        "rmse_ratio_to_floor": {
-            region: heldout_eval[region]["model"]["rmse_mps2"]["overall"]
-            / heldout_eval[region]["error_floor"]["rmse_mps2"]["overall"]
-            for region in ("all", "interaction")
-        },
+        **_floor_ratio(heldout_eval, cfg),
     }
     timings["curriculum_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -235,6 +231,40 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     results["figures"] = figures
     _write_json_atomic(out_dir / "results.json", results)
     return results
+
+
+def _floor_ratio(heldout_eval: dict[str, Any], cfg: Config) -> dict[str, Any]:
+    """The model's held-out RMSE over the error floor, per region, and where the floor's mean
+    field came from; ``None`` (with a note for ``report.md``) where no floor could be computed.
+
+    The floor needs the simulator's mean field recorded beside each label
+    (``World.true_mean_field_mps2``). A plug-in field without ``mean_acceleration`` has it only
+    if the world estimates it (:func:`aerodock.downwash.mean.mean_acceleration_fn`); otherwise
+    the figure is reported as unavailable rather than guessed.
+    """
+    from aerodock.downwash import build_field
+    from aerodock.downwash.mean import has_mean
+
+    ratio: dict[str, float | None] = {}
+    for region in ("all", "interaction"):
+        floor = heldout_eval[region].get("error_floor")
+        floor_rmse = None if floor is None else floor["rmse_mps2"]["overall"]
+        model_rmse = heldout_eval[region]["model"]["rmse_mps2"]["overall"]
+        ratio[region] = (model_rmse / floor_rmse if floor_rmse and model_rmse is not None
+                         else None)
+    exact = has_mean(build_field(cfg))
+    if all(v is None for v in ratio.values()):
+        note = (f"unavailable: the field {cfg.downwash.field} has no mean_acceleration() and "
+                "the recorded flights carry no estimate of its mean, so no error floor (and no "
+                "ratio to it) is computed" if not exact else
+                "unavailable: no held-out label had a recorded mean field")
+    elif exact:
+        note = "the field's own mean_acceleration(), recorded beside each label"
+    else:
+        note = (f"estimated: the field {cfg.downwash.field} has no mean_acceleration(); its mean "
+                "was estimated by averaging acceleration() over turbulence samples "
+                "(aerodock.downwash.mean)")
+    return {"rmse_ratio_to_floor": ratio, "error_floor_source": note}
 
 
 def _trace_keep(res: CampaignResult) -> dict[str, Any]:
