@@ -14,13 +14,17 @@ returns the field's own method when it has one and otherwise an :class:`Estimate
 - the random numbers are *common*: every point uses the same ``samples`` turbulence draws,
   from a generator restarted from ``seed`` on every call. So the estimate at a point depends on
   that point only (not on the batch size, on the other points or on how often it was called),
-  a batch of N trials reproduces N single trials bit for bit, and a plotted slice is smooth.
+  a batch of N trials reproduces N single trials bit for bit, and a plotted slice is smooth;
+- the draws come in antithetic pairs (``z`` and ``-z``; ``u`` and ``1 - u``): turbulence that
+  enters the field linearly (additive, or multiplicative on the mean, as in the default jet and
+  most Ornstein-Uhlenbeck models) averages out exactly, so such a field's mean is recovered to
+  rounding error.
 
-Its error is the field's turbulence sd divided by ``sqrt(samples * steps)`` (fewer independent
-draws if the field's turbulence is correlated across steps): with the default 64 samples and
-the default jet's 22 % vertical turbulence, about 3 % of the mean. A field whose output depends
-on its own history (not only on the current states and fresh noise) is estimated as it behaves
-``steps`` steps after ``reset``.
+For turbulence that enters non-linearly the error is at most about the field's turbulence sd
+divided by ``sqrt(samples * steps)`` (fewer independent draws if the turbulence is correlated
+across steps): with the default 64 samples and a 22 % sd, about 3 % of the mean. A field whose
+output depends on its own history (not only on the current states and fresh noise) is estimated
+as it behaves ``steps`` steps after ``reset``.
 """
 
 from __future__ import annotations
@@ -102,8 +106,8 @@ class EstimatedMean:
         self.dt_s = float(dt_s)
         self.seed = int(seed)
         self.description = (f"estimated: average of acceleration() over {self.samples} "
-                            f"independent turbulence samples x {self.steps} step(s) of "
-                            f"{self.dt_s:g} s (aerodock.downwash.mean)")
+                            f"turbulence samples (antithetic pairs) x {self.steps} step(s) of "
+                            f"{self.dt_s:g} s on a copy of the field (aerodock.downwash.mean)")
 
     def __call__(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """(n, 3) estimated mean acceleration on the follower, m/s², NED."""
@@ -131,8 +135,9 @@ class CommonRandom:
     """A random source whose per-trial draws repeat every ``samples`` rows.
 
     For a draw whose leading size is ``rows`` (= points x samples, point-major), it draws
-    ``samples`` rows from its own generator and tiles them over the points; any other draw goes
-    to the generator unchanged. Methods a field may use beyond ``standard_normal``, ``normal``,
+    ``samples`` rows from its own generator, half of them the antithetic mirror of the other
+    half (``-z`` for a normal ``z``, ``1 - u`` for a uniform ``u``), and tiles them over the
+    points; any other draw goes to the generator unchanged. Methods a field may use beyond ``standard_normal``, ``normal``,
     ``random`` and ``uniform`` are the generator's own.
     """
 
@@ -141,27 +146,33 @@ class CommonRandom:
         self.samples = samples
         self.rows = rows
 
-    def _common(self, draw: Callable[..., np.ndarray], size: Any) -> np.ndarray:
+    def _common(self, draw: Callable[..., np.ndarray], size: Any,
+                mirror: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
         shape = (size,) if isinstance(size, int | np.integer) else tuple(size or ())
         if not shape or shape[0] != self.rows or self.rows % self.samples:
             return draw(size=size)
-        base = draw(size=(self.samples, *shape[1:]))
-        return np.tile(base, (self.rows // self.samples,) + (1,) * (len(shape) - 1))
+        half = self.samples // 2
+        base = draw(size=(half, *shape[1:]))
+        parts = [base, mirror(base)]
+        if self.samples % 2:
+            parts.append(draw(size=(1, *shape[1:])))
+        block = np.concatenate(parts)
+        return np.tile(block, (self.rows // self.samples,) + (1,) * (len(shape) - 1))
 
     def standard_normal(self, size: Any = None) -> np.ndarray:
-        """Standard normal draws (common over the points)."""
-        return self._common(self._gen.standard_normal, size)
+        """Standard normal draws (common over the points, antithetic pairs ``z, -z``)."""
+        return self._common(self._gen.standard_normal, size, np.negative)
 
     def normal(self, loc: Any = 0.0, scale: Any = 1.0, size: Any = None) -> np.ndarray:
-        """Normal draws (common over the points)."""
+        """Normal draws (common over the points, antithetic pairs)."""
         return loc + scale * self.standard_normal(size)
 
     def random(self, size: Any = None) -> np.ndarray:
-        """Uniform draws in [0, 1) (common over the points)."""
-        return self._common(self._gen.random, size)
+        """Uniform draws in [0, 1) (common over the points, antithetic pairs ``u, 1 - u``)."""
+        return self._common(self._gen.random, size, lambda u: 1.0 - u)
 
     def uniform(self, low: Any = 0.0, high: Any = 1.0, size: Any = None) -> np.ndarray:
-        """Uniform draws in [low, high) (common over the points)."""
+        """Uniform draws in [low, high) (common over the points, antithetic pairs)."""
         return low + (high - low) * self.random(size)
 
     def __getattr__(self, name: str) -> Any:

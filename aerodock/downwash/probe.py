@@ -50,7 +50,7 @@ def probe_field(field: DownwashField, separation_m: float, radial_m: float,
         raise ValueError(f"--samples must be >= 2, got {samples}")
     leader, follower = probe_bodies(separation_m, radial_m, leader_speed_mps, mass_kg,
                                     gravity_mps2, azimuth_rad)
-    mean_fn = mean_acceleration_fn(field, dt_s=dt_s)  # copies the field before it is reset
+    mean_fn = mean_acceleration_fn(field, samples=samples, dt_s=dt_s)  # copies it before reset
     field.reset(1, rng)
     draws = np.empty((samples, 3))
     for k in range(samples):
