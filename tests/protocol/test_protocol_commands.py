@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
+from protocol_helpers import (
     FIELDS,
     WITHOUT_MEAN,
     aerodock_process,
