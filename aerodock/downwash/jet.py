@@ -153,7 +153,11 @@ class RoundJetField:
         # R^T F, column by column (rounding independent of the batch size, like dot_rows)
         force_body = (R[:, 0, :] * force[:, 0:1] + R[:, 1, :] * force[:, 1:2]
                       + R[:, 2, :] * force[:, 2:3])
-        return force, np.cross(centre, force_body)
+        torque = np.empty_like(force_body)  # centre x force_body, written out (np.cross is slow)
+        torque[:, 0] = centre[:, 1] * force_body[:, 2] - centre[:, 2] * force_body[:, 1]
+        torque[:, 1] = centre[:, 2] * force_body[:, 0] - centre[:, 0] * force_body[:, 2]
+        torque[:, 2] = centre[:, 0] * force_body[:, 1] - centre[:, 1] * force_body[:, 0]
+        return force, torque
 
     # -- extras used by the simulator, the oracle and `field probe` ---------------------------
     def mean_acceleration(self, leader: BodyState, follower: BodyState) -> np.ndarray:
@@ -287,25 +291,63 @@ class RoundJetField:
     def _pressure_centre_body(self, leader: BodyState, follower: BodyState,
                               offsets_body_m: np.ndarray, lead: tuple | None) -> np.ndarray:
         """(n, 3) body-frame centre of the rotor disks weighted by the wake's dynamic pressure
-        at each (equal weights where no disk is in the wake)."""
-        n, k = follower.n, offsets_body_m.shape[0]
+        at each disk centre (equal weights where no disk is in the wake).
+
+        The wake of :meth:`_wake` evaluated at the (n, k) disk centres at once; the factor
+        ``w0^2`` common to a trial's disks cancels in the weights and is left out. Elementwise
+        arithmetic only, so each trial's rounding is independent of the batch size.
+        """
+        axis, _, w0_min, v_perp = self._leader_wake(leader) if lead is None else lead
         R = follower.R  # noqa: N806
-        disks = np.empty((n, k, 3))
-        for j in range(k):  # R @ r_j, column by column (batch-size independent rounding)
-            r = offsets_body_m[j]
-            disks[:, j, :] = follower.p + R[:, :, 0] * r[0] + R[:, :, 1] * r[1] + R[:, :, 2] * r[2]
-        lead = self._leader_wake(leader) if lead is None else lead
-        lead_rep = tuple(np.repeat(a, k, axis=0) for a in lead)
-        _, _, speed, _, _ = self._wake(np.repeat(leader.p, k, axis=0), disks.reshape(n * k, 3),
-                                       lead_rep)
-        pressure = (speed * speed).reshape(n, k)
+        ox, oy, oz = offsets_body_m[:, 0], offsets_body_m[:, 1], offsets_body_m[:, 2]
+        d = follower.p - leader.p
+        rel = []  # (n, k) per component: disk centres from the leader
+        for i in range(3):
+            c = R[:, i, 0:1] * ox
+            c += R[:, i, 1:2] * oy
+            if oz.any():
+                c += R[:, i, 2:3] * oz
+            c += d[:, i:i + 1]
+            rel.append(c)
+        depth = rel[0] * axis[:, 0:1]
+        depth += rel[1] * axis[:, 1:2]
+        depth += rel[2] * axis[:, 2:3]
+        s = np.maximum(depth, 0.0)
+        lc = self.core_length_m
+        tau = s * s
+        tau *= 0.5 / lc
+        tau += s
+        tau /= w0_min[:, None]
+        r2 = np.zeros_like(depth)
+        for i in range(3):
+            radial = rel[i]
+            radial -= depth * axis[:, i:i + 1]
+            radial += v_perp[:, i:i + 1] * tau
+            radial *= radial
+            r2 += radial
+        half_width = self.spread_rate * s
+        half_width += self.half_width0_m
+        r2 /= half_width * half_width
+        r2 *= -2.0 * _LN2
+        pressure = np.exp(r2, out=r2)
+        centre_speed = s + lc
+        np.divide(lc, centre_speed, out=centre_speed)
+        pressure *= centre_speed * centre_speed
+        above = depth < 0.0
+        if above.any():  # nothing above the rotors (as in _wake)
+            pressure *= np.where(above, np.exp(-2.0 * (depth / 0.05) ** 2), 1.0)
+        k = offsets_body_m.shape[0]
         total = pressure[:, 0].copy()
         for j in range(1, k):
             total += pressure[:, j]
-        inside = total > 1e-12
-        share = np.where(inside[:, None], pressure / np.where(inside, total, 1.0)[:, None],
-                         1.0 / k)
-        centre = np.zeros((n, 3))
-        for j in range(k):
+        inside = total > 1e-300
+        if inside.all():
+            pressure /= total[:, None]
+            share = pressure
+        else:
+            share = np.where(inside[:, None], pressure / np.where(inside, total, 1.0)[:, None],
+                             1.0 / k)
+        centre = share[:, 0:1] * offsets_body_m[0]
+        for j in range(1, k):
             centre += share[:, j:j + 1] * offsets_body_m[j]
         return centre

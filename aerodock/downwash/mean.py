@@ -137,8 +137,8 @@ class CommonRandom:
     For a draw whose leading size is ``rows`` (= points x samples, point-major), it draws
     ``samples`` rows from its own generator, half of them the antithetic mirror of the other
     half (``-z`` for a normal ``z``, ``1 - u`` for a uniform ``u``), and tiles them over the
-    points; any other draw goes to the generator unchanged. Methods a field may use beyond ``standard_normal``, ``normal``,
-    ``random`` and ``uniform`` are the generator's own.
+    points; any other draw goes to the generator unchanged. Methods a field may use beyond
+    ``standard_normal``, ``normal``, ``random`` and ``uniform`` are the generator's own.
     """
 
     def __init__(self, seed: int, samples: int, rows: int):

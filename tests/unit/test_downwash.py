@@ -385,3 +385,18 @@ def test_bar_force_backwards_compatible(cfg):
     b.acceleration(leader, follower, 0.002)
     assert np.array_equal(a.bar_force_n(leader, p, v, BAR_AREA),
                           bar_wake_force_n(b, leader, p, v, BAR_AREA, 0.002))
+
+
+def test_wrench_torque_comes_from_the_wake_at_each_disk(cfg):
+    """The torque is the calibrated force acting at the disks' centre weighted by the wake's
+    dynamic pressure there (wind_mps sampled at each disk centre), tilted and moving too."""
+    pts = np.array([[0.08, 0.03, 0.36], [-0.15, 0.1, 0.7], [0.3, -0.1, 1.2]])
+    leader, follower = _bodies(pts, leader_v=(0.4, 0.1, 0.0), fol_rpy=(0.15, -0.1, 0.8))
+    field = build_field(cfg)
+    field.reset(3, np.random.default_rng(6))
+    force, torque = field.wrench(leader, follower, ROTORS, 0.002)
+    disks = follower.p[:, None, :] + np.einsum("nij,kj->nki", follower.R, ROTORS)
+    q = np.stack([np.sum(field.wind_mps(leader, disks[:, j]) ** 2, axis=1) for j in range(4)], 1)
+    centre = (q / q.sum(1, keepdims=True)) @ ROTORS
+    force_body = np.einsum("nji,nj->ni", follower.R, force)
+    assert np.allclose(torque, np.cross(centre, force_body), rtol=1e-9, atol=1e-12)
