@@ -42,7 +42,8 @@ class MinimalField:
 class OutwardThrustAxisField:
     """Pushes along the leader's thrust axis (its body z, so it follows the leader's tilt) with a
     strong outward lateral component (half the axial push at the edge), decaying exponentially
-    with depth; time-correlated multiplicative turbulence. Offers ``mean_acceleration`` and an
+    with depth; time-correlated multiplicative turbulence. Offers ``mean_acceleration``, a
+    ``wrench`` (its force acting 2 cm from the centre of mass towards the wake's axis) and an
     old-style ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2)`` (no ``dt``)."""
 
     def __init__(self, accel_mps2: float = 3.5, decay_m: float = 0.8, width_m: float = 0.25,
@@ -81,6 +82,16 @@ class OutwardThrustAxisField:
         self._state = decay * self._state + np.sqrt(1 - decay**2) * self._rng.standard_normal(
             leader.n)
         return self._mean(leader, follower.p) * (1.0 + self.turb * self._state)[:, None]
+
+    def wrench(self, leader: BodyState, follower: BodyState, rotor_offsets_body_m: np.ndarray,
+               dt: float) -> tuple[np.ndarray, np.ndarray]:
+        force = self.acceleration(leader, follower, dt) * follower.mass_kg[:, None]
+        rel = follower.p - leader.p
+        inward = -(rel - np.einsum("ij,ij->i", rel, leader.R[:, :, 2])[:, None] * leader.R[:, :, 2])
+        inward /= np.maximum(np.linalg.norm(inward, axis=1), 1e-9)[:, None]
+        centre_body = np.einsum("nji,nj->ni", follower.R, 0.02 * inward)
+        force_body = np.einsum("nji,nj->ni", follower.R, force)
+        return force, np.cross(centre_body, force_body)
 
     def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
                     bar_area_m2: float) -> np.ndarray:
