@@ -268,14 +268,15 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
         d = h[key]
         lines.append(f"| {key.replace('_', ' ')} | {d['docked']}/{d['trials']} = "
                      f"{_pct(d['success_rate'], d['success_wilson95'])} | "
-                     f"{d['terminal_err_down_median_m']:.3f} m | "
-                     f"{d['terminal_err_3d_median_m']:.3f} m | {d['slip_throughs']} | "
+                     f"{_fmt(d['terminal_err_down_median_m'])} m | "
+                     f"{_fmt(d['terminal_err_3d_median_m'])} m | {d['slip_throughs']} | "
                      f"{d['aborts']} |")
     lines += ["", f"Paper: {PAPER_HOVER['docked']}/{PAPER_HOVER['trials']} docks with the model, "
               f"terminal tracking error < {PAPER_HOVER['terminal_error_m']} m, a "
               f"{PAPER_HOVER['reduction_x']}x reduction. Here: error reduction "
-              f"{h['terminal_error_reduction_x']:.1f}x (median vertical error over the final "
-              "0.5 s of the approach).", ""]
+              f"{_fmt(h['terminal_error_reduction_x'], 1)}x (median vertical error over the "
+              "final 0.5 s of the approach). The oracle flies the simulator's mean field: "
+              f"{h.get('oracle_mean_source', 'the field')}.", ""]
     # Moving
     mv = r["moving_leader"]
     lines += ["## Leader in motion (0.25 m/s, meet at 6 s, hold 5 s)", "",

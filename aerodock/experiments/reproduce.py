@@ -27,6 +27,8 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import Compensation
+from aerodock.downwash import build_field
+from aerodock.downwash.mean import has_mean, mean_acceleration_fn, mean_source
 from aerodock.fileio import atomic_open
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
@@ -179,8 +181,10 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
         hover[key] = _campaign_record(res)
         hover_res[key] = res
     w, m = hover["without_model"], hover["with_model"]
-    hover["terminal_error_reduction_x"] = (w["terminal_err_down_median_m"]
-                                           / max(m["terminal_err_down_median_m"], 1e-9))
+    err_w, err_m = w["terminal_err_down_median_m"], m["terminal_err_down_median_m"]
+    hover["terminal_error_reduction_x"] = (None if err_w is None or err_m is None
+                                           else err_w / max(err_m, 1e-9))
+    hover["oracle_mean_source"] = mean_source(mean_acceleration_fn(build_field(cfg)))
     results["hover_docking"] = hover
     traces["hover"] = {k: _trace_keep(v) for k, v in hover_res.items()}
     timings["hover_s"] = time.perf_counter() - t0
@@ -242,9 +246,6 @@ def _floor_ratio(heldout_eval: dict[str, Any], cfg: Config) -> dict[str, Any]:
     if the world estimates it (:func:`aerodock.downwash.mean.mean_acceleration_fn`); otherwise
     the figure is reported as unavailable rather than guessed.
     """
-    from aerodock.downwash import build_field
-    from aerodock.downwash.mean import has_mean
-
     ratio: dict[str, float | None] = {}
     for region in ("all", "interaction"):
         floor = heldout_eval[region].get("error_floor")
