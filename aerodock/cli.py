@@ -55,18 +55,48 @@ def field_probe(
     model: Annotated[
         Path | None, typer.Option(help="A trained model DIR to probe instead of the field.")
     ] = None,
+    bar: Annotated[bool, typer.Option(
+        "--bar", help="Probe the force on the docking bar (held still, hovering leader).")] = False,
     config: ConfigOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Mean and sd of the acceleration (m/s², NED) on a follower below the leader."""
+    """Mean and sd of the acceleration (m/s², NED) on a follower below the leader (or, with
+    --bar, of the force in N on the docking bar there)."""
     from aerodock.downwash import build_field
-    from aerodock.downwash.probe import probe_bodies, probe_field
+    from aerodock.downwash.probe import probe_bar, probe_bodies, probe_field
 
     cfg = _config(config)
     if samples < 2:
         fail(f"--samples must be >= 2, got {samples}")
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+    dt = 1.0 / cfg.sim.physics_rate_hz
+    if bar:
+        if model is not None or leader_speed != 0.0:
+            fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
+        area = cfg.platform.bar_length_m * cfg.platform.bar_diameter_m
+        result = probe_bar(build_field(cfg), separation, radial, samples, dt,
+                           np.random.default_rng(seed), area, mass, g)
+        if result is None:
+            result = {"separation_m": separation, "radial_m": radial, "mean_n": None,
+                      "sd_n": None, "lateral_sd_over_vertical_mean": None,
+                      "note": "the field has no bar_force_n(): the world applies no wake force "
+                              "to the bar"}
+        result["source"] = cfg.downwash.field
+        if as_json:
+            print_json(result)
+            return
+        typer.echo(f"{result['source']} on the bar at {separation:g} m below, {radial:g} m off "
+                   "axis, hovering leader:")
+        if result["mean_n"] is None:
+            typer.echo(f"  {result['note']}")
+            return
+        typer.echo("  mean [N, NED] = " + "  ".join(f"{v:+.5f}" for v in result["mean_n"]))
+        typer.echo("  sd   [N, NED] = " + "  ".join(f"{v:.5f}" for v in result["sd_n"]))
+        ratio = result["lateral_sd_over_vertical_mean"]
+        if ratio is not None:
+            typer.echo(f"  sd across the bar / mean vertical drag = {ratio:.3f}")
+        return
     if model is not None:
         from aerodock.learning.runtime import Predictor
 
@@ -79,8 +109,8 @@ def field_probe(
             "mean_mps2": mean.tolist(), "sd_mps2": [0.0, 0.0, 0.0],
         }
     else:
-        result = probe_field(build_field(cfg), separation, radial, leader_speed, samples,
-                             1.0 / cfg.sim.physics_rate_hz, np.random.default_rng(seed), mass, g)
+        result = probe_field(build_field(cfg), separation, radial, leader_speed, samples, dt,
+                             np.random.default_rng(seed), mass, g)
         result["source"] = cfg.downwash.field
     if as_json:
         print_json(result)
@@ -90,6 +120,10 @@ def field_probe(
                f"leader {leader_speed:g} m/s:")
     typer.echo("  mean [m/s², NED] = " + "  ".join(f"{v:+.3f}" for v in m))
     typer.echo("  sd   [m/s², NED] = " + "  ".join(f"{v:.3f}" for v in s))
+    if "field_mean_mps2" in result:
+        typer.echo("  field mean       = " + "  ".join(f"{v:+.3f}" for v in
+                                                      result["field_mean_mps2"])
+                   + f"  ({result['field_mean_source']})")
 
 
 @field_app.command("plot")
@@ -99,8 +133,10 @@ def field_plot(
     model: Annotated[Path | None, typer.Option(help="Plot a trained model DIR instead.")] = None,
     config: ConfigOpt = None,
 ) -> None:
-    """Draw the field (or a learnt model) as a vertical slice through the wake."""
+    """Draw the field's mean (or a learnt model) as a vertical slice through the wake; a field
+    without mean_acceleration() is drawn from an estimate of its mean (said in the title)."""
     from aerodock.downwash import build_field
+    from aerodock.downwash.mean import EstimatedMean, mean_acceleration_fn
     from aerodock.downwash.probe import plot_field_slice
 
     cfg = _config(config)
@@ -111,10 +147,10 @@ def field_plot(
         mean_fn, title = predictor.predict_bodies, f"learnt model {model.name}"
     else:
         field = build_field(cfg)
-        mean_fn = getattr(field, "mean_acceleration", None)
-        if mean_fn is None:
-            fail(f"field {cfg.downwash.field} has no mean_acceleration(); cannot plot its mean")
+        mean_fn = mean_acceleration_fn(field, dt_s=1.0 / cfg.sim.physics_rate_hz)
         title = cfg.downwash.field.rsplit(":", 1)[-1]
+        if isinstance(mean_fn, EstimatedMean):
+            title += f" (mean estimated, {mean_fn.samples} samples)"
     path = plot_field_slice(mean_fn, out, cfg.vehicle.mass_kg, cfg.sim.gravity_mps2,
                             leader_speed, title)
     typer.echo(f"wrote {path}")

@@ -23,6 +23,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
+from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
 from aerodock.fleet import Fleet, build_fleet, concat_states, split_state
 from aerodock.geometry import rotmat_to_euler
 from aerodock.gripper import (
@@ -97,6 +98,7 @@ class World:
         self._mass_col = self._mass[:, None]
         self._bar_mass = np.full(n, self.platform.bar_mass_kg)
         self._no_close = np.zeros(n, dtype=bool)
+        self._zero_n = np.zeros(n)
         self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
         imu = cfg.imu
         self._gyro_sd = imu.gyro_noise_radps if self.rigid else 0.0
@@ -321,12 +323,16 @@ class World:
         lead_body = BodyState(leader.p, leader.v, lead_R, thrust[:n], mass)
         fol_body = BodyState(follower.p, follower.v, fol_R, thrust[n:], mass)
         # 1. Forces: the wake on the follower's rotors, on the bar; contact; cables.
-        wake_force, wake_torque = _follower_wrench(self.field, lead_body, fol_body,
-                                                  self._rotor_offsets, dt)
+        if self.rigid:  # sampled where it acts: each rotor disk (force and torque)
+            wake_force, wake_torque = follower_wrench(self.field, lead_body, fol_body,
+                                                      self._rotor_offsets, dt)
+        else:  # a point mass feels the force at its centre
+            wake_force = self.field.acceleration(lead_body, fol_body, dt) * self._mass_col
+            wake_torque = None
         self.last_downwash_mps2 = wake_force / self._mass_col
-        bar_drag = getattr(self.field, "bar_force_n", None)
-        bar_force = (None if bar_drag is None
-                     else bar_drag(lead_body, bar.p, bar.v, self.platform.bar_area_m2))
+        bar_axis = np.stack([np.cos(bar.yaw_rad), np.sin(bar.yaw_rad), self._zero_n], axis=1)
+        bar_force = bar_wake_force_n(self.field, lead_body, bar.p, bar.v,
+                                     self.platform.bar_area_m2, dt, bar_axis)
         contact, inside, up = bar_in_gripper(
             follower.p, fol_R, follower.v, bar.p, bar.v, bar.yaw_rad, gp,
         )
@@ -397,17 +403,6 @@ class World:
         self.gripper = step_gripper(self.gripper, self.t_s, contact, inside, sample, close, gp,
                                     self.rng)
         self._history[self.step_index % (self._latency_steps + 1)] = self._snapshot()
-
-
-def _follower_wrench(field: DownwashField, leader: BodyState, follower: BodyState,
-                     rotor_offsets_body_m: np.ndarray,
-                     dt: float) -> tuple[np.ndarray, np.ndarray | None]:
-    """Wake force (world) and torque (body) on the follower; a field without ``wrench`` acts at
-    the centre of mass."""
-    wrench = getattr(field, "wrench", None)
-    if wrench is not None:
-        return wrench(leader, follower, rotor_offsets_body_m, dt)
-    return field.acceleration(leader, follower, dt) * follower.mass_kg[:, None], None
 
 
 def _yaw(rot: np.ndarray) -> np.ndarray:

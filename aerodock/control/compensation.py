@@ -3,7 +3,8 @@
 Anything with ``predict_bodies(leader: BodyState, follower: BodyState) -> (n, 3)`` (m/s², NED) can
 be the follower's feed-forward: the learnt model (``aerodock.learning.runtime.Predictor``), the
 zero predictor, or the oracle, which reads the simulator's true mean field (an upper bound only:
-no real vehicle has it).
+no real vehicle has it; for a plug-in field without ``mean_acceleration`` the mean is estimated by
+:func:`aerodock.downwash.mean.mean_acceleration_fn`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Protocol
 import numpy as np
 
 from aerodock.downwash.base import BodyState
+from aerodock.downwash.mean import DEFAULT_DT_S, mean_acceleration_fn, mean_source
 
 
 class Compensation(StrEnum):
@@ -41,13 +43,19 @@ class ZeroPredictor:
 
 
 class OraclePredictor:
-    """The simulator's true mean field (needs a field with ``mean_acceleration``)."""
+    """The simulator's true mean field: the field's ``mean_acceleration`` or, when it has none,
+    an estimate on a private copy of the field (the simulated trials' turbulence is untouched).
 
-    def __init__(self, field):
-        if not hasattr(field, "mean_acceleration"):
-            raise ValueError("the oracle needs a field with mean_acceleration(); this one has none")
+    Args:
+        field: the simulated world's downwash field.
+        dt_s: the physics step, s (the step the estimate passes to ``acceleration``).
+    """
+
+    def __init__(self, field, dt_s: float = DEFAULT_DT_S):
         self.field = field
+        self.mean_fn = mean_acceleration_fn(field, dt_s=dt_s)
+        self.source = mean_source(self.mean_fn)
 
     def predict_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """(n, 3) the field's mean acceleration at the given states."""
-        return self.field.mean_acceleration(leader, follower)
+        return self.mean_fn(leader, follower)

@@ -1,4 +1,6 @@
-"""Downwash fields: the default truth (``jet``), the protocol (``base``) and plug-in loading."""
+"""Downwash fields: the default truth (``jet``), the protocol (``base``), plug-in loading, and the
+helpers that let every field (also one with only the required methods) be used everywhere: its
+mean (``mean``) and its force and torque on the follower and the bar (``wrench``)."""
 
 from __future__ import annotations
 
@@ -7,8 +9,11 @@ from typing import Any
 
 from aerodock.config import Config, ConfigError, resolve_factory
 from aerodock.downwash.base import BodyState, DownwashField
+from aerodock.downwash.mean import mean_acceleration_fn
+from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench, quad_rotor_offsets_body_m
 
-__all__ = ["BodyState", "DownwashField", "build_field"]
+__all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "follower_wrench",
+           "mean_acceleration_fn", "quad_rotor_offsets_body_m"]
 
 # World constants a field factory may accept; passed only when its signature names them.
 _WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3")

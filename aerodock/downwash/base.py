@@ -1,8 +1,21 @@
 """The downwash field protocol: a public extension point (documented in the README).
 
-A field is any object with ``reset`` and ``acceleration``; it is loaded from the config by import
-path (``[downwash] field = "package.module:factory"``) with ``[downwash.params]`` passed to the
-factory as keyword arguments. See ``aerodock/downwash/template.py`` for a minimal example.
+A field is any object with ``reset`` and ``acceleration`` (:class:`DownwashField`); it is loaded
+from the config by import path (``[downwash] field = "package.module:factory"``) with
+``[downwash.params]`` passed to the factory as keyword arguments. See
+``aerodock/downwash/template.py`` for a minimal example.
+
+Three methods are optional; every command works without them:
+
+- ``mean_acceleration(leader, follower) -> (n, 3)`` (:class:`SupportsMean`): the turbulence-free
+  mean. Without it, whoever needs the mean estimates it (:mod:`aerodock.downwash.mean`).
+- ``wrench(leader, follower, rotor_offsets_body_m, dt) -> (force_n, torque_nm)``
+  (:class:`SupportsWrench`): force and torque sampled per rotor disk. Without it, the world
+  applies ``acceleration * mass`` at the centre of mass (:func:`aerodock.downwash.wrench.
+  follower_wrench`).
+- ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2[, dt][, bar_axis]) -> (n, 3)``
+  (:class:`SupportsBarForce`): the wake's force on the docking bar. Without it, the bar feels no
+  wake (:func:`aerodock.downwash.wrench.bar_wake_force_n`).
 """
 
 from __future__ import annotations
@@ -46,3 +59,36 @@ class DownwashField(Protocol):
 
     def acceleration(self, leader: BodyState, follower: BodyState, dt: float) -> np.ndarray:
         """(n, 3) acceleration in m/s² on the follower, world NED; advances time by ``dt``."""
+
+
+@runtime_checkable
+class SupportsMean(Protocol):
+    """Optional: the field's turbulence-free mean."""
+
+    def mean_acceleration(self, leader: BodyState, follower: BodyState) -> np.ndarray:
+        """(n, 3) mean acceleration in m/s² on the follower, world NED (no time advance)."""
+
+
+@runtime_checkable
+class SupportsWrench(Protocol):
+    """Optional: force and torque on the follower from the field sampled at its rotor disks."""
+
+    def wrench(self, leader: BodyState, follower: BodyState, rotor_offsets_body_m: np.ndarray,
+               dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(force_n, torque_nm)``: (n, 3) force in N, world NED, and (n, 3) torque in N·m in
+        the follower's body frame (FRD) about its centre of mass; ``rotor_offsets_body_m`` is
+        (k, 3) rotor-disk centres in the body frame. Advances time by ``dt`` exactly as
+        ``acceleration`` does (the world calls one of the two per physics step)."""
+
+
+@runtime_checkable
+class SupportsBarForce(Protocol):
+    """Optional: the wake's force on the hanging docking bar.
+
+    ``dt`` (the physics step, for a field with bar turbulence) and ``bar_axis`` ((n, 3) unit
+    vectors along the bar, NED) are passed only to implementations whose signature names them.
+    """
+
+    def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
+                    bar_area_m2: float) -> np.ndarray:
+        """(n, 3) force in N on the bar at ``bar_p_m`` moving at ``bar_v_mps``, world NED."""

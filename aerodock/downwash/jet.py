@@ -19,6 +19,10 @@ Physics (DESIGN.md, "Downwash field"):
   ``turb_corr_time_s``), multiplicative on the axial force (sd ``turb_vertical`` of the local mean)
   and additive in the plane (sd ``turb_lateral`` of the local mean axial force).
 
+The wake also acts where it is felt (``wrench``): on each rotor disk of the follower (giving a
+torque when the follower is off the wake's axis) and on the hanging bar (``bar_force_n``: drag of
+the bar's velocity relative to the turbulent wake air); see those methods.
+
 With the default parameters, directly below a hovering 0.7 kg leader (0.7 kg follower) the mean
 downward acceleration is about 4.4 m/s² at 0.36 m, 3.0 at 0.64 m and 1.5 at 1.35 m, the
 calibration of DESIGN.md (checked in ``tests/unit/test_downwash.py``).
@@ -47,8 +51,12 @@ class RoundJetField:
         planar_ratio: peak planar force as a fraction of the centreline axial force.
         turb_vertical: axial turbulence sd as a fraction of the local mean.
         turb_lateral: planar turbulence sd as a fraction of the local mean axial force.
-        turb_corr_time_s: turbulence correlation time.
+        turb_corr_time_s: turbulence correlation time (follower and bar).
         bar_drag_coeff: drag coefficient of the docking bar (cylinder, cross-flow).
+        bar_turb_vertical: sd of the bar's drag along the wake axis, as a fraction of its local
+            mean (DESIGN.md's vertical 20-25 %; default the follower's).
+        bar_turb_lateral: sd of the bar's drag across the wake axis, as a fraction of its local
+            mean axial drag (DESIGN.md's lateral 5-10 %; default the follower's).
         rotor_radius_m, n_rotors, air_density_kgpm3: vehicle and air constants (both vehicles).
     """
 
@@ -63,6 +71,8 @@ class RoundJetField:
         turb_lateral: float = 0.08,
         turb_corr_time_s: float = 0.08,
         bar_drag_coeff: float = 1.2,
+        bar_turb_vertical: float = 0.22,
+        bar_turb_lateral: float = 0.08,
         rotor_radius_m: float = 0.0635,
         n_rotors: int = 4,
         air_density_kgpm3: float = 1.225,
@@ -81,11 +91,15 @@ class RoundJetField:
         self.turb_lateral = turb_lateral
         self.turb_corr_time_s = turb_corr_time_s
         self.bar_drag_coeff = bar_drag_coeff
+        self.bar_turb_vertical = bar_turb_vertical
+        self.bar_turb_lateral = bar_turb_lateral
         self.disk_area_m2 = n_rotors * np.pi * rotor_radius_m**2
         self.air_density_kgpm3 = air_density_kgpm3
         self._noise = np.zeros((0, 3))
+        self._bar_noise = np.zeros((0, 3))
         self._rng = np.random.default_rng(0)
         self._ou: tuple[float, float, float] | None = None  # (dt, decay, innovation scale)
+        self._last_dt: float | None = None
         # The leader's part of the wake, computed by acceleration() and reused by the
         # bar_force_n() call of the same physics step (same leader object), then dropped.
         self._lead_key: BodyState | None = None
@@ -93,26 +107,57 @@ class RoundJetField:
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
-        """Start ``n`` trials; turbulence starts from its stationary distribution."""
+        """Start ``n`` trials; turbulence (follower's, then bar's) starts from its stationary
+        distribution, drawn from ``rng`` (per trial with a :class:`aerodock.rng.TrialRNG`)."""
         self._rng = rng
         self._noise = rng.standard_normal((n, 3))
+        self._bar_noise = rng.standard_normal((n, 3))
         self._lead_key = self._lead_wake = None
 
     def acceleration(self, leader: BodyState, follower: BodyState, dt: float) -> np.ndarray:
         """(n, 3) acceleration on the follower, m/s², NED; advances the turbulence by ``dt``."""
         if self._noise.shape[0] != leader.n:
             self.reset(leader.n, self._rng)
-        ou = self._ou
-        if ou is None or ou[0] != dt:
-            decay = np.exp(-dt / self.turb_corr_time_s)
-            ou = self._ou = (dt, decay, np.sqrt(1.0 - decay**2))
-        noise = self._rng.standard_normal(self._noise.shape)
-        noise *= ou[2]
-        noise += ou[1] * self._noise
-        self._noise = noise
+        noise = self._noise = self._ou_step(self._noise, dt)
+        self._last_dt = dt
         lead = self._leader_wake(leader)
         self._lead_key, self._lead_wake = leader, lead
         return self._accel(leader, follower.p, follower.v, follower.mass_kg, noise, lead)
+
+    def wrench(self, leader: BodyState, follower: BodyState, rotor_offsets_body_m: np.ndarray,
+               dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Force (n, 3), N, world NED, and torque (n, 3), N·m, in the follower's body frame about
+        its centre of mass, from the wake sampled at each rotor disk; advances the turbulence by
+        ``dt`` exactly as :meth:`acceleration` does (call one of them per physics step).
+
+        The total force is the calibrated one, ``acceleration * mass`` (same turbulence draw),
+        so force and acceleration agree exactly and DESIGN.md's calibration table holds for
+        both. It is shared among the rotor disks (``rotor_offsets_body_m`` (k, 3), FRD) in
+        proportion to the wake's dynamic pressure ``rho w_k^2 / 2`` at each disk centre: the
+        split that sampling each disk with its own area gives (a disk ingests the momentum flux
+        of the air it sits in), while the sum stays the whole-vehicle force the calibration
+        was measured as. Point samples of a narrow wake at the disks (0.135 m off the centre)
+        alone would give about 40 % of the calibrated force on the axis, because a real
+        follower's inflow draws wake air into all of its rotors. The force thus acts at the
+        disks' centre of pressure ``c = sum_k share_k r_k`` and the torque is
+        ``c x (R^T F)``: zero for a level follower on the wake's axis (equal shares) and, off
+        the axis, pushing the rotors nearer the axis down, tilting the follower towards the
+        axis (the paper's oscillatory behaviour near the wake's edge). Turbulence scales the
+        whole wrench (uncorrelated per-disk turbulence is not modelled).
+        """
+        accel = self.acceleration(leader, follower, dt)
+        force = accel * np.asarray(follower.mass_kg, dtype=float)[:, None]
+        offsets = np.asarray(rotor_offsets_body_m, dtype=float).reshape(-1, 3)
+        centre = self._pressure_centre_body(leader, follower, offsets, self._lead_wake)
+        R = follower.R  # noqa: N806
+        # R^T F, column by column (rounding independent of the batch size, like dot_rows)
+        force_body = (R[:, 0, :] * force[:, 0:1] + R[:, 1, :] * force[:, 1:2]
+                      + R[:, 2, :] * force[:, 2:3])
+        torque = np.empty_like(force_body)  # centre x force_body, written out (np.cross is slow)
+        torque[:, 0] = centre[:, 1] * force_body[:, 2] - centre[:, 2] * force_body[:, 1]
+        torque[:, 1] = centre[:, 2] * force_body[:, 0] - centre[:, 0] * force_body[:, 2]
+        torque[:, 2] = centre[:, 0] * force_body[:, 1] - centre[:, 1] * force_body[:, 0]
+        return force, torque
 
     # -- extras used by the simulator, the oracle and `field probe` ---------------------------
     def mean_acceleration(self, leader: BodyState, follower: BodyState) -> np.ndarray:
@@ -121,8 +166,54 @@ class RoundJetField:
 
     def wind_mps(self, leader: BodyState, points_m: np.ndarray) -> np.ndarray:
         """(n, 3) mean wake air velocity at ``points_m`` (n, 3), NED (used for the bar's drag)."""
-        axis, _, speed, _, _ = self._wake(leader, points_m)
+        axis, _, speed, _, _ = self._wake(leader.p, points_m, self._leader_wake(leader))
         return axis * speed[:, None]
+
+    def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
+                    bar_area_m2: float, dt: float | None = None,
+                    bar_axis: np.ndarray | None = None) -> np.ndarray:
+        """(n, 3) drag force of the turbulent wake air on the docking bar, N, NED.
+
+        Quadratic drag of the bar's velocity relative to the local air,
+        ``F = rho C_d A |u_rel| u_rel / 2`` with ``u_rel = w (1 + a n_v) e_axis
+        + w b (n_1 e_1 + n_2 e_2) - v_bar``, where ``w`` is the local mean wake speed, ``n_*``
+        the bar's own Ornstein-Uhlenbeck turbulence (correlation time ``turb_corr_time_s``,
+        drawn per trial from the ``rng`` given to :meth:`reset`), ``e_1, e_2`` the leader's body
+        x and y, ``a = bar_turb_vertical / 2`` and ``b = bar_turb_lateral``: so the drag's sd is
+        ``bar_turb_vertical`` of its mean along the axis and ``bar_turb_lateral`` of it across
+        (drag grows with the square of the speed). Outside the wake the bar feels the drag of
+        its own motion through still air.
+
+        Args:
+            leader: the leader's state.
+            bar_p_m, bar_v_mps: (n, 3) bar centre position, m, and velocity, m/s.
+            bar_area_m2: projected area (length x diameter), m².
+            dt: physics step, s; the bar's turbulence advances by it. ``None`` (a world that
+                predates it) advances by the step of the last :meth:`acceleration` call.
+            bar_axis: (n, 3) unit vectors along the bar, NED: only the flow across the
+                cylinder makes drag (cross-flow principle). ``None``: all of ``u_rel`` counts.
+        """
+        lead = self._lead_wake if leader is self._lead_key else self._leader_wake(leader)
+        self._lead_key = self._lead_wake = None
+        axis, _, speed, _, _ = self._wake(leader.p, bar_p_m, lead)
+        n = axis.shape[0]
+        if self._bar_noise.shape[0] != n:
+            self._bar_noise = self._rng.standard_normal((n, 3))
+        step = dt if dt is not None else self._last_dt
+        if step is not None and step > 0:
+            self._bar_noise = self._ou_step(self._bar_noise, step)
+        noise = self._bar_noise
+        R = leader.R  # noqa: N806
+        along = 1.0 + 0.5 * self.bar_turb_vertical * noise[:, 0]
+        rel = axis * (speed * along)[:, None]
+        lateral = self.bar_turb_lateral * speed
+        rel += (lateral * noise[:, 1])[:, None] * R[:, :, 0]
+        rel += (lateral * noise[:, 2])[:, None] * R[:, :, 1]
+        rel -= bar_v_mps
+        if bar_axis is not None:
+            rel -= dot_rows(rel, bar_axis)[:, None] * bar_axis
+        drag = 0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2
+        return (drag * norm_rows(rel))[:, None] * rel
 
     # -- internals -----------------------------------------------------------------------------
     def _leader_wake(self, leader: BodyState) -> tuple:
@@ -134,10 +225,11 @@ class RoundJetField:
         v_perp = lv - dot_rows(lv, axis)[:, None] * axis
         return axis, w0, np.maximum(w0, 1e-6), v_perp
 
-    def _wake(self, leader: BodyState, points_m: np.ndarray, lead: tuple | None = None):
-        """Axis, radial vector, local wake speed, centreline speed and force half-radius."""
-        axis, w0, w0_min, v_perp = self._leader_wake(leader) if lead is None else lead
-        rel = points_m - leader.p
+    def _wake(self, leader_p_m: np.ndarray, points_m: np.ndarray, lead: tuple):
+        """Axis, radial vector, local wake speed, distance from the wake's centre and force
+        half-radius at ``points_m``, for leaders at ``leader_p_m`` with wake parts ``lead``."""
+        axis, w0, w0_min, v_perp = lead
+        rel = points_m - leader_p_m
         depth = dot_rows(rel, axis)
         s = np.maximum(depth, 0.0)
         lc = self.core_length_m
@@ -162,7 +254,8 @@ class RoundJetField:
         return axis, radial, speed, r, half_width / np.sqrt(2.0)
 
     def _accel(self, leader, p_m, v_mps, mass_kg, noise, lead=None) -> np.ndarray:
-        axis, radial, speed, r, force_half_radius = self._wake(leader, p_m, lead)
+        lead = self._leader_wake(leader) if lead is None else lead
+        axis, radial, speed, r, force_half_radius = self._wake(leader.p, p_m, lead)
         w_rel = speed - dot_rows(v_mps, axis) * (speed > 0)
         k = self.ingest_coeff * self.air_density_kgpm3 * self.disk_area_m2 / mass_kg
         axial = k * w_rel
@@ -183,13 +276,78 @@ class RoundJetField:
         out += planar[:, None] * unit_radial
         return out
 
-    def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
-                    bar_area_m2: float) -> np.ndarray:
-        """(n, 3) mean drag force of the wake on the docking bar, N, NED."""
-        lead = self._lead_wake if leader is self._lead_key else None
-        self._lead_key = self._lead_wake = None
-        axis, _, speed, _, _ = self._wake(leader, bar_p_m, lead)
-        w_rel = speed - dot_rows(bar_v_mps, axis) * (speed > 0)
-        drag = 0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2
-        return (drag * w_rel * np.abs(w_rel))[:, None] * axis
+    def _ou_step(self, state: np.ndarray, dt: float) -> np.ndarray:
+        """One Ornstein-Uhlenbeck step of a unit-variance state (correlation time
+        ``turb_corr_time_s``), with fresh draws from the trial's random source."""
+        ou = self._ou
+        if ou is None or ou[0] != dt:
+            decay = np.exp(-dt / self.turb_corr_time_s)
+            ou = self._ou = (dt, decay, np.sqrt(1.0 - decay**2))
+        noise = self._rng.standard_normal(state.shape)
+        noise *= ou[2]
+        noise += ou[1] * state
+        return noise
 
+    def _pressure_centre_body(self, leader: BodyState, follower: BodyState,
+                              offsets_body_m: np.ndarray, lead: tuple | None) -> np.ndarray:
+        """(n, 3) body-frame centre of the rotor disks weighted by the wake's dynamic pressure
+        at each disk centre (equal weights where no disk is in the wake).
+
+        The wake of :meth:`_wake` evaluated at the (n, k) disk centres at once; the factor
+        ``w0^2`` common to a trial's disks cancels in the weights and is left out. Elementwise
+        arithmetic only, so each trial's rounding is independent of the batch size.
+        """
+        axis, _, w0_min, v_perp = self._leader_wake(leader) if lead is None else lead
+        R = follower.R  # noqa: N806
+        ox, oy, oz = offsets_body_m[:, 0], offsets_body_m[:, 1], offsets_body_m[:, 2]
+        d = follower.p - leader.p
+        rel = []  # (n, k) per component: disk centres from the leader
+        for i in range(3):
+            c = R[:, i, 0:1] * ox
+            c += R[:, i, 1:2] * oy
+            if oz.any():
+                c += R[:, i, 2:3] * oz
+            c += d[:, i:i + 1]
+            rel.append(c)
+        depth = rel[0] * axis[:, 0:1]
+        depth += rel[1] * axis[:, 1:2]
+        depth += rel[2] * axis[:, 2:3]
+        s = np.maximum(depth, 0.0)
+        lc = self.core_length_m
+        tau = s * s
+        tau *= 0.5 / lc
+        tau += s
+        tau /= w0_min[:, None]
+        r2 = np.zeros_like(depth)
+        for i in range(3):
+            radial = rel[i]
+            radial -= depth * axis[:, i:i + 1]
+            radial += v_perp[:, i:i + 1] * tau
+            radial *= radial
+            r2 += radial
+        half_width = self.spread_rate * s
+        half_width += self.half_width0_m
+        r2 /= half_width * half_width
+        r2 *= -2.0 * _LN2
+        pressure = np.exp(r2, out=r2)
+        centre_speed = s + lc
+        np.divide(lc, centre_speed, out=centre_speed)
+        pressure *= centre_speed * centre_speed
+        above = depth < 0.0
+        if above.any():  # nothing above the rotors (as in _wake)
+            pressure *= np.where(above, np.exp(-2.0 * (depth / 0.05) ** 2), 1.0)
+        k = offsets_body_m.shape[0]
+        total = pressure[:, 0].copy()
+        for j in range(1, k):
+            total += pressure[:, j]
+        inside = total > 1e-300
+        if inside.all():
+            pressure /= total[:, None]
+            share = pressure
+        else:
+            share = np.where(inside[:, None], pressure / np.where(inside, total, 1.0)[:, None],
+                             1.0 / k)
+        centre = share[:, 0:1] * offsets_body_m[0]
+        for j in range(1, k):
+            centre += share[:, j:j + 1] * offsets_body_m[j]
+        return centre

@@ -1,4 +1,6 @@
-"""Inspecting a field: mean and spread at a point, and a vertical slice through the wake."""
+"""Inspecting a field: mean and spread at a point (on the follower, or on the docking bar), and a
+vertical slice through the wake. A field without ``mean_acceleration`` is shown through
+:func:`aerodock.downwash.mean.mean_acceleration_fn` (an estimate, said so in the output)."""
 
 from __future__ import annotations
 
@@ -8,6 +10,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash.base import BodyState, DownwashField
+from aerodock.downwash.mean import mean_acceleration_fn, mean_source
+from aerodock.downwash.wrench import bar_wake_force_n
 
 
 def probe_bodies(separation_m: np.ndarray, radial_m: np.ndarray, leader_speed_mps: float,
@@ -38,12 +42,15 @@ def probe_field(field: DownwashField, separation_m: float, radial_m: float,
     """Mean and standard deviation of the acceleration (m/s², NED) a field exerts at a point.
 
     Draws ``samples`` consecutive values of the field at the physics step ``dt_s`` (so turbulence
-    is time-correlated, as in flight) and also reports the field's noise-free mean if it has one.
+    is time-correlated, as in flight) and also reports the field's noise-free mean
+    (``field_mean_mps2``): its own ``mean_acceleration`` or, without one, an estimate on a copy
+    of the field (``field_mean_source`` says which).
     """
     if samples < 2:
         raise ValueError(f"--samples must be >= 2, got {samples}")
     leader, follower = probe_bodies(separation_m, radial_m, leader_speed_mps, mass_kg,
                                     gravity_mps2, azimuth_rad)
+    mean_fn = mean_acceleration_fn(field, samples=samples, dt_s=dt_s)  # copies it before reset
     field.reset(1, rng)
     draws = np.empty((samples, 3))
     for k in range(samples):
@@ -53,10 +60,48 @@ def probe_field(field: DownwashField, separation_m: float, radial_m: float,
         "samples": samples, "frame": "NED", "unit": "m/s^2",
         "mean_mps2": draws.mean(0).tolist(), "sd_mps2": draws.std(0, ddof=1).tolist(),
     }
-    mean_fn = getattr(field, "mean_acceleration", None)
-    if mean_fn is not None:
-        out["field_mean_mps2"] = mean_fn(leader, follower)[0].tolist()
+    out["field_mean_mps2"] = np.asarray(mean_fn(leader, follower))[0].tolist()
+    out["field_mean_source"] = mean_source(mean_fn)
     return out
+
+
+def probe_bar(field: DownwashField, separation_m: float, radial_m: float, samples: int,
+              dt_s: float, rng: np.random.Generator, bar_area_m2: float, mass_kg: float,
+              gravity_mps2: float, bar_yaw_rad: float = 0.0) -> dict[str, Any] | None:
+    """Mean and sd of the wake's force on a bar held still at a point below a hovering leader.
+
+    Draws ``samples`` consecutive values at the physics step ``dt_s``, as the world calls the
+    field (one ``acceleration`` for the follower, then ``bar_force_n``, per step; the follower
+    is placed 1 m to the side, out of the way). The bar lies horizontal at ``bar_yaw_rad``;
+    ``lateral_sd_over_vertical_mean`` is the sd of the horizontal force across the bar (the
+    direction that pushes it through a gripper's gate; along its length a cylinder feels no
+    drag) over the mean vertical drag.
+    Returns None if the field has no ``bar_force_n``.
+    """
+    if getattr(field, "bar_force_n", None) is None:
+        return None
+    if samples < 2:
+        raise ValueError(f"--samples must be >= 2, got {samples}")
+    leader, follower = probe_bodies(1.0, 1.0, 0.0, mass_kg, gravity_mps2)
+    bar_p = np.array([[radial_m, 0.0, separation_m]])
+    still = np.zeros((1, 3))
+    axis = np.array([[np.cos(bar_yaw_rad), np.sin(bar_yaw_rad), 0.0]])
+    field.reset(1, rng)
+    draws = np.empty((samples, 3))
+    for k in range(samples):
+        field.acceleration(leader, follower, dt_s)
+        draws[k] = bar_wake_force_n(field, leader, bar_p, still, bar_area_m2, dt_s, axis)[0]
+    mean, sd = draws.mean(0), draws.std(0, ddof=1)
+    vertical = abs(float(mean[2]))
+    across = draws[:, 1] * np.cos(bar_yaw_rad) - draws[:, 0] * np.sin(bar_yaw_rad)
+    lateral_sd = float(across.std(ddof=1))
+    return {
+        "separation_m": separation_m, "radial_m": radial_m, "samples": samples, "frame": "NED",
+        "unit": "N", "bar_area_m2": bar_area_m2, "bar_yaw_rad": bar_yaw_rad,
+        "mean_n": mean.tolist(), "sd_n": sd.tolist(),
+        "vertical_sd_over_mean": float(sd[2]) / vertical if vertical > 0 else None,
+        "lateral_sd_over_vertical_mean": lateral_sd / vertical if vertical > 0 else None,
+    }
 
 
 def half_magnitude_radius_m(mean_fn, separation_m: float, mass_kg: float, gravity_mps2: float,

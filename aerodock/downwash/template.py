@@ -9,8 +9,11 @@ Use it from a config file::
     radius_m = 0.15
 
 A field implements ``reset(n, rng)`` and ``acceleration(leader, follower, dt) -> (n, 3)``, m/s²,
-world NED (``aerodock.downwash.base.DownwashField``). ``mean_acceleration`` is optional: it lets
-the oracle compensator and ``aerodock field probe`` separate the mean from turbulence.
+world NED (``aerodock.downwash.base.DownwashField``). Optional (``aerodock.downwash.base``):
+``mean_acceleration`` (exact mean for the oracle, ``field probe``/``plot`` and the error floor;
+otherwise estimated by averaging ``acceleration``), ``wrench`` (force and torque sampled per
+rotor disk; otherwise ``acceleration * mass`` at the centre of mass) and ``bar_force_n`` (the
+wake on the docking bar; otherwise none).
 """
 
 from __future__ import annotations

@@ -222,12 +222,15 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
               "ratio to floor |", "|---|---|---|---|---|"]
     for region in ("all", "interaction"):
         d = ho[region]
-        lines.append(f"| {region} | {d['model']['rmse_mps2']['overall']:.3f} | "
-                     f"{d['zero']['rmse_mps2']['overall']:.3f} | "
-                     f"{d['error_floor']['rmse_mps2']['overall']:.3f} | "
-                     f"{lrn['rmse_ratio_to_floor'][region]:.2f} |")
+        floor = d.get("error_floor")
+        ratio = lrn["rmse_ratio_to_floor"][region]
+        lines.append(f"| {region} | {_fmt(d['model']['rmse_mps2']['overall'])} | "
+                     f"{_fmt(d['zero']['rmse_mps2']['overall'])} | "
+                     f"{_fmt(floor['rmse_mps2']['overall']) if floor else 'unavailable'} | "
+                     f"{_fmt(ratio, 2) if ratio is not None else 'unavailable'} |")
     lines += ["", "The error floor is the RMSE of the simulator's own mean field against the same "
-              "labels (turbulence and sensor noise no model can predict).", ""]
+              "labels (turbulence and sensor noise no model can predict).",
+              f"Mean field used for the floor: {lrn.get('error_floor_source', 'the field')}.", ""]
     se = r.get("sample_efficiency")
     if se:
         lines += _se_table(se, "Sample efficiency, simulated (held-out RMSE, m/s², mean ± sd "
@@ -268,14 +271,15 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
         d = h[key]
         lines.append(f"| {key.replace('_', ' ')} | {d['docked']}/{d['trials']} = "
                      f"{_pct(d['success_rate'], d['success_wilson95'])} | "
-                     f"{d['terminal_err_down_median_m']:.3f} m | "
-                     f"{d['terminal_err_3d_median_m']:.3f} m | {d['slip_throughs']} | "
+                     f"{_fmt(d['terminal_err_down_median_m'])} m | "
+                     f"{_fmt(d['terminal_err_3d_median_m'])} m | {d['slip_throughs']} | "
                      f"{d['aborts']} |")
     lines += ["", f"Paper: {PAPER_HOVER['docked']}/{PAPER_HOVER['trials']} docks with the model, "
               f"terminal tracking error < {PAPER_HOVER['terminal_error_m']} m, a "
               f"{PAPER_HOVER['reduction_x']}x reduction. Here: error reduction "
-              f"{h['terminal_error_reduction_x']:.1f}x (median vertical error over the final "
-              "0.5 s of the approach).", ""]
+              f"{_fmt(h['terminal_error_reduction_x'], 1)}x (median vertical error over the "
+              "final 0.5 s of the approach). The oracle flies the simulator's mean field: "
+              f"{h.get('oracle_mean_source', 'the field')}.", ""]
     # Moving
     mv = r["moving_leader"]
     lines += ["## Leader in motion (0.25 m/s, meet at 6 s, hold 5 s)", "",
