@@ -56,6 +56,9 @@ def dock(
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     predictor = _load_predictor(model, compensation)
+    from aerodock.learning.modelfile import model_vehicle_warnings
+    for note in model_vehicle_warnings(predictor, cfg):
+        typer.echo(f"warning: {note}", err=True)
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
                        leader_fixed=leader_fixed, compensation=compensation, seed=seed)
     with progress_bar() as bar:
