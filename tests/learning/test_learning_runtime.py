@@ -389,3 +389,49 @@ def test_onnx_export_matches_onnxruntime(tmp_path, kind):
         again = load_torch_model(model_dir)(torch.as_tensor(x, dtype=torch.float32),
                                             torch.as_tensor(rot, dtype=torch.float32))
     np.testing.assert_allclose(again.numpy(), pred.predict(x, rot), atol=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "mlp", "zero"])
+def test_onnx_float64_equals_numpy_and_carries_metadata(tmp_path, kind):
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import read_onnx_metadata
+    from aerodock.learning.modelfile import vehicles_from_flights
+
+    trained = _random_trained(kind, activation="silu" if kind == "so2-ext" else "tanh")
+    trained.info["data"] = {"vehicles": vehicles_from_flights(
+        [{"leader_mass_kg": 0.7, "follower_mass_kg": 0.5, "follower_n_rotors": 4}])}
+    model_dir = trained.save(tmp_path / kind)
+    pred = Predictor.load(model_dir)
+    path64 = export_onnx(model_dir, tmp_path / f"{kind}64.onnx", dtype="float64")
+    assert check_onnx(path64, pred, n=300) < 1e-10
+    meta = read_onnx_metadata(path64)
+    doc = json.loads((model_dir / "model.json").read_text())
+    assert meta["aerodock.kind"] == kind and meta["aerodock.units"] == "m/s^2 NED"
+    assert meta["aerodock.dtype"] == "float64"
+    assert json.loads(meta["aerodock.vehicles"]) == doc["vehicles"]
+    assert json.loads(meta["aerodock.vehicles"])["follower"]["mass_kg"] == 0.5
+    if kind != "zero":
+        assert meta["aerodock.weights_sha256"] == doc["weights"]["sha256"]
+    import onnxruntime as ort
+
+    sess = ort.InferenceSession(str(path64), providers=["CPUExecutionProvider"])
+    x, rot = _inputs(7, seed=4)
+    with pytest.raises(Exception, match="(?i)type"):  # a float64 file wants float64 inputs
+        sess.run(None, {"x": x.astype(np.float32), "leader_R": rot.astype(np.float32)})
+    (got,) = sess.run(None, {"x": x, "leader_R": rot})
+    np.testing.assert_allclose(got, pred.predict(x, rot), atol=1e-10)
+
+
+def test_onnx_export_needs_no_torch(tmp_path):
+    pytest.importorskip("onnx")
+    path = _random_trained("so2").save(tmp_path / "m")
+    code = (
+        "import sys\n"
+        "from aerodock.learning.export import export_onnx\n"
+        f"export_onnx({str(path)!r}, {str(tmp_path / 'm.onnx')!r})\n"
+        "assert 'torch' not in sys.modules, 'torch was imported'\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "m.onnx").stat().st_size > 1000
