@@ -188,4 +188,4 @@ def test_not_a_ulog_file(tmp_path: Path) -> None:
 def test_no_hover_thrust(tmp_path: Path) -> None:
     t = 10.0 + np.arange(100) * 0.01
     path = write_ulog(tmp_path / "solo.ulg", ulog_topics(t, synthetic_flight(t)))
-    _expect([path], path, "no hover thrust", single=True)
+    _expect([path], path, "no plausible hover thrust", single=True)
