@@ -450,7 +450,10 @@ class CsvTable:
 
 
 def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
-    """Read a comma-separated numeric table with one header line.
+    """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
+
+    Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
+    starting with ``#`` are comments.
 
     Args:
         path: The file.
@@ -461,21 +464,30 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
         IngestError: unreadable or empty file, no header, no data rows, rows with a different
             number of fields than the header (naming the line), or a field that is not a number.
     """
+    import csv
+
     where = str(path)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
     except FileNotFoundError:
         raise IngestError(where, "file not found") from None
     except OSError as err:
         raise IngestError(where, f"cannot read file ({err.strerror or err})") from None
     if not text.strip():
         raise IngestError(where, "empty file")
+
+    def fields_of(line: str, number: int) -> list[str]:
+        try:
+            return next(csv.reader([line], skipinitialspace=True))
+        except (csv.Error, StopIteration) as err:
+            raise IngestError(where, f"line {number}: not CSV ({err})") from None
+
     header: list[str] | None = None
     comments: list[str] = []
     rows: list[list[str]] = []
     line_numbers: list[int] = []
     for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
+        line = raw.strip().lstrip("\ufeff")
         if not line:
             continue
         if header is None:
@@ -485,12 +497,12 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
             if header_in_comment and not line.startswith("#"):
                 raise IngestError(where, "no header line: expected a first line starting with "
                                          "'#' that names the columns")
-            header = [c.strip() for c in line.lstrip("#").split(",")]
+            header = [c.strip() for c in fields_of(line.lstrip("#").strip(), number)]
             continue
         if line.startswith("#"):
             comments.append(line[1:].strip())
             continue
-        fields = line.split(",")
+        fields = fields_of(line, number)
         if len(fields) != len(header):
             raise IngestError(where, f"line {number} has {len(fields)} fields, the header has "
                                      f"{len(header)} (truncated or ragged file?)")
@@ -504,12 +516,12 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
         data = np.array(rows, dtype=float)
     except ValueError:
         for fields, number in zip(rows, line_numbers, strict=True):
-            for name, field in zip(header, fields, strict=True):
+            for name, value in zip(header, fields, strict=True):
                 try:
-                    float(field)
+                    float(value)
                 except ValueError:
                     raise IngestError(
-                        where, f"line {number}: column {name!r} holds {field.strip()!r}, "
+                        where, f"line {number}: column {name!r} holds {value.strip()!r}, "
                         f"not a number"
                     ) from None
         raise

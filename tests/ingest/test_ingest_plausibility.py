@@ -188,3 +188,25 @@ def test_ulog_accelerometer_in_g(tmp_path: Path) -> None:
 
     path = _follower(tmp_path, in_g)
     _one_line_error(lambda: _read_single(path), "vehicle_acceleration", "in g, not m/s^2")
+
+
+# -- CSV syntax ----------------------------------------------------------------------------
+
+def test_csv_quoted_header_and_byte_order_mark(tmp_path: Path) -> None:
+    log = _log(np.arange(300) * 0.01)
+    plain = write_csv(log, tmp_path / "plain.csv")
+    lines = plain.read_text().splitlines()
+    header = ",".join(f'"{name}"' for name in lines[1].split(","))
+    body = [",".join(f'"{v}"' if k % 3 == 0 else v for k, v in enumerate(line.split(",")))
+            for line in lines[2:]]
+    quoted = tmp_path / "quoted.csv"
+    quoted.write_bytes(b"\xef\xbb\xbf" + "\r\n".join([lines[0], header, *body]).encode() + b"\r\n")
+    back = read_csv(quoted)
+    want = read_csv(plain)
+    np.testing.assert_array_equal(back.follower_pos_m, want.follower_pos_m)
+    np.testing.assert_array_equal(back.t_s, want.t_s)
+    assert back.meta["leader_mass_kg"] == MASS_KG  # the meta comment after the BOM still counts
+    # a BOM before a header that starts the file (no comment line)
+    bare = tmp_path / "bare.csv"
+    bare.write_bytes(b"\xef\xbb\xbf" + "\n".join([header, *body]).encode())
+    assert read_csv(bare, mass_kg=MASS_KG).n_samples == 300
