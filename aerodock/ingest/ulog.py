@@ -321,10 +321,13 @@ def _warn_unless_multirotor(ulog: Any, datasets: dict[str, dict[str, np.ndarray]
     kind: str | None = None
     rotary: bool | None = None
     if status is not None and "vehicle_type" in status and len(status["vehicle_type"]):
-        code = int(np.asarray(status["vehicle_type"])[-1])
+        codes = np.asarray(status["vehicle_type"]).astype(int)
+        code = int(codes[-1])
         kind, rotary = _VEHICLE_TYPES.get(code, f"type {code}"), code == _ROTARY_WING_TYPE
         if "is_vtol" in status and np.asarray(status["is_vtol"]).any():
-            kind, rotary = "VTOL", False
+            share = float(np.mean(codes == _ROTARY_WING_TYPE))
+            kind = f"a VTOL, in multirotor mode in {100 * share:.0f}% of vehicle_status"
+            rotary = False
     elif status is not None and "is_rotary_wing" in status and len(status["is_rotary_wing"]):
         rotary = bool(np.asarray(status["is_rotary_wing"])[-1])
         kind = "rotary wing" if rotary else "fixed wing"
@@ -466,6 +469,7 @@ def _meta(follower: UlogTrack, name: str) -> dict[str, Any]:
         "thrust_model": follower.meta["thrust_model"],
         "obs_accel_source": follower.meta["obs_accel_source"],
         "landed_fraction": follower.meta["landed_fraction"],
+        "vehicle_type": follower.meta["vehicle_type"],
         "gravity_mps2": GRAVITY_MPS2,
     }
 

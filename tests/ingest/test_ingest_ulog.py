@@ -18,8 +18,13 @@ pytest.importorskip("pyulog")
 
 
 def test_real_sample_single(ulog_sample: Path) -> None:
-    with pytest.warns(IngestWarning, match="horizontal position valid in only 0%"):
+    with pytest.warns(IngestWarning) as caught:
         logs = read_logs("ulog", [ulog_sample], single=True, mass_kg=1.5)
+    notes = [str(w.message) for w in caught]
+    assert any("horizontal position valid in only 0%" in n for n in notes)
+    # the sample is a standard VTOL (MAV_TYPE 22) hovering as a multirotor: flagged
+    assert any("not a multirotor (a VTOL, in multirotor mode in 100% of" in n for n in notes)
+    assert logs[0].meta["vehicle_type"].startswith("a VTOL")
     assert len(logs) == 1
     log = logs[0]
     assert log.name == "sample_log_small"
