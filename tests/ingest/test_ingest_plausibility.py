@@ -210,3 +210,37 @@ def test_csv_quoted_header_and_byte_order_mark(tmp_path: Path) -> None:
     bare = tmp_path / "bare.csv"
     bare.write_bytes(b"\xef\xbb\xbf" + "\n".join([header, *body]).encode())
     assert read_csv(bare, mass_kg=MASS_KG).n_samples == 300
+
+
+def test_ulog_with_the_topic_layout_of_pyulogs_old_sample(tmp_path: Path) -> None:
+    """The layout of pyulog's test/sample.ulg (PX4 of 2017, per its sample_info.txt): no
+    vehicle_acceleration nor thrust vector, vehicle_local_position at 10 Hz without ax/ay/az,
+    vehicle_attitude and vehicle_rates_setpoint (scalar thrust) at 100 Hz, the accelerometer in
+    sensor_combined, vehicle_status.is_rotary_wing. (The binary file itself is not on PyPI.)"""
+    t100 = 10.0 + np.arange(1000) * 0.01
+    fl = synthetic_flight(t100)
+    full = ulog_topics(t100, fl)
+    lp = {k: v[::10] for k, v in full["vehicle_local_position"].items()
+          if k not in ("ax", "ay", "az")}
+    thrust = -full["vehicle_thrust_setpoint"]["xyz"][:, 2]
+    topics = {
+        "vehicle_local_position": lp,
+        "vehicle_attitude": full["vehicle_attitude"],
+        "vehicle_rates_setpoint": {"timestamp": full["vehicle_attitude"]["timestamp"],
+                                   "roll": np.zeros(1000), "pitch": np.zeros(1000),
+                                   "yaw": np.zeros(1000), "thrust": thrust},
+        "sensor_combined": {"timestamp": full["vehicle_acceleration"]["timestamp"],
+                            "accelerometer_m_s2": full["vehicle_acceleration"]["xyz"]},
+        "vehicle_status": {"timestamp": full["vehicle_attitude"]["timestamp"][::100],
+                           "is_rotary_wing": np.ones(10)},
+    }
+    path = write_ulog(tmp_path / "old.ulg", topics, {"MPC_THR_HOVER": 0.5})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IngestWarning)
+        log = _read_single(path)
+    assert log.meta["thrust_topic"] == "vehicle_rates_setpoint.thrust"
+    assert log.meta["obs_accel_source"] == "sensor_combined"
+    assert log.meta["vehicle_type"] == "rotary wing"
+    assert 95 <= log.n_samples <= 100  # the 10 Hz local position is the time base
+    label = log.follower_obs_accel_mps2 - log.follower_cmd_accel_mps2
+    np.testing.assert_allclose(label, np.tile(DISTURBANCE, (log.n_samples, 1)), atol=1e-4)
