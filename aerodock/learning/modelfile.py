@@ -377,7 +377,9 @@ def vehicle_mismatches(model_vehicles: Mapping[str, Any] | None,
     """One-line notes where a model's training vehicles differ from the configured ones.
 
     A mass or rotor radius more than :data:`VEHICLE_TOLERANCE` (relative) off, or another rotor
-    count, is noted; a parameter the model does not record is noted once as unknown.
+    count, is noted. A model that records none of them (saved before aerodock recorded them)
+    gets one note saying so; parameters some logs do not carry (simulated logs record masses
+    only) are compared where known.
     """
     model = normalise_vehicles(model_vehicles)
     config = normalise_vehicles(configured)
@@ -399,9 +401,10 @@ def vehicle_mismatches(model_vehicles: Mapping[str, Any] | None,
             if off:
                 shown = "/".join(f"{v:g}" for v in values)
                 notes.append(f"model trained with {role} {key} = {shown}, configured {want:g}")
-    if unknown:
-        notes.append("model does not record the training vehicles' " + ", ".join(unknown)
-                     + " (trained before aerodock recorded them, or on logs without them)")
+    known = sum(model[role][key] is not None for role in model for key in VEHICLE_KEYS)
+    if unknown and not known:
+        notes.append("model does not record the vehicles it was trained on (saved before "
+                     "aerodock recorded them, or trained on logs without masses)")
     return notes
 
 
