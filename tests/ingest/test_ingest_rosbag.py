@@ -342,7 +342,34 @@ def test_only_mapped_topics_are_read_with_progress(tmp_path: Path, ros: RosMessa
         for k in range(500):
             writer.write(junk, BAG_T0_NS + k * 10**6, b"\x00\x01\x00\x00garbage")
     calls: list[tuple[int, int]] = []
-    log = read_rosbag(bag, progress=lambda done, total: calls.append((done, total)))
+    log = read_rosbag(bag, mass_kg=0.7,
+                      progress=lambda done, total: calls.append((done, total)))
     assert log.n_samples > 100
     assert calls and calls[-1][0] == calls[-1][1] == 4 * 150
     assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_memory_grows_only_with_the_returned_arrays(tmp_path: Path, ros: RosMessages) -> None:
+    """Peak memory per extra sample stays within a small multiple of what the FlightLog holds
+    per sample (the intermediate float arrays of the conversion). Keeping the deserialised
+    message objects, as this reader once did, costs about 16x."""
+    import gc
+    import tracemalloc
+
+    def peak_and_size(n: int) -> tuple[int, int]:
+        bag = write_bag(tmp_path / f"b{n}", freyja_topics(ros, n=n), ros=ros)
+        read_rosbag(bag, mass_kg=0.7)  # warm caches (typestore, imports)
+        gc.collect()
+        tracemalloc.start()
+        log = read_rosbag(bag, mass_kg=0.7)
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        size = sum(np.asarray(getattr(log, f)).nbytes for f in (
+            "t_s", "leader_pos_m", "leader_vel_mps", "leader_quat", "follower_pos_m",
+            "follower_vel_mps", "follower_quat", "follower_cmd_accel_mps2", "follower_thrust_n",
+            "follower_obs_accel_mps2")) + sum(v.nbytes for v in log.extra.values())
+        return peak, size
+
+    small, large = peak_and_size(500), peak_and_size(2000)
+    ratio = (large[0] - small[0]) / (large[1] - small[1])
+    assert ratio < 12.0, f"peak memory grows {ratio:.1f}x as fast as the returned arrays"
