@@ -63,7 +63,10 @@ def dock(
         fail(f"--trials must be >= 1, got {trials}")
     predictor = _load_predictor(model, compensation)
     from aerodock.faults import load_faults
+    from aerodock.learning.modelfile import model_vehicle_warnings
 
+    for note in model_vehicle_warnings(predictor, cfg):
+        typer.echo(f"warning: {note}", err=True)
     injected = tuple(load_faults(faults)) if faults is not None else ()
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
                        leader_fixed=leader_fixed, compensation=compensation, seed=seed,
@@ -157,12 +160,14 @@ def _register_subpackages() -> None:
     from aerodock.bench import bench_command
     from aerodock.ingest.command import ingest_command
     from aerodock.learning.commands import evaluate_command, export_command, train_command
+    from aerodock.node.command import node_command
 
     app.command("bench")(bench_command)
     app.command("ingest")(ingest_command)
     app.command("train")(train_command)
     app.command("evaluate")(evaluate_command)
     app.command("export")(export_command)
+    app.command("node")(node_command)
 
 
 _register_subpackages()

@@ -35,7 +35,7 @@ from aerodock.gripper import GateState
 from aerodock.planning.docking import DockGeometry, docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
 from aerodock.platform import anchor_point, platform_segments, rotor_strike
-from aerodock.recorder import FlightRecorder
+from aerodock.recorder import FlightRecorder, vehicle_meta
 from aerodock.rng import TrialRNG
 from aerodock.settle import settle
 from aerodock.sim import Observation, World
@@ -482,6 +482,7 @@ def run_campaign(
             "name": f"dock-seed{spec.seed}-trial{spec.first_trial + i:04d}",
             "source": "aerodock-sim", "frame": "NED", "label_basis": "command",
             "leader_mass_kg": mass, "follower_mass_kg": mass,
+            **vehicle_meta(cfg),
             "compensation": Compensation(spec.compensation).value,
             "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
             "seed": spec.seed, "trial": spec.first_trial + i,

@@ -87,7 +87,11 @@ def _per_file(read_one: Callable[..., FlightLog]) -> Callable[..., list[FlightLo
                  progress: Callable[[int, int], None] | None = None,
                  **options: Any) -> list[FlightLog]:
         logs = []
+        within = "progress" in inspect.signature(read_one).parameters
         for i, path in enumerate(paths):
+            if progress and within:  # finer steps inside a file (rosbag: messages read)
+                options["progress"] = (lambda done, total, i=i: progress(
+                    i + done / max(total, 1), len(paths)))
             logs.append(read_one(path, **options))
             if progress:
                 progress(i + 1, len(paths))

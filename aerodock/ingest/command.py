@@ -81,7 +81,8 @@ def ingest_command(
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", IngestWarning)
             files = expand_paths(fmt.value, paths)
-            if len(files) > 1 and err.is_terminal:
+            # a bag reports progress per message, so one bag gets a bar too
+            if err.is_terminal and (len(files) > 1 or fmt.value == "rosbag"):
                 with Progress(TextColumn("reading logs"), BarColumn(), MofNCompleteColumn(),
                               TimeElapsedColumn(), console=err, transient=True) as bar:
                     task = bar.add_task("ingest", total=len(files))

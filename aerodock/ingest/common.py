@@ -28,9 +28,16 @@ IDENTITY = np.eye(3)
 TIME_UNITS: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _UNIT_LABEL = {"s": "seconds", "ms": "milliseconds", "us": "microseconds", "ns": "nanoseconds"}
 
-# A flight log's sample spacing, seconds: between 10 kHz and 1 Hz.
+# A flight log's sample spacing, seconds: between 10 kHz and 5 Hz (a slower log cannot show the
+# downwash, whose turbulence decorrelates in about 0.1 s; a 1 kHz log with its time in ms would
+# otherwise pass as 1 Hz).
 MIN_PLAUSIBLE_DT_S = 1e-4
-MAX_PLAUSIBLE_DT_S = 1.0
+MAX_PLAUSIBLE_DT_S = 0.2
+
+# Plausibility limits of multirotor flight data (see check_kinematics and friends).
+MAX_PLAUSIBLE_SPEED_MPS = 30.0
+MAX_PLAUSIBLE_POSITION_M = 10_000.0
+MOVING_SPEED_MPS = 0.05
 
 
 # --------------------------------------------------------------------------------------------
@@ -141,7 +148,7 @@ def detect_time_unit(t_raw: np.ndarray, where: str, *, column: str = "time",
 def check_time_unit(t_raw: np.ndarray, unit: str, where: str, *, column: str = "time") -> None:
     """Raise if stamps declared in ``unit`` give an implausible sample rate (unit mix-up).
 
-    A flight log is sampled between 1 Hz and 10 kHz. Stamps 1000 times too coarse or too fine
+    A flight log is sampled between 5 Hz and 10 kHz. Stamps 1000 times too coarse or too fine
     (milliseconds written where microseconds are expected, ...) fall outside that range, and the
     message names the unit that would fit.
 
@@ -157,7 +164,7 @@ def check_time_unit(t_raw: np.ndarray, unit: str, where: str, *, column: str = "
     guess = f"looks like {_UNIT_LABEL[fits[0]]}" if fits else "has an implausible spacing"
     raise IngestError(
         where, f"time column {column!r} {guess}, expected {_UNIT_LABEL[unit]} (median spacing "
-        f"{med:.6g} {unit} = {1.0 / dt_s:.3g} Hz; a flight log is sampled at 1 Hz-10 kHz)"
+        f"{med:.6g} {unit} = {1.0 / dt_s:.3g} Hz; a flight log is sampled at 5 Hz-10 kHz)"
     )
 
 
@@ -170,6 +177,106 @@ def check_mass(mass_kg: float, where: str, what: str = "mass") -> float:
     if not np.isfinite(mass) or mass <= 0:
         raise IngestError(where, f"{what} must be a positive number of kg, got {mass_kg!r}")
     return mass
+
+
+# --------------------------------------------------------------------------------------------
+# Plausibility: data that reads fine but means something else (units, axes, orders)
+# --------------------------------------------------------------------------------------------
+
+
+def check_kinematics(t_s: np.ndarray, pos_m: np.ndarray, vel_mps: np.ndarray | None,
+                     where: str, what: str) -> None:
+    """Raise when positions, velocities and time do not fit together as SI flight data.
+
+    Checks: positions within 10 km; speeds (given, and from differentiated positions) below
+    30 m/s; and, while the vehicle moves, the given velocity about equal to d/dt of the position
+    (a factor near 1000 means positions in mm, or time in ms read as s).
+
+    Raises:
+        IngestError: ``"FILE: follower speed from positions is 520 m/s: positions in mm?"``.
+    """
+    pos = np.asarray(pos_m, dtype=float)
+    t = np.asarray(t_s, dtype=float)
+    if pos.shape[0] < 3:
+        return
+    far = float(np.max(np.abs(pos)))
+    if far > MAX_PLAUSIBLE_POSITION_M:
+        raise IngestError(where, f"{what} position reaches {far:.3g} m: not metres (mm?) "
+                                 "or not a local frame")
+    dpdt = np.gradient(pos, t, axis=0)
+    speed_from_pos = np.linalg.norm(dpdt, axis=1)
+    p99 = float(np.percentile(speed_from_pos, 99))
+    if vel_mps is None:
+        if p99 > MAX_PLAUSIBLE_SPEED_MPS:
+            raise IngestError(where, f"{what} speed from positions is {p99:.3g} m/s (99th "
+                                     "percentile): positions in mm, or time not in s?")
+        return
+    vel = np.asarray(vel_mps, dtype=float)
+    speed = np.linalg.norm(vel, axis=1)
+    moving = (speed > MOVING_SPEED_MPS) | (speed_from_pos > MOVING_SPEED_MPS)
+    if moving.sum() >= max(5, pos.shape[0] // 20):
+        ratio = float(np.median(speed_from_pos[moving]) / max(np.median(speed[moving]), 1e-12))
+        if ratio > 30.0:
+            raise IngestError(where, f"{what} positions change {ratio:.3g}x faster than its "
+                                     "velocity says: positions in mm (not m)?")
+        if ratio < 1.0 / 30.0:
+            raise IngestError(where, f"{what} positions change {1 / ratio:.3g}x slower than its "
+                                     "velocity says: time in ms read as s (or velocity in mm/s)?")
+    v99 = float(np.percentile(speed, 99))
+    if v99 > MAX_PLAUSIBLE_SPEED_MPS:
+        raise IngestError(where, f"{what} speed is {v99:.3g} m/s (99th percentile): velocity "
+                                 "not in m/s?")
+
+
+def check_upright(rot: np.ndarray, where: str, what: str, hint: str) -> None:
+    """Raise when the attitude is upside down (body z up) in most samples.
+
+    A multirotor's FRD body z points down (``R[2, 2] > 0`` in NED) unless it flips; an
+    attitude upside down in most samples is a mix-up (quaternion order, frame), named by
+    ``hint``.
+
+    Raises:
+        IngestError: ``"FILE: follower attitude is upside down in 100% of samples: {hint}"``.
+    """
+    r22 = np.asarray(rot, dtype=float)[:, 2, 2]
+    flipped = float(np.mean(r22 < 0.0))
+    if flipped > 0.5:
+        raise IngestError(where, f"{what} attitude is upside down in {100 * flipped:.0f}% of "
+                                 f"samples: {hint}")
+
+
+def check_specific_force(force: np.ndarray, where: str, what: str, *, down_axis: np.ndarray,
+                         frame: str) -> None:
+    """Raise when measured specific forces are not m/s² or point the wrong way.
+
+    An accelerometer on a flying or resting multirotor reads about g (9.81 m/s²) in magnitude
+    over a flight, pointing up. ``down_axis`` is the unit vector of the sensor's frame that
+    points down at rest (``(0, 0, 1)`` in FRD, ``(0, 0, -1)`` in a z-up frame).
+
+    Raises:
+        IngestError: ``"FILE: follower acceleration has median magnitude 1.0: in g, not
+            m/s^2?"``, or a hover acceleration of the wrong sign (axis already flipped).
+    """
+    f = np.asarray(force, dtype=float)
+    if f.shape[0] < 3:
+        return
+    magnitude = float(np.median(np.linalg.norm(f, axis=1)))
+    if 0.5 <= magnitude <= 2.0:
+        raise IngestError(where, f"{what} has median magnitude {magnitude:.3g}: in g, not "
+                                 "m/s^2? (an accelerometer reads about 9.81 m/s^2)")
+    if not 4.0 <= magnitude <= 25.0:
+        raise IngestError(where, f"{what} has median magnitude {magnitude:.3g} m/s^2; an "
+                                 "accelerometer reads about 9.81 (units?)")
+    along_down = float(np.median(f @ np.asarray(down_axis, dtype=float)))
+    if along_down > 0.5 * GRAVITY_MPS2:
+        raise IngestError(where, f"{what} points down ({along_down:+.3g} m/s^2 along the "
+                                 f"downward axis) where a hovering accelerometer reads up: "
+                                 f"{frame}")
+
+
+def check_hover_thrust(value: float) -> bool:
+    """True for a plausible normalised hover thrust (0.05-0.95; PX4 limits MPC_THR_HOVER so)."""
+    return bool(np.isfinite(value) and 0.05 <= value <= 0.95)
 
 
 # --------------------------------------------------------------------------------------------
@@ -343,7 +450,10 @@ class CsvTable:
 
 
 def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
-    """Read a comma-separated numeric table with one header line.
+    """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
+
+    Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
+    starting with ``#`` are comments.
 
     Args:
         path: The file.
@@ -354,21 +464,30 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
         IngestError: unreadable or empty file, no header, no data rows, rows with a different
             number of fields than the header (naming the line), or a field that is not a number.
     """
+    import csv
+
     where = str(path)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
     except FileNotFoundError:
         raise IngestError(where, "file not found") from None
     except OSError as err:
         raise IngestError(where, f"cannot read file ({err.strerror or err})") from None
     if not text.strip():
         raise IngestError(where, "empty file")
+
+    def fields_of(line: str, number: int) -> list[str]:
+        try:
+            return next(csv.reader([line], skipinitialspace=True))
+        except (csv.Error, StopIteration) as err:
+            raise IngestError(where, f"line {number}: not CSV ({err})") from None
+
     header: list[str] | None = None
     comments: list[str] = []
     rows: list[list[str]] = []
     line_numbers: list[int] = []
     for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
+        line = raw.strip().lstrip("\ufeff")
         if not line:
             continue
         if header is None:
@@ -378,12 +497,12 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
             if header_in_comment and not line.startswith("#"):
                 raise IngestError(where, "no header line: expected a first line starting with "
                                          "'#' that names the columns")
-            header = [c.strip() for c in line.lstrip("#").split(",")]
+            header = [c.strip() for c in fields_of(line.lstrip("#").strip(), number)]
             continue
         if line.startswith("#"):
             comments.append(line[1:].strip())
             continue
-        fields = line.split(",")
+        fields = fields_of(line, number)
         if len(fields) != len(header):
             raise IngestError(where, f"line {number} has {len(fields)} fields, the header has "
                                      f"{len(header)} (truncated or ragged file?)")
@@ -397,12 +516,12 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
         data = np.array(rows, dtype=float)
     except ValueError:
         for fields, number in zip(rows, line_numbers, strict=True):
-            for name, field in zip(header, fields, strict=True):
+            for name, value in zip(header, fields, strict=True):
                 try:
-                    float(field)
+                    float(value)
                 except ValueError:
                     raise IngestError(
-                        where, f"line {number}: column {name!r} holds {field.strip()!r}, "
+                        where, f"line {number}: column {name!r} holds {value.strip()!r}, "
                         f"not a number"
                     ) from None
         raise

@@ -48,9 +48,11 @@ from aerodock.ingest.common import (
     FLIP_YZ,
     GRAVITY_MPS2,
     check_finite,
+    check_kinematics,
     check_mass,
     check_time,
     check_time_unit,
+    check_upright,
     convert_rotations,
     convert_vectors,
     differentiate,
@@ -143,10 +145,15 @@ def read_csv(path: Path, *, frame: str | None = None, mass_kg: float | None = No
             i = int(np.argmax(np.abs(norm - 1.0) > 0.1))
             raise IngestError(where, f"{role}_qw..qz has norm {norm[i]:.3g} at line "
                                      f"{table.lines[i]}, not a unit quaternion")
+        rot = convert_rotations(world, quat_to_rotmat(quat), body)
+        check_upright(rot, where, role, f"{role}_qw..qz in x, y, z, w order (the schema is w, "
+                                        "x, y, z), or an ENU file read as NED (add frame: ENU)?")
         if frame_name != "NED":
-            quat = rotmat_to_quat(convert_rotations(world, quat_to_rotmat(quat), body))
+            quat = rotmat_to_quat(rot)
         states[role] = (convert_vectors(world, block(cols[0:3])),
                         convert_vectors(world, block(cols[3:6])), quat)
+        check_kinematics(table.column(TIME_COLUMN), states[role][0], states[role][1], where,
+                         role)
     t_s = table.column(TIME_COLUMN)
     cmd = convert_vectors(world, block(CMD_COLUMNS))
 

@@ -39,10 +39,13 @@ from aerodock.ingest.common import (
     TIME_UNITS,
     bracket_gap_s,
     check_finite,
+    check_kinematics,
     check_mass,
     check_pair_alignment,
+    check_specific_force,
     check_time,
     check_time_unit,
+    check_upright,
     convert_rotations,
     convert_vectors,
     detect_time_unit,
@@ -169,6 +172,13 @@ def read_vehicle_file(path: Path, *, time_unit: str = "auto") -> VehicleTrack:
 
     rot_zup = quat_to_rotmat(quat_xyzw[:, [3, 0, 1, 2]])
     rot_ned = convert_rotations(FLIP_YZ, rot_zup, FLIP_YZ)
+    t_s = t_raw * TIME_UNITS[unit]
+    check_specific_force(stack["accel"], where, "acceleration ax, ay, az",
+                         down_axis=np.array([0.0, 0.0, -1.0]),
+                         frame="is z already down? (Neural-Swarm files are z-up)")
+    check_kinematics(t_s, stack["pos"], stack["vel"], where, vehicle_id)
+    check_upright(rot_ned, where, vehicle_id, "quaternion in w, x, y, z order? (Neural-Swarm "
+                                              "files hold qx, qy, qz, qw)")
     # az includes gravity (+g at hover, z up): kinematic NED acceleration is C a_meas + g e3.
     accel_ned = convert_vectors(FLIP_YZ, stack["accel"]) + GRAVITY_MPS2 * E3
     extra: dict[str, np.ndarray] = {}
@@ -182,7 +192,7 @@ def read_vehicle_file(path: Path, *, time_unit: str = "auto") -> VehicleTrack:
         vehicle_id=vehicle_id,
         flight_id=flight_id,
         time_unit=unit,
-        t_s=t_raw * TIME_UNITS[unit],
+        t_s=t_s,
         pos_m=convert_vectors(FLIP_YZ, stack["pos"]),
         vel_mps=convert_vectors(FLIP_YZ, stack["vel"]),
         quat=rotmat_to_quat(rot_ned),

@@ -12,14 +12,24 @@ Topics (time stamps in µs, PX4 frames: NED world, FRD body):
 - ``vehicle_attitude``: ``q[0..3]``, ``[w, x, y, z]``, body FRD to NED.
 - Commanded thrust, normalised (``[0, 1]`` along ``-z_b``), the first topic present of
   ``vehicle_thrust_setpoint.xyz``, ``vehicle_rates_setpoint.thrust_body``,
-  ``vehicle_attitude_setpoint.thrust_body``. It becomes acceleration through the hover thrust
-  (``hover_thrust`` option, else ``hover_thrust_estimate.hover_thrust``, else the ``MPC_THR_HOVER``
-  parameter): ``|a| = g * thrust / hover``; or through ``max_thrust_n`` and the mass. The label
-  basis is ``"thrust"``: ``cmd = g e3 + R thrust_body g / hover``.
-- Observed acceleration: ``vehicle_acceleration.xyz`` (body specific force, ``R f + g e3``) or
-  else ``vehicle_local_position.ax, ay, az`` (NED, gravity removed).
+  ``vehicle_attitude_setpoint.thrust_body``; in logs of PX4 1.10 and older, which have no
+  thrust vector, the scalar ``thrust`` of ``vehicle_rates_setpoint`` or
+  ``vehicle_attitude_setpoint`` (along ``-z_b``). It becomes acceleration through the hover
+  thrust (``hover_thrust`` option, else ``hover_thrust_estimate.hover_thrust``, else the
+  ``MPC_THR_HOVER`` parameter): ``|a| = g * thrust / hover``; or through ``max_thrust_n`` and the
+  mass. The label basis is ``"thrust"``: ``cmd = g e3 + R thrust_body g / hover``. A hover thrust
+  outside 0.05-0.95 is implausible (an error for the option; estimate rows that are NaN or
+  implausible are dropped, with a warning).
+- Observed acceleration: ``vehicle_acceleration.xyz`` (body specific force, ``R f + g e3``),
+  else ``vehicle_local_position.ax, ay, az`` (NED, gravity removed), else (old logs)
+  ``sensor_combined.accelerometer_m_s2`` (body specific force).
 - ``vehicle_land_detected.landed``, if logged, gives ``extra["label_valid"]`` (False on the
   ground, where the support force, not the air, explains ``a_obs - cmd``).
+- ``vehicle_status`` (``vehicle_type``, or ``is_rotary_wing`` in old logs) or else the
+  ``MAV_TYPE`` parameter: a vehicle that is not a multirotor gives a warning.
+- Plausibility: an accelerometer whose median reading is about 1 (g, not m/s²) or points down,
+  an attitude upside down in most samples, or positions and velocities that disagree by a
+  factor near 1000 stop with an error naming the likely cause.
 
 Clocks: each log's stamps count from its own boot. Two logs are put on one clock through GPS
 time (``vehicle_gps_position``/``sensor_gps`` ``time_utc_usec``) when both have it, else their
@@ -45,10 +55,14 @@ from aerodock.ingest.common import (
     GRAVITY_MPS2,
     bracket_gap_s,
     check_finite,
+    check_hover_thrust,
+    check_kinematics,
     check_mass,
     check_pair_alignment,
+    check_specific_force,
     check_time,
     check_time_unit,
+    check_upright,
     resample_hold,
     resample_linear,
     resample_quat,
@@ -63,12 +77,21 @@ THRUST_TOPICS = (
     ("vehicle_thrust_setpoint", "xyz"),
     ("vehicle_rates_setpoint", "thrust_body"),
     ("vehicle_attitude_setpoint", "thrust_body"),
+    # PX4 <= 1.10: a scalar normalised thrust along -z_b
+    ("vehicle_rates_setpoint", "thrust"),
+    ("vehicle_attitude_setpoint", "thrust"),
 )
 TOPICS = (
     "vehicle_local_position", "vehicle_attitude", "vehicle_acceleration",
     "hover_thrust_estimate", "vehicle_gps_position", "sensor_gps", "vehicle_land_detected",
-    *(topic for topic, _ in THRUST_TOPICS),
+    "vehicle_status", "sensor_combined", *dict.fromkeys(topic for topic, _ in THRUST_TOPICS),
 )
+# vehicle_status.vehicle_type (PX4 >= 1.11) and MAV_TYPE values of multirotors
+_ROTARY_WING_TYPE = 1
+_VEHICLE_TYPES = {0: "unknown", 1: "rotary wing", 2: "fixed wing", 3: "rover", 4: "airship"}
+_MULTIROTOR_MAV_TYPES = {2, 3, 13, 14, 15}  # quad, coaxial, hexa, octo, tri
+_MAV_TYPES = {1: "fixed wing", 4: "helicopter", 10: "ground rover", 11: "surface boat",
+              12: "submarine", 19: "VTOL", 20: "VTOL", 21: "VTOL", 22: "VTOL"}
 
 
 @dataclass
@@ -155,19 +178,36 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     t_lp, lp = _topic(datasets, "vehicle_local_position", ["x", "y", "z", "vx", "vy", "vz"],
                       where)
     t_att, quat = _topic(datasets, "vehicle_attitude", [f"q[{k}]" for k in range(4)], where)
-    thrust_src = next(((t, f) for t, f in THRUST_TOPICS if t in datasets), None)
+    thrust_src = next(((t, f) for t, f in THRUST_TOPICS if t in datasets
+                       and (f"{f}[0]" in datasets[t] or f in datasets[t])), None)
     if thrust_src is None:
+        present = [t for t in dict.fromkeys(t for t, _ in THRUST_TOPICS) if t in datasets]
         raise IngestError(where, "missing topic: no thrust setpoint (none of "
-                                 f"{', '.join(t for t, _ in THRUST_TOPICS)})")
-    t_thr, thrust_body = _topic(datasets, thrust_src[0],
-                                [f"{thrust_src[1]}[{k}]" for k in range(3)], where)
+                                 f"{', '.join(dict.fromkeys(t for t, _ in THRUST_TOPICS))}"
+                                 + (f"; {', '.join(present)} without a thrust field)" if present
+                                    else ")"))
+    if f"{thrust_src[1]}[0]" in datasets[thrust_src[0]]:
+        t_thr, thrust_body = _topic(datasets, thrust_src[0],
+                                    [f"{thrust_src[1]}[{k}]" for k in range(3)], where)
+    else:  # PX4 <= 1.10: scalar thrust along -z_b
+        t_thr, scalar = _topic(datasets, thrust_src[0], [thrust_src[1]], where)
+        thrust_body = np.column_stack([np.zeros((len(t_thr), 2)), -scalar[:, 0]])
+    check_kinematics(t_lp, lp[:, :3], lp[:, 3:], where, "vehicle_local_position")
+    lp_fields = datasets["vehicle_local_position"]
     if "vehicle_acceleration" in datasets:
         t_acc, accel = _topic(datasets, "vehicle_acceleration", [f"xyz[{k}]" for k in range(3)],
                               where)
         accel_source = "vehicle_acceleration"
-    else:
+    elif "ax" in lp_fields or "sensor_combined" not in datasets:
         t_acc, accel = _topic(datasets, "vehicle_local_position", ["ax", "ay", "az"], where)
         accel_source = "vehicle_local_position.ax/ay/az"
+    else:  # old logs: the raw accelerometer (body FRD specific force)
+        t_acc, accel = _topic(datasets, "sensor_combined",
+                              [f"accelerometer_m_s2[{k}]" for k in range(3)], where)
+        accel_source = "sensor_combined"
+    if accel_source != "vehicle_local_position.ax/ay/az":
+        check_specific_force(accel, where, f"{accel_source} (specific force, body FRD)",
+                             down_axis=E3, frame="body z already up? (PX4's body frame is FRD)")
 
     start = max(t_lp[0], t_att[0], t_thr[0], t_acc[0])
     end = min(t_lp[-1], t_att[-1], t_thr[-1], t_acc[-1])
@@ -178,6 +218,9 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     t = t_lp[keep]
     q = resample_quat(t_att, quat, t)
     rot = quat_to_rotmat(q)
+    check_upright(rot, where, "vehicle_attitude", "q not in w, x, y, z order, or not FRD to "
+                                                  "NED?")
+    vehicle_type = _warn_unless_multirotor(ulog, datasets, path)
 
     if mass_kg is None:
         mass = DEFAULT_MASS_KG
@@ -202,7 +245,8 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     cmd = GRAVITY_MPS2 * E3 + np.einsum("tij,tj->ti", rot, thr) * accel_per_unit[:, None]
 
     acc = resample_linear(t_acc, accel, t)
-    obs = specific_force_to_accel(rot, acc) if accel_source == "vehicle_acceleration" else acc
+    obs = acc if accel_source == "vehicle_local_position.ax/ay/az" else \
+        specific_force_to_accel(rot, acc)
 
     utc_offset = _utc_offset_s(datasets)
     label_valid = None
@@ -221,6 +265,7 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
         "mass_assumed": mass_assumed,
         "clock_utc_offset_s": utc_offset,
         "px4_version": str(ulog.msg_info_dict.get("ver_sw_branch", "")),
+        "vehicle_type": vehicle_type,
         "landed_fraction": None if label_valid is None else float(np.mean(~label_valid)),
     }
     if "xy_valid" in datasets["vehicle_local_position"]:
@@ -241,19 +286,64 @@ def _hover_thrust(ulog: Any, datasets: dict[str, dict[str, np.ndarray]],
                   option: float | None, t: np.ndarray, where: str) -> tuple[Any, str]:
     if option is not None:
         value = float(option)
-        if not 0.0 < value < 1.0:
-            raise IngestError(where, f"hover thrust must be in (0, 1), got {option!r}")
+        if not check_hover_thrust(value):
+            raise IngestError(where, f"hover thrust {option!r} is implausible: expected the "
+                                     "normalised thrust that holds a hover, 0.05-0.95")
         return value, "option"
-    if "hover_thrust_estimate" in datasets and "hover_thrust" in datasets["hover_thrust_estimate"]:
-        t_h, hover = _topic(datasets, "hover_thrust_estimate", ["hover_thrust"], where)
-        hover = hover[:, 0]
-        if np.all((hover > 0) & (hover < 1)):
-            return resample_hold(t_h, hover, t), "hover_thrust_estimate"
+    est = datasets.get("hover_thrust_estimate")
+    if est is not None and "hover_thrust" in est and len(est.get("timestamp", [])):
+        stamps = np.asarray(est["timestamp"], dtype=float)
+        hover = np.asarray(est["hover_thrust"], dtype=float)
+        good = np.isfinite(stamps) & np.array([check_hover_thrust(h) for h in hover], bool)
+        if "valid" in est:
+            good &= np.asarray(est["valid"]) != 0
+        if good.sum() < len(hover):
+            warnings.warn(ingest_warning(
+                where, f"hover_thrust_estimate: {len(hover) - int(good.sum())} of {len(hover)} "
+                "rows are NaN, not valid or implausible (outside 0.05-0.95) and were dropped"),
+                stacklevel=3)
+        if good.any():
+            t_h, h = stamps[good], hover[good]
+            check_time(t_h, where, column="hover_thrust_estimate.timestamp")
+            return resample_hold(t_h * 1e-6, h, t), "hover_thrust_estimate"
     param = ulog.initial_parameters.get("MPC_THR_HOVER")
-    if param is not None and 0.0 < float(param) < 1.0:
+    if param is not None and check_hover_thrust(float(param)):
         return float(param), "MPC_THR_HOVER"
-    raise IngestError(where, "no hover thrust (no hover_thrust_estimate topic or MPC_THR_HOVER "
-                             "parameter): pass --hover-thrust or max_thrust_n")
+    raise IngestError(where, "no plausible hover thrust (no usable hover_thrust_estimate rows, "
+                             "MPC_THR_HOVER missing or outside 0.05-0.95): pass --hover-thrust "
+                             "or max_thrust_n")
+
+
+def _warn_unless_multirotor(ulog: Any, datasets: dict[str, dict[str, np.ndarray]],
+                            path: Path) -> str:
+    """The vehicle type (from vehicle_status or MAV_TYPE); warns when it is not a multirotor."""
+    status = datasets.get("vehicle_status")
+    kind: str | None = None
+    rotary: bool | None = None
+    if status is not None and "vehicle_type" in status and len(status["vehicle_type"]):
+        codes = np.asarray(status["vehicle_type"]).astype(int)
+        code = int(codes[-1])
+        kind, rotary = _VEHICLE_TYPES.get(code, f"type {code}"), code == _ROTARY_WING_TYPE
+        if "is_vtol" in status and np.asarray(status["is_vtol"]).any():
+            share = float(np.mean(codes == _ROTARY_WING_TYPE))
+            kind = f"a VTOL, in multirotor mode in {100 * share:.0f}% of vehicle_status"
+            rotary = False
+    elif status is not None and "is_rotary_wing" in status and len(status["is_rotary_wing"]):
+        rotary = bool(np.asarray(status["is_rotary_wing"])[-1])
+        kind = "rotary wing" if rotary else "fixed wing"
+        if "is_vtol" in status and np.asarray(status["is_vtol"]).any():
+            kind, rotary = "VTOL", False
+    else:
+        mav_type = ulog.initial_parameters.get("MAV_TYPE")
+        if mav_type is not None:
+            code = int(mav_type)
+            rotary = code in _MULTIROTOR_MAV_TYPES
+            kind = "multirotor" if rotary else _MAV_TYPES.get(code, f"MAV_TYPE {code}")
+    if rotary is False:
+        warnings.warn(ingest_warning(
+            path, f"the vehicle is not a multirotor ({kind}): aerodock's downwash models and "
+            "labels assume one"), stacklevel=3)
+    return kind or "unknown"
 
 
 def _utc_offset_s(datasets: dict[str, dict[str, np.ndarray]]) -> float | None:
@@ -379,6 +469,7 @@ def _meta(follower: UlogTrack, name: str) -> dict[str, Any]:
         "thrust_model": follower.meta["thrust_model"],
         "obs_accel_source": follower.meta["obs_accel_source"],
         "landed_fraction": follower.meta["landed_fraction"],
+        "vehicle_type": follower.meta["vehicle_type"],
         "gravity_mps2": GRAVITY_MPS2,
     }
 

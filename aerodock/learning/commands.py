@@ -212,6 +212,7 @@ def evaluate_command(
 def export_command(
     model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
     out: Annotated[Path, typer.Option("--out", help="ONNX file to write.")],
+    dtype: Annotated[str, typer.Option("--dtype", help="float32 or float64 graph.")] = "float32",
     as_json: JsonOpt = False,
 ) -> None:
     """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output (n,3))."""
@@ -224,12 +225,16 @@ def export_command(
         _fail(_one_line(err))
     if out.is_dir():
         _fail(f"{out}: is a directory; give a file name such as model.onnx")
+    if dtype not in ("float32", "float64"):
+        _fail(f"--dtype {dtype!r}: use float32 or float64")
     try:
+        import onnx  # noqa: F401
+
         from aerodock.learning.export import check_onnx, export_onnx
     except ImportError:
-        _fail("ONNX export needs PyTorch and onnx: pip install 'aerodock[learn,export]'")
+        _fail("ONNX export needs onnx: pip install 'aerodock[export]'")
     try:
-        path = export_onnx(model, out)
+        path = export_onnx(model, out, dtype=dtype)
     except ModelFileError as err:
         _fail(_one_line(err))
     except (OSError, RuntimeError) as err:

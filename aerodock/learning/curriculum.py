@@ -24,7 +24,7 @@ from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
 from aerodock.flightlog import FlightLog, save_flightlogs
 from aerodock.planning.minjerk import minjerk
-from aerodock.recorder import FlightRecorder
+from aerodock.recorder import FlightRecorder, vehicle_meta
 from aerodock.rng import TrialRNG
 from aerodock.settle import settle
 from aerodock.sim import World
@@ -152,6 +152,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     return recorder.flightlogs(lambda i: {
         "name": f"{name}-{first_trial + i:03d}", "source": "aerodock-sim", "frame": "NED",
         "label_basis": "command", "leader_mass_kg": mass, "follower_mass_kg": mass,
+        **vehicle_meta(cfg),
         "depth_band_m": [depth_min_m, depth_max_m], "leader_speed_mps": float(speed[i]),
         "compensation": "observer" if predictor is None else "observer+model", "seed": seed,
     })

@@ -27,6 +27,7 @@ from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.geometry import quat_to_rotmat
 from aerodock.learning.labels import FREE_AIR_RADIUS_M, labels_from_logs, valid_mask
+from aerodock.learning.modelfile import flight_vehicle_fields, vehicles_from_flights
 
 DATASET_FORMAT = "aerodock-dataset"
 DATASET_VERSION = 1
@@ -145,6 +146,7 @@ class Dataset:
             "flights": self.flight_names,
             "sources": self.meta.get("sources", []),
             "has_true_mean": self.y_true_mean is not None,
+            "vehicles": vehicles_from_flights(self.meta["flights"]),
         }
 
 
@@ -225,6 +227,7 @@ def build_dataset(
             "bias_mps2": [float(b) for b in bias.bias_mps2],
             "bias_source": bias.source,
             "n_free_air": bias.n_free_air,
+            **flight_vehicle_fields(log.meta),
         })
     if not sum(len(f) for f in parts["fid"]):
         raise DataError("dataset: no valid samples in the given flights")

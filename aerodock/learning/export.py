@@ -1,90 +1,280 @@
-"""ONNX export of a trained downwash model (features + MLP + rotation back, in one graph).
+"""ONNX export of a trained downwash model, built from ``weights.npz`` with ``onnx`` alone.
 
-The exported graph has inputs ``x`` (n, 9, float32: ``[dp, v_A, v_B]``, NED) and ``leader_R``
-(n, 3, 3, float32, leader body to world) and output ``f_ext_mps2`` (n, 3, float32, NED), with a
-dynamic batch axis. It uses the legacy TorchScript exporter (``dynamo=False``): the dynamo
-exporter of torch 2.13 needs ``onnxscript``, which aerodock does not depend on; the graph only
-uses elementary operators (MatMul/Gemm, Tanh, Pow, ReduceSum, Concat, Slice), opset 17.
+The graph (opset 17) is written operator by operator from the model directory: the SO(2)
+feature map of :mod:`aerodock.learning.features`, the MLP with the input standardisation and the
+output scaling folded into its first and last layers (as in the NumPy runtime), and the rotation
+of the invariant outputs back to the world. No PyTorch is imported: ``aerodock[export]`` is
+enough.
+
+Inputs ``x`` (n, 9: ``[dp, v_A, v_B]``, NED) and ``leader_R`` (n, 3, 3, leader body to world);
+output ``f_ext_mps2`` (n, 3, NED), with a dynamic batch axis ``n``. ONNX fixes the element type
+of a graph's inputs, so the export takes ``dtype``: ``"float32"`` (the default, what most
+runtimes want) or ``"float64"`` (the whole graph in double precision, equal to the NumPy runtime
+to rounding). :func:`check_onnx` feeds whichever type the file declares.
+
+``metadata_props`` carries what ``model.json`` says about the model (keys ``aerodock.*``): the
+format, kind, units, input and output, the vehicles it was trained on (JSON), the feature version
+and regularisation, the weights' SHA-256 and the aerodock version, and the element type.
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
-import warnings
+import hashlib
+import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
-from torch import nn
 
-from aerodock.learning.models import load_torch_model, model_from_spec
+from aerodock.fileio import atomic_open
+from aerodock.learning.modelfile import (
+    MODEL_FORMAT,
+    UNITS,
+    ModelSpec,
+    load_model_dir,
+    normalise_vehicles,
+)
 
 ONNX_OPSET = 17
 INPUT_NAMES = ("x", "leader_R")
 OUTPUT_NAME = "f_ext_mps2"
+DTYPES = ("float32", "float64")
 
 
-class _KeepInputs(nn.Module):
-    """Makes the graph use ``leader_R`` even when the model ignores it (``mlp``, ``zero``), so
-    that every exported file has the same two inputs (the exporter drops unused inputs). Adds an
-    exact zero for finite inputs."""
-
-    def __init__(self, inner: nn.Module) -> None:
-        super().__init__()
-        self.inner = inner
-
-    def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
-        return self.inner(x, leader_R) + 0.0 * leader_R[:, :, 0] * x[:, 0:1]
-
-
-def _as_module(model: Any) -> nn.Module:
-    """A plain float32 module: rebuilt from the effective weights, so spectral-norm
-    parametrisations (not exportable) are folded in and the caller's module is left alone."""
-    if hasattr(model, "model") and isinstance(model.model, nn.Module):  # TrainedModel
-        model = model.model
-    if isinstance(model, nn.Module):
-        model.eval()
-        return model_from_spec(model.spec(), model.weights())
-    return load_torch_model(model)
+def _source(model: Any) -> tuple[ModelSpec, list[tuple[np.ndarray, np.ndarray]], dict[str, Any]]:
+    """Spec, weights and ``model.json``-like document of a model directory or trained model."""
+    if isinstance(model, str | Path):
+        return load_model_dir(model)
+    module = getattr(model, "model", model)  # a TrainedModel holds the module in .model
+    if hasattr(module, "spec") and hasattr(module, "weights"):
+        if hasattr(module, "eval"):
+            module.eval()
+        info = getattr(model, "info", {}) or {}
+        data = info.get("data") if isinstance(info, dict) else None
+        vehicles = data.get("vehicles") if isinstance(data, dict) else None
+        return module.spec(), module.weights(), {"kind": module.spec().kind, "units": UNITS,
+                                                 "vehicles": vehicles, "training": info}
+    raise TypeError(f"cannot export {type(model).__name__}: give a model directory or a "
+                    "trained model")
 
 
-def export_onnx(model: Any, out: str | Path, *, opset: int = ONNX_OPSET) -> Path:
-    """Export ``model`` to an ONNX file, atomically.
+class _Graph:
+    """A small builder of ONNX nodes with generated names (one element type throughout)."""
+
+    def __init__(self, dtype: str) -> None:
+        from onnx import TensorProto, helper, numpy_helper
+
+        self.helper, self.numpy_helper = helper, numpy_helper
+        self.np_dtype = np.dtype(dtype)
+        self.elem = TensorProto.FLOAT if dtype == "float32" else TensorProto.DOUBLE
+        self.nodes: list[Any] = []
+        self.inits: list[Any] = []
+        self.count = 0
+
+    def _name(self, hint: str) -> str:
+        self.count += 1
+        return f"{hint}_{self.count}"
+
+    def const(self, value: Any, hint: str = "c", dtype: Any = None) -> str:
+        name = self._name(hint)
+        arr = np.asarray(value, dtype=dtype or self.np_dtype)
+        self.inits.append(self.numpy_helper.from_array(arr, name))
+        return name
+
+    def op(self, op_type: str, *inputs: str, hint: str | None = None, **attrs: Any) -> str:
+        out = self._name(hint or op_type.lower())
+        self.nodes.append(self.helper.make_node(op_type, list(inputs), [out], **attrs))
+        return out
+
+    def col(self, mat: str, row: int, col: int) -> str:
+        """``mat[:, row, col]`` as an (n,) tensor of a (n, 3, 3) tensor."""
+        i64 = np.int64
+        piece = self.op("Slice", mat, self.const([row, col], "s", i64),
+                        self.const([row + 1, col + 1], "e", i64), self.const([1, 2], "ax", i64))
+        return self.op("Reshape", piece, self.const([-1], "shape", i64))
+
+    def add(self, a: str, b: str) -> str:
+        return self.op("Add", a, b)
+
+    def sub(self, a: str, b: str) -> str:
+        return self.op("Sub", a, b)
+
+    def mul(self, a: str, b: str) -> str:
+        return self.op("Mul", a, b)
+
+    def div(self, a: str, b: str) -> str:
+        return self.op("Div", a, b)
+
+    def sqrt(self, a: str) -> str:
+        return self.op("Sqrt", a)
+
+    def stack(self, parts: list[str]) -> str:
+        """(n,) tensors side by side: (n, k)."""
+        axis = self.const([1], "axis", np.int64)
+        return self.op("Concat", *[self.op("Unsqueeze", p, axis) for p in parts], axis=1)
+
+
+def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
+    """Feature tensor (n, F) and a function of the outputs giving the world force (n, 3)."""
+    if kind == "mlp":
+        return "x", lambda c: c
+    body = g.op("MatMul", g.op("Reshape", "x", g.const([-1, 3, 3], "shape", np.int64)),
+                "leader_R", hint="body")  # rows: R^T dp, R^T v_A, R^T v_B
+    px, py, pz = (g.col(body, 0, k) for k in range(3))
+    ax, ay, az = (g.col(body, 1, k) for k in range(3))
+    bx, by, bz = (g.col(body, 2, k) for k in range(3))
+    eps_p2 = g.const(spec.eps_pos_m**2, "eps_p2")
+    eps_v2 = g.const(spec.eps_vel_mps**2, "eps_v2")
+    rho2 = g.add(g.mul(px, px), g.mul(py, py))
+    rho_soft = g.sqrt(g.add(rho2, eps_p2))
+    urx, ury = g.div(px, rho_soft), g.div(py, rho_soft)
+    vb2 = g.add(g.mul(bx, bx), g.mul(by, by))
+    va2 = g.add(g.mul(ax, ax), g.mul(ay, ay))
+    vb_soft = g.sqrt(g.add(vb2, eps_v2))
+    cos_b = g.div(g.add(g.mul(urx, bx), g.mul(ury, by)), vb_soft)
+    if kind == "so2":
+        z = g.stack([cos_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2)])
+
+        def out_so2(c: str) -> str:
+            c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))  # (n, 1, 2)
+            cr, ca = g.col(c3, 0, 0), g.col(c3, 0, 1)
+            # f = R (cr e_r + ca e3) with e_r = (urx, ury, 0) in leader-body coordinates
+            return _rotate(g, [g.mul(cr, urx), g.mul(cr, ury), ca])
+
+        return z, out_so2
+    va_soft = g.sqrt(g.add(va2, eps_v2))
+    sin_b = g.div(g.sub(g.mul(urx, by), g.mul(ury, bx)), vb_soft)
+    cos_a = g.div(g.add(g.mul(urx, ax), g.mul(ury, ay)), va_soft)
+    sin_a = g.div(g.sub(g.mul(urx, ay), g.mul(ury, ax)), va_soft)
+    z = g.stack([cos_b, sin_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2), cos_a, sin_a, az])
+
+    def out_ext(c: str) -> str:
+        c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))
+        cr, ct, ca = (g.col(c3, 0, k) for k in range(3))
+        # f = R (cr e_r + ct e_t + ca e3) with e_r = (urx, ury, 0), e_t = (-ury, urx, 0)
+        return _rotate(g, [g.sub(g.mul(cr, urx), g.mul(ct, ury)),
+                           g.add(g.mul(cr, ury), g.mul(ct, urx)), ca])
+
+    return z, out_ext
+
+
+def _rotate(g: _Graph, body_parts: list[str]) -> str:
+    """``R @ v`` for leader-body components ``v`` given as three (n,) tensors: (n, 3)."""
+    v = g.op("Unsqueeze", g.stack(body_parts), g.const([2], "axis", np.int64))
+    return g.op("Reshape", g.op("MatMul", "leader_R", v),
+                g.const([-1, 3], "shape", np.int64))
+
+
+def _mlp(g: _Graph, z: str, spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
+         ) -> str:
+    layers = [(np.asarray(w, np.float64), np.asarray(b, np.float64)) for w, b in weights]
+    w0, b0 = layers[0]
+    w0 = w0 / np.asarray(spec.in_std, np.float64)[None, :]
+    layers[0] = (w0, b0 - w0 @ np.asarray(spec.in_mean, np.float64))
+    wl, bl = layers[-1]
+    out_std = np.asarray(spec.out_std, np.float64)
+    layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, np.float64))
+    h = z
+    for i, (w, b) in enumerate(layers):
+        h = g.op("Add", g.op("MatMul", h, g.const(w.T, "W")), g.const(b, "b"))
+        if i < len(layers) - 1:
+            h = g.op("Tanh", h) if spec.activation == "tanh" else g.mul(h, g.op("Sigmoid", h))
+    return h
+
+
+def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
+               doc: dict[str, Any] | None = None, *, dtype: str = "float32",
+               opset: int = ONNX_OPSET) -> Any:
+    """The ONNX ``ModelProto`` of a model (see the module docstring); checked by ``onnx``.
+
+    Raises:
+        ValueError: an unknown ``dtype``.
+    """
+    import onnx
+    from onnx import helper
+
+    if dtype not in DTYPES:
+        raise ValueError(f"dtype {dtype!r}: use float32 or float64")
+    g = _Graph(dtype)
+    if spec.kind == "zero":
+        n = g.op("Slice", g.op("Shape", "x"), g.const([0], "s", np.int64),
+                 g.const([1], "e", np.int64))
+        shape = g.op("Concat", n, g.const([3], "three", np.int64), axis=0)
+        zero = helper.make_tensor("zero", g.elem, [1], [0.0])
+        out = g.op("ConstantOfShape", shape, value=zero)
+    else:
+        z, to_world = _features(g, spec.kind, spec)
+        out = to_world(_mlp(g, z, spec, weights))
+    g.nodes.append(helper.make_node("Identity", [out], [OUTPUT_NAME]))
+    graph = helper.make_graph(
+        g.nodes, f"aerodock_{spec.kind.replace('-', '_')}",
+        [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
+         helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])],
+        [helper.make_tensor_value_info(OUTPUT_NAME, g.elem, ["n", 3])],
+        initializer=g.inits,
+    )
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)],
+                              producer_name="aerodock")
+    model.ir_version = min(model.ir_version, 9)  # readable by onnxruntime releases of 2024 on
+    helper.set_model_props(model, _metadata(spec, weights, doc or {}, dtype))
+    onnx.checker.check_model(model)
+    return model
+
+
+def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
+              doc: dict[str, Any], dtype: str) -> dict[str, str]:
+    sha = (doc.get("weights") or {}).get("sha256") if isinstance(doc.get("weights"), dict) \
+        else None
+    if sha is None and weights:
+        sha = hashlib.sha256(b"".join(np.asarray(a, np.float32).tobytes()
+                                      for pair in weights for a in pair)).hexdigest()
+    return {
+        "aerodock.format": MODEL_FORMAT,
+        "aerodock.kind": spec.kind,
+        "aerodock.units": UNITS,
+        "aerodock.input": "x (n, 9) = [dp = p_follower - p_leader, v_leader, v_follower] "
+                          "(m, m/s, NED); leader_R (n, 3, 3) leader attitude, body to world",
+        "aerodock.output": "f_ext_mps2 (n, 3): predicted downwash acceleration on the "
+                           "follower, m/s^2, NED",
+        "aerodock.vehicles": json.dumps(normalise_vehicles(doc.get("vehicles"))),
+        "aerodock.feature_version": str(spec.feature_version),
+        "aerodock.eps_pos_m": repr(spec.eps_pos_m),
+        "aerodock.eps_vel_mps": repr(spec.eps_vel_mps),
+        "aerodock.weights_sha256": sha or "",
+        "aerodock.aerodock_version": str(doc.get("aerodock_version", "")),
+        "aerodock.dtype": dtype,
+    }
+
+
+def export_onnx(model: Any, out: str | Path, *, dtype: str = "float32",
+                opset: int = ONNX_OPSET) -> Path:
+    """Export ``model`` to an ONNX file, atomically (the old file stays until the new is whole).
 
     Args:
-        model: a model directory, a ``TrainedModel`` or a torch module of this package.
+        model: a model directory, or a trained model (``TrainedModel`` or module of this
+            package: its ``spec()`` and effective ``weights()`` are used).
         out: the ``.onnx`` file to write.
+        dtype: element type of the graph's inputs, output and arithmetic.
         opset: ONNX opset version.
 
     Raises:
         ModelFileError: ``model`` is a directory with missing, corrupt or mismatched files.
+        ValueError: an unknown ``dtype``.
     """
-    module = _as_module(model).float().eval()
-    if getattr(module, "kind", "") in ("mlp", "zero"):
-        module = _KeepInputs(module).eval()
+    spec, weights, doc = _source(model)
+    proto = build_onnx(spec, weights, doc, dtype=dtype, opset=opset)
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    x = torch.zeros(2, 9)
-    x[:, 2] = 0.5
-    rot = torch.eye(3).expand(2, 3, 3).contiguous()
-    fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            torch.onnx.export(
-                module, (x, rot), tmp,
-                input_names=list(INPUT_NAMES), output_names=[OUTPUT_NAME],
-                dynamic_axes={"x": {0: "n"}, "leader_R": {0: "n"}, OUTPUT_NAME: {0: "n"}},
-                opset_version=opset, dynamo=False,
-            )
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(out, "wb") as fh:
+        fh.write(proto.SerializeToString())
     return out
+
+
+def read_onnx_metadata(path: str | Path) -> dict[str, str]:
+    """The ``metadata_props`` of an ONNX file, as a dict."""
+    import onnx
+
+    return {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
+            .metadata_props}
 
 
 def check_onnx(
@@ -96,7 +286,8 @@ def check_onnx(
 ) -> float:
     """Max absolute difference (m/s²) between an ONNX file (onnxruntime) and ``predictor``.
 
-    Inputs are random scenes around and below the leader (tilted and yawed).
+    Inputs are random scenes around and below the leader (tilted and yawed), given in the
+    element type the file declares; the predictor sees the same (rounded) numbers.
 
     Raises:
         ImportError: onnxruntime is not installed.
@@ -112,7 +303,8 @@ def check_onnx(
     ], axis=1)
     rot = euler_to_rotmat(rng.normal(0, 0.1, n), rng.normal(0, 0.1, n), rng.uniform(-3, 3, n))
     sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-    (got,) = sess.run(None, {"x": x.astype(np.float32), "leader_R": rot.astype(np.float32)})
-    want = predictor.predict(x.astype(np.float32).astype(float),
-                             rot.astype(np.float32).astype(float))
+    dtype = np.float64 if sess.get_inputs()[0].type == "tensor(double)" else np.float32
+    xs, rs = x.astype(dtype), rot.astype(dtype)
+    (got,) = sess.run(None, {"x": xs, "leader_R": rs})
+    want = predictor.predict(xs.astype(float), rs.astype(float))
     return float(np.max(np.abs(got - want)))

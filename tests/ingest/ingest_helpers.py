@@ -188,12 +188,30 @@ class RosMessages:
     def __init__(self) -> None:
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-        from aerodock.ingest.rosbag import FREYJA_MSGS
+        from aerodock.ingest.rosbag import FREYJA_MSGS, PX4_MSGS
 
         self.store = get_typestore(Stores.ROS2_HUMBLE)
-        for name, text in FREYJA_MSGS.items():
+        for name, text in {**FREYJA_MSGS, **PX4_MSGS}.items():
             self.store.register(get_types_from_msg(text, name))
         self.types = self.store.types
+
+    def make(self, msgtype: str, **values: Any) -> Any:
+        """A message of a flat type (base fields and fixed arrays), unset fields zero."""
+        for name, (node, spec) in self.store.fielddefs[msgtype][1]:
+            if name in values:
+                continue
+            if node == 1:  # base type
+                values[name] = False if spec[0] == "bool" else 0.0 if "float" in spec[0] else 0
+            elif node == 3:  # fixed array
+                values[name] = np.zeros(spec[1], dtype=spec[0][1][0])
+        for name, (node, spec) in self.store.fielddefs[msgtype][1]:
+            if node == 3:
+                values[name] = np.asarray(values[name], dtype=spec[0][1][0])
+            elif node == 1 and "float" in spec[0]:
+                values[name] = float(values[name])
+            elif node == 1 and spec[0] != "bool":
+                values[name] = int(values[name])
+        return self._t(msgtype)(**values)
 
     def _t(self, name: str) -> Any:
         return self.types[name]
@@ -319,3 +337,52 @@ def freyja_topics(ros: RosMessages, n: int = 400, *, with_rpyt: bool = False,
             (ns[i], ros.ctrl_command(fl["roll"][i], fl["pitch"][i], fl["thrust_n"][i]))
             for i in range(n)])
     return topics
+
+
+def px4_topics(ros: RosMessages, n: int = 400, *, hover: float = 0.5,
+               follower_velocity_frame: int = 1) -> BagTopics:
+    """A PX4 (uXRCE-DDS) bag of :func:`synthetic_flight`: px4_msgs, NED, no headers.
+
+    The follower's VehicleOdometry gives its velocity in NED (``velocity_frame`` 1) or in the
+    body (3); its VehicleThrustSetpoint realises ``u`` through ``hover``; its
+    VehicleLocalPosition carries the kinematic acceleration.
+    """
+    t = np.arange(n) * 0.01
+    fl = synthetic_flight(t)
+    ns = [BAG_T0_NS + int(round(x * 1e9)) for x in t]
+    boot_us = [int(5e6 + x * 1e6) for x in t]
+    thrust = np.linalg.norm(G * E3 - fl["u"], axis=1) * hover / G
+    v_f = fl["v"] if follower_velocity_frame == 1 else np.einsum("tji,tj->ti", fl["R"], fl["v"])
+
+    def odom(i: int, p: np.ndarray, q: np.ndarray, v: np.ndarray, frame: int) -> Any:
+        return ros.make("px4_msgs/msg/VehicleOdometry", timestamp=boot_us[i],
+                        timestamp_sample=boot_us[i], pose_frame=1, position=p, q=q,
+                        velocity_frame=frame, velocity=v)
+
+    return {
+        "/alpha/fmu/out/vehicle_odometry": ("px4_msgs/msg/VehicleOdometry", [
+            (ns[i], odom(i, fl["leader_p"][i], np.array([1.0, 0, 0, 0]), fl["leader_v"][i], 1))
+            for i in range(n)]),
+        "/bravo/fmu/out/vehicle_odometry": ("px4_msgs/msg/VehicleOdometry", [
+            (ns[i], odom(i, fl["p"][i], fl["quat"][i], v_f[i], follower_velocity_frame))
+            for i in range(n)]),
+        "/bravo/fmu/out/vehicle_thrust_setpoint": ("px4_msgs/msg/VehicleThrustSetpoint", [
+            (ns[i], ros.make("px4_msgs/msg/VehicleThrustSetpoint", timestamp=boot_us[i],
+                             xyz=[0.0, 0.0, -thrust[i]])) for i in range(n)]),
+        "/bravo/fmu/out/vehicle_local_position": ("px4_msgs/msg/VehicleLocalPosition", [
+            (ns[i], ros.make("px4_msgs/msg/VehicleLocalPosition", timestamp=boot_us[i],
+                             x=fl["p"][i, 0], y=fl["p"][i, 1], z=fl["p"][i, 2],
+                             vx=fl["v"][i, 0], vy=fl["v"][i, 1], vz=fl["v"][i, 2],
+                             ax=fl["a"][i, 0], ay=fl["a"][i, 1], az=fl["a"][i, 2]))
+            for i in range(n)]),
+    }
+
+
+PX4_MAPPING = {
+    "frame": "ned",
+    "leader": {"state": "/alpha/fmu/out/vehicle_odometry"},
+    "follower": {"state": "/bravo/fmu/out/vehicle_odometry",
+                 "command": "/bravo/fmu/out/vehicle_thrust_setpoint",
+                 "imu": "/bravo/fmu/out/vehicle_local_position", "hover_thrust": 0.5,
+                 "mass_kg": MASS_KG},
+}

@@ -209,7 +209,8 @@ def _corruptions():
                           "normalisation"),
         "no layer sizes": (lambda p: _edit_json(p, layer_sizes=_DELETE), "layer_sizes"),
         "truncated weights": (truncated_weights, "weights.npz"),
-        "truncated weights, no hash": (truncated_weights_no_hash, "corrupt weights"),
+        "truncated weights, no hash": (truncated_weights_no_hash, "sha256 missing"),
+        "no hash": (lambda p: _edit_json(p, weights={"file": "weights.npz"}), "sha256 missing"),
         "no weights": (no_weights, "weights.npz"),
         "wrong shape": (wrong_shape, "W1 has shape"),
         "missing array": (missing_array, "b2 missing"),
@@ -253,6 +254,117 @@ def test_model_json_metadata(tmp_path, trained_so2):
     assert sorted(p.name for p in path.iterdir()) == ["model.json", "weights.npz"]
 
 
+# -- writing a model directory as a whole ---------------------------------------------------
+
+def _weights_of(path):
+    with np.load(path / "weights.npz") as data:
+        return {k: data[k].copy() for k in data.files}
+
+
+def test_failed_save_keeps_the_old_model_and_leaves_no_temp(tmp_path, monkeypatch):
+    import builtins
+
+    path = _random_trained("so2").save(tmp_path / "m")
+    before = (path / "model.json").read_bytes(), (path / "weights.npz").read_bytes()
+    real_open = builtins.open
+    calls = []
+
+    def failing_open(file, mode="r", *args, **kwargs):  # the second file cannot be written
+        if "w" in str(mode) and str(file).endswith("model.json"):
+            calls.append(file)
+            raise OSError(28, "No space left on device")
+        return real_open(file, mode, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", failing_open)
+    with pytest.raises(OSError, match="No space"):
+        _random_trained("so2-ext").save(path)
+    monkeypatch.undo()
+    assert calls
+    assert ((path / "model.json").read_bytes(), (path / "weights.npz").read_bytes()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m"]
+    Predictor.load(path)
+
+
+def test_save_refuses_a_directory_with_other_files(tmp_path):
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="notes.txt"):
+        _random_trained("so2").save(tmp_path / "m")
+    assert (tmp_path / "m" / "notes.txt").read_text() == "mine"
+
+
+_SAVE_LOOP = """
+import sys, torch, numpy as np
+sys.path.insert(0, {tests!r})
+from test_learning_runtime import _random_trained
+a, b = _random_trained("so2"), _random_trained("so2")
+with torch.no_grad():
+    for p in b.model.parameters():
+        p.mul_(2.0)
+print("ready", flush=True)
+i = 0
+while True:
+    (a if i % 2 else b).save({path!r})
+    i += 1
+"""
+
+
+@pytest.mark.slow
+def test_kill_during_saves_leaves_a_whole_model(tmp_path):
+    """kill -9 at random moments of repeated saves: the directory always holds one whole model
+    (weights matching model.json), one of the two being written, and no mix."""
+    import os
+    import signal
+    import time
+    from pathlib import Path
+
+    path = tmp_path / "m"
+    first = _random_trained("so2")
+    first.save(path)
+    want = {json.dumps({k: v.tolist() for k, v in sorted(_weights_of(path).items())})}
+    code = _SAVE_LOOP.format(tests=str(Path(__file__).parent), path=str(path))
+    rng = np.random.default_rng(5)
+    for _ in range(6):
+        proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+        assert proc.stdout.readline().strip() == "ready"
+        time.sleep(float(rng.uniform(0.05, 0.4)))
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        spec, weights, doc = load_model_dir(path)  # checksum verified: no mix
+        assert sorted(p.name for p in path.iterdir()) == ["model.json", "weights.npz"]
+        want.add(json.dumps({k: v.tolist() for k, v in sorted(_weights_of(path).items())}))
+    assert len(want) <= 2  # only ever the first model or the doubled one
+
+
+def test_model_records_its_vehicles_and_flags_others(tmp_path):
+    from aerodock.config import load_config
+    from aerodock.learning.modelfile import model_vehicle_warnings, vehicles_from_flights
+
+    trained = _random_trained("so2")
+    flights = [{"leader_mass_kg": 0.7, "follower_mass_kg": 0.7, "leader_rotor_radius_m": 0.0635,
+                "follower_rotor_radius_m": 0.0635, "leader_n_rotors": 4, "follower_n_rotors": 4}]
+    trained.info["data"] = {"vehicles": vehicles_from_flights(flights)}
+    path = trained.save(tmp_path / "m")
+    doc = json.loads((path / "model.json").read_text())
+    assert doc["vehicles"]["follower"] == {"mass_kg": 0.7, "rotor_radius_m": 0.0635,
+                                           "n_rotors": 4}
+    assert doc["units"] == "m/s^2 NED"
+    cfg = load_config()
+    pred = Predictor.load(path)
+    assert model_vehicle_warnings(pred, cfg) == []
+    heavy = cfg.with_overrides({"vehicle": {"mass_kg": 1.5, "n_rotors": 6}})
+    notes = model_vehicle_warnings(pred, heavy)
+    assert any("leader mass_kg = 0.7, configured 1.5" in n for n in notes)
+    assert any("follower n_rotors = 4, configured 6" in n for n in notes)
+    # flights that disagree, or say nothing, are recorded as such
+    mixed = vehicles_from_flights(flights + [{**flights[0], "follower_mass_kg": 0.5}])
+    assert mixed["follower"]["mass_kg"] == [0.5, 0.7]
+    unknown = vehicles_from_flights([{}])
+    assert unknown["leader"] == {"mass_kg": None, "rotor_radius_m": None, "n_rotors": None}
+    bare = _random_trained("so2").save(tmp_path / "bare")
+    assert "does not record" in model_vehicle_warnings(Predictor.load(bare), cfg)[-1]
+
+
 # -- ONNX ------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("kind", ["so2", "so2-ext", "mlp", "zero"])
@@ -277,3 +389,49 @@ def test_onnx_export_matches_onnxruntime(tmp_path, kind):
         again = load_torch_model(model_dir)(torch.as_tensor(x, dtype=torch.float32),
                                             torch.as_tensor(rot, dtype=torch.float32))
     np.testing.assert_allclose(again.numpy(), pred.predict(x, rot), atol=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "mlp", "zero"])
+def test_onnx_float64_equals_numpy_and_carries_metadata(tmp_path, kind):
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import read_onnx_metadata
+    from aerodock.learning.modelfile import vehicles_from_flights
+
+    trained = _random_trained(kind, activation="silu" if kind == "so2-ext" else "tanh")
+    trained.info["data"] = {"vehicles": vehicles_from_flights(
+        [{"leader_mass_kg": 0.7, "follower_mass_kg": 0.5, "follower_n_rotors": 4}])}
+    model_dir = trained.save(tmp_path / kind)
+    pred = Predictor.load(model_dir)
+    path64 = export_onnx(model_dir, tmp_path / f"{kind}64.onnx", dtype="float64")
+    assert check_onnx(path64, pred, n=300) < 1e-10
+    meta = read_onnx_metadata(path64)
+    doc = json.loads((model_dir / "model.json").read_text())
+    assert meta["aerodock.kind"] == kind and meta["aerodock.units"] == "m/s^2 NED"
+    assert meta["aerodock.dtype"] == "float64"
+    assert json.loads(meta["aerodock.vehicles"]) == doc["vehicles"]
+    assert json.loads(meta["aerodock.vehicles"])["follower"]["mass_kg"] == 0.5
+    if kind != "zero":
+        assert meta["aerodock.weights_sha256"] == doc["weights"]["sha256"]
+    import onnxruntime as ort
+
+    sess = ort.InferenceSession(str(path64), providers=["CPUExecutionProvider"])
+    x, rot = _inputs(7, seed=4)
+    with pytest.raises(Exception, match="(?i)type"):  # a float64 file wants float64 inputs
+        sess.run(None, {"x": x.astype(np.float32), "leader_R": rot.astype(np.float32)})
+    (got,) = sess.run(None, {"x": x, "leader_R": rot})
+    np.testing.assert_allclose(got, pred.predict(x, rot), atol=1e-10)
+
+
+def test_onnx_export_needs_no_torch(tmp_path):
+    pytest.importorskip("onnx")
+    path = _random_trained("so2").save(tmp_path / "m")
+    code = (
+        "import sys\n"
+        "from aerodock.learning.export import export_onnx\n"
+        f"export_onnx({str(path)!r}, {str(tmp_path / 'm.onnx')!r})\n"
+        "assert 'torch' not in sys.modules, 'torch was imported'\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "m.onnx").stat().st_size > 1000

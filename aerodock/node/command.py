@@ -1,0 +1,106 @@
+"""``aerodock node``: run a trained model as a ROS 2 node (wired as ``app.command("node")``)."""
+
+from __future__ import annotations
+
+import os
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aerodock.node.core import DEFAULT_MAX_AGE_S, DEFAULT_RATE_HZ
+
+
+class OutputFrame(StrEnum):
+    """World frame of the published f_ext."""
+
+    auto = "auto"
+    ned = "ned"
+    enu = "enu"
+
+
+def _fail(message: str) -> None:
+    typer.echo("error: " + " ".join(str(message).split()), err=True)
+    raise typer.Exit(2)
+
+
+def node_command(
+    model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
+    mapping: Annotated[Path | None, typer.Option(
+        "--mapping", help="Topic mapping TOML (the bag reader's; default: Freyja's alpha/bravo).",
+    )] = None,
+    rate: Annotated[float, typer.Option("--rate", help="Output rate, Hz.")] = DEFAULT_RATE_HZ,
+    max_age: Annotated[float, typer.Option(
+        "--max-age", help="Oldest accepted input, s; older: publish zero, flag stale.",
+    )] = DEFAULT_MAX_AGE_S,
+    output_topic: Annotated[str, typer.Option(
+        "--output-topic", help="f_ext topic (geometry_msgs/Vector3Stamped, m/s²).",
+    )] = "/aerodock/f_ext",
+    diagnostics_topic: Annotated[str, typer.Option(
+        "--diagnostics-topic", help="Diagnostics topic (diagnostic_msgs/DiagnosticArray).",
+    )] = "/aerodock/diagnostics",
+    output_frame: Annotated[OutputFrame, typer.Option(
+        "--output-frame", help="f_ext world frame; auto: NED for Freyja/PX4, else the mapping's.",
+    )] = OutputFrame.auto,
+    state_type: Annotated[list[str] | None, typer.Option(
+        "--state-type", help="TOPIC=TYPE (e.g. /bravo/odom=nav_msgs/msg/Odometry) instead of "
+                             "discovering the type on the ROS graph; repeatable.",
+    )] = None,
+    duration: Annotated[float | None, typer.Option(
+        "--duration", help="Stop after this many seconds (default: run until Ctrl-C).",
+    )] = None,
+    config: Annotated[Path | None, typer.Option(
+        "--config", help="aerodock TOML: the vehicles, to check the model was trained on them.",
+    )] = None,
+) -> None:
+    """Run a trained downwash model as a ROS 2 node next to Freyja or PX4 (the ros extra)."""
+    from aerodock.config import ConfigError, load_config
+    from aerodock.ingest.errors import IngestError
+    from aerodock.ingest.rosbag import load_mapping
+    from aerodock.learning.modelfile import ModelFileError, model_vehicle_warnings
+    from aerodock.learning.runtime import Predictor
+    from aerodock.node.core import STATE_TYPES
+
+    if not (rate > 0 and rate <= 1000):
+        _fail(f"--rate must be in (0, 1000] Hz, got {rate}")
+    if not (max_age > 0 and max_age < 10):
+        _fail(f"--max-age must be in (0, 10) s, got {max_age}")
+    if duration is not None and not duration > 0:
+        _fail(f"--duration must be positive, got {duration}")
+    types: dict[str, str] = {}
+    for item in state_type or []:
+        topic, sep, type_name = item.partition("=")
+        if not sep or type_name not in STATE_TYPES:
+            _fail(f"--state-type {item!r}: expected TOPIC=TYPE with TYPE one of "
+                  f"{', '.join(STATE_TYPES)}")
+        types[topic] = type_name
+    try:
+        predictor = Predictor.load(model)
+        cfg = load_config(config)
+        merged, _ = load_mapping(mapping)
+    except (ModelFileError, ConfigError, IngestError) as err:
+        _fail(str(err))
+    try:
+        import rclpy  # noqa: F401
+    except ImportError:
+        _fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
+    from aerodock.node.ros import NodeSettings, run_node
+
+    notes = model_vehicle_warnings(predictor, cfg)
+    for note in notes:
+        typer.echo(f"warning: {note}", err=True)
+    settings = NodeSettings(
+        mapping=merged, rate_hz=rate, max_age_s=max_age, output_topic=output_topic,
+        diagnostics_topic=diagnostics_topic,
+        output_frame=None if output_frame == OutputFrame.auto else output_frame.value,
+        state_types=types,
+    )
+    typer.echo(f"aerodock node: {predictor.kind} model {model}, {rate:g} Hz, "
+               f"{merged['leader']['state']} + {merged['follower']['state']} -> {output_topic} "
+               f"(ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')})", err=True)
+    try:
+        ticks = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes)
+    except RuntimeError as err:
+        _fail(str(err))
+    typer.echo(f"aerodock node: stopped after {ticks} ticks", err=True)

@@ -1,0 +1,198 @@
+"""Replay a FlightLog as ROS 2 state messages and record what ``aerodock node`` publishes.
+
+Used by the end-to-end test and :mod:`aerodock.node.bench` (needs the ``aerodock[ros]`` extra).
+The node runs in its own process (``aerodock node``, started by :func:`start_node`); this side
+publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame, stamped with
+the wall clock when sent, and records every f_ext and diagnostics message it gets back with its
+receive time. Everything stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``)
+and on a ROS domain of its own (:func:`free_domain_id`).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import quat_to_rotmat
+from aerodock.node.core import VehicleState, odometry_fields
+
+LOCALHOST_ENV = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+
+
+def free_domain_id() -> int:
+    """A ROS domain id for one run (1-100, from the process id: parallel runs do not meet)."""
+    return 1 + os.getpid() % 100
+
+
+def ros_env(domain_id: int) -> dict[str, str]:
+    """The environment for a localhost-only ROS 2 process on ``domain_id``."""
+    return {**os.environ, **LOCALHOST_ENV, "ROS_DOMAIN_ID": str(domain_id)}
+
+
+def write_mapping(path: Path, leader_topic: str, follower_topic: str, *, frame: str = "enu",
+                  twist: str = "body") -> Path:
+    """A topic mapping TOML for an Odometry replay (the bag reader's format)."""
+    path.write_text(
+        f'frame = "{frame}"\nodom_twist = "{twist}"\n\n'
+        f'[leader]\nstate = "{leader_topic}"\n\n[follower]\nstate = "{follower_topic}"\n'
+    )
+    return path
+
+
+def start_node(model: Path, mapping: Path, domain_id: int, *, rate_hz: float = 100.0,
+               max_age_s: float = 0.05, duration_s: float = 30.0,
+               output_topic: str = "/aerodock/f_ext",
+               diagnostics_topic: str = "/aerodock/diagnostics") -> subprocess.Popen:
+    """Start ``aerodock node`` in a subprocess (it stops by itself after ``duration_s``)."""
+    cmd = [sys.executable, "-c", "from aerodock.cli import main; main()", "node", "--model",
+           str(model), "--mapping",
+           str(mapping), "--rate", str(rate_hz), "--max-age", str(max_age_s), "--duration",
+           str(duration_s), "--output-topic", output_topic, "--diagnostics-topic",
+           diagnostics_topic]
+    return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+@dataclass
+class ReplayRecord:
+    """What was sent and what came back.
+
+    Attributes:
+        sent: ``{"leader": {stamp_s: VehicleState}, "follower": {...}}`` (NED states as in the
+            log, keyed by the stamp they were sent with).
+        outputs: rows ``(receive_s, stamp_s, fx, fy, fz)`` of the f_ext messages.
+        diagnostics: ``(receive_s, stamp_s, values)`` of the diagnostics messages.
+        frame_ids: the f_ext messages' ``header.frame_id`` values.
+        send_times_s: wall times of the follower messages sent.
+    """
+
+    sent: dict[str, dict[float, VehicleState]] = field(
+        default_factory=lambda: {"leader": {}, "follower": {}})
+    outputs: list[tuple[float, float, float, float, float]] = field(default_factory=list)
+    diagnostics: list[tuple[float, float, dict[str, str]]] = field(default_factory=list)
+    frame_ids: set[str] = field(default_factory=set)
+    send_times_s: list[float] = field(default_factory=list)
+
+    def output_array(self) -> np.ndarray:
+        """Outputs as an ``(n, 5)`` array (receive, stamp, fx, fy, fz)."""
+        return np.asarray(self.outputs, dtype=float).reshape(-1, 5)
+
+
+def _stamp(msg: Any) -> float:
+    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+
+
+def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic: str,
+           frame: str = "enu", twist: str = "body", rate_hz: float | None = None,
+           leader_gap_s: tuple[float, float] | None = None,
+           output_topic: str = "/aerodock/f_ext",
+           diagnostics_topic: str = "/aerodock/diagnostics",
+           wait_for_node_s: float = 30.0, tail_s: float = 0.3) -> ReplayRecord:
+    """Publish ``log``'s states at its own rate (or ``rate_hz``) and record the node's output.
+
+    Args:
+        log: the flight (NED).
+        domain_id: ROS domain (the node's).
+        leader_topic: leader state topic.
+        follower_topic: follower state topic.
+        frame: Odometry world frame (``"enu"`` or ``"ned"``).
+        twist: Odometry twist frame (``"body"`` or ``"world"``).
+        rate_hz: publish rate (default: the log's sample rate).
+        leader_gap_s: ``(start, end)`` in log time during which the leader is not published.
+        output_topic: the node's f_ext topic.
+        diagnostics_topic: the node's diagnostics topic.
+        wait_for_node_s: how long to wait for the node to subscribe and publish.
+        tail_s: how long to keep listening after the last message.
+
+    Raises:
+        TimeoutError: the node did not show up on the graph in time.
+    """
+    os.environ.update(LOCALHOST_ENV)
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Vector3Stamped
+    from nav_msgs.msg import Odometry
+
+    rec = ReplayRecord()
+    rclpy.init()
+    node = rclpy.create_node("aerodock_replay")
+    try:
+        pubs = {"leader": node.create_publisher(Odometry, leader_topic, 10),
+                "follower": node.create_publisher(Odometry, follower_topic, 10)}
+
+        def on_output(msg: Any) -> None:
+            rec.outputs.append((time.time(), _stamp(msg), msg.vector.x, msg.vector.y,
+                                msg.vector.z))
+            rec.frame_ids.add(msg.header.frame_id)
+
+        def on_diag(msg: Any) -> None:
+            for status in msg.status:
+                rec.diagnostics.append((time.time(), _stamp(msg),
+                                        {kv.key: kv.value for kv in status.values}))
+
+        node.create_subscription(Vector3Stamped, output_topic, on_output, 100)
+        node.create_subscription(DiagnosticArray, diagnostics_topic, on_diag, 100)
+        deadline = time.monotonic() + wait_for_node_s
+        while not (all(p.get_subscription_count() > 0 for p in pubs.values()) and rec.outputs):
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"aerodock node did not subscribe to {leader_topic} and "
+                                   f"{follower_topic} within {wait_for_node_s:g} s")
+            rclpy.spin_once(node, timeout_sec=0.05)
+        rec.outputs.clear()
+        rec.diagnostics.clear()
+        period = 1.0 / rate_hz if rate_hz else float(np.median(np.diff(log.t_s)))
+        rot_l, rot_f = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
+        start = time.monotonic()
+        for i in range(log.n_samples):
+            target = start + i * period
+            while (now := time.monotonic()) < target:
+                rclpy.spin_once(node, timeout_sec=max(min(target - now, 0.002), 0.0))
+            stamp = stamp_of(time.time())
+            t_log = float(log.t_s[i] - log.t_s[0])
+            states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
+                      "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
+            for role, (p, v, rot) in states.items():
+                if role == "leader" and leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
+                    continue
+                state = VehicleState(np.array(p, float), np.array(v, float), rot, 0.0, stamp)
+                pubs[role].publish(_odometry(Odometry, state, stamp, frame, twist))
+                rec.sent[role][stamp] = state
+            rec.send_times_s.append(stamp)
+        end = time.monotonic() + tail_s
+        while time.monotonic() < end:
+            rclpy.spin_once(node, timeout_sec=0.01)
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+    return rec
+
+
+def _odometry(cls: Any, state: VehicleState, stamp_s: float, frame: str, twist: str) -> Any:
+    pos, quat, lin = odometry_fields(state, frame=frame, twist=twist)
+    msg = cls()
+    msg.header.stamp.sec = int(stamp_s)
+    msg.header.stamp.nanosec = int(round((stamp_s - int(stamp_s)) * 1e9)) % 1_000_000_000
+    msg.header.frame_id = "map" if frame == "enu" else "map_ned"
+    msg.child_frame_id = "base_link"
+    p = msg.pose.pose
+    p.position.x, p.position.y, p.position.z = (float(v) for v in pos)
+    p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z = (float(v) for v in quat)
+    t = msg.twist.twist.linear
+    t.x, t.y, t.z = (float(v) for v in lin)
+    return msg
+
+
+def stamp_of(msg_stamp_s: float) -> float:
+    """A stamp as the node reports it (``sec + nanosec * 1e-9``, rounded like the message)."""
+    sec = int(msg_stamp_s)
+    nanosec = int(round((msg_stamp_s - sec) * 1e9)) % 1_000_000_000
+    return sec + nanosec * 1e-9

@@ -1,0 +1,247 @@
+"""The ``rclpy`` node of ``aerodock node`` (needs the ``aerodock[ros]`` extra).
+
+It subscribes to the leader's and the follower's state topics of the topic mapping (the same
+TOML as the bag reader, :mod:`aerodock.ingest.rosbag`), finds each topic's type on the ROS graph
+(``nav_msgs/msg/Odometry``, ``freyja_msgs/msg/CurrentState`` or ``px4_msgs/msg/VehicleOdometry``),
+and at a fixed rate publishes:
+
+- ``f_ext`` (``geometry_msgs/msg/Vector3Stamped``): the predicted downwash acceleration on the
+  follower, m/s², in the consumer's world frame (NED for Freyja and PX4, the mapping's frame for
+  Odometry), stamped with the node's clock at the tick; zero when the inputs are stale;
+- diagnostics (``diagnostic_msgs/msg/DiagnosticArray``, one status named ``aerodock f_ext``):
+  ``latency_ms`` (tick start to publish), ``compute_ms`` (predictor), ``leader_age_ms``,
+  ``follower_age_ms`` (since each state was received), ``stale`` (``true``/``false``),
+  ``leader_stamp``, ``follower_stamp`` (the states' own stamps, s) and ``tick``. The level is
+  OK, or STALE when the output is zero for stale inputs.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from aerodock.node.core import (
+    CURRENT_STATE,
+    DEFAULT_MAX_AGE_S,
+    DEFAULT_RATE_HZ,
+    ODOMETRY,
+    PX4_ODOMETRY,
+    STATE_TYPES,
+    StepResult,
+    VehicleState,
+    current_state,
+    odometry_state,
+    prediction_step,
+    px4_odometry_state,
+)
+
+STATUS_NAME = "aerodock f_ext"
+
+
+@dataclass
+class NodeSettings:
+    """What the node subscribes to and publishes.
+
+    Attributes:
+        mapping: merged topic mapping (:func:`aerodock.ingest.rosbag.load_mapping`).
+        rate_hz: output rate.
+        max_age_s: oldest accepted input (older: zero output, stale flag).
+        output_topic: f_ext topic.
+        diagnostics_topic: diagnostics topic.
+        output_frame: ``"ned"``, ``"enu"``, or ``None`` (from the follower's state type).
+        state_types: topic -> ROS type name, for topics whose type is not to be discovered.
+        frame_ids: output ``header.frame_id`` per output frame.
+    """
+
+    mapping: dict[str, Any]
+    rate_hz: float = DEFAULT_RATE_HZ
+    max_age_s: float = DEFAULT_MAX_AGE_S
+    output_topic: str = "/aerodock/f_ext"
+    diagnostics_topic: str = "/aerodock/diagnostics"
+    output_frame: str | None = None
+    state_types: dict[str, str] = field(default_factory=dict)
+    frame_ids: dict[str, str] = field(default_factory=lambda: {"ned": "map_ned", "enu": "map"})
+
+
+def message_class(type_name: str) -> Any:
+    """The Python class of a ROS message type name such as ``nav_msgs/msg/Odometry``.
+
+    Raises:
+        RuntimeError: the message package is not installed.
+    """
+    package, _, name = type_name.partition("/msg/")
+    try:
+        module = __import__(f"{package}.msg", fromlist=[name])
+        return getattr(module, name)
+    except (ImportError, AttributeError):
+        hint = {"freyja_msgs": "build Freyja's freyja_msgs in your ROS 2 workspace and source it",
+                "px4_msgs": "build PX4's px4_msgs in your ROS 2 workspace and source it"}.get(
+            package, f"pip install ros-{package.replace('_', '-')}")
+        raise RuntimeError(f"message type {type_name} is not available ({hint})") from None
+
+
+def _stamp_s(msg: Any) -> float | None:
+    header = getattr(msg, "header", None)
+    if header is None:
+        return None
+    return header.stamp.sec + header.stamp.nanosec * 1e-9
+
+
+def state_from_message(type_name: str, msg: Any, mapping: dict[str, Any],
+                       received_s: float) -> VehicleState:
+    """A received state message as a NED :class:`VehicleState` (see :mod:`aerodock.node.core`)."""
+    if type_name == ODOMETRY:
+        pose, lin = msg.pose.pose, msg.twist.twist.linear
+        o = pose.orientation
+        return odometry_state(
+            (pose.position.x, pose.position.y, pose.position.z), (o.w, o.x, o.y, o.z),
+            (lin.x, lin.y, lin.z), frame=mapping["frame"], twist=mapping["odom_twist"],
+            received_s=received_s, stamp_s=_stamp_s(msg))
+    if type_name == CURRENT_STATE:
+        return current_state(msg.state_vector, received_s=received_s, stamp_s=_stamp_s(msg))
+    if type_name == PX4_ODOMETRY:
+        return px4_odometry_state(msg.position, msg.q, msg.velocity, int(msg.velocity_frame),
+                                  received_s=received_s, timestamp_us=int(msg.timestamp))
+    raise ValueError(f"state type {type_name} is not one of {', '.join(STATE_TYPES)}")
+
+
+def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerodock_f_ext",
+              warnings_to_log: list[str] | None = None) -> Any:
+    """Build the node (``rclpy.init`` must have been called). See the module docstring."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import Vector3Stamped
+    from rclpy.node import Node
+    from rclpy.qos import qos_profile_sensor_data
+
+    class PredictorNode(Node):
+        """Subscribes to both vehicles' states and publishes f_ext at a fixed rate."""
+
+        def __init__(self) -> None:
+            super().__init__(node_name)
+            self.predictor = predictor
+            self.settings = settings
+            self.states: dict[str, VehicleState | None] = {"leader": None, "follower": None}
+            self.topics = {role: settings.mapping[role]["state"]
+                           for role in ("leader", "follower")}
+            self.types: dict[str, str] = {}
+            self.output_frame = settings.output_frame
+            self.tick = 0
+            self.errors: list[str] = []
+            self.pub = self.create_publisher(Vector3Stamped, settings.output_topic, 10)
+            self.diag_pub = self.create_publisher(DiagnosticArray, settings.diagnostics_topic, 10)
+            self._qos = qos_profile_sensor_data
+            self._subs: list[Any] = []
+            for note in warnings_to_log or []:
+                self.get_logger().warning(note)
+            self._connect()
+            self.timer = self.create_timer(1.0 / settings.rate_hz, self._on_tick)
+            if len(self.types) < 2:
+                self.graph_timer = self.create_timer(0.1, self._connect)
+
+        def _connect(self) -> None:
+            """Subscribe to the state topics whose type is known or now on the graph."""
+            graph = dict(self.get_topic_names_and_types())
+            for role, topic in self.topics.items():
+                if role in self.types:
+                    continue
+                type_name = self.settings.state_types.get(topic)
+                if type_name is None:
+                    found = [t for t in graph.get(topic, []) if t in STATE_TYPES]
+                    if not found:
+                        continue
+                    type_name = found[0]
+                cls = message_class(type_name)
+                self.types[role] = type_name
+                self._subs.append(self.create_subscription(
+                    cls, topic, self._callback(role, type_name), self._qos))
+                if role == "follower" and self.output_frame is None:
+                    self.output_frame = ("ned" if type_name != ODOMETRY
+                                         else self.settings.mapping["frame"])
+                self.get_logger().info(f"{role} state: {topic} ({type_name})")
+            if len(self.types) == 2 and hasattr(self, "graph_timer"):
+                self.graph_timer.cancel()
+
+        def _callback(self, role: str, type_name: str) -> Any:
+            mapping = self.settings.mapping
+
+            def on_state(msg: Any) -> None:
+                try:
+                    self.states[role] = state_from_message(type_name, msg, mapping,
+                                                           time.monotonic())
+                except ValueError as err:  # a message we cannot use: the input goes stale
+                    self.errors.append(str(err))
+
+            return on_state
+
+        def _on_tick(self) -> None:
+            start = time.monotonic()
+            result = prediction_step(self.predictor, self.states["leader"],
+                                     self.states["follower"], start,
+                                     max_age_s=self.settings.max_age_s,
+                                     output_frame=self.output_frame or "ned")
+            stamp = self.get_clock().now().to_msg()
+            out = Vector3Stamped()
+            out.header.stamp = stamp
+            out.header.frame_id = self.settings.frame_ids[self.output_frame or "ned"]
+            out.vector.x, out.vector.y, out.vector.z = (float(v) for v in result.f_ext_mps2)
+            latency_ms = (time.monotonic() - start) * 1e3
+            self.pub.publish(out)
+            self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms))
+            self.tick += 1
+
+        def _diagnostics(self, result: StepResult, stamp: Any, latency_ms: float) -> Any:
+            def ms(value: float) -> str:
+                return "inf" if not np.isfinite(value) else f"{value * 1e3:.4f}"
+
+            status = DiagnosticStatus()
+            status.name = STATUS_NAME
+            status.hardware_id = node_name
+            status.level = DiagnosticStatus.STALE if result.stale else DiagnosticStatus.OK
+            status.message = ("stale or missing input: publishing zero" if result.stale
+                              else "ok")
+            values = {
+                "latency_ms": f"{latency_ms:.4f}",
+                "compute_ms": ms(result.compute_s),
+                "leader_age_ms": ms(result.leader_age_s),
+                "follower_age_ms": ms(result.follower_age_s),
+                "stale": "true" if result.stale else "false",
+                "leader_stamp": repr(result.leader_stamp_s),
+                "follower_stamp": repr(result.follower_stamp_s),
+                "tick": str(self.tick),
+                "output_frame": self.output_frame or "ned",
+            }
+            status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+            array = DiagnosticArray()
+            array.header.stamp = stamp
+            array.status = [status]
+            return array
+
+    return PredictorNode()
+
+
+def run_node(predictor: Any, settings: NodeSettings, *, duration_s: float | None = None,
+             warnings_to_log: list[str] | None = None) -> int:
+    """Run the node until interrupted (or for ``duration_s``); returns the number of ticks."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    rclpy.init()
+    node = make_node(predictor, settings, warnings_to_log=warnings_to_log)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    end = None if duration_s is None else time.monotonic() + duration_s
+    try:
+        while rclpy.ok() and (end is None or time.monotonic() < end):
+            executor.spin_once(timeout_sec=0.05)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        ticks = node.tick
+        executor.remove_node(node)
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return ticks
