@@ -96,12 +96,14 @@ def _register_subpackages() -> None:
     from aerodock.bench import bench_command
     from aerodock.ingest.command import ingest_command
     from aerodock.learning.commands import evaluate_command, export_command, train_command
+    from aerodock.view.command import view_command
 
     app.command("bench")(bench_command)
     app.command("ingest")(ingest_command)
     app.command("train")(train_command)
     app.command("evaluate")(evaluate_command)
     app.command("export")(export_command)
+    app.command("view")(view_command)
 
 
 _register_subpackages()
