@@ -96,6 +96,7 @@ def _register_subpackages() -> None:
     from aerodock.bench import bench_command
     from aerodock.ingest.command import ingest_command
     from aerodock.learning.commands import evaluate_command, export_command, train_command
+    from aerodock.sweep.command import sweep_command
     from aerodock.view.command import view_command
 
     app.command("bench")(bench_command)
@@ -104,6 +105,7 @@ def _register_subpackages() -> None:
     app.command("evaluate")(evaluate_command)
     app.command("export")(export_command)
     app.command("view")(view_command)
+    app.command("sweep")(sweep_command)
 
 
 _register_subpackages()

@@ -139,15 +139,18 @@ class DockingBatch:
         self.max_steps = int(np.ceil(self.end_s / self.dt_s))
 
     # -- episode start -------------------------------------------------------------------------
-    def reset(self, first_trial: int) -> None:
-        """Start trials ``first_trial .. first_trial + n - 1`` of campaign ``spec.seed``.
+    def reset(self, first_trial: int, trials: np.ndarray | None = None) -> None:
+        """Start trials ``first_trial .. first_trial + n - 1`` of campaign ``spec.seed`` (or the
+        explicit trial indices ``trials``, one per row, e.g. the same trial for several rows).
 
-        Trial ``i`` draws every random number from stream ``(spec.seed, first_trial + i)``: the
-        same numbers as in ``run_campaign`` and whatever the batch size.
+        Trial ``k`` draws every random number from stream ``(spec.seed, k)``: the same numbers
+        as in ``run_campaign`` and whatever the batch size.
         """
         cfg, spec, n, m = self.cfg, self.spec, self.n, self.cfg.mission
         self.first_trial = int(first_trial)
-        rng = TrialRNG(spec.seed, n, self.first_trial)
+        self.trials = (self.first_trial + np.arange(n) if trials is None
+                       else np.asarray(trials, dtype=np.int64).copy())
+        rng = TrialRNG(spec.seed, n, trials=self.trials)
         world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
         self.predictor = (OraclePredictor(world.field) if self.comp == Compensation.ORACLE
                           else self.model_predictor)
@@ -158,7 +161,7 @@ class DockingBatch:
         leader_p0 = np.tile([0.0, 0.0, -m.leader_altitude_m], (n, 1))
         dock0 = docking_point_m(leader_p0, np.zeros((n, 3)), geom)
         az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[
-            (self.first_trial + np.arange(n)) % len(spec.start_azimuths_deg)]
+            self.trials % len(spec.start_azimuths_deg)]
         start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
                                   np.full(n, m.start_below_m)], 1)
         start += m.start_jitter_m * rng.standard_normal((n, 3))

@@ -47,7 +47,7 @@ def step_info(batch: DockingBatch, outcome: Any = None) -> dict[str, np.ndarray]
     none = np.zeros(batch.n, dtype=bool)
     return {
         "t_s": np.full(batch.n, batch.t_s),
-        "trial": batch.first_trial + np.arange(batch.n),
+        "trial": batch.trials.copy(),
         "phase": batch.phase.astype(np.int64),
         "docked": none.copy() if outcome is None else outcome.docked.copy(),
         "missed": none.copy() if outcome is None else outcome.missed.copy(),

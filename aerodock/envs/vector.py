@@ -16,6 +16,8 @@ Seeding: ``reset(seed=s)`` flies trials ``s .. s + N - 1`` of campaign ``campaig
 per-trial streams of :class:`aerodock.rng.TrialRNG`), so sub-environment ``i`` is exactly
 ``DockingEnv`` reset with ``seed=s + i`` (the seeds ``gymnasium.vector.SyncVectorEnv`` would
 give): tested step for step. Each autoreset moves on to the next N trial indices.
+``reset(options={"trials": idx})`` flies explicit trial indices, repeats allowed: several
+policies on the same trials (common random numbers, as ``examples/residual_ars.py`` does).
 """
 
 from __future__ import annotations
@@ -60,17 +62,24 @@ class DockingVectorEnv(VectorEnv):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Start N new trials (see the module docstring for which)."""
         super().reset(seed=seed)
-        if options and "trial" in options:
+        trials = None
+        if options and "trials" in options:
+            trials = np.asarray(options["trials"], dtype=np.int64)
+            if trials.shape != (self.num_envs,) or np.any(trials < 0):
+                raise ValueError(f"options['trials'] must hold {self.num_envs} indices >= 0")
+            first = int(trials.max()) + 1 - self.num_envs  # autoreset continues after them
+        elif options and "trial" in options:
             first = int(options["trial"])
         elif seed is not None:
             first = int(seed)
         else:
             first = int(self.np_random.integers(0, MAX_TRIAL_INDEX))
-        return self._start(first)
+        return self._start(first, trials)
 
-    def _start(self, first_trial: int) -> tuple[np.ndarray, dict[str, Any]]:
+    def _start(self, first_trial: int,
+               trials: np.ndarray | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         self._first_trial = first_trial
-        self._batch.reset(first_trial)
+        self._batch.reset(first_trial, trials)
         self._autoreset = False
         self._held_obs = self._batch.observation()
         info = step_info(self._batch)

@@ -1,0 +1,117 @@
+"""The docking environments: Gymnasium's checks, the mission they fly, and batch = single."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+from gymnasium.vector import SyncVectorEnv  # noqa: E402
+
+from aerodock.envs import ENV_ID, DockingEnv, DockingVectorEnv  # noqa: E402
+from aerodock.envs.check import check_vector_env  # noqa: E402
+from aerodock.mission import MissionSpec, run_campaign  # noqa: E402
+
+
+def test_single_env_passes_gymnasium_check_env():
+    env = gym.make(ENV_ID, render_mode="rgb_array")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a checker warning fails the test too
+        check_env(env.unwrapped)
+    frame = env.unwrapped.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+
+
+def test_vector_env_passes_the_vector_checks_and_gymnasium_wrappers():
+    env = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
+    assert isinstance(env.unwrapped, DockingVectorEnv)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_vector_env(env)
+        # Gymnasium's vector wrappers accept its autoreset mode.
+        wrapped = gym.wrappers.vector.RecordEpisodeStatistics(env)
+        wrapped.reset(seed=0)
+        wrapped.step(wrapped.action_space.sample())
+
+
+def test_zero_residual_flies_run_campaigns_mission(cfg):
+    """With no residual, each trial's outcome and clearance are those of run_campaign."""
+    n, seed = 4, 3
+    env = DockingVectorEnv(num_envs=n, campaign_seed=seed, compensation="oracle")
+    env.reset(seed=0)
+    docked = np.zeros(n, bool)
+    missed = np.zeros(n, bool)
+    aborted = np.zeros(n, bool)
+    ret = np.zeros(n)
+    for _ in range(env.batch.max_steps + 1):
+        _, rew, term, trunc, info = env.step(np.zeros((n, 3)))
+        ret += rew
+        docked |= info["docked"]
+        missed |= info["missed"]
+        aborted |= info["aborted"]
+        if term.any() or trunc.any():
+            break
+    assert term.all() and not trunc.any()
+    res = run_campaign(cfg, MissionSpec(trials=n, seed=seed, compensation="oracle"))
+    np.testing.assert_array_equal(docked, res.success)
+    np.testing.assert_array_equal(missed, res.missed)
+    np.testing.assert_array_equal(aborted, res.aborted)
+    np.testing.assert_allclose(info["min_clearance_m"], res.min_clearance_m, rtol=0, atol=0)
+    # Docked trials earn the dock reward (less the small dense costs).
+    assert np.all(ret[res.success] > 8.0) and np.all(ret[~res.success] < 0.0)
+    # The next step autoresets the whole batch onto the next trials.
+    obs, rew, term, trunc, info = env.step(np.zeros((n, 3)))
+    assert not rew.any() and not term.any() and not trunc.any()
+    np.testing.assert_array_equal(info["trial"], np.arange(n, 2 * n))
+
+
+def test_vector_env_equals_sync_vector_env_of_single_envs():
+    """Sub-environment i of the native vector env is DockingEnv reset with seed s + i."""
+    n, s = 3, 10
+    kwargs = {"campaign_seed": 1, "compensation": "observer", "leader_speed_mps": 0.25}
+    native = DockingVectorEnv(num_envs=n, **kwargs)
+    sync = SyncVectorEnv([lambda: DockingEnv(**kwargs) for _ in range(n)])
+    o1, _ = native.reset(seed=s)
+    o2, _ = sync.reset(seed=s)
+    np.testing.assert_array_equal(o1, o2)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        act = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
+        a, ra, ta, _, ia = native.step(act)
+        b, rb, tb, _, ib = sync.step(act)
+        np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(ra, rb)
+        np.testing.assert_array_equal(ta, tb)
+        np.testing.assert_array_equal(ia["phase"], ib["phase"])
+
+
+def test_residual_changes_the_flight_and_leader_dropout_aborts():
+    env = DockingEnv(campaign_seed=0, leader_dropout_s=(1.0, 2.0))
+    obs0, _ = env.reset(seed=5)
+    push = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # up, 2 m/s²
+    for _ in range(30):
+        obs_push, *_ = env.step(push)
+    env.reset(seed=5)
+    for _ in range(30):
+        obs_zero, *_ = env.step(np.zeros(3, np.float32))
+    # Tracking error down (index 2) is smaller when pushed up.
+    assert obs_push[2] < obs_zero[2] - 0.01
+    info = {}
+    for _ in range(env.batch.max_steps):
+        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
+        if term or trunc:
+            break
+    assert term and info["abort_reason"] == 2  # AbortReason.LEADER_LOST
+
+
+def test_bad_arguments_are_refused():
+    with pytest.raises(ValueError, match="needs a predictor"):
+        DockingEnv(compensation="model")
+    with pytest.raises(ValueError, match="offset_m"):
+        DockingEnv(offset_m=-1.0)
+    with pytest.raises(ValueError, match="num"):
+        DockingVectorEnv(num_envs=0)
