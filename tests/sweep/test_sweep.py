@@ -9,7 +9,6 @@ import sys
 
 import pytest
 
-from aerodock.config import load_config
 from aerodock.sweep import SweepSpecError, load_spec, parse_spec, run_sweep, write_table
 
 TINY = """
