@@ -115,3 +115,39 @@ def test_bad_arguments_are_refused():
         DockingEnv(offset_m=-1.0)
     with pytest.raises(ValueError, match="num"):
         DockingVectorEnv(num_envs=0)
+
+
+def test_residual_example_quick_mode_trains_and_evaluates(cfg):
+    """examples/residual_ars.py in quick mode; its baseline is run_campaign's LQG mission."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "residual_ars.py"
+    spec = importlib.util.spec_from_file_location("residual_ars", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    result = mod.main(["--quick"])
+    assert len(result["training"]) == result["settings"]["iterations"] == 2
+    assert result["weights_norm"] > 0  # ARS moved the policy
+    n = result["settings"]["eval_trials"]
+    base = run_campaign(cfg, MissionSpec(trials=n, seed=0, offset_m=0.36,
+                                         compensation="observer",
+                                         first_trial=mod.HELDOUT_FIRST_TRIAL))
+    assert result["baseline_lqg"]["docked_rate"] == base.success.mean()
+    assert result["baseline_lqg"]["aborted_rate"] == base.aborted.mean()
+    for key in ("baseline_lqg", "residual_policy"):
+        r = result[key]
+        assert r["docked_rate"] + r["missed_rate"] + r["aborted_rate"] == pytest.approx(1.0)
+
+
+def test_bench_vector_env_figures(cfg, benchmark):
+    """The bench's env-steps/s figures exist for both batch sizes (speed is measured by
+    `aerodock bench`, not asserted here)."""
+    from aerodock import bench
+    from aerodock.envs.bench import bench_vector_env
+
+    figs = benchmark.pedantic(bench_vector_env, args=(cfg, (1, 8), True), rounds=1,
+                              iterations=1)
+    assert set(figs) == {"1", "8"} and all(f["value"] > 0 for f in figs.values())
+    rows = bench.table_rows({"figures": {"gym_vector_env": figs}})
+    assert [r[0] for r in rows] == ["gym vector env, 1 envs", "gym vector env, 8 envs"]
