@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -22,6 +23,17 @@ def progress_bar() -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(),
                     TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
                     console=err_console, transient=True)
+
+
+def bar_callback(bar: Progress) -> Callable[[str, int, int], None]:
+    """``update(description, done, total)`` driving one task of ``bar`` (shown from the first
+    update): for work that reports its own steps (training epochs, sample-efficiency runs)."""
+    task = bar.add_task("", total=None, visible=False)
+
+    def update(description: str, done: int, total: int) -> None:
+        bar.update(task, description=description, completed=done, total=total, visible=True)
+
+    return update
 
 
 def _load_predictor(model: Path | None, comp: Compensation):
@@ -129,7 +141,11 @@ def collect(
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")
 
-    summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say)
+    with progress_bar() as bar:
+        update = bar_callback(bar)
+        summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say,
+                                 train_kwargs={"progress": lambda e, n, *_: update(
+                                     "training epochs", e, n)})
     if as_json:
         print_json(summary)
         return
@@ -159,6 +175,8 @@ def reproduce(
     def say(msg: str) -> None:
         err_console.print(msg)
 
-    results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data)
+    with progress_bar() as bar:
+        results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
+                                bar=bar_callback(bar))
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
                f"{results['timings_s']['total_s']:.0f} s)")
