@@ -34,3 +34,12 @@ def bench_vector_env(cfg: Any, batches: tuple[int, ...] = ENV_BATCHES, quick: bo
         out[str(n)] = figure([n * steps / t for t in times], "env-steps/s",
                              f"{n} envs, {steps} steps of 10 ms, random residual actions")
     return out
+
+
+if __name__ == "__main__":  # python -m aerodock.envs.bench [--quick]: the figures as JSON
+    import json
+    import sys
+
+    from aerodock.config import load_config
+
+    print(json.dumps(bench_vector_env(load_config(), quick="--quick" in sys.argv), indent=2))
