@@ -61,13 +61,16 @@ class Track:
 def track_from_flightlog(log: FlightLog, cfg: Any | None = None) -> Track:
     """A Track from one FlightLog; the bar, gate and predicted force where the log has them.
 
-    The gate state comes from the mission phase the simulator logs (captured, missed, or open
-    while approaching); a closing gate is not in the FlightLog, so it is not shown.
+    The gate state is the log's ``gate`` extra if it has one, else it comes from the mission
+    phase the simulator logs (captured, missed, or open while approaching; a closing gate is then
+    not shown).
     """
     extra = log.extra
     bar = extra.get("bar_pos_m")
     gate = None
-    if "phase" in extra:
+    if "gate" in extra:  # a log that records the gate itself (GateState values)
+        gate = np.asarray(extra["gate"]).astype(int)
+    elif "phase" in extra:
         phase = np.asarray(extra["phase"])
         gate = np.full(phase.shape, int(GateState.OPEN))
         gate[phase == Phase.CAPTURED] = GateState.CAPTURED

@@ -35,7 +35,8 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert (res["hover_docking"]["with_model"]["success_rate"]
             > res["hover_docking"]["without_model"]["success_rate"])
     report = (out / "report.md").read_text()
+    assert "figures/hover_docking.gif" in res["figures"]
     assert "Cable-length study" in report and "8/10" in report
     for fig in res["figures"]:
-        assert (out / fig).read_bytes()[:4] == b"\x89PNG", fig
+        assert (out / fig).read_bytes()[:4] in (b"\x89PNG", b"GIF8"), fig  # + the docking GIF
         assert f"({fig})" in report
