@@ -13,6 +13,7 @@ needs ffmpeg on PATH.
 
 from __future__ import annotations
 
+import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -287,6 +288,9 @@ def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: fl
                     progress(j + 1, len(idx))
         with atomic_open(out, "wb") as fh:  # never a half-written video under the final name
             fh.write(tmp.read_bytes())
+        umask = os.umask(0)
+        os.umask(umask)
+        out.chmod(0o666 & ~umask)  # readable like any figure (the temporary file was private)
     finally:
         tmp.unlink(missing_ok=True)
         drawer.close()
