@@ -8,7 +8,7 @@ STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 #   make test TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu
 TORCH_INDEX_URL ?=
 TORCH_PIP_ARGS := $(if $(TORCH_INDEX_URL),--index-url $(TORCH_INDEX_URL))
-EXTRAS := learn,export,ingest,ros,dev
+EXTRAS := learn,export,ingest,ros,gym,ray,parquet,viz,dev
 
 .PHONY: demo test lint bench clean
 

@@ -19,6 +19,8 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``reproduce_quick``: wall time of ``aerodock reproduce --quick`` (one run, subprocess).
 - ``memory``: peak memory of a 1024-trial campaign (fresh subprocesses): of the whole process,
   and of the campaign's own allocations.
+- ``gym_vector_env``: env-steps per second of :class:`aerodock.envs.DockingVectorEnv` at 1 and
+  256 environments (:func:`aerodock.envs.bench.bench_vector_env`; needs ``aerodock[gym]``).
 - ``peer``: the RotorPy comparison of ``bench/compare_rotorpy.py`` (:func:`compare_rotorpy`).
 
 The same functions serve ``bench/compare_rotorpy.py`` and the pytest-benchmark tests.
@@ -910,6 +912,12 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = _quiet,
         include_reproduce = not quick
     figs["reproduce_quick_s"] = (bench_reproduce(progress, config_path) if include_reproduce
                                  else unavailable("skipped with --quick (takes minutes)", "s"))
+    try:
+        from aerodock.envs.bench import bench_vector_env
+    except ImportError as err:  # gymnasium is an optional extra
+        figs["gym_vector_env"] = {"1": unavailable(_reason(err), "env-steps/s")}
+    else:
+        figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
     if include_peer:
         figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
     return {
@@ -954,6 +962,8 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
     for n, row in figs.get("simulator", {}).items():
         add(f"simulator, batch {n}, with controllers", row.get("with_controllers"))
         add(f"simulator, batch {n}, physics only", row.get("physics_only"))
+    for n, fig in figs.get("gym_vector_env", {}).items():
+        add(f"gym vector env, {n} envs", fig)
     for key, label in (("trial_1", "docking trial (1)"),
                        ("campaign_100", "docking campaign (100)")):
         add(label, figs.get("docking", {}).get(key))

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -22,6 +23,17 @@ def progress_bar() -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(),
                     TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
                     console=err_console, transient=True)
+
+
+def bar_callback(bar: Progress) -> Callable[[str, int, int], None]:
+    """``update(description, done, total)`` driving one task of ``bar`` (shown from the first
+    update): for work that reports its own steps (training epochs, sample-efficiency runs)."""
+    task = bar.add_task("", total=None, visible=False)
+
+    def update(description: str, done: int, total: int) -> None:
+        bar.update(task, description=description, completed=done, total=total, visible=True)
+
+    return update
 
 
 def _load_predictor(model: Path | None, comp: Compensation):
@@ -161,6 +173,8 @@ def _register_subpackages() -> None:
     from aerodock.ingest.command import ingest_command
     from aerodock.learning.commands import evaluate_command, export_command, train_command
     from aerodock.node.command import node_command
+    from aerodock.sweep.command import sweep_command
+    from aerodock.view.command import view_command
 
     app.command("bench")(bench_command)
     app.command("ingest")(ingest_command)
@@ -168,6 +182,8 @@ def _register_subpackages() -> None:
     app.command("evaluate")(evaluate_command)
     app.command("export")(export_command)
     app.command("node")(node_command)
+    app.command("view")(view_command)
+    app.command("sweep")(sweep_command)
 
 
 _register_subpackages()
@@ -191,7 +207,11 @@ def collect(
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")
 
-    summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say)
+    with progress_bar() as bar:
+        update = bar_callback(bar)
+        summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say,
+                                 train_kwargs={"progress": lambda e, n, *_: update(
+                                     "training epochs", e, n)})
     if as_json:
         print_json(summary)
         return
@@ -221,6 +241,8 @@ def reproduce(
     def say(msg: str) -> None:
         err_console.print(msg)
 
-    results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data)
+    with progress_bar() as bar:
+        results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
+                                bar=bar_callback(bar))
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
                f"{results['timings_s']['total_s']:.0f} s)")

@@ -23,13 +23,18 @@ class TrialRNG:
         seed: campaign seed.
         n: number of trials in this batch.
         first_trial: index of the first trial (a single trial ``i`` is ``TrialRNG(seed, 1, i)``).
+        trials: explicit trial indices, one per row, instead of ``first_trial + i`` (e.g. the
+            same trials flown by several policies: common random numbers).
     """
 
-    def __init__(self, seed: int, n: int, first_trial: int = 0):
+    def __init__(self, seed: int, n: int, first_trial: int = 0, trials: Any = None):
         self.seed = int(seed)
         self.n = int(n)
         self.first_trial = int(first_trial)
-        self._gens = [np.random.default_rng([self.seed, self.first_trial + i]) for i in range(n)]
+        index = self.first_trial + np.arange(n) if trials is None else np.asarray(trials)
+        if index.shape != (self.n,):
+            raise ValueError(f"trials must hold {self.n} indices, got shape {index.shape}")
+        self._gens = [np.random.default_rng([self.seed, int(t)]) for t in index]
         self._shared = np.random.default_rng([self.seed, -1 & 0x7FFFFFFF])
         self._buf = {"normal": np.empty((n, 0)), "uniform": np.empty((n, 0))}
         self._pos = {"normal": 0, "uniform": 0}

@@ -142,6 +142,18 @@ def fig_moving(traces: dict[str, dict], fig_dir: Path, meet_s: float, hold_s: fl
     return _save(fig, fig_dir / "moving_altitude_error.png")
 
 
+def fig_docking_animation(tr: dict[str, Any], fig_dir: Path, cfg: Config) -> Path:
+    """An animated GIF of the first docked trial of a traced campaign (aerodock.view)."""
+    from aerodock.view.render import render_animation, track_from_trace
+
+    i = int(np.argmax(tr["success"]))
+    end = np.searchsorted(tr["t_s"], float(tr["arrival_s"]) + 1.5)
+    track = track_from_trace({k: tr[k][:end] for k in ("t_s", "leader_p", "follower_p",
+                                                       "bar_p", "gate", "ff")}, i, cfg,
+                             f"hover docking with the model, trial {i} (docked)")
+    return render_animation(track, fig_dir / "hover_docking.gif", fps=10, max_frames=60, dpi=60)
+
+
 # -- report ----------------------------------------------------------------------------------
 def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
                  cfg: Config) -> list[str]:
@@ -155,6 +167,7 @@ def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
                                   hover["with_model"]["success"]))
     if np.any(hover["with_model"]["success"]):
         figs.append(fig_planar_forces(hover["with_model"], fig_dir))
+        figs.append(fig_docking_animation(hover["with_model"], fig_dir, cfg))
         both = {}
         tw, tm = hover["with_model"], hover["without_model"]
         n = min(len(tw["t_s"]), len(tm["t_s"]))

@@ -170,8 +170,12 @@ def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
 
 def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
                   say: Callable[[str], None] = print,
-                  shared_data: Path | None = None) -> dict[str, Any]:
-    """Run every experiment and write ``results.json``, ``report.md`` and ``figures/``."""
+                  shared_data: Path | None = None,
+                  bar: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
+    """Run every experiment and write ``results.json``, ``report.md`` and ``figures/``.
+
+    ``bar(description, done, total)``, if given, follows training epochs and the sample-efficiency
+    runs (a progress bar)."""
     from aerodock.experiments.report import write_report
     from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
     from aerodock.learning.dataset import build_dataset, save_dataset
@@ -198,7 +202,9 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     t0 = time.perf_counter()
     say("1/5 curriculum data collection and training")
     data_dir = out_dir / "data"
-    curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m))
+    epochs = None if bar is None else {"progress": lambda e, n, *_: bar("training epochs", e, n)}
+    curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m),
+                                train_kwargs=epochs)
     model_dir = Path(curriculum["final_model"])
     predictor = Predictor.load(model_dir)
     test_logs = []
@@ -231,6 +237,7 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
         build_dataset(train_logs), test_ds, kinds=("so2", "so2-ext", "mlp"),
         minutes=size.se_minutes, seeds=size.se_seeds, out_dir=fig_dir,
         train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
+        progress=bar,
     )
     results["sample_efficiency"] = se
     timings["sample_efficiency_s"] = time.perf_counter() - t0

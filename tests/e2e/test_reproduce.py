@@ -44,9 +44,10 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 1.0, 0.25]
     assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
     report = (out / "report.md").read_text()
+    assert "figures/hover_docking.gif" in res["figures"]
     assert "Cable-length study" in report and "8/10" in report
     assert "The paper's controller and ours, side by side" in report
     assert "What each lever costs" in report
     for fig in res["figures"]:
-        assert (out / fig).read_bytes()[:4] == b"\x89PNG", fig
+        assert (out / fig).read_bytes()[:4] in (b"\x89PNG", b"GIF8"), fig  # + the docking GIF
         assert f"({fig})" in report

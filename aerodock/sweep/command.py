@@ -1,0 +1,78 @@
+"""``aerodock sweep SPEC.toml``: run a study, write its tidy table and summary figures."""
+
+from __future__ import annotations
+
+import json
+import time
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+
+class Backend(StrEnum):
+    """Where the cells run."""
+
+    LOCAL = "local"
+    RAY = "ray"
+
+
+def sweep_command(
+    spec_path: Annotated[Path, typer.Argument(metavar="SPEC.toml",
+                                              help="The study (see aerodock/sweep/spec.py).")],
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/sweep"),
+    backend: Annotated[Backend, typer.Option(help="local processes, or Ray.")] = Backend.LOCAL,
+    address: Annotated[str | None, typer.Option(
+        help="An existing Ray cluster (e.g. auto or ray://host:10001); --backend ray.")] = None,
+    jobs: Annotated[int | None, typer.Option(
+        help="Parallel workers (default: all CPUs).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+) -> None:
+    """A grid or random study of docking campaigns (cable length x leader speed x noise x fault
+    x compensation x seed): results.csv (+ results.parquet with pyarrow), summary.json and
+    figures/sweep_success.png, figures/sweep_error.png."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from aerodock.cli import fail, print_json
+    from aerodock.commands import progress_bar
+    from aerodock.config import load_config
+    from aerodock.fileio import atomic_open, json_default
+    from aerodock.sweep.figures import cell_summaries, plot_sweep
+    from aerodock.sweep.run import run_sweep, write_table
+    from aerodock.sweep.spec import load_spec
+
+    spec = load_spec(spec_path)
+    if address is not None and backend != Backend.RAY:
+        fail("--address needs --backend ray")
+    cfg = load_config(spec.config)
+    started = time.perf_counter()
+    with progress_bar() as bar:
+        task = bar.add_task(f"sweep: {len(spec.cells)} campaigns x {spec.trials} trials "
+                            f"({backend.value})", total=len(spec.cells))
+        rows = run_sweep(spec, cfg, backend=backend.value, jobs=jobs, address=address,
+                         progress=lambda d, n: bar.update(task, completed=d))
+    files = write_table(rows, out)
+    figures = [str(p) for p in plot_sweep(rows, out / "figures", spec.name)]
+    summary = {"name": spec.name, "kind": spec.kind, "spec": str(spec_path),
+               "backend": backend.value, "campaigns": len(spec.cells), "trials": len(rows),
+               "docked": sum(r["docked"] for r in rows), "wall_s": time.perf_counter() - started,
+               "files": files, "figures": figures, "cells": cell_summaries(rows)}
+    with atomic_open(out / "summary.json", "w") as fh:
+        json.dump(summary, fh, indent=2, default=json_default)
+    if as_json:
+        print_json(summary)
+        return
+    table = Table(title=f"{spec.name}: {len(rows)} trials, {len(spec.cells)} campaigns")
+    for col in ("cell", "d_p [m]", "speed [m/s]", "noise", "fault", "compensation", "seed",
+                "docked"):
+        table.add_column(col)
+    for c in summary["cells"]:
+        lo, hi = c["success_wilson95"]
+        table.add_row(str(c["cell"]), f"{c['cable_length_m']:g}", f"{c['leader_speed_mps']:g}",
+                      f"{c['mocap_noise_scale']:g}", c["fault"], c["compensation"],
+                      str(c["seed"]), f"{c['docked']}/{c['trials']} ({lo:.0%}-{hi:.0%})")
+    Console().print(table)
+    typer.echo(f"wrote {', '.join(files.values())}, {out / 'summary.json'} and "
+               f"{len(figures)} figures in {out / 'figures'} ({summary['wall_s']:.0f} s)")

@@ -1,0 +1,207 @@
+"""Running a sweep: one docking campaign per cell, on local processes or on Ray.
+
+Every cell is :func:`aerodock.mission.run_campaign` with its own seed, so a cell's numbers do not
+depend on where or in which order it runs: the local and the Ray backends give the same table
+(tested). The table is tidy: one row per trial, the cell's settings in columns beside the trial's
+outcome (:data:`OUTCOME_COLUMNS`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.sweep.spec import Cell, SweepSpec
+
+OUTCOME_COLUMNS = (
+    ("trial", "trial index within the campaign"),
+    ("docked", "the bar was captured (bool)"),
+    ("missed", "the gate closed without the bar (bool)"),
+    ("slipped", "the bar slipped through the closing gate (bool)"),
+    ("aborted", "the mission aborted (bool)"),
+    ("abort_reason", "none | timeout | leader_lost | unsafe_tracking"),
+    ("clearance_violation", "the follower's top came closer than clearance_m (bool)"),
+    ("min_clearance_m", "closest follower-top to leader distance, m"),
+    ("capture_time_s", "mission time of the capture, s (empty if not docked)"),
+    ("err_down_m", "mean |vertical tracking error| over the final 0.5 s of the approach, m"),
+    ("err_3d_m", "mean 3-D tracking error over the same window, m"),
+)
+
+Progress = Callable[[int, int], None]
+
+
+def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> list[dict[str, Any]]:
+    """Fly one cell's campaign; its rows of the tidy table."""
+    from aerodock.mission import AbortReason, MissionSpec, run_campaign
+
+    over: dict[str, Any] = {}
+    if cell.mocap_noise_scale != 1.0:
+        over["mocap"] = {"pos_noise_m": cfg.mocap.pos_noise_m * cell.mocap_noise_scale,
+                         "vel_noise_mps": cfg.mocap.vel_noise_mps * cell.mocap_noise_scale}
+    if over:
+        cfg = cfg.with_overrides(over, source="sweep cell")
+    predictor = None
+    if cell.compensation == "model":
+        from aerodock.learning.runtime import Predictor
+
+        predictor = Predictor.load(model)
+    spec = MissionSpec(trials=trials, offset_m=cell.cable_length_m,
+                       leader_speed_mps=cell.leader_speed_mps, compensation=cell.compensation,
+                       seed=cell.seed, leader_dropout_s=cell.leader_dropout_s)
+    res = run_campaign(cfg, spec, predictor)
+    base = cell.row()
+    if base["cable_length_m"] is None:
+        base["cable_length_m"] = cfg.platform.cable_length_m
+    rows = []
+    for i in range(trials):
+        cap = float(res.capture_time_s[i])
+        rows.append({**base, "trial": i, "docked": bool(res.success[i]),
+                     "missed": bool(res.missed[i]), "slipped": bool(res.slipped[i]),
+                     "aborted": bool(res.aborted[i]),
+                     "abort_reason": AbortReason(int(res.abort_reason[i])).name.lower(),
+                     "clearance_violation": bool(res.clearance_violation[i]),
+                     "min_clearance_m": float(res.min_clearance_m[i]),
+                     "capture_time_s": None if np.isnan(cap) else cap,
+                     "err_down_m": float(res.err_down_m[i]), "err_3d_m": float(res.err_3d_m[i])})
+    return rows
+
+
+def _cell_job(cfg_data: dict[str, Any], cfg_source: str, cell: Cell, trials: int,
+              model: str | None) -> tuple[int, list[dict[str, Any]]]:
+    """A picklable job: (cell index, rows)."""
+    return cell.index, run_cell(Config(cfg_data, cfg_source), cell, trials, model)
+
+
+_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def _single_threaded_children() -> Iterator[None]:
+    """Child processes started inside see one thread per BLAS/OpenMP pool (restored after)."""
+    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
+    os.environ.update({k: "1" for k in _THREAD_VARS})
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | None = None,
+              address: str | None = None, progress: Progress | None = None
+              ) -> list[dict[str, Any]]:
+    """Every cell of ``spec``; the rows of the tidy table, ordered by cell then trial.
+
+    Args:
+        spec: the sweep.
+        cfg: the configuration every cell starts from.
+        backend: ``"local"`` (processes on this machine) or ``"ray"``.
+        jobs: parallel workers (local: processes, default the CPU count; ray: CPUs of a local
+            Ray instance it starts, default all).
+        address: an existing Ray cluster's address (``ray`` backend), e.g. ``"auto"``.
+        progress: called as ``progress(done, total)`` after every cell.
+    """
+    if backend not in ("local", "ray"):
+        raise ValueError(f"--backend must be local or ray, got {backend!r}")
+    if jobs is not None and jobs < 1:
+        raise ValueError(f"--jobs must be >= 1, got {jobs}")
+    model = None if spec.model is None else str(spec.model)
+    args = [(cfg.data, cfg.source, c, spec.trials, model) for c in spec.cells]
+    results: dict[int, list[dict[str, Any]]] = {}
+    total = len(args)
+    if backend == "local":
+        workers = min(jobs or os.cpu_count() or 1, total)
+        if workers == 1:
+            for a in args:
+                idx, rows = _cell_job(*a)
+                results[idx] = rows
+                if progress:
+                    progress(len(results), total)
+        else:
+            # Fresh interpreters with one BLAS/OpenMP thread each: N processes on N cores
+            # (inherited thread pools oversubscribe the cores and spin in the kernel).
+            with _single_threaded_children(), ProcessPoolExecutor(
+                    max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+                futures = [pool.submit(_cell_job, *a) for a in args]
+                for fut in as_completed(futures):
+                    idx, rows = fut.result()
+                    results[idx] = rows
+                    if progress:
+                        progress(len(results), total)
+    else:
+        results = _run_ray(args, jobs, address, progress)
+    return [row for idx in sorted(results) for row in results[idx]]
+
+
+def _run_ray(args: list[tuple], jobs: int | None, address: str | None,
+             progress: Progress | None) -> dict[int, list[dict[str, Any]]]:
+    try:
+        import ray
+    except ImportError:
+        raise ValueError("--backend ray needs Ray: pip install 'aerodock[ray]'") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        if address is not None:
+            ray.init(address=address, log_to_driver=False)
+        else:
+            ray.init(num_cpus=jobs, include_dashboard=False, log_to_driver=False)
+    try:
+        job = ray.remote(num_cpus=1)(_cell_job)
+        pending = [job.remote(*a) for a in args]
+        results: dict[int, list[dict[str, Any]]] = {}
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            idx, rows = ray.get(done[0])
+            results[idx] = rows
+            if progress:
+                progress(len(results), len(args))
+        return results
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def columns(rows: list[dict[str, Any]]) -> list[str]:
+    """Column names of the tidy table, in order."""
+    return list(rows[0]) if rows else []
+
+
+def write_table(rows: list[dict[str, Any]], out_dir: Path) -> dict[str, str]:
+    """Write ``results.csv`` (always) and ``results.parquet`` (if pyarrow is installed)."""
+    import csv
+    import io
+
+    from aerodock.fileio import atomic_open
+
+    out_dir = Path(out_dir)
+    names = columns(rows)
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=names, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: "" if v is None else repr(v) if isinstance(v, float) else v
+                         for k, v in row.items()})
+    with atomic_open(out_dir / "results.csv", "w") as fh:
+        fh.write(buf.getvalue())
+    written = {"csv": str(out_dir / "results.csv")}
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        return written
+    table = pa.Table.from_pylist(rows)
+    with atomic_open(out_dir / "results.parquet", "wb") as fh:
+        pq.write_table(table, fh)
+    written["parquet"] = str(out_dir / "results.parquet")
+    return written

@@ -1,0 +1,219 @@
+"""A sweep's specification (TOML) and the cells it expands to.
+
+```toml
+[sweep]
+kind = "grid"            # "grid": every combination; "random": `samples` random points
+trials = 8               # docking trials per cell (one campaign per cell)
+seeds = [0, 1]           # every point is flown with each campaign seed
+samples = 20             # random only: number of points
+sampling_seed = 0        # random only: seed of the draw of the points
+model = "models/final"   # needed if compensation includes "model"
+config = "my.toml"       # optional aerodock config (relative to this file)
+
+[axes]                   # each axis: a list of values, or (random only) {min = a, max = b}
+cable_length_m = [0.36, 0.64, 1.35]      # d_p, m
+leader_speed_mps = [0.0, 0.25]           # leader speed towards north, m/s
+mocap_noise_scale = [1.0, 5.0]           # x the config's motion-capture noise (pos and vel)
+leader_dropout_s = ["none", [3.0, 1.0]]  # fault: leader state lost from 3 s for 1 s
+compensation = ["observer", "oracle"]    # none | observer | model | oracle
+```
+
+Axes left out keep the config's value (compensation: ``observer``; no fault). A grid's points
+are the Cartesian product in the order above; a random study draws each axis independently
+(uniform on ``{min, max}``, uniform choice from a list).
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.control.compensation import Compensation
+
+AXES = ("cable_length_m", "leader_speed_mps", "mocap_noise_scale", "leader_dropout_s",
+        "compensation")
+_NUMERIC = {"cable_length_m": (0.0, False), "leader_speed_mps": (None, True),
+            "mocap_noise_scale": (0.0, True)}  # axis: (lower bound, bound allowed)
+_SWEEP_KEYS = {"kind", "trials", "seeds", "samples", "sampling_seed", "model", "config", "name"}
+
+
+class SweepSpecError(ValueError):
+    """The sweep specification is invalid; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One campaign of the sweep: a point of the axes and a campaign seed."""
+
+    index: int
+    cable_length_m: float | None
+    leader_speed_mps: float
+    mocap_noise_scale: float
+    leader_dropout_s: tuple[float, float] | None
+    compensation: str
+    seed: int
+
+    def row(self) -> dict[str, Any]:
+        """The cell's columns of the tidy table."""
+        drop = self.leader_dropout_s
+        return {"cell": self.index, "cable_length_m": self.cable_length_m,
+                "leader_speed_mps": self.leader_speed_mps,
+                "mocap_noise_scale": self.mocap_noise_scale,
+                "fault": "none" if drop is None else "leader_dropout",
+                "dropout_start_s": None if drop is None else drop[0],
+                "dropout_duration_s": None if drop is None else drop[1],
+                "compensation": self.compensation, "seed": self.seed}
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep specification (see the module docstring)."""
+
+    kind: str
+    trials: int
+    seeds: tuple[int, ...]
+    axes: dict[str, Any]
+    samples: int = 0
+    sampling_seed: int = 0
+    model: Path | None = None
+    config: Path | None = None
+    name: str = "sweep"
+    source: str = "spec"
+    cells: tuple[Cell, ...] = field(default=())
+
+
+def _fail(source: str, msg: str) -> SweepSpecError:
+    return SweepSpecError(f"{source}: {msg}")
+
+
+def _check_value(source: str, axis: str, value: Any) -> Any:
+    """One axis value, validated and normalised."""
+    if axis in _NUMERIC:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise _fail(source, f"axes.{axis}: values must be numbers, got {value!r}")
+        low, equal_ok = _NUMERIC[axis]
+        if low is not None and (value < low or (value == low and not equal_ok)):
+            raise _fail(source, f"axes.{axis}: {value!r} must be "
+                        f"{'>=' if equal_ok else '>'} {low}")
+        return float(value)
+    if axis == "compensation":
+        try:
+            return Compensation(value).value
+        except ValueError:
+            raise _fail(source, f"axes.compensation: {value!r} is not one of "
+                        "none|observer|model|oracle") from None
+    if axis == "leader_dropout_s":
+        if value == "none":
+            return None
+        ok = (isinstance(value, list) and len(value) == 2
+              and all(isinstance(v, int | float) and not isinstance(v, bool) and v >= 0
+                      for v in value) and value[1] > 0)
+        if not ok:
+            raise _fail(source, f"axes.leader_dropout_s: {value!r} must be \"none\" or "
+                        "[start_s, duration_s] with duration > 0")
+        return (float(value[0]), float(value[1]))
+    raise _fail(source, f"unknown axis 'axes.{axis}' (known: {', '.join(AXES)})")
+
+
+def parse_spec(data: dict[str, Any], source: str = "spec", base_dir: Path | None = None
+               ) -> SweepSpec:
+    """Validate a specification (a parsed TOML document) and expand its cells."""
+    unknown = set(data) - {"sweep", "axes"}
+    if unknown:
+        raise _fail(source, f"unknown table(s) {sorted(unknown)} (expected [sweep] and [axes])")
+    sw = data.get("sweep", {})
+    bad = set(sw) - _SWEEP_KEYS
+    if bad:
+        raise _fail(source, f"unknown key(s) {sorted('sweep.' + k for k in bad)}")
+    kind = sw.get("kind", "grid")
+    if kind not in ("grid", "random"):
+        raise _fail(source, f"sweep.kind must be \"grid\" or \"random\", got {kind!r}")
+    trials = sw.get("trials", 8)
+    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
+        raise _fail(source, f"sweep.trials must be an integer >= 1, got {trials!r}")
+    seeds = sw.get("seeds", [0])
+    if (not isinstance(seeds, list) or not seeds
+            or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)):
+        raise _fail(source, f"sweep.seeds must be a non-empty list of integers, got {seeds!r}")
+    samples = sw.get("samples", 0)
+    if kind == "random" and (not isinstance(samples, int) or samples < 1):
+        raise _fail(source, f"sweep.samples must be an integer >= 1 for a random study, "
+                    f"got {samples!r}")
+    base = base_dir or Path.cwd()
+    model = Path(base, sw["model"]) if "model" in sw else None
+    config = Path(base, sw["config"]) if "config" in sw else None
+    raw_axes = data.get("axes", {})
+    axes: dict[str, Any] = {}
+    for axis, values in raw_axes.items():
+        if axis not in AXES:
+            raise _fail(source, f"unknown axis 'axes.{axis}' (known: {', '.join(AXES)})")
+        if isinstance(values, dict):
+            if kind != "random" or axis not in _NUMERIC or set(values) != {"min", "max"}:
+                raise _fail(source, f"axes.{axis}: a {{min, max}} range needs a random study "
+                            "and a numeric axis")
+            lo, hi = (_check_value(source, axis, values[k]) for k in ("min", "max"))
+            if not hi >= lo:
+                raise _fail(source, f"axes.{axis}: max must be >= min")
+            axes[axis] = {"min": lo, "max": hi}
+        elif isinstance(values, list) and values:
+            axes[axis] = [_check_value(source, axis, v) for v in values]
+        else:
+            raise _fail(source, f"axes.{axis} must be a non-empty list of values")
+    comps = axes.get("compensation", ["observer"])
+    if "model" in comps and model is None:
+        raise _fail(source, "compensation \"model\" needs sweep.model = \"MODEL_DIR\"")
+    spec = SweepSpec(kind=kind, trials=trials, seeds=tuple(seeds), axes=axes, samples=samples,
+                     sampling_seed=int(sw.get("sampling_seed", 0)), model=model, config=config,
+                     name=str(sw.get("name", "sweep")), source=source)
+    return _with_cells(spec)
+
+
+def load_spec(path: str | Path) -> SweepSpec:
+    """Read and validate a sweep specification file."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SweepSpecError(f"{path}: sweep specification not found") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise SweepSpecError(f"{path}: cannot read ({err})") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SweepSpecError(f"{path}: invalid TOML ({err})") from None
+    return parse_spec(data, str(path), path.parent)
+
+
+def _points(spec: SweepSpec) -> list[dict[str, Any]]:
+    names = [a for a in AXES if a in spec.axes]
+    if spec.kind == "grid":
+        return [dict(zip(names, combo, strict=True))
+                for combo in itertools.product(*(spec.axes[a] for a in names))]
+    rng = np.random.default_rng(spec.sampling_seed)
+    points = []
+    for _ in range(spec.samples):
+        point = {}
+        for a in names:
+            values = spec.axes[a]
+            if isinstance(values, dict):
+                point[a] = float(rng.uniform(values["min"], values["max"]))
+            else:
+                point[a] = values[int(rng.integers(len(values)))]
+        points.append(point)
+    return points
+
+
+def _with_cells(spec: SweepSpec) -> SweepSpec:
+    cells = []
+    for point in _points(spec):
+        for seed in spec.seeds:
+            cells.append(Cell(
+                index=len(cells), cable_length_m=point.get("cable_length_m"),
+                leader_speed_mps=point.get("leader_speed_mps", 0.0),
+                mocap_noise_scale=point.get("mocap_noise_scale", 1.0),
+                leader_dropout_s=point.get("leader_dropout_s"),
+                compensation=point.get("compensation", "observer"), seed=int(seed)))
+    return SweepSpec(**{**spec.__dict__, "cells": tuple(cells)})

@@ -1,0 +1,13 @@
+"""Watching a trial: animations of FlightLogs (``aerodock view``) and an optional rerun stream."""
+
+from aerodock.view.render import (
+    FrameDrawer,
+    Track,
+    frame_indices,
+    render_animation,
+    track_from_flightlog,
+    track_from_trace,
+)
+
+__all__ = ["FrameDrawer", "Track", "frame_indices", "render_animation", "track_from_flightlog",
+           "track_from_trace"]

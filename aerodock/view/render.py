@@ -1,0 +1,317 @@
+"""Animations of a docking trial (or any two-vehicle FlightLog), drawn with matplotlib.
+
+A :class:`Track` holds what is drawn, from a FlightLog (:func:`track_from_flightlog`: simulated
+with ``dock --save-logs`` or ingested from real logs) or from a campaign trace
+(:func:`track_from_trace`). Each frame has a side view (north against altitude) and a top view
+(east against north): both vehicles with their arms (attitude from the log), the bar and its two
+cables, the gate's state (colour of the follower's gripper) and the predicted-force arrow.
+What a log lacks is left out and said on the frame (a real log has no bar, gate or prediction).
+
+GIFs are written with matplotlib's PillowWriter (always available with matplotlib); ``.mp4``
+needs ffmpeg on PATH.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.fileio import atomic_open
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import quat_to_rotmat
+from aerodock.gripper import GateState
+from aerodock.mission import Phase
+from aerodock.plots import _plt
+
+GATE_COLOURS = {GateState.OPEN: "tab:green", GateState.CLOSING: "tab:orange",
+                GateState.CAPTURED: "tab:blue", GateState.MISSED: "tab:red"}
+FORCE_SCALE_M_PER_MPS2 = 0.05  # a 10 m/s² predicted force is drawn 0.5 m long
+CRAZYFLIE_DIAGONAL_M = 0.092  # motor-to-motor (real Crazyflie logs carry no size)
+SIM_DIAGONAL_M = 0.27
+
+
+@dataclass
+class Track:
+    """What an animation draws, T samples, NED, SI units (optional parts may be None)."""
+
+    t_s: np.ndarray
+    leader_p: np.ndarray
+    follower_p: np.ndarray
+    leader_R: np.ndarray | None = None  # (T, 3, 3) body to world
+    follower_R: np.ndarray | None = None
+    bar_p: np.ndarray | None = None
+    gate: np.ndarray | None = None  # (T,) GateState values
+    force_mps2: np.ndarray | None = None  # (T, 3) predicted external acceleration
+    diagonal_m: float = SIM_DIAGONAL_M
+    anchor_below_leader_m: float = 0.02
+    cable_spacing_m: float = 0.15
+    title: str = "trial"
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of time samples."""
+        return int(self.t_s.shape[0])
+
+
+def track_from_flightlog(log: FlightLog, cfg: Any | None = None) -> Track:
+    """A Track from one FlightLog; the bar, gate and predicted force where the log has them.
+
+    The gate state is the log's ``gate`` extra if it has one, else it comes from the mission
+    phase the simulator logs (captured, missed, or open while approaching; a closing gate is then
+    not shown).
+    """
+    extra = log.extra
+    bar = extra.get("bar_pos_m")
+    gate = None
+    if "gate" in extra:  # a log that records the gate itself (GateState values)
+        gate = np.asarray(extra["gate"]).astype(int)
+    elif "phase" in extra:
+        phase = np.asarray(extra["phase"])
+        gate = np.full(phase.shape, int(GateState.OPEN))
+        gate[phase == Phase.CAPTURED] = GateState.CAPTURED
+        gate[phase == Phase.MISSED] = GateState.MISSED
+        # After the follower is done the gate keeps the state it resolved to.
+        for k in range(1, len(gate)):
+            if phase[k] == Phase.DONE:
+                gate[k] = gate[k - 1]
+    force = extra.get("feedforward_mps2")
+    if force is not None and not np.any(force):
+        force = None  # flown without a feed-forward model: nothing predicted
+    mass = float(log.meta.get("follower_mass_kg", 0.7))
+    diagonal = float(log.meta.get("diagonal_m", CRAZYFLIE_DIAGONAL_M if mass < 0.1
+                                  else SIM_DIAGONAL_M))
+    notes = []
+    if bar is None:
+        notes.append("no bar in this log")
+    if gate is None:
+        notes.append("no gate state in this log")
+    if force is None:
+        notes.append("no predicted force in this log")
+    plat = cfg.platform if cfg is not None else None
+    return Track(
+        t_s=log.t_s - log.t_s[0], leader_p=log.leader_pos_m, follower_p=log.follower_pos_m,
+        leader_R=quat_to_rotmat(log.leader_quat), follower_R=quat_to_rotmat(log.follower_quat),
+        bar_p=bar, gate=gate, force_mps2=force, diagonal_m=diagonal,
+        anchor_below_leader_m=plat.anchor_below_leader_m if plat else 0.02,
+        cable_spacing_m=plat.cable_spacing_m if plat else 0.15,
+        title=f"{log.name} ({log.meta.get('source', 'log')})", notes=notes)
+
+
+def track_from_trace(trace: dict[str, np.ndarray], trial: int, cfg: Any,
+                     title: str = "docking") -> Track:
+    """A Track from a ``run_campaign(record="trace")`` trace, one trial (attitudes not traced:
+    the vehicles are drawn level)."""
+    ff = trace["ff"][:, trial]
+    return Track(t_s=np.asarray(trace["t_s"]), leader_p=trace["leader_p"][:, trial],
+                 follower_p=trace["follower_p"][:, trial], bar_p=trace["bar_p"][:, trial],
+                 gate=trace["gate"][:, trial], force_mps2=ff if np.any(ff) else None,
+                 diagonal_m=cfg.vehicle.diagonal_m,
+                 anchor_below_leader_m=cfg.platform.anchor_below_leader_m,
+                 cable_spacing_m=cfg.platform.cable_spacing_m, title=title)
+
+
+# -- drawing -------------------------------------------------------------------------------------
+def _arms(p: np.ndarray, R: np.ndarray | None, diagonal_m: float) -> np.ndarray:
+    """(2, 2, 3) the two motor-to-motor arms (X frame) as segments, world NED."""
+    half = diagonal_m / 2.0
+    c = half / np.sqrt(2.0)
+    body = np.array([[[c, c, 0.0], [-c, -c, 0.0]], [[c, -c, 0.0], [-c, c, 0.0]]])
+    rot = np.eye(3) if R is None else R
+    return p + body @ rot.T
+
+
+def _limits(track: Track) -> tuple[np.ndarray, np.ndarray]:
+    pts = [track.leader_p, track.follower_p] + ([track.bar_p] if track.bar_p is not None else [])
+    allp = np.concatenate(pts)
+    lo, hi = allp.min(0), allp.max(0)
+    pad = 0.15 + 0.6 * track.diagonal_m
+    centre, half = (lo + hi) / 2, (hi - lo) / 2 + pad
+    return centre, half
+
+
+class FrameDrawer:
+    """Draws frame ``k`` of a Track on a side and a top axis (artists re-created per frame)."""
+
+    def __init__(self, track: Track, figsize: tuple[float, float] = (9.0, 4.4), dpi: int = 80):
+        plt = _plt()
+        self.track = track
+        self.fig, (self.ax_side, self.ax_top) = plt.subplots(1, 2, figsize=figsize, dpi=dpi)
+        centre, half = _limits(track)
+        span_side = max(half[0], half[2])
+        self.ax_side.set_xlim(centre[0] - span_side, centre[0] + span_side)
+        self.ax_side.set_ylim(-centre[2] - span_side, -centre[2] + span_side)
+        span_top = max(half[0], half[1])
+        self.ax_top.set_xlim(centre[1] - span_top, centre[1] + span_top)
+        self.ax_top.set_ylim(centre[0] - span_top, centre[0] + span_top)
+        self.ax_side.set_xlabel("north [m]")
+        self.ax_side.set_ylabel("altitude [m]")
+        self.ax_top.set_xlabel("east [m]")
+        self.ax_top.set_ylabel("north [m]")
+        for ax in (self.ax_side, self.ax_top):
+            ax.set_aspect("equal")
+            ax.grid(alpha=0.3)
+        self.ax_side.set_title("side view")
+        self.ax_top.set_title("top view")
+        self._artists: list[Any] = []
+        self.fig.tight_layout(rect=(0, 0, 1, 0.9))
+
+    # Views: side (north, up), top (east, north).
+    @staticmethod
+    def _side(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return p[..., 0], -p[..., 2]
+
+    @staticmethod
+    def _top(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return p[..., 1], p[..., 0]
+
+    def draw(self, k: int) -> None:
+        """Replace the frame's artists with those of sample ``k``."""
+        for art in self._artists:
+            art.remove()
+        self._artists = []
+        tr = self.track
+        lp, fp = tr.leader_p[k], tr.follower_p[k]
+        lR = None if tr.leader_R is None else tr.leader_R[k]
+        fR = None if tr.follower_R is None else tr.follower_R[k]
+        gate = None if tr.gate is None else GateState(int(tr.gate[k]))
+        for ax, view in ((self.ax_side, self._side), (self.ax_top, self._top)):
+            add = self._artists.extend
+            add(ax.plot(*view(tr.follower_p[:k + 1]), color="tab:purple", lw=0.8, alpha=0.6))
+            for p, R, colour in ((lp, lR, "black"), (fp, fR, "tab:purple")):
+                for seg in _arms(p, R, tr.diagonal_m):
+                    add(ax.plot(*view(seg), color=colour, lw=2.5, solid_capstyle="round"))
+                add(ax.plot(*view(p), "o", color=colour, ms=4))
+            if tr.bar_p is not None:
+                self._draw_bar(ax, view, lp, lR, tr.bar_p[k])
+            if gate is not None:
+                up = -(np.eye(3) if fR is None else fR)[:, 2]
+                arm = fp + up * 0.05
+                add(ax.plot(*view(np.stack([fp, arm])), color=GATE_COLOURS[gate], lw=2))
+                add(ax.plot(*view(arm), "s", color=GATE_COLOURS[gate], ms=6))
+            if tr.force_mps2 is not None:
+                f = tr.force_mps2[k] * FORCE_SCALE_M_PER_MPS2
+                (x0, y0), (dx, dy) = view(fp), view(f)
+                if np.hypot(dx, dy) > 1e-4:
+                    self._artists.append(ax.arrow(x0, y0, dx, dy, color="tab:red", width=0.004,
+                                                  head_width=0.025, length_includes_head=True))
+        status = [f"t = {tr.t_s[k]:5.2f} s"]
+        if gate is not None:
+            status.append(f"gate {gate.name.lower()}")
+        sep = np.linalg.norm(fp - lp)
+        status.append(f"separation {sep:.2f} m")
+        lines = [tr.title, "   ".join(status)]
+        if tr.force_mps2 is not None:
+            lines[-1] += "   red: predicted force (0.5 m = 10 m/s²)"
+        if tr.notes:
+            lines[-1] += "   (" + "; ".join(tr.notes) + ")"
+        self._artists.append(self.fig.text(0.5, 0.97, "\n".join(lines), ha="center", va="top",
+                                           fontsize=8))
+
+    def _draw_bar(self, ax, view, lp, lR, bar_p) -> None:
+        tr = self.track
+        rot = np.eye(3) if lR is None else lR
+        along = rot[:, 1] * tr.cable_spacing_m / 2  # cables attached along the leader's y axis
+        anchor = lp + rot[:, 2] * tr.anchor_below_leader_m
+        ends = np.stack([bar_p - along, bar_p + along])
+        add = self._artists.extend
+        for sign, end in zip((-1, 1), ends, strict=True):
+            add(ax.plot(*view(np.stack([anchor + sign * along, end])), color="0.5", lw=0.8))
+        add(ax.plot(*view(ends), color="tab:brown", lw=3, zorder=4))
+        add(ax.plot(*view(bar_p), "o", color="tab:brown", ms=4, zorder=4))  # seen end-on too
+
+    def rgb(self) -> np.ndarray:
+        """The current frame as an (H, W, 3) uint8 array."""
+        self.fig.canvas.draw()
+        return np.asarray(self.fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def close(self) -> None:
+        """Free the figure."""
+        _plt().close(self.fig)
+
+
+def frame_indices(t_s: np.ndarray, fps: float, speed: float = 1.0,
+                  max_frames: int | None = None) -> np.ndarray:
+    """Sample indices for frames every ``speed / fps`` seconds of flight (at most ``max_frames``,
+    evenly spread)."""
+    t = t_s - t_s[0]
+    wanted = np.arange(0.0, t[-1] + 1e-9, speed / fps)
+    idx = np.unique(np.clip(np.searchsorted(t, wanted), 0, len(t) - 1))
+    if max_frames is not None and len(idx) > max_frames:
+        idx = idx[np.linspace(0, len(idx) - 1, max_frames).round().astype(int)]
+    return idx
+
+
+def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: float = 1.0,
+                     max_frames: int | None = 300, dpi: int = 80,
+                     progress: Any = None) -> Path:
+    """Write the animation of ``track`` to ``out`` (``.gif``, or ``.mp4`` with ffmpeg).
+
+    Args:
+        track: what to draw.
+        out: output file; the suffix picks the format.
+        fps: frames per second of the video.
+        speed: seconds of flight per second of video.
+        max_frames: cap on the number of frames (evenly spread over the flight).
+        dpi: resolution.
+        progress: called as ``progress(done, total)`` after every frame.
+
+    Raises:
+        ValueError: unknown suffix, or ``.mp4`` without ffmpeg.
+    """
+    from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    out = Path(out)
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"{out}: the video must be .gif or .mp4")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise ValueError(f"{out}: writing MP4 needs ffmpeg on PATH; write a .gif instead")
+    if not fps > 0 or not speed > 0:
+        raise ValueError("fps and speed must be > 0")
+    idx = frame_indices(track.t_s, fps, speed, max_frames)
+    drawer = FrameDrawer(track, dpi=dpi)
+    writer = PillowWriter(fps=fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.stem}.partial{suffix}")
+    try:
+        with writer.saving(drawer.fig, str(tmp), dpi):
+            for j, k in enumerate(idx):
+                drawer.draw(int(k))
+                writer.grab_frame()
+                if progress is not None:
+                    progress(j + 1, len(idx))
+        with atomic_open(out, "wb") as fh:  # never a half-written video under the final name
+            fh.write(tmp.read_bytes())
+        umask = os.umask(0)
+        os.umask(umask)
+        out.chmod(0o666 & ~umask)  # readable like any figure (the temporary file was private)
+    finally:
+        tmp.unlink(missing_ok=True)
+        drawer.close()
+    return out
+
+
+def render_env_frame(history: list[dict[str, Any]], cfg: Any) -> np.ndarray:
+    """One RGB frame of a :class:`aerodock.envs.DockingEnv` episode so far (its ``render``)."""
+    if not history:
+        raise ValueError("nothing to render before reset()")
+    t = np.arange(len(history)) / cfg.sim.control_rate_hz
+    track = Track(t_s=t, leader_p=np.array([h["leader"] for h in history]),
+                  follower_p=np.array([h["follower"] for h in history]),
+                  bar_p=np.array([h["bar"] for h in history]),
+                  gate=np.array([h["gate"] for h in history]),
+                  diagonal_m=cfg.vehicle.diagonal_m,
+                  anchor_below_leader_m=cfg.platform.anchor_below_leader_m,
+                  cable_spacing_m=cfg.platform.cable_spacing_m, title="aerodock/Docking-v0")
+    drawer = FrameDrawer(track, figsize=(6.4, 3.2), dpi=60)
+    try:
+        drawer.draw(len(history) - 1)
+        return drawer.rgb()
+    finally:
+        drawer.close()

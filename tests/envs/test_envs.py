@@ -1,0 +1,153 @@
+"""The docking environments: Gymnasium's checks, the mission they fly, and batch = single."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+from gymnasium.vector import SyncVectorEnv  # noqa: E402
+
+from aerodock.envs import ENV_ID, DockingEnv, DockingVectorEnv  # noqa: E402
+from aerodock.envs.check import check_vector_env  # noqa: E402
+from aerodock.mission import MissionSpec, run_campaign  # noqa: E402
+
+
+def test_single_env_passes_gymnasium_check_env():
+    env = gym.make(ENV_ID, render_mode="rgb_array")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a checker warning fails the test too
+        check_env(env.unwrapped)
+    frame = env.unwrapped.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+
+
+def test_vector_env_passes_the_vector_checks_and_gymnasium_wrappers():
+    env = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
+    assert isinstance(env.unwrapped, DockingVectorEnv)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_vector_env(env)
+        # Gymnasium's vector wrappers accept its autoreset mode.
+        wrapped = gym.wrappers.vector.RecordEpisodeStatistics(env)
+        wrapped.reset(seed=0)
+        wrapped.step(wrapped.action_space.sample())
+
+
+def test_zero_residual_flies_run_campaigns_mission(cfg):
+    """With no residual, each trial's outcome and clearance are those of run_campaign."""
+    n, seed = 4, 3
+    env = DockingVectorEnv(num_envs=n, campaign_seed=seed, compensation="oracle")
+    env.reset(seed=0)
+    docked = np.zeros(n, bool)
+    missed = np.zeros(n, bool)
+    aborted = np.zeros(n, bool)
+    ret = np.zeros(n)
+    for _ in range(env.batch.max_steps + 1):
+        _, rew, term, trunc, info = env.step(np.zeros((n, 3)))
+        ret += rew
+        docked |= info["docked"]
+        missed |= info["missed"]
+        aborted |= info["aborted"]
+        if term.any() or trunc.any():
+            break
+    assert term.all() and not trunc.any()
+    res = run_campaign(cfg, MissionSpec(trials=n, seed=seed, compensation="oracle"))
+    np.testing.assert_array_equal(docked, res.success)
+    np.testing.assert_array_equal(missed, res.missed)
+    np.testing.assert_array_equal(aborted, res.aborted)
+    np.testing.assert_allclose(info["min_clearance_m"], res.min_clearance_m, rtol=0, atol=0)
+    # Docked trials earn the dock reward (less the small dense costs).
+    assert np.all(ret[res.success] > 8.0) and np.all(ret[~res.success] < 0.0)
+    # The next step autoresets the whole batch onto the next trials.
+    obs, rew, term, trunc, info = env.step(np.zeros((n, 3)))
+    assert not rew.any() and not term.any() and not trunc.any()
+    np.testing.assert_array_equal(info["trial"], np.arange(n, 2 * n))
+
+
+def test_vector_env_equals_sync_vector_env_of_single_envs():
+    """Sub-environment i of the native vector env is DockingEnv reset with seed s + i."""
+    n, s = 3, 10
+    kwargs = {"campaign_seed": 1, "compensation": "observer", "leader_speed_mps": 0.25}
+    native = DockingVectorEnv(num_envs=n, **kwargs)
+    sync = SyncVectorEnv([lambda: DockingEnv(**kwargs) for _ in range(n)])
+    o1, _ = native.reset(seed=s)
+    o2, _ = sync.reset(seed=s)
+    np.testing.assert_array_equal(o1, o2)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        act = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
+        a, ra, ta, _, ia = native.step(act)
+        b, rb, tb, _, ib = sync.step(act)
+        np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(ra, rb)
+        np.testing.assert_array_equal(ta, tb)
+        np.testing.assert_array_equal(ia["phase"], ib["phase"])
+
+
+def test_residual_changes_the_flight_and_leader_dropout_aborts():
+    env = DockingEnv(campaign_seed=0, leader_dropout_s=(1.0, 2.0))
+    obs0, _ = env.reset(seed=5)
+    push = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # up, 2 m/s²
+    for _ in range(30):
+        obs_push, *_ = env.step(push)
+    env.reset(seed=5)
+    for _ in range(30):
+        obs_zero, *_ = env.step(np.zeros(3, np.float32))
+    # Tracking error down (index 2) is smaller when pushed up.
+    assert obs_push[2] < obs_zero[2] - 0.01
+    info = {}
+    for _ in range(env.batch.max_steps):
+        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
+        if term or trunc:
+            break
+    assert term and info["abort_reason"] == 2  # AbortReason.LEADER_LOST
+
+
+def test_bad_arguments_are_refused():
+    with pytest.raises(ValueError, match="needs a predictor"):
+        DockingEnv(compensation="model")
+    with pytest.raises(ValueError, match="offset_m"):
+        DockingEnv(offset_m=-1.0)
+    with pytest.raises(ValueError, match="num"):
+        DockingVectorEnv(num_envs=0)
+
+
+def test_residual_example_quick_mode_trains_and_evaluates(cfg):
+    """examples/residual_ars.py in quick mode; its baseline is run_campaign's LQG mission."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "residual_ars.py"
+    spec = importlib.util.spec_from_file_location("residual_ars", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    result = mod.main(["--quick"])
+    assert len(result["training"]) == result["settings"]["iterations"] == 2
+    assert result["weights_norm"] > 0  # ARS moved the policy
+    n = result["settings"]["eval_trials"]
+    base = run_campaign(cfg, MissionSpec(trials=n, seed=0, offset_m=0.36,
+                                         compensation="observer",
+                                         first_trial=mod.HELDOUT_FIRST_TRIAL))
+    assert result["baseline_lqg"]["docked_rate"] == base.success.mean()
+    assert result["baseline_lqg"]["aborted_rate"] == base.aborted.mean()
+    for key in ("baseline_lqg", "residual_policy"):
+        r = result[key]
+        assert r["docked_rate"] + r["missed_rate"] + r["aborted_rate"] == pytest.approx(1.0)
+
+
+def test_bench_vector_env_figures(cfg, benchmark):
+    """The bench's env-steps/s figures exist for both batch sizes (speed is measured by
+    `aerodock bench`, not asserted here)."""
+    from aerodock import bench
+    from aerodock.envs.bench import bench_vector_env
+
+    figs = benchmark.pedantic(bench_vector_env, args=(cfg, (1, 8), True), rounds=1,
+                              iterations=1)
+    assert set(figs) == {"1", "8"} and all(f["value"] > 0 for f in figs.values())
+    rows = bench.table_rows({"figures": {"gym_vector_env": figs}})
+    assert [r[0] for r in rows] == ["gym vector env, 1 envs", "gym vector env, 8 envs"]

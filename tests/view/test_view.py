@@ -1,0 +1,131 @@
+"""``aerodock view``: animations of simulated and real FlightLogs, and the report's GIF."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from aerodock.flightlog import load_flightlogs, save_flightlogs
+from aerodock.mission import MissionSpec, run_campaign
+from aerodock.view import frame_indices, render_animation, track_from_flightlog
+
+BROWN = np.array([140, 86, 75])  # matplotlib tab:brown: the bar
+PURPLE = np.array([148, 103, 189])  # tab:purple: the follower
+
+
+def aerodock(*args):
+    return subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
+                          capture_output=True, text=True, timeout=600)
+
+
+def frames(path):
+    im = Image.open(path)
+    out = []
+    for k in range(im.n_frames):
+        im.seek(k)
+        out.append(np.asarray(im.convert("RGB")).astype(int))
+    return out
+
+
+def has_colour(img, rgb, tol=14):
+    return bool(np.any(np.all(np.abs(img - rgb) <= tol, axis=-1)))
+
+
+def has_blue(img):
+    """Gate captured (tab:blue, whatever the GIF palette made of it)."""
+    return bool(np.any((img[..., 2] - img[..., 0] > 80) & (img[..., 2] > 140)))
+
+
+def has_green(img):
+    """Gate open (tab:green)."""
+    return bool(np.any((img[..., 1] - img[..., 0] > 70) & (img[..., 1] - img[..., 2] > 70)))
+
+
+@pytest.fixture(scope="module")
+def sim_log(tmp_path_factory, cfg):
+    res = run_campaign(cfg, MissionSpec(trials=1, compensation="oracle", seed=0), record="full")
+    assert res.success[0]
+    return save_flightlogs(tmp_path_factory.mktemp("sim") / "dock.npz", res.logs)
+
+
+def test_view_simulated_log_draws_vehicles_bar_and_gate(sim_log, tmp_path):
+    out = tmp_path / "dock.gif"
+    proc = aerodock("view", str(sim_log), "--out", str(out), "--fps", "5", "--start", "3",
+                    "--duration", "3")
+    assert proc.returncode == 0, proc.stderr
+    imgs = frames(out)
+    log = load_flightlogs(sim_log)[0]
+    t = log.t_s - log.t_s[0]
+    keep = (t >= 3) & (t <= 6)
+    assert len(imgs) == len(frame_indices(t[keep], 5.0))
+    assert all(has_colour(f, PURPLE) and has_colour(f, BROWN) for f in imgs)
+    # The gate is drawn open (green) before the capture and captured (blue) after it.
+    assert has_green(imgs[0]) and not has_blue(imgs[0])
+    assert has_blue(imgs[-1]) and not has_green(imgs[-1])
+
+
+def test_view_real_log_degrades_without_bar(shared_data, tmp_path):
+    from aerodock.ingest import read_logs
+
+    d = shared_data("neural-swarm", "swap_ss")
+    logs = read_logs("neural-swarm", [d / "cf50_00.csv", d / "cf51_00.csv"])
+    path = save_flightlogs(tmp_path / "real.npz", logs)
+    track = track_from_flightlog(logs[0])
+    assert track.bar_p is None and track.gate is None and track.force_mps2 is None
+    assert "no bar in this log" in track.notes
+    out = tmp_path / "real.gif"
+    proc = aerodock("view", str(path), "--out", str(out), "--duration", "2", "--fps", "4")
+    assert proc.returncode == 0, proc.stderr
+    imgs = frames(out)
+    assert len(imgs) >= 8
+    assert all(has_colour(f, PURPLE) and not has_colour(f, BROWN, tol=6) for f in imgs)
+    # The vehicles move: consecutive frames differ.
+    assert np.abs(imgs[0] - imgs[-1]).sum() > 0
+
+
+def test_view_refuses_bad_input_in_one_line(sim_log, tmp_path):
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    for args, text in (([str(junk)], "corrupt or unreadable"),
+                       ([str(sim_log), "--out", str(tmp_path / "v.avi")], ".gif or .mp4"),
+                       ([str(sim_log), "--flight", "3"], "out of range"),
+                       ([str(sim_log), "--start", "99"], "no samples")):
+        proc = aerodock("view", *args)
+        assert proc.returncode == 2, proc.stderr
+        assert text in proc.stderr and proc.stderr.strip().count("\n") == 0
+
+
+def test_mp4_needs_ffmpeg_or_writes_one(sim_log, tmp_path, monkeypatch):
+    import shutil
+
+    track = track_from_flightlog(load_flightlogs(sim_log)[0])
+    if shutil.which("ffmpeg") is None:
+        with pytest.raises(ValueError, match="ffmpeg"):
+            render_animation(track, tmp_path / "v.mp4")
+    else:
+        path = render_animation(track, tmp_path / "v.mp4", max_frames=5)
+        assert path.stat().st_size > 0
+
+
+def test_rerun_stream_saves_a_recording(sim_log, tmp_path):
+    pytest.importorskip("rerun")
+    from aerodock.view.rerun_stream import stream_to_rerun
+
+    track = track_from_flightlog(load_flightlogs(sim_log)[0].slice(0, 50))
+    path = stream_to_rerun(track, save=tmp_path / "dock.rrd")
+    assert path.stat().st_size > 1000
+
+
+def test_report_embeds_an_animated_docking(cfg, tmp_path):
+    from aerodock.experiments.report import fig_docking_animation
+
+    res = run_campaign(cfg, MissionSpec(trials=2, compensation="oracle", seed=0), record="trace")
+    tr = dict(res.trace, success=res.success, arrival_s=res.arrival_s)
+    path = fig_docking_animation(tr, tmp_path, cfg)
+    imgs = frames(path)
+    assert path.name == "hover_docking.gif" and 10 <= len(imgs) <= 60
+    assert has_green(imgs[0]) and has_blue(imgs[-1])  # open, then captured
