@@ -185,119 +185,185 @@ def run_campaign(
             ``"full"`` (+ one FlightLog per trial).
         progress: called with the fraction of the mission time done.
     """
-    if spec.trials < 1:
-        raise ValueError(f"--trials must be >= 1, got {spec.trials}")
-    if record not in ("summary", "trace", "full"):
-        raise ValueError(f"record must be summary, trace or full, got {record!r}")
-    if spec.offset_m is not None:
-        if not spec.offset_m > 0:
-            raise ValueError(f"--offset must be > 0 m, got {spec.offset_m}")
-        cfg = cfg.with_overrides({"platform": {"cable_length_m": float(spec.offset_m)}})
-    comp = Compensation(spec.compensation)
-    if comp == Compensation.MODEL and predictor is None:
-        raise ValueError("compensation 'model' needs a trained model (--model DIR)")
-    rng = TrialRNG(spec.seed, spec.trials, spec.first_trial)
-    n = spec.trials
-    m = cfg.mission
-    world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
-    if comp == Compensation.ORACLE:
-        predictor = OraclePredictor(world.field)
-    elif comp != Compensation.MODEL:
-        predictor = None  # a model given alongside 'none' or 'observer' is not flown
-    geom = DockGeometry.from_config(cfg)
-    world.gripper_params = replace(world.gripper_params,
-                                   passive=world.gripper_params.passive and spec.passive_trigger,
-                                   active=world.gripper_params.active and spec.active_trigger)
-    gp = world.gripper_params
-    mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
-    moving = spec.leader_speed_mps != 0.0 and not spec.leader_fixed
-    arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s
-    hold_s = cfg.planner.hold_s if moving else 0.0
-    active_at_s = arrival_s + (0.5 if moving else m.active_trigger_delay_s)
-    timeout_s = arrival_s + hold_s + m.dock_window_s
-    end_s = timeout_s + m.backoff_s
+    batch = MissionBatch(cfg, spec, predictor, record)
+    while not batch.finished:
+        batch.fly()
+        if progress is not None and batch.k % 20 == 1:
+            progress(min(1.0, batch.k / batch.steps))
+    if progress is not None:
+        progress(1.0)
+    return batch.result()
 
-    # Initial conditions: leader hovering (or already cruising north), follower below and away.
-    leader_p0 = np.tile([0.0, 0.0, -m.leader_altitude_m], (n, 1))
-    dock0 = docking_point_m(leader_p0, np.zeros((n, 3)), geom)
-    az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[
-        (spec.first_trial + np.arange(n)) % len(spec.start_azimuths_deg)]
-    start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
-                              np.full(n, m.start_below_m)], 1)
-    start += m.start_jitter_m * rng.standard_normal((n, 3))
-    lead_vel = np.array([spec.leader_speed_mps, 0.0, 0.0]) if moving else np.zeros(3)
-    lead_v = np.tile(lead_vel, (n, 1))
-    zeros = np.zeros((n, 3))
-    zero_n = np.zeros(n)
-    # Settled start: both fly (the leader cruising if it moves) for settle_s before t = 0.
-    settle_s = m.settle_s
-    world.reset(leader_p0 - lead_vel * settle_s, start - lead_vel * settle_s)
-    if moving:
-        world.set_velocities(lead_v, lead_v)
 
-    def leader_ref(t: float) -> Reference:
-        return Reference(leader_p0 + lead_vel * t, lead_v, zeros, zero_n, zero_n)
+class MissionBatch:
+    """N docking trials flown one control period per :meth:`fly`: the mission's one
+    implementation (``run_campaign`` loops over it; the Gymnasium environments act through it).
 
-    def predict(obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
-        if predictor is None:
-            return None
+    Each period: :meth:`_decide` (motion capture and injected faults, the leader's controller,
+    the phases, the follower's reference, aborts, the feed-forward), then :meth:`fly` (the
+    follower's controller with an optional residual acceleration, the triggers, the metrics, one
+    control period of physics) and the next period's decision.
+
+    Args:
+        cfg: configuration.
+        spec: the campaign (``trials`` trials from ``first_trial``, or the explicit ``trials``).
+        predictor: the feed-forward model for ``Compensation.MODEL``.
+        record: ``"summary"``, ``"trace"`` or ``"full"`` (see :func:`run_campaign`).
+        trials: explicit per-row trial indices (each row draws from stream ``(seed, index)``).
+    """
+
+    def __init__(self, cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
+                 record: str = "summary", trials: np.ndarray | None = None):
+        if spec.trials < 1:
+            raise ValueError(f"--trials must be >= 1, got {spec.trials}")
+        if record not in ("summary", "trace", "full"):
+            raise ValueError(f"record must be summary, trace or full, got {record!r}")
+        if spec.offset_m is not None:
+            if not spec.offset_m > 0:
+                raise ValueError(f"--offset must be > 0 m, got {spec.offset_m}")
+            cfg = cfg.with_overrides({"platform": {"cable_length_m": float(spec.offset_m)}})
+        comp = Compensation(spec.compensation)
+        if comp == Compensation.MODEL and predictor is None:
+            raise ValueError("compensation 'model' needs a trained model (--model DIR)")
+        n = spec.trials
+        self.trials = (spec.first_trial + np.arange(n) if trials is None
+                       else np.asarray(trials, dtype=np.int64).copy())
+        rng = TrialRNG(spec.seed, n, trials=self.trials)
+        self.cfg, self.spec, self.n, self.comp, self.record = cfg, spec, n, comp, record
+        m = cfg.mission
+        world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
         if comp == Compensation.ORACLE:
-            return predictor.predict_bodies(*world.body_states())
-        return predictor.predict_bodies(_bodies(obs_l, mass * g, mass),
-                                        _bodies(obs_f, mass * g, mass))
+            predictor = OraclePredictor(world.field)
+        elif comp != Compensation.MODEL:
+            predictor = None  # a model given alongside 'none' or 'observer' is not flown
+        self.predictor = predictor
+        self.geom = geom = DockGeometry.from_config(cfg)
+        world.gripper_params = replace(
+            world.gripper_params, passive=world.gripper_params.passive and spec.passive_trigger,
+            active=world.gripper_params.active and spec.active_trigger)
+        self.world = world
+        moving = spec.leader_speed_mps != 0.0 and not spec.leader_fixed
+        self.arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s
+        hold_s = cfg.planner.hold_s if moving else 0.0
+        self.active_at_s = self.arrival_s + (0.5 if moving else m.active_trigger_delay_s)
+        self.timeout_s = self.arrival_s + hold_s + m.dock_window_s
+        self.dt_s = world.dt_control_s
+        self.steps = int(np.ceil((self.timeout_s + m.backoff_s) / self.dt_s))
 
-    leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
-    follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
-    settle(world, leader_ctl, follower_ctl, leader_ref,
-           lambda t: Reference(start + lead_vel * t, lead_v, zeros, zero_n, zero_n), settle_s,
-           predict)
-    plan = minjerk(start, lead_v, zeros, docking_point_m(leader_p0, lead_v, geom, arrival_s),
-                   lead_v, zeros, arrival_s, 0.0)
-    # The docking status reaches the leader over the network, status_delay_s late.
-    delay_ticks = int(round(m.status_delay_s / world.dt_control_s))
-    status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
-    strikes = np.zeros(n, dtype=bool)
-    nan_seen = np.zeros(n, dtype=bool)
-    rotor_r = cfg.vehicle.rotor_radius_m
+        # Initial conditions: leader hovering (or cruising north), follower below and away.
+        self.leader_p0 = leader_p0 = np.tile([0.0, 0.0, -m.leader_altitude_m], (n, 1))
+        dock0 = docking_point_m(leader_p0, np.zeros((n, 3)), geom)
+        az = np.deg2rad(np.asarray(spec.start_azimuths_deg))[
+            self.trials % len(spec.start_azimuths_deg)]
+        start = dock0 + np.stack([m.start_radius_m * np.cos(az), m.start_radius_m * np.sin(az),
+                                  np.full(n, m.start_below_m)], 1)
+        start += m.start_jitter_m * rng.standard_normal((n, 3))
+        self.lead_vel = lead_vel = (np.array([spec.leader_speed_mps, 0.0, 0.0]) if moving
+                                    else np.zeros(3))
+        self.lead_v = lead_v = np.tile(lead_vel, (n, 1))
+        zeros, zero_n = np.zeros((n, 3)), np.zeros(n)
+        # Settled start: both fly (the leader cruising if it moves) for settle_s before t = 0.
+        settle_s = m.settle_s
+        world.reset(leader_p0 - lead_vel * settle_s, start - lead_vel * settle_s)
+        if moving:
+            world.set_velocities(lead_v, lead_v)
+        self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
+        self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
+        settle(world, self.leader_ctl, self.follower_ctl, self._leader_ref,
+               lambda t: Reference(start + lead_vel * t, lead_v, zeros, zero_n, zero_n),
+               settle_s, self._predict)
+        self.plan = minjerk(start, lead_v, zeros,
+                            docking_point_m(leader_p0, lead_v, geom, self.arrival_s), lead_v,
+                            zeros, self.arrival_s, 0.0)
+        # The docking status reaches the leader over the network, status_delay_s late.
+        delay_ticks = int(round(m.status_delay_s / self.dt_s))
+        self._status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
+        faults = tuple(spec.faults)
+        if spec.leader_dropout_s is not None:
+            t0, duration = spec.leader_dropout_s
+            faults += (Fault("leader dropout", "leader_state_lost", 1.0, (t0, t0), duration),)
+        self.faults = FaultRuntime(draw_faults(faults, n, rng), n, self.dt_s)
+        # Per-trial mission state and metrics.
+        self.phase = np.full(n, Phase.APPROACH, dtype=np.int8)
+        self.abort_reason = np.zeros(n, dtype=np.int8)
+        self.phase_t = np.zeros(n)  # when the current phase began
+        self.capture_t = np.full(n, np.nan)
+        self.min_clear = np.full(n, np.inf)
+        self.strikes = np.zeros(n, dtype=bool)
+        self.nan_seen = np.zeros(n, dtype=bool)
+        # Terminal window: the 0.5 s before the approach ends (arrival, or the gate closing).
+        self.approach_end = np.full(n, self.arrival_s)
+        # |e_down|, |e_3d|, predicted down force, tilt (deg), control saturated
+        self.hist = np.full((self.steps, n, 5), np.nan)
+        keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
+        self.trace: dict[str, list] = {k: [] for k in keys} if record != "summary" else {}
+        self.recorder = FlightRecorder() if record == "full" else None
+        self.k = 0
+        self.finished = False
+        world.observed_accel()  # start the accelerometer's averaging window
+        self._decide()
 
-    phase = np.full(n, Phase.APPROACH, dtype=np.int8)
-    abort_reason = np.zeros(n, dtype=np.int8)
-    phase_t = np.zeros(n)  # when the current phase began
-    capture_t = np.full(n, np.nan)
-    faults = tuple(spec.faults)
-    if spec.leader_dropout_s is not None:
-        start, duration = spec.leader_dropout_s
-        faults += (Fault("leader dropout", "leader_state_lost", 1.0, (start, start), duration),)
-    fault_rt = FaultRuntime(draw_faults(faults, n, rng), n, world.dt_control_s)
-    min_clear = np.full(n, np.inf)
-    dt_c = world.dt_control_s
-    steps = int(np.ceil(end_s / dt_c))
-    # Terminal window: the 0.5 s before the approach ends (arrival, or the gate starting to close).
-    approach_end = np.full(n, arrival_s)
-    # |e_down|, |e_3d|, predicted down force, tilt (deg), control saturated
-    hist = np.full((steps, n, 5), np.nan)
-    trace_keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
-    trace: dict[str, list] = {k: [] for k in trace_keys} if record != "summary" else {}
-    recorder = FlightRecorder() if record == "full" else None
-    world.observed_accel()  # start the accelerometer's averaging window
-    for k in range(steps):
-        t = k * dt_c
+    @staticmethod
+    def timing(cfg: Config, spec: MissionSpec) -> tuple[float, float, int]:
+        """(planned arrival s, control period s, control periods in the whole mission)."""
+        m = cfg.mission
+        moving = spec.leader_speed_mps != 0.0 and not spec.leader_fixed
+        arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s
+        hold_s = cfg.planner.hold_s if moving else 0.0
+        dt_s = 1.0 / cfg.sim.control_rate_hz
+        timeout_s = arrival_s + hold_s + m.dock_window_s
+        return arrival_s, dt_s, int(np.ceil((timeout_s + m.backoff_s) / dt_s))
+
+    # -- helpers -------------------------------------------------------------------------------
+    @property
+    def t_s(self) -> float:
+        """Mission time of the current control period, s."""
+        return self.k * self.dt_s
+
+    @property
+    def active(self) -> np.ndarray:
+        """(n,) bool: trials still approaching."""
+        return (self.phase == Phase.APPROACH) | (self.phase == Phase.TERMINAL)
+
+    def _leader_ref(self, t: float) -> Reference:
+        zero_n = np.zeros(self.n)
+        return Reference(self.leader_p0 + self.lead_vel * t, self.lead_v, np.zeros((self.n, 3)),
+                         zero_n, zero_n)
+
+    def _predict(self, obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
+        if self.predictor is None:
+            return None
+        if self.comp == Compensation.ORACLE:
+            return self.predictor.predict_bodies(*self.world.body_states())
+        mass, g = self.cfg.vehicle.mass_kg, self.cfg.sim.gravity_mps2
+        return self.predictor.predict_bodies(_bodies(obs_l, mass * g, mass),
+                                             _bodies(obs_f, mass * g, mass))
+
+    # -- the decision half of a control period -------------------------------------------------
+    def _decide(self) -> None:
+        """Observe, fly the leader, update the phases, the follower's reference and aborts."""
+        world, n, m, geom, cfg = self.world, self.n, self.cfg.mission, self.geom, self.cfg
+        gp = world.gripper_params
+        t, zeros, g = self.t_s, np.zeros((n, 3)), cfg.sim.gravity_mps2
+        arrival_s = self.arrival_s
         # What each controller sees (motion capture, and the leader's state over the network
         # at the follower), after any injected fault; gripper and rotor faults go to the world.
-        obs_l, obs_f, obs_l_f = fault_rt.observations(t, *world.observe())
-        if faults:
-            fault_rt.apply_to_world(t, world)
+        obs_l, obs_f, obs_l_f = self.faults.observations(t, *world.observe())
+        if self.faults.draws:
+            self.faults.apply_to_world(t, world)
         # --- leader: its own controller, hovering or cruising north ---
-        lref = leader_ref(t)
         # Docking status is shared: the leader feeds forward the payload the follower sheds,
         # once the follower's message arrives.
-        status_sent = status_sent[1:] + [world.captured.copy()]
-        payload = np.where(status_sent[0], (1.0 - m.post_dock_thrust_fraction) * g, 0.0)
+        self._status_sent = self._status_sent[1:] + [world.captured.copy()]
+        payload = np.where(self._status_sent[0], (1.0 - m.post_dock_thrust_fraction) * g, 0.0)
         lff = np.stack([np.zeros(n), np.zeros(n), payload], axis=1)
-        lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, lref, feedforward_mps2=lff)
+        self.lout = self.leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, self._leader_ref(t),
+                                         feedforward_mps2=lff)
 
-        # --- follower: phases ---
-        active = (phase == Phase.APPROACH) | (phase == Phase.TERMINAL)
+        # --- follower: plan, phases ---
+        phase, plan = self.phase, self.plan
+        # Approaching when this period began (the triggers and the terminal window use it).
+        self.was_active = active = self.active
         target_now = docking_point_m(obs_l_f.p, obs_l_f.v, geom)
         if t < arrival_s - 0.3:
             target_arr = docking_point_m(obs_l_f.p, obs_l_f.v, geom, arrival_s - t)
@@ -316,39 +382,15 @@ def run_campaign(
         top_limit = obs_l_f.p[:, 2] + m.clearance_m + 0.05 + gp.mount_height_m
         p_ref = p_ref.copy()
         p_ref[:, 2] = np.where(active, np.maximum(p_ref[:, 2], top_limit), p_ref[:, 2])
-
         phase = np.where((phase == Phase.APPROACH) & (t >= arrival_s - m.terminal_s),
                          Phase.TERMINAL, phase).astype(np.int8)
-        # Aborts.
-        err = obs_f.p - p_ref
-        up_err = -err[:, 2]
-        unsafe = (phase == Phase.TERMINAL) & (
-            (up_err > m.abort_tracking_m / 2)
-            | ((np.linalg.norm(err, axis=1) > m.abort_tracking_m) & (up_err > 0))
-        )
-        leader_lost = (t - fault_rt.last_fresh_leader_t) > m.leader_lost_s
-        timeout = t >= timeout_s
+
+        abort_now = self._aborts(t, phase, active, obs_f.p - p_ref)
         gate = world.gripper.gate
-        # The software knows when it commanded the gate: one that has not closed long after
-        # (a jammed servo) is a fault.
-        gate_stuck = (gate == GateState.CLOSING) & (
-            world.t_s - world.gripper.servo_start_s > 4.0 * gp.close_time_s)
-        abort_now = active & (((gate == GateState.OPEN) & (unsafe | leader_lost | timeout))
-                              | gate_stuck)
-        if abort_now.any():
-            world.disarm_gate(abort_now)  # an aborted approach never closes the gate
-        abort_reason = np.where(
-            abort_now & (abort_reason == 0),
-            np.where(gate_stuck, AbortReason.GATE_FAULT,
-                     np.where(leader_lost, AbortReason.LEADER_LOST,
-                              np.where(timeout, AbortReason.TIMEOUT,
-                                       AbortReason.UNSAFE_TRACKING))),
-            abort_reason,
-        ).astype(np.int8)
         captured_now = (gate == GateState.CAPTURED) & (phase != Phase.CAPTURED) & (
             phase != Phase.DONE)
         missed_now = (gate == GateState.MISSED) & active
-        capture_t = np.where(captured_now, t, capture_t)
+        self.capture_t = np.where(captured_now, t, self.capture_t)
         backoff_now = (abort_now | missed_now) & ~captured_now
         if np.any(backoff_now):
             away = obs_f.p[:, :2] - obs_l_f.p[:, :2]
@@ -356,16 +398,16 @@ def run_campaign(
             away = np.where(norm > 1e-3, away / np.maximum(norm, 1e-9), [1.0, 0.0])
             goal = obs_f.p + m.backoff_distance_m * np.concatenate(
                 [away, np.ones((n, 1))], axis=1)
-            p_r, v_r, a_r = plan.sample(t)
             back = minjerk(obs_f.p, obs_f.v, zeros, goal, zeros, zeros, m.backoff_s, t)
             plan = _merge_plans(plan, back, backoff_now)
         phase = np.where(captured_now, Phase.CAPTURED, phase)
         phase = np.where(missed_now & ~captured_now, Phase.MISSED, phase)
         phase = np.where(abort_now & ~captured_now & ~missed_now, Phase.ABORT, phase)
-        phase_t = np.where(captured_now | backoff_now, t, phase_t)
+        self.phase_t = np.where(captured_now | backoff_now, t, self.phase_t)
         finished = (
-            ((phase == Phase.CAPTURED) & (t - phase_t >= m.post_dock_s))
-            | (((phase == Phase.MISSED) | (phase == Phase.ABORT)) & (t - phase_t >= m.backoff_s))
+            ((phase == Phase.CAPTURED) & (t - self.phase_t >= m.post_dock_s))
+            | (((phase == Phase.MISSED) | (phase == Phase.ABORT))
+               & (t - self.phase_t >= m.backoff_s))
         )
         phase = np.where(finished, Phase.DONE, phase).astype(np.int8)
         backing = (phase == Phase.MISSED) | (phase == Phase.ABORT)
@@ -379,17 +421,72 @@ def run_campaign(
         v_ref = np.where(done_free[:, None], 0.0, v_ref)
         a_ref = np.where(done_free[:, None], 0.0, a_ref)
 
-        # Compensation and control.
-        ff = predict(obs_l_f, obs_f)
-        terminal = (phase == Phase.TERMINAL) | holding
+        self.phase, self.plan, self.holding = phase, plan, holding
+        self.ref = (p_ref, v_ref, a_ref)
+        self.ff = self._predict(obs_l_f, obs_f)
+        self.obs_l, self.obs_f, self.obs_l_f = obs_l, obs_f, obs_l_f
+        # Outcomes decided at this control period.
+        self.just_docked = captured_now
+        self.just_missed = missed_now & ~captured_now
+        self.just_aborted = abort_now & ~captured_now & ~missed_now
+
+    def _aborts(self, t: float, phase: np.ndarray, active: np.ndarray,
+                err: np.ndarray) -> np.ndarray:
+        """(n,) trials aborting now (their gates are disarmed); records the reasons."""
+        world, m = self.world, self.cfg.mission
+        up_err = -err[:, 2]
+        unsafe = (phase == Phase.TERMINAL) & (
+            (up_err > m.abort_tracking_m / 2)
+            | ((np.linalg.norm(err, axis=1) > m.abort_tracking_m) & (up_err > 0))
+        )
+        leader_lost = (t - self.faults.last_fresh_leader_t) > m.leader_lost_s
+        timeout = t >= self.timeout_s
+        gate = world.gripper.gate
+        # The software knows when it commanded the gate: one that has not closed long after
+        # (a jammed servo) is a fault.
+        gate_stuck = (gate == GateState.CLOSING) & (
+            world.t_s - world.gripper.servo_start_s > 4.0 * world.gripper_params.close_time_s)
+        abort_now = active & (((gate == GateState.OPEN) & (unsafe | leader_lost | timeout))
+                              | gate_stuck)
+        if abort_now.any():
+            world.disarm_gate(abort_now)  # an aborted approach never closes the gate
+        self.abort_reason = np.where(
+            abort_now & (self.abort_reason == 0),
+            np.where(gate_stuck, AbortReason.GATE_FAULT,
+                     np.where(leader_lost, AbortReason.LEADER_LOST,
+                              np.where(timeout, AbortReason.TIMEOUT,
+                                       AbortReason.UNSAFE_TRACKING))),
+            self.abort_reason,
+        ).astype(np.int8)
+        return abort_now
+
+    # -- the acting half -------------------------------------------------------------------------
+    def fly(self, residual_mps2: np.ndarray | None = None) -> None:
+        """Fly one control period, then decide the next.
+
+        Args:
+            residual_mps2: (n, 3) acceleration added to the follower's reference feed-forward
+                while it approaches (a learning agent's action); None for the mission alone.
+        """
+        if self.finished:
+            raise RuntimeError("the mission is over: every trial is done")
+        world, n, cfg, m = self.world, self.n, self.cfg, self.cfg.mission
+        gp, t, k = world.gripper_params, self.t_s, self.k
+        active, phase = self.was_active, self.phase
+        p_ref, v_ref, a_ref = self.ref
+        if residual_mps2 is not None:  # only on trials still approaching after this decision
+            a_ref = a_ref + np.where(self.active[:, None], residual_mps2, 0.0)
+        obs_f, obs_l_f, ff = self.obs_f, self.obs_l_f, self.ff
+        terminal = (phase == Phase.TERMINAL) | self.holding
         yaw0 = np.zeros(n)
-        fref = Reference(p_ref, v_ref, a_ref, yaw0, yaw0)
-        fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, fref, terminal, ff)
+        fout = self.follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy,
+                                      Reference(p_ref, v_ref, a_ref, yaw0, yaw0), terminal, ff)
         hanging = world.captured
         if np.any(hanging):
             # Docked: level attitude; thrust is the configured fraction of the weight plus the
             # follower's own prediction of the wake (the position loop would fight the cables).
             cmd = fout.command
+            mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
             hang_thrust = mass * (m.post_dock_thrust_fraction * g
                                   + np.maximum(fout.feedforward_mps2[:, 2], 0.0))
             fout = replace(fout, command=replace(
@@ -397,97 +494,111 @@ def run_campaign(
                 pitch_rad=np.where(hanging, 0.0, cmd.pitch_rad),
                 yaw_rate_radps=np.where(hanging, 0.0, cmd.yaw_rate_radps),
                 thrust_n=np.where(hanging, hang_thrust, cmd.thrust_n)))
-        close = (t >= active_at_s) & active & _bar_will_be_inside(
-            obs_f, obs_l_f, geom, gp, gp.latency_s + gp.close_time_s)
+        close = (t >= self.active_at_s) & active & _bar_will_be_inside(
+            obs_f, obs_l_f, self.geom, gp, gp.latency_s + gp.close_time_s)
+        self._measure(k, t, active, p_ref, ff, fout)
+        if self.recorder is not None:
+            self.recorder.before_step(t, world, self.obs_l, obs_f, fout, p_ref, phase)
+        world.advance(self.lout.command, fout.command, close)
+        if self.recorder is not None:
+            self.recorder.after_step(world)
+        self.last_fout = fout
+        self.k += 1
+        if np.all(phase == Phase.DONE) or self.k >= self.steps:
+            self.finished = True
+        else:
+            self._decide()
 
-        # Metrics (true state).
+    def _measure(self, k: int, t: float, active: np.ndarray, p_ref: np.ndarray,
+                 ff: np.ndarray | None, fout: Any) -> None:
+        """Metrics of this period from the true state (never seen by a controller)."""
+        world, gp, hist = self.world, self.world.gripper_params, self.hist
         true_err = world.follower.p - p_ref
         hist[k, :, 0] = np.abs(true_err[:, 2])
-        hist[k, :, 1] = np.linalg.norm(true_err, axis=1)
+        hist[k, :, 1] = self.track_err_m = np.linalg.norm(true_err, axis=1)
         hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
         hist[k, :, 3] = np.rad2deg(np.arccos(np.clip(world.follower.R[:, 2, 2], -1.0, 1.0)))
         hist[k, :, 4] = fout.saturated
-        ended = (~active | (world.gripper.gate != GateState.OPEN)) & (approach_end > t)
-        approach_end = np.where(ended, t, approach_end)
+        ended = (~active | (world.gripper.gate != GateState.OPEN)) & (self.approach_end > t)
+        self.approach_end = np.where(ended, t, self.approach_end)
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
-        min_clear = np.minimum(min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
-        nan_seen |= ~(np.isfinite(world.follower.p).all(axis=1)
-                      & np.isfinite(world.leader.p).all(axis=1)
-                      & np.isfinite(fout.command.thrust_n))
+        clear_m = self.cfg.mission.clearance_m
+        was_clear = self.min_clear >= clear_m
+        self.min_clear = np.minimum(self.min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
+        self.clearance_violated_now = was_clear & (self.min_clear < clear_m)
+        self.nan_seen |= ~(np.isfinite(world.follower.p).all(axis=1)
+                           & np.isfinite(world.leader.p).all(axis=1)
+                           & np.isfinite(fout.command.thrust_n))
         if world.rigid:
             seg_a, seg_b = platform_segments(
                 anchor_point(world.leader.p, world.leader.R, world.platform),
-                obs_l.yaw_rad, world.bar, world.platform)
-            strikes |= rotor_strike(world.follower.p, world.follower.R,
-                                    world.fleet.params.rotor_offsets_m, rotor_r, seg_a, seg_b,
-                                    gp.bar_radius_m)
+                self.obs_l.yaw_rad, world.bar, world.platform)
+            self.strikes |= rotor_strike(world.follower.p, world.follower.R,
+                                         world.fleet.params.rotor_offsets_m,
+                                         self.cfg.vehicle.rotor_radius_m, seg_a, seg_b,
+                                         gp.bar_radius_m)
+        if self.record != "summary":
+            tr = self.trace
+            tr["t_s"].append(t)
+            tr["follower_p"].append(world.follower.p.copy())
+            tr["leader_p"].append(world.leader.p.copy())
+            tr["bar_p"].append(world.bar.p.copy())
+            tr["ref_p"].append(p_ref.copy())
+            tr["phase"].append(self.phase.copy())
+            tr["ff"].append(fout.feedforward_mps2.copy())
+            tr["gate"].append(world.gripper.gate.copy())
 
-        if record != "summary":
-            trace["t_s"].append(t)
-            trace["follower_p"].append(world.follower.p.copy())
-            trace["leader_p"].append(world.leader.p.copy())
-            trace["bar_p"].append(world.bar.p.copy())
-            trace["ref_p"].append(p_ref.copy())
-            trace["phase"].append(phase.copy())
-            trace["ff"].append(fout.feedforward_mps2.copy())
-            trace["gate"].append(world.gripper.gate.copy())
-        if recorder is not None:
-            recorder.before_step(t, world, obs_l, obs_f, fout, p_ref, phase)
-        world.advance(lout.command, fout.command, close)
-        if recorder is not None:
-            recorder.after_step(world)
-        if progress is not None and k % 20 == 0:
-            progress(min(1.0, (k + 1) / steps))
-        if np.all(phase == Phase.DONE):
-            break
-    if progress is not None:
-        progress(1.0)
-
-    gate = world.gripper.gate
-    collision = strikes | world.ground_contact
-    success = (gate == GateState.CAPTURED) & ~collision
-    t_grid = np.arange(steps)[:, None] * dt_c
-    in_win = (t_grid >= approach_end - 0.5) & (t_grid < approach_end)
-    win = np.where(in_win[..., None], hist, 0.0)
-    cnt = np.maximum(in_win.sum(0), 1)
-    result = CampaignResult(
-        spec=spec,
-        success=success,
-        slipped=world.gripper.slipped.copy(),
-        missed=(gate == GateState.MISSED),
-        aborted=abort_reason != AbortReason.NONE,
-        abort_reason=abort_reason,
-        clearance_violation=min_clear < m.clearance_m,
-        rotor_strike=strikes,
-        nan_state=nan_seen,
-        fault_hit=(np.any([d.hit for d in fault_rt.draws], axis=0) if fault_rt.draws
-                   else np.ones(n, dtype=bool)),
-        ground_contact=world.ground_contact.copy(),
-        min_clearance_m=min_clear,
-        capture_time_s=capture_t,
-        err_down_m=win[..., 0].sum(0) / cnt,
-        err_3d_m=win[..., 1].sum(0) / cnt,
-        err_down_int_ms=win[..., 0].sum(0) * dt_c,
-        err_3d_int_ms=win[..., 1].sum(0) * dt_c,
-        ff_down_int_mps=win[..., 2].sum(0) * dt_c,
-        tilt_rms_deg=np.sqrt((win[..., 3] ** 2).sum(0) / cnt),
-        saturated_frac=win[..., 4].sum(0) / cnt,
-        arrival_s=arrival_s,
-    )
-    if record != "summary":
-        result.trace = {k: np.asarray(v) for k, v in trace.items()}
-    if recorder is not None:
-        mass = cfg.vehicle.mass_kg
-        result.logs = recorder.flightlogs(lambda i: {
-            "name": f"dock-seed{spec.seed}-trial{spec.first_trial + i:04d}",
-            "source": "aerodock-sim", "frame": "NED", "label_basis": "command",
-            "leader_mass_kg": mass, "follower_mass_kg": mass,
-            **vehicle_meta(cfg),
-            "compensation": Compensation(spec.compensation).value,
-            "offset_m": cfg.platform.cable_length_m, "leader_speed_mps": spec.leader_speed_mps,
-            "seed": spec.seed, "trial": spec.first_trial + i,
-        })
-    return result
+    # -- outcome -----------------------------------------------------------------------------------
+    def result(self) -> CampaignResult:
+        """Per-trial outcomes and terminal-window metrics of the flights so far."""
+        world, n, spec, cfg, m = self.world, self.n, self.spec, self.cfg, self.cfg.mission
+        gate = world.gripper.gate
+        collision = self.strikes | world.ground_contact
+        dt_c = self.dt_s
+        t_grid = np.arange(self.steps)[:, None] * dt_c
+        in_win = (t_grid >= self.approach_end - 0.5) & (t_grid < self.approach_end)
+        win = np.where(in_win[..., None], self.hist, 0.0)
+        cnt = np.maximum(in_win.sum(0), 1)
+        draws = self.faults.draws
+        result = CampaignResult(
+            spec=spec,
+            success=(gate == GateState.CAPTURED) & ~collision,
+            slipped=world.gripper.slipped.copy(),
+            missed=(gate == GateState.MISSED),
+            aborted=self.abort_reason != AbortReason.NONE,
+            abort_reason=self.abort_reason,
+            clearance_violation=self.min_clear < m.clearance_m,
+            rotor_strike=self.strikes.copy(),
+            nan_state=self.nan_seen.copy(),
+            fault_hit=(np.any([d.hit for d in draws], axis=0) if draws
+                       else np.ones(n, dtype=bool)),
+            ground_contact=world.ground_contact.copy(),
+            min_clearance_m=self.min_clear,
+            capture_time_s=self.capture_t,
+            err_down_m=win[..., 0].sum(0) / cnt,
+            err_3d_m=win[..., 1].sum(0) / cnt,
+            err_down_int_ms=win[..., 0].sum(0) * dt_c,
+            err_3d_int_ms=win[..., 1].sum(0) * dt_c,
+            ff_down_int_mps=win[..., 2].sum(0) * dt_c,
+            tilt_rms_deg=np.sqrt((win[..., 3] ** 2).sum(0) / cnt),
+            saturated_frac=win[..., 4].sum(0) / cnt,
+            arrival_s=self.arrival_s,
+        )
+        if self.record != "summary":
+            result.trace = {k: np.asarray(v) for k, v in self.trace.items()}
+        if self.recorder is not None:
+            mass = cfg.vehicle.mass_kg
+            result.logs = self.recorder.flightlogs(lambda i: {
+                "name": f"dock-seed{spec.seed}-trial{int(self.trials[i]):04d}",
+                "source": "aerodock-sim", "frame": "NED", "label_basis": "command",
+                "leader_mass_kg": mass, "follower_mass_kg": mass,
+                **vehicle_meta(cfg),
+                "compensation": Compensation(spec.compensation).value,
+                "offset_m": cfg.platform.cable_length_m,
+                "leader_speed_mps": spec.leader_speed_mps,
+                "seed": spec.seed, "trial": int(self.trials[i]),
+            })
+        return result
 
 
 def _bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeometry,
