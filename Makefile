@@ -13,6 +13,7 @@ $(BIN)/python:
 $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/python -m pip install --quiet "torch==2.13.0"
 	$(BIN)/python -m pip install --quiet -e ".[learn,export,ingest,dev]"
+	$(BIN)/python -m pip install --quiet --no-deps rotorpy  # the peer-validation tests (its simulator needs only NumPy/SciPy)
 	rm -f $(VENV)/.installed-* && touch $(STAMP)
 
 demo: $(STAMP)

@@ -8,11 +8,14 @@ The vehicle DESIGN.md asks for, batch-first and pure (one call advances N vehicl
     d omega_i/dt = (omega_cmd_i - omega_i) / tau_motor,   f_i = k_T omega_i^2 (x thrust gain)
 
 with ``T = sum f_i``, rotor torques ``tau = sum r_i x (-f_i e3) + s_i c_tau f_i e3`` (X layout,
-spin directions as PX4's quad X), rotor drag ``F_rotor_drag = -k_d (sum omega_i) [v_bx, v_by,
-(k_z/k_d) v_bz]`` (the H-force of blades in edgewise flow, as RotorPy models it) and quadratic
-parasitic drag. External forces (downwash, cable, contact) arrive as a world force and a body
-torque about the centre of mass, so off-centre loads (the wake on each rotor disk, the cable
-anchor below the leader) tilt the vehicle.
+spin directions as PX4's quad X), rotor drag as RotorPy models it (the H-force of blades in
+edgewise flow and the induced-inflow force along the axis): on rotor ``i``, with its local
+airspeed ``u_i = v_b + w x r_i`` (body frame), ``H_i = -omega_i diag(k_d, k_d, k_z) u_i`` acting
+at the rotor hub, so ``F_rotor_drag = sum H_i`` with the moment ``sum r_i x H_i`` (the rotors'
+damping of roll, pitch and yaw rates), and quadratic parasitic drag. External forces (downwash,
+cable, contact) arrive as a world force and a body torque about the centre of mass, so
+off-centre loads (the wake on each rotor disk, the cable anchor below the leader) tilt the
+vehicle.
 
 The autopilot (:mod:`aerodock.autopilot`) runs inside the step at the physics rate, on the gyro's
 noisy rates: it is part of the vehicle, as on the aircraft. Integration: angular velocity and
@@ -54,6 +57,7 @@ class RigidBodyParams:
     gains: AutopilotGains
     mixer_inv: np.ndarray  # (4, 4): [T, tau_x, tau_y, tau_z] -> rotor thrusts
     rotor_torque_map: np.ndarray  # (4, 3): rotor thrusts -> body torque
+    rotor_drag_sums: np.ndarray  # (4, 6): rotor speeds -> sums of omega_i [1, x, y, x^2, y^2, xy]
 
     @classmethod
     def from_config(cls, cfg: Config) -> RigidBodyParams:
@@ -71,6 +75,8 @@ class RigidBodyParams:
         # tau = r x (-f e3) = (-y f, x f, 0); yaw reaction s c_tau f.
         torque_map = np.stack([-offsets[:, 1], offsets[:, 0], spin * v.rotor_torque_ratio_m],
                               axis=1)
+        x, y = offsets[:, 0], offsets[:, 1]  # the rotor disks lie in the body x-y plane
+        drag_sums = np.stack([np.ones(4), x, y, x * x, y * y, x * y], axis=1)
         mixer = np.vstack([np.ones(4), torque_map.T])
         gains = AutopilotGains(
             attitude_p=np.asarray(a.attitude_p, dtype=float),
@@ -88,6 +94,7 @@ class RigidBodyParams:
             rotor_thrust_max_n=v.thrust_max_g * v.mass_kg * g / 4.0,
             tilt_max_rad=np.deg2rad(v.tilt_max_deg), gravity_mps2=g, gains=gains,
             mixer_inv=np.linalg.inv(mixer).T.copy(), rotor_torque_map=torque_map,
+            rotor_drag_sums=drag_sums,
         )
 
     @property
@@ -185,6 +192,55 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
     return np.sqrt(f_cmd / params.thrust_coeff), integral
 
 
+def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
+                w_radps: np.ndarray, params: RigidBodyParams) -> tuple[np.ndarray, np.ndarray]:
+    """The rotors' force and torque on N vehicles, body FRD: ((n, 3) N, (n, 3) N m).
+
+    Thrust ``-f_i e3`` and yaw reaction at each rotor, and rotor drag at each hub:
+    ``H_i = -omega_i diag(k_d, k_d, k_z) (v_b + w x r_i)`` (RotorPy's H-force and induced-inflow
+    terms, per rotor on its local airspeed). With the hubs in the body x-y plane the sums over
+    rotors reduce to the weighted sums ``S = sum omega_i [1, x_i, y_i, x_i^2, y_i^2, x_i y_i]``.
+
+    Args:
+        rotor_speed: (n, 4) rotor speeds, rad/s.
+        thrust_gain: (n,) multiplicative thrust error.
+        v_body_mps: (n, 3) velocity relative to the air, body frame.
+        w_radps: (n, 3) body rates.
+        params: vehicle constants.
+    """
+    f = rotor_thrusts_n(rotor_speed, thrust_gain, params)
+    tmap = params.rotor_torque_map
+    torque = f[:, 0:1] * tmap[0]
+    torque += f[:, 1:2] * tmap[1]
+    torque += f[:, 2:3] * tmap[2]
+    torque += f[:, 3:4] * tmap[3]
+    thrust = f[:, 0] + f[:, 1]
+    thrust += f[:, 2]
+    thrust += f[:, 3]
+    force = np.empty_like(v_body_mps)
+    force[:, 0] = 0.0
+    force[:, 1] = 0.0
+    force[:, 2] = -thrust
+    kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
+    if kd or kz:
+        g = params.rotor_drag_sums
+        sums = rotor_speed[:, 0:1] * g[0]
+        sums += rotor_speed[:, 1:2] * g[1]
+        sums += rotor_speed[:, 2:3] * g[2]
+        sums += rotor_speed[:, 3:4] * g[3]
+        s, sx, sy, sxx, syy, sxy = sums.T
+        vx, vy, vz = v_body_mps.T
+        wx, wy, wz = w_radps.T
+        axial = s * vz + wx * sy - wy * sx  # sum omega_i (u_i)_z
+        force[:, 0] -= kd * (s * vx - wz * sy)
+        force[:, 1] -= kd * (s * vy + wz * sx)
+        force[:, 2] -= kz * axial
+        torque[:, 0] -= kz * (sy * vz + wx * syy - wy * sxy)
+        torque[:, 1] += kz * (sx * vz + wx * sxy - wy * sxx)
+        torque[:, 2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
+    return force, torque
+
+
 def step_rigid_body(
     state: RigidBodyState,
     rotor_speed_cmd: np.ndarray,
@@ -206,22 +262,12 @@ def step_rigid_body(
     m = params.mass_kg
     rot = state.R
     omega = state.rotor_speed
-    f = rotor_thrusts_n(omega, state.thrust_gain, params)
-    thrust = f.sum(axis=1)
-    tmap = params.rotor_torque_map
-    torque = f[:, 0:1] * tmap[0]
-    torque += f[:, 1:2] * tmap[1]
-    torque += f[:, 2:3] * tmap[2]
-    torque += f[:, 3:4] * tmap[3]
+    v = state.v
+    w = state.w
+    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
+    force_body, torque = body_wrench(omega, state.thrust_gain, v_body, w, params)
     if ext_torque_nm is not None:
         torque += ext_torque_nm
-    # Body-frame forces: rotor drag (H-force) and thrust.
-    v = state.v
-    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    drag = omega.sum(axis=1)
-    force_body = v_body * (-params.rotor_drag_coeff * drag)[:, None]
-    force_body[:, 2] *= params.rotor_drag_z_coeff / max(params.rotor_drag_coeff, 1e-30)
-    force_body[:, 2] -= thrust
     accel = np.matmul(rot, force_body[:, :, None])[:, :, 0]
     if params.parasitic_drag_coeff:
         speed = np.sqrt((v * v).sum(axis=1))
@@ -230,7 +276,6 @@ def step_rigid_body(
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    w = state.w
     jw = w * params.inertia_kgm2
     gyro = np.cross(w, jw)
     w_dot = (torque - gyro) / params.inertia_kgm2
@@ -240,7 +285,10 @@ def step_rigid_body(
     rot_new = _rotate(rot, (w + w_new) * (0.5 * dt_s))
     alpha = 1.0 - np.exp(-dt_s / params.motor_tau_s)
     omega_new = omega + (rotor_speed_cmd - omega) * alpha
-    thrust_new = rotor_thrusts_n(omega_new, state.thrust_gain, params).sum(axis=1)
+    f_new = rotor_thrusts_n(omega_new, state.thrust_gain, params)
+    thrust_new = f_new[:, 0] + f_new[:, 1]
+    thrust_new += f_new[:, 2]
+    thrust_new += f_new[:, 3]
     return RigidBodyState(p_new, v_new, rot_new, w_new, omega_new, state.rate_integral,
                           state.yaw_setpoint, state.thrust_gain, thrust_new), accel
 
