@@ -174,8 +174,11 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
     tilt = params.tilt_max_rad
     roll = np.broadcast_to(np.clip(cmd.roll_rad, -tilt, tilt), (n,))
     pitch = np.broadcast_to(np.clip(cmd.pitch_rad, -tilt, tilt), (n,))
+    r_des = attitude_target(roll, pitch, state.yaw_setpoint)
+    # Stored transposed in memory: the autopilot multiplies by R_des^T at every physics step.
+    r_des = np.ascontiguousarray(r_des.transpose(0, 2, 1)).transpose(0, 2, 1)
     return RigidTargets(
-        attitude_target(roll, pitch, state.yaw_setpoint),
+        r_des,
         np.broadcast_to(np.asarray(cmd.yaw_rate_radps, dtype=float), (n,)),
         np.broadcast_to(np.clip(cmd.thrust_n, 0.0, params.thrust_max_n), (n,)),
     )
@@ -209,35 +212,36 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
         params: vehicle constants.
     """
     f = rotor_thrusts_n(rotor_speed, thrust_gain, params)
-    tmap = params.rotor_torque_map
-    torque = f[:, 0:1] * tmap[0]
-    torque += f[:, 1:2] * tmap[1]
-    torque += f[:, 2:3] * tmap[2]
-    torque += f[:, 3:4] * tmap[3]
-    thrust = f[:, 0] + f[:, 1]
+    # Component-major (3, n) and (6, n) work arrays: every operation runs on contiguous rows of
+    # n (a (n, 1) x (3,) broadcast would call the inner loop once per vehicle).
+    tmap = params.rotor_torque_map[:, :, None]
+    torque = tmap[0] * f[:, 0]
+    torque += tmap[1] * f[:, 1]
+    torque += tmap[2] * f[:, 2]
+    torque += tmap[3] * f[:, 3]
+    force = np.zeros_like(torque)
+    thrust = np.add(f[:, 0], f[:, 1], out=force[2])
     thrust += f[:, 2]
     thrust += f[:, 3]
-    force = np.empty_like(v_body_mps)
-    force[:, 0] = 0.0
-    force[:, 1] = 0.0
-    force[:, 2] = -thrust
+    np.negative(thrust, out=force[2])
     kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
     if kd or kz:
-        g = params.rotor_drag_sums
-        sums = rotor_speed[:, 0:1] * g[0]
-        sums += rotor_speed[:, 1:2] * g[1]
-        sums += rotor_speed[:, 2:3] * g[2]
-        sums += rotor_speed[:, 3:4] * g[3]
-        s, sx, sy, sxx, syy, sxy = sums.T
+        g = params.rotor_drag_sums[:, :, None]
+        sums = g[0] * rotor_speed[:, 0]
+        sums += g[1] * rotor_speed[:, 1]
+        sums += g[2] * rotor_speed[:, 2]
+        sums += g[3] * rotor_speed[:, 3]
+        s, sx, sy, sxx, syy, sxy = sums
         vx, vy, vz = v_body_mps.T
         wx, wy, wz = w_radps.T
         axial = s * vz + wx * sy - wy * sx  # sum omega_i (u_i)_z
-        force[:, 0] -= kd * (s * vx - wz * sy)
-        force[:, 1] -= kd * (s * vy + wz * sx)
-        force[:, 2] -= kz * axial
-        torque[:, 0] -= kz * (sy * vz + wx * syy - wy * sxy)
-        torque[:, 1] += kz * (sx * vz + wx * sxy - wy * sxx)
-        torque[:, 2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
+        force[0] -= kd * (s * vx - wz * sy)
+        force[1] -= kd * (s * vy + wz * sx)
+        force[2] -= kz * axial
+        torque[0] -= kz * (sy * vz + wx * syy - wy * sxy)
+        torque[1] += kz * (sx * vz + wx * sxy - wy * sxx)
+        torque[2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
+    return force.T, torque.T
     return force, torque
 
 
@@ -270,21 +274,46 @@ def step_rigid_body(
         torque += ext_torque_nm
     accel = np.matmul(rot, force_body[:, :, None])[:, :, 0]
     if params.parasitic_drag_coeff:
-        speed = np.sqrt((v * v).sum(axis=1))
-        accel -= (params.parasitic_drag_coeff * speed)[:, None] * v
+        vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
+        speed = vx * vx
+        speed += vy * vy
+        speed += vz * vz
+        np.sqrt(speed, out=speed)
+        speed *= params.parasitic_drag_coeff
+        accel -= speed[:, None] * v
     accel += ext_force_n
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    jw = w * params.inertia_kgm2
-    gyro = np.cross(w, jw)
-    w_dot = (torque - gyro) / params.inertia_kgm2
-    w_new = w + w_dot * dt_s
-    v_new = v + accel * dt_s
-    p_new = state.p + (v + v_new) * (0.5 * dt_s)
-    rot_new = _rotate(rot, (w + w_new) * (0.5 * dt_s))
+    inertia = params.inertia_kgm2
+    jw = w * inertia
+    wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
+    jx, jy, jz = jw[:, 0], jw[:, 1], jw[:, 2]
+    # torque -= w x J w (the components of np.cross, written out: no axis juggling per call).
+    gyro = wy * jz
+    gyro -= wz * jy
+    torque[:, 0] -= gyro
+    np.multiply(wz, jx, out=gyro)
+    gyro -= wx * jz
+    torque[:, 1] -= gyro
+    np.multiply(wx, jy, out=gyro)
+    gyro -= wy * jx
+    torque[:, 2] -= gyro
+    torque /= inertia  # the angular acceleration
+    torque *= dt_s
+    w_new = np.add(w, torque, out=np.empty_like(w))
+    accel_dt = accel * dt_s
+    v_new = v + accel_dt
+    mean = v + v_new
+    mean *= 0.5 * dt_s
+    p_new = state.p + mean
+    np.add(w, w_new, out=mean)
+    mean *= 0.5 * dt_s
+    rot_new = _rotate(rot, mean)
     alpha = 1.0 - np.exp(-dt_s / params.motor_tau_s)
-    omega_new = omega + (rotor_speed_cmd - omega) * alpha
+    omega_new = rotor_speed_cmd - omega
+    omega_new *= alpha
+    omega_new += omega
     f_new = rotor_thrusts_n(omega_new, state.thrust_gain, params)
     thrust_new = f_new[:, 0] + f_new[:, 1]
     thrust_new += f_new[:, 2]
@@ -319,27 +348,40 @@ def step_with_autopilot(
 
 def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """``R exp([phi]x)`` for (n, 3, 3) ``R`` and (n, 3) body rotation vectors (Rodrigues)."""
-    theta2 = (phi * phi).sum(axis=1)
-    small = theta2 < 1e-12
-    theta = np.sqrt(theta2)
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I.
     x, y, z = phi[:, 0], phi[:, 1], phi[:, 2]
-    d = np.empty_like(rot)
-    bp = b[:, None] * phi
-    outer = bp[:, :, None] * phi[:, None, :]
-    d[:] = outer
-    diag = 1.0 - b * theta2
-    d[:, 0, 0] += diag
-    d[:, 1, 1] += diag
-    d[:, 2, 2] += diag
-    ax, ay, az = a * x, a * y, a * z
-    d[:, 0, 1] -= az
-    d[:, 1, 0] += az
-    d[:, 0, 2] += ay
-    d[:, 2, 0] -= ay
-    d[:, 1, 2] -= ax
-    d[:, 2, 1] += ax
-    return np.matmul(rot, d)
+    theta2 = x * x
+    theta2 += y * y
+    theta2 += z * z
+    theta = np.sqrt(theta2)
+    small = theta2 < 1e-12
+    if small.any():  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
+        safe = np.where(small, 1.0, theta)
+        a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+        b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    else:
+        a = np.sin(theta)
+        a /= theta
+        b = 1.0 - np.cos(theta)
+        b /= theta * theta
+    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I, built component-major (3, 3, n)
+    # so that every operation runs on a contiguous row of n.
+    n = phi.shape[0]
+    d = np.empty((3, 3, n))
+    diag = b * theta2
+    np.subtract(1.0, diag, out=diag)
+    for i, p_i in enumerate((x, y, z)):
+        bp = b * p_i
+        np.multiply(bp, x, out=d[i, 0])
+        np.multiply(bp, y, out=d[i, 1])
+        np.multiply(bp, z, out=d[i, 2])
+        d[i, i] += diag
+    ax = a * x
+    ay = a * y
+    az = a * z
+    d[0, 1] -= az
+    d[1, 0] += az
+    d[0, 2] += ay
+    d[2, 0] -= ay
+    d[1, 2] -= ax
+    d[2, 1] += ax
+    return np.matmul(rot, d.transpose(2, 0, 1))
