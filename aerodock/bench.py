@@ -10,7 +10,10 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``simulator``: vehicle-steps per second (trials x 2 vehicles x physics steps) for batches of
   1, 64, 256 and 1024 trials: the whole world (both vehicles, bar, gripper, default downwash) at
   500 Hz physics with both position controllers (LQR + bias observer) at 100 Hz
-  (``with_controllers``), and the physics alone under held commands (``physics_only``).
+  (``with_controllers``), and the physics alone under held commands (``physics_only``), with
+  rigid-body vehicles (``[vehicle] model = "rigid-body"``: attitude, rotors, autopilot, IMU).
+- ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
+  comparison.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
   (:func:`aerodock.mission.run_campaign`, oracle compensation, summary only).
 - ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
@@ -44,7 +47,8 @@ import typer
 
 SIM_BATCHES = (1, 64, 256, 1024)
 TARGETS = {
-    "vehicle_steps_per_s_at_256": 1_000_000.0,
+    "vehicle_steps_per_s_at_256": 500_000.0,  # rigid-body world (issue 10)
+    "point_mass_vehicle_steps_per_s_at_256": 1_000_000.0,
     "rotorpy_sequential_speedup": 20.0,
     "predictor_single_call_us": 50.0,
     "reproduce_quick_s": 300.0,
@@ -157,12 +161,17 @@ class SimLoop:
 
 
 def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: bool = False,
-                    progress: Progress = _quiet) -> dict[str, Any]:
-    """Vehicle-steps per second, with controllers and physics only, per batch size."""
+                    progress: Progress = _quiet, model: str | None = None) -> dict[str, Any]:
+    """Vehicle-steps per second, with controllers and physics only, per batch size.
+
+    ``model`` (``"rigid-body"`` or ``"point-mass"``) overrides ``cfg``'s ``[vehicle] model``.
+    """
+    if model is not None:
+        cfg = cfg.with_overrides({"vehicle": {"model": model}}, source="bench")
     out: dict[str, Any] = {}
     repeats = 3 if quick else 5
     for n in batches:
-        progress(f"simulator: batch of {n}")
+        progress(f"simulator ({cfg.vehicle.model}): batch of {n}")
         loop = SimLoop(cfg, n)
         # About 0.1-0.3 s per repetition on a 2-core machine.
         periods = max(4, int((100 if n <= 64 else 60 if n <= 256 else 24) * (0.5 if quick else 1)))
@@ -173,7 +182,9 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
                             warmup=1, setup=loop.reset)
             row[key] = figure([steps / t for t in times], "vehicle-steps/s")
         row["with_controllers"]["note"] = (
-            f"{n} trials x 2 vehicles, 500 Hz physics, LQR + observer at 100 Hz")
+            f"{cfg.vehicle.model}, {n} trials x 2 vehicles, 500 Hz physics, LQR + observer at "
+            "100 Hz")
+        row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
         out[str(n)] = row
     return out
 
@@ -856,7 +867,11 @@ def machine_info() -> dict[str, Any]:
             versions[mod] = version(mod)
         except Exception:  # noqa: BLE001 - not installed
             versions[mod] = None
-    return {"cpu": cpu, "cores": os.cpu_count(),
+    try:
+        load = [round(x, 2) for x in os.getloadavg()]
+    except (OSError, AttributeError):
+        load = None
+    return {"cpu": cpu, "cores": os.cpu_count(), "load_average_1_5_15_min": load,
             "memory_gib": None if mem_gib is None else round(mem_gib, 1),
             "os": f"{platform.system()} {platform.release()}", "versions": versions}
 
@@ -868,14 +883,18 @@ def _value(fig: Any) -> float | None:
 def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
     """The issue's targets (benchmarks, not tests): measured value, threshold, met or not."""
     sim = figs.get("simulator", {}).get("256", {})
+    point_mass = figs.get("simulator_point_mass", {}).get("256", {})
     numpy_pred = figs.get("predictor", {}).get("numpy", {})
     peer = figs.get("peer") or {}
     ratios = peer.get("ratios") or {}
     rows = [
-        ("vehicle-steps/s at a batch of 256, physics (World.step)", ">=",
+        ("vehicle-steps/s at a batch of 256, rigid-body, physics (World.step)", ">=",
          TARGETS["vehicle_steps_per_s_at_256"], _value(sim.get("physics_only"))),
-        ("vehicle-steps/s at a batch of 256, with controllers at 100 Hz", ">=",
+        ("vehicle-steps/s at a batch of 256, rigid-body, with controllers at 100 Hz", ">=",
          TARGETS["vehicle_steps_per_s_at_256"], _value(sim.get("with_controllers"))),
+        ("vehicle-steps/s at a batch of 256, point-mass, with controllers at 100 Hz", ">=",
+         TARGETS["point_mass_vehicle_steps_per_s_at_256"],
+         _value(point_mass.get("with_controllers"))),
         ("speed-up over RotorPy sequential, single trial", ">=",
          TARGETS["rotorpy_sequential_speedup"], ratios.get("single_trial")),
         ("NumPy predictor, single call (us)", "<", TARGETS["predictor_single_call_us"],
@@ -901,7 +920,9 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = _quiet,
     """
     started = time.perf_counter()
     figs: dict[str, Any] = {}
-    figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress)
+    figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress, model="rigid-body")
+    figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                                   model="point-mass")
     figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
     figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
     figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
@@ -951,9 +972,10 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
         rows.append((name, _fmt(fig["value"], unit), spread, unit, fig.get("note", "")))
 
     figs = doc["figures"]
-    for n, row in figs.get("simulator", {}).items():
-        add(f"simulator, batch {n}, with controllers", row.get("with_controllers"))
-        add(f"simulator, batch {n}, physics only", row.get("physics_only"))
+    for key, model in (("simulator", "rigid-body"), ("simulator_point_mass", "point-mass")):
+        for n, row in figs.get(key, {}).items():
+            add(f"simulator {model}, batch {n}, with controllers", row.get("with_controllers"))
+            add(f"simulator {model}, batch {n}, physics only", row.get("physics_only"))
     for key, label in (("trial_1", "docking trial (1)"),
                        ("campaign_100", "docking campaign (100)")):
         add(label, figs.get("docking", {}).get(key))
@@ -1008,8 +1030,11 @@ def bench_command(
         typer.echo(json.dumps(doc, indent=2))
         return
     m = doc["machine"]
+    load = m.get("load_average_1_5_15_min")
     table = Table(title=f"aerodock bench{' --quick' if quick else ''}: {m['cpu']}, "
-                  f"{m['cores']} cores, Python {m['versions']['python']}")
+                  f"{m['cores']} cores, Python {m['versions']['python']}"
+                  + (f", load average {load[0]:g} / {load[1]:g} / {load[2]:g} (1/5/15 min, "
+                     "at the end)" if load else ""))
     for col, justify in (("figure", "left"), ("median", "right"), ("spread (min - max)", "right"),
                          ("unit", "left"), ("note", "left")):
         table.add_column(col, justify=justify)  # type: ignore[arg-type]
