@@ -911,27 +911,44 @@ def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
     return out
 
 
+PARTS = ("simulator", "docking", "predictor", "memory", "reproduce", "peer")
+
+
 def run_all(cfg: Any, quick: bool = False, progress: Progress = _quiet,
             include_reproduce: bool | None = None, include_peer: bool = True,
-            config_path: Path | None = None) -> dict[str, Any]:
+            config_path: Path | None = None, only: str | None = None) -> dict[str, Any]:
     """Every figure (see the module docstring), as a JSON-ready document.
 
-    ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses.
+    ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses; ``only`` (one
+    of :data:`PARTS`) measures that part alone (``predictor`` includes training).
     """
+    if only is not None and only not in PARTS:
+        raise ValueError(f"unknown bench part {only!r}; choose one of {', '.join(PARTS)}")
+
+    def wanted(part: str) -> bool:
+        return only is None or only == part
+
     started = time.perf_counter()
     figs: dict[str, Any] = {}
-    figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress, model="rigid-body")
-    figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
-                                                   model="point-mass")
-    figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
-    figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
-    figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
-    figs["memory"] = bench_memory(progress=progress, config_path=config_path)
+    if wanted("simulator"):
+        figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                            model="rigid-body")
+        figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                                       model="point-mass")
+    if wanted("docking"):
+        figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
+    if wanted("predictor"):
+        figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
+        figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
+    if wanted("memory"):
+        figs["memory"] = bench_memory(progress=progress, config_path=config_path)
     if include_reproduce is None:
-        include_reproduce = not quick
-    figs["reproduce_quick_s"] = (bench_reproduce(progress, config_path) if include_reproduce
-                                 else unavailable("skipped with --quick (takes minutes)", "s"))
-    if include_peer:
+        include_reproduce = not quick or only == "reproduce"
+    if wanted("reproduce"):
+        figs["reproduce_quick_s"] = (
+            bench_reproduce(progress, config_path) if include_reproduce
+            else unavailable("skipped with --quick (takes minutes)", "s"))
+    if include_peer and wanted("peer"):
         figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
     return {
         "machine": machine_info(),
@@ -1009,6 +1026,8 @@ def bench_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print the numbers as JSON.")] = False,
     config: Annotated[Path | None, typer.Option(
         "--config", help="TOML file overriding aerodock's defaults.")] = None,
+    only: Annotated[str | None, typer.Option(
+        "--only", help=f"Measure one part alone: {', '.join(PARTS)}.")] = None,
 ) -> None:
     """Measure the speed of every hot path: simulator, docking, learnt model, training,
     `reproduce --quick`, memory, and RotorPy on the same scenario (if installed)."""
@@ -1016,6 +1035,10 @@ def bench_command(
     from rich.table import Table
 
     from aerodock.config import load_config
+
+    if only is not None and only not in PARTS:
+        typer.echo(f"error: unknown --only {only!r}; choose one of {', '.join(PARTS)}", err=True)
+        raise typer.Exit(2)
 
     err = Console(stderr=True)
     with err.status("benchmarking") as status:
@@ -1025,7 +1048,8 @@ def bench_command(
             else:
                 err.print(f"bench: {msg}", highlight=False)
 
-        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config)
+        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config,
+                      only=only)
     if as_json:
         typer.echo(json.dumps(doc, indent=2))
         return

@@ -154,3 +154,17 @@ def test_bench_command_help_and_table_rows():
     assert any(r[0] == "predictor numpy" and r[1] == "null" for r in rows)
     assert ("ratio: single trial", "30.0x", "", "", "") in rows
     json.dumps(doc)  # JSON-ready
+
+
+def test_bench_only_one_part_and_bad_part(cfg, monkeypatch):
+    monkeypatch.setattr(bench, "SIM_BATCHES", (1,))
+    monkeypatch.setattr(bench, "bench_simulator",
+                        lambda cfg, quick, progress, model: {"1": {"model": model}})
+    doc = bench.run_all(cfg, quick=True, only="simulator")
+    assert set(doc["figures"]) == {"simulator", "simulator_point_mass"}
+    assert doc["figures"]["simulator_point_mass"]["1"]["model"] == "point-mass"
+    app = typer.Typer()
+    app.command("bench")(bench.bench_command)
+    app.command("other")(lambda: None)
+    result = CliRunner().invoke(app, ["bench", "--only", "nonsense"])
+    assert result.exit_code == 2 and "error: unknown --only" in result.output
