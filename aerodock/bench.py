@@ -13,7 +13,8 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
   (``with_controllers``), and the physics alone under held commands (``physics_only``), with
   rigid-body vehicles (``[vehicle] model = "rigid-body"``: attitude, rotors, autopilot, IMU).
 - ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
-  comparison.
+  comparison. Each simulator figure also gives ``per_cpu_s``: vehicle-steps per second of the
+  process's CPU time (median), which a busy shared machine does not dilute.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
   (:func:`aerodock.mission.run_campaign`, oracle compensation, summary only).
 - ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
@@ -64,19 +65,24 @@ def _quiet(_: str) -> None:
 
 # -- measuring ---------------------------------------------------------------------------------
 def measure(fn: Callable[[], Any], repeats: int, warmup: int = 1,
-            setup: Callable[[], Any] | None = None) -> list[float]:
+            setup: Callable[[], Any] | None = None,
+            cpu_times: list[float] | None = None) -> list[float]:
     """Wall times (s) of ``repeats`` calls of ``fn`` after ``warmup`` untimed ones.
 
-    ``setup``, if given, runs (untimed) before every call, the warm-up ones included.
+    ``setup``, if given, runs (untimed) before every call, the warm-up ones included; the
+    process CPU time of each timed call is appended to ``cpu_times`` if given.
     """
     times = []
     for i in range(warmup + repeats):
         if setup is not None:
             setup()
+        c0 = time.process_time()
         t0 = time.perf_counter()
         fn()
         if i >= warmup:
             times.append(time.perf_counter() - t0)
+            if cpu_times is not None:
+                cpu_times.append(time.process_time() - c0)
     return times
 
 
@@ -178,9 +184,13 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
         steps = loop.vehicle_steps_per_period * periods
         row = {}
         for key, ctl in (("with_controllers", True), ("physics_only", False)):
+            cpu: list[float] = []
             times = measure(lambda loop=loop, k=periods, ctl=ctl: loop.run(k, ctl), repeats,
-                            warmup=1, setup=loop.reset)
+                            warmup=1, setup=loop.reset, cpu_times=cpu)
             row[key] = figure([steps / t for t in times], "vehicle-steps/s")
+            # Per second of this process's CPU time: what wall time would be on an idle core
+            # (on a shared machine the wall-time figure also counts other processes' turns).
+            row[key]["per_cpu_s"] = float(statistics.median(steps / max(c, 1e-9) for c in cpu))
         row["with_controllers"]["note"] = (
             f"{cfg.vehicle.model}, {n} trials x 2 vehicles, 500 Hz physics, LQR + observer at "
             "100 Hz")
@@ -986,7 +996,10 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
             return
         spread = (f"{_fmt(fig['min'], unit)} - {_fmt(fig['max'], unit)} (x{fig['repeats']})"
                   if fig.get("repeats", 1) > 1 else "one run")
-        rows.append((name, _fmt(fig["value"], unit), spread, unit, fig.get("note", "")))
+        note = fig.get("note", "")
+        if "per_cpu_s" in fig:
+            note = f"{note}; {_fmt(fig['per_cpu_s'], unit)} per CPU-second".lstrip("; ")
+        rows.append((name, _fmt(fig["value"], unit), spread, unit, note))
 
     figs = doc["figures"]
     for key, model in (("simulator", "rigid-body"), ("simulator_point_mass", "point-mass")):

@@ -77,6 +77,7 @@ def test_simulator_and_docking_figures(cfg, model):
         assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["repeats"] == 3
         assert fig["min"] <= fig["value"] <= fig["max"]
         assert fig["note"].startswith(model)
+        assert fig["per_cpu_s"] > 0
 
 
 def test_predictor_figures_without_a_trained_model():
