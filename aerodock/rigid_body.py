@@ -192,7 +192,8 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                                     params.inertia_kgm2, dt_s)
     f_cmd = mix(targets.thrust_n, torque, params.mixer_inv, params.rotor_thrust_max_n)
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
-    return np.sqrt(f_cmd / params.thrust_coeff), integral
+    speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
+    return np.sqrt(speed, out=speed), integral
 
 
 def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
