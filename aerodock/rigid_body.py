@@ -30,7 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.autopilot import AutopilotGains, attitude_target, mix, rate_control, rate_setpoint
+from aerodock.autopilot import (
+    AutopilotGains,
+    attitude_target,
+    mix,
+    per_axis,
+    rate_control,
+    rate_setpoint,
+)
 from aerodock.config import Config
 from aerodock.geometry import rotmat_to_euler
 from aerodock.vehicle import AttitudeCommand
@@ -286,7 +293,7 @@ def step_rigid_body(
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    inertia = params.inertia_kgm2
+    inertia = per_axis(params.inertia_kgm2, w.shape[0])
     jw = w * inertia
     wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
     jx, jy, jz = jw[:, 0], jw[:, 1], jw[:, 2]
