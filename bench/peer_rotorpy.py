@@ -8,7 +8,8 @@ attitude and their difference over time (the aero-on run) to a PNG.
 
 Needs RotorPy: ``.venv/bin/pip install --no-deps rotorpy``.
 
-Run: ``.venv/bin/python bench/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]``.
+Run: ``.venv/bin/python bench/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
+[--rtol 1e-9]``.
 """
 
 from __future__ import annotations
@@ -87,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--figure", type=Path, help="write the figure (PNG) here")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--rtol", type=float, default=None,
+                        help="RotorPy's solve_ivp relative tolerance (default: its own, 1e-3); "
+                             "atol is 1e-3 of it")
     args = parser.parse_args(argv)
     try:
         import rotorpy  # noqa: F401
@@ -95,7 +99,12 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     cfg = load_config()
-    runs = {aero: compare_with_rotorpy(cfg, aero=aero) for aero in (True, False)}
+    if args.rtol is not None and not 0.0 < args.rtol < 1.0:
+        parser.error(f"--rtol must be in (0, 1), got {args.rtol}")
+    kwargs = (None if args.rtol is None
+              else {"method": "RK45", "rtol": args.rtol, "atol": 1e-3 * args.rtol})
+    runs = {aero: compare_with_rotorpy(cfg, aero=aero, integrator_kwargs=kwargs)
+            for aero in (True, False)}
     if args.json:
         print(json.dumps({("aero_on" if k else "aero_off"): c.summary()
                           for k, c in runs.items()}, indent=2))
