@@ -15,6 +15,8 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
   comparison. Each simulator figure also gives ``per_cpu_s``: vehicle-steps per second of the
   process's CPU time (median), which a busy shared machine does not dilute.
+- ``vehicle_step``: the vehicles' own step alone (``Fleet.step`` on 2n vehicles: for rigid
+  bodies the autopilot, rotor wrench and attitude step), per model and batch of 1, 256 and 1024.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
   (:func:`aerodock.mission.run_campaign`, oracle compensation, summary only).
 - ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
@@ -196,6 +198,50 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
             "100 Hz")
         row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
         out[str(n)] = row
+    return out
+
+
+def bench_vehicle_step(cfg: Any, batches: tuple[int, ...] = (1, 256, 1024), quick: bool = False,
+                       progress: Progress = _quiet) -> dict[str, Any]:
+    """Vehicle-steps per second of the vehicles' own step (``Fleet.step``: for rigid bodies the
+    autopilot, rotor wrench and attitude step) on 2n vehicles, without the rest of the world:
+    per model and batch, wall and per CPU-second."""
+    from aerodock.fleet import build_fleet
+    from aerodock.vehicle import AttitudeCommand
+
+    out: dict[str, Any] = {}
+    repeats = 3 if quick else 5
+    dt = 1.0 / cfg.sim.physics_rate_hz
+    for model in ("rigid-body", "point-mass"):
+        fleet = build_fleet(cfg.with_overrides({"vehicle": {"model": model}}, source="bench"))
+        row: dict[str, Any] = {}
+        for n in batches:
+            progress(f"vehicle step ({model}): batch of {n}")
+            rng = np.random.default_rng(0)
+            start = fleet.hover(np.tile([0.0, 0.0, -2.0], (2 * n, 1)), 0.0, np.ones(2 * n))
+            cmd = AttitudeCommand(np.full(n, 0.05), np.full(n, -0.03), np.full(n, 0.1),
+                                  np.full(n, 7.5))
+            targets = fleet.targets(cmd, cmd, start, n, dt)
+            force = 0.1 * rng.standard_normal((2 * n, 3))
+            torque = 1e-3 * rng.standard_normal((2 * n, 3))
+            noise = 0.02 * rng.standard_normal((2 * n, 3))
+            steps = max(20, (200 if n <= 256 else 60) // (2 if quick else 1))
+
+            def fly(fleet: Any = fleet, start: Any = start, targets: Any = targets,
+                    force: np.ndarray = force, torque: np.ndarray = torque,
+                    noise: np.ndarray = noise, steps: int = steps) -> None:
+                state = start
+                for _ in range(steps):
+                    state, _ = fleet.step(state, targets, force, torque, dt, noise)
+
+            cpu: list[float] = []
+            times = measure(fly, repeats, warmup=1, cpu_times=cpu)
+            fig = figure([2 * n * steps / t for t in times], "vehicle-steps/s",
+                         f"{model}, Fleet.step alone, {2 * n} vehicles")
+            fig["per_cpu_s"] = float(statistics.median(2 * n * steps / max(c, 1e-9)
+                                                       for c in cpu))
+            row[str(n)] = fig
+        out[model] = row
     return out
 
 
@@ -945,6 +991,7 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = _quiet,
                                             model="rigid-body")
         figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
                                                        model="point-mass")
+        figs["vehicle_step"] = bench_vehicle_step(cfg, quick=quick, progress=progress)
     if wanted("docking"):
         figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
     if wanted("predictor"):
@@ -1006,6 +1053,9 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
         for n, row in figs.get(key, {}).items():
             add(f"simulator {model}, batch {n}, with controllers", row.get("with_controllers"))
             add(f"simulator {model}, batch {n}, physics only", row.get("physics_only"))
+    for model, row in figs.get("vehicle_step", {}).items():
+        for n, fig in row.items():
+            add(f"vehicle step {model}, batch {n} (Fleet.step alone)", fig)
     for key, label in (("trial_1", "docking trial (1)"),
                        ("campaign_100", "docking campaign (100)")):
         add(label, figs.get("docking", {}).get(key))

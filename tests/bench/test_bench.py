@@ -161,11 +161,20 @@ def test_bench_only_one_part_and_bad_part(cfg, monkeypatch):
     monkeypatch.setattr(bench, "SIM_BATCHES", (1,))
     monkeypatch.setattr(bench, "bench_simulator",
                         lambda cfg, quick, progress, model: {"1": {"model": model}})
+    monkeypatch.setattr(bench, "bench_vehicle_step", lambda cfg, quick, progress: {})
     doc = bench.run_all(cfg, quick=True, only="simulator")
-    assert set(doc["figures"]) == {"simulator", "simulator_point_mass"}
+    assert set(doc["figures"]) == {"simulator", "simulator_point_mass", "vehicle_step"}
     assert doc["figures"]["simulator_point_mass"]["1"]["model"] == "point-mass"
     app = typer.Typer()
     app.command("bench")(bench.bench_command)
     app.command("other")(lambda: None)
     result = CliRunner().invoke(app, ["bench", "--only", "nonsense"])
     assert result.exit_code == 2 and "error: unknown --only" in result.output
+
+
+def test_vehicle_step_figures(cfg):
+    out = bench.bench_vehicle_step(cfg, batches=(2,), quick=True)
+    for model in ("rigid-body", "point-mass"):
+        fig = out[model]["2"]
+        assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["per_cpu_s"] > 0
+        assert fig["note"].startswith(model)
