@@ -19,6 +19,7 @@ down); the world is NED.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,22 @@ class AutopilotGains:
     rate_max_radps: np.ndarray
 
 
+@functools.lru_cache(maxsize=64)
+def _tiled_rows(values: bytes, n: int) -> np.ndarray:
+    out = np.tile(np.frombuffer(values), (n, 1))
+    out.flags.writeable = False
+    return out
+
+
+def per_axis(vec: np.ndarray, n: int) -> np.ndarray:
+    """A constant (k,) vector as a read-only C-contiguous (n, k) array, cached per value and n.
+
+    ``a * per_axis(g, n)`` gives the numbers of ``a * g`` for (n, k) ``a``, as one flat loop
+    (a (k,) broadcast runs the inner loop once per row).
+    """
+    return _tiled_rows(np.asarray(vec, dtype=float).tobytes(), n)
+
+
 def attitude_target(roll_rad: np.ndarray, pitch_rad: np.ndarray,
                     yaw_setpoint_rad: np.ndarray) -> np.ndarray:
     """(n, 3, 3) desired body-to-world rotation from ZYX Euler angles (the outer loop's tilt)."""
@@ -67,9 +84,13 @@ def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray, 
     np.subtract(m[:, 2, 1], m[:, 1, 2], out=err[:, 0])
     np.subtract(m[:, 0, 2], m[:, 2, 0], out=err[:, 1])
     np.subtract(m[:, 1, 0], m[:, 0, 1], out=err[:, 2])
-    rate = err * (-0.5 * gains.attitude_p)
+    n = R.shape[0]
+    err *= per_axis(-0.5 * gains.attitude_p, n)
+    rate = err
     rate[:, 2] += yaw_rate_radps
-    return np.clip(rate, -gains.rate_max_radps, gains.rate_max_radps, out=rate)
+    limit = gains.rate_max_radps
+    np.maximum(rate, per_axis(-limit, n), out=rate)  # np.clip's values, without its wrapper
+    return np.minimum(rate, per_axis(limit, n), out=rate)
 
 
 def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
@@ -85,12 +106,17 @@ def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np
         inertia_kgm2: (3,) principal moments of inertia.
         dt_s: loop period.
     """
+    n = rate_sp_radps.shape[0]
     err = rate_sp_radps - gyro_radps
     limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
-    new_int = np.clip(integral + err * dt_s, -limit, limit)
-    accel = err * gains.rate_p
-    accel += new_int * gains.rate_i
-    accel *= inertia_kgm2
+    new_int = err * dt_s
+    new_int += integral
+    np.maximum(new_int, per_axis(-limit, n), out=new_int)
+    np.minimum(new_int, per_axis(limit, n), out=new_int)
+    accel = err
+    accel *= per_axis(gains.rate_p, n)
+    accel += new_int * per_axis(gains.rate_i, n)
+    accel *= per_axis(inertia_kgm2, n)
     return accel, new_int
 
 
@@ -103,14 +129,26 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     zero) so that the torque differences survive, then every rotor is clipped to
     ``[0, rotor_thrust_max_n]``.
     """
-    # Explicit column sums (no BLAS gemm: rounding would depend on the batch size).
-    f = thrust_n[:, None] * mixer_inv[0]
-    f += torque_nm[:, 0:1] * mixer_inv[1]
-    f += torque_nm[:, 1:2] * mixer_inv[2]
-    f += torque_nm[:, 2:3] * mixer_inv[3]
+    # Explicit column sums (no BLAS gemm: rounding would depend on the batch size), rotor-major
+    # (k, n) so that every operation below runs on contiguous rows.
+    m = mixer_inv[:, :, None]
+    f = m[0] * thrust_n
+    f += m[1] * torque_nm[:, 0]
+    f += m[2] * torque_nm[:, 1]
+    f += m[3] * torque_nm[:, 2]
     # Feasible collective shifts keep every rotor in [0, max]: s in [-min f, max - max f].
-    lo = -f.min(axis=1)
-    hi = rotor_thrust_max_n - f.max(axis=1)
-    shift = np.where(lo <= hi, np.minimum(np.maximum(lo, 0.0), hi), 0.5 * (lo + hi))
-    f += shift[:, None]
-    return np.clip(f, 0.0, rotor_thrust_max_n, out=f)
+    lo = np.minimum.reduce(f, axis=0)
+    np.negative(lo, out=lo)
+    hi = np.maximum.reduce(f, axis=0)
+    np.subtract(rotor_thrust_max_n, hi, out=hi)
+    shift = np.maximum(lo, 0.0)
+    np.minimum(shift, hi, out=shift)
+    infeasible = lo > hi
+    if infeasible.any():
+        mid = lo + hi
+        mid *= 0.5
+        np.copyto(shift, mid, where=infeasible)
+    f += shift
+    np.maximum(f, 0.0, out=f)
+    np.minimum(f, rotor_thrust_max_n, out=f)
+    return f.T

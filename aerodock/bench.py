@@ -10,7 +10,13 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``simulator``: vehicle-steps per second (trials x 2 vehicles x physics steps) for batches of
   1, 64, 256 and 1024 trials: the whole world (both vehicles, bar, gripper, default downwash) at
   500 Hz physics with both position controllers (LQR + bias observer) at 100 Hz
-  (``with_controllers``), and the physics alone under held commands (``physics_only``).
+  (``with_controllers``), and the physics alone under held commands (``physics_only``), with
+  rigid-body vehicles (``[vehicle] model = "rigid-body"``: attitude, rotors, autopilot, IMU).
+- ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
+  comparison. Each simulator figure also gives ``per_cpu_s``: vehicle-steps per second of the
+  process's CPU time (median), which a busy shared machine does not dilute.
+- ``vehicle_step``: the vehicles' own step alone (``Fleet.step`` on 2n vehicles: for rigid
+  bodies the autopilot, rotor wrench and attitude step), per model and batch of 1, 256 and 1024.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
   (:func:`aerodock.mission.run_campaign`, oracle compensation, summary only).
 - ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
@@ -46,7 +52,8 @@ import typer
 
 SIM_BATCHES = (1, 64, 256, 1024)
 TARGETS = {
-    "vehicle_steps_per_s_at_256": 1_000_000.0,
+    "vehicle_steps_per_s_at_256": 500_000.0,  # rigid-body world (issue 10)
+    "point_mass_vehicle_steps_per_s_at_256": 1_000_000.0,
     "rotorpy_sequential_speedup": 20.0,
     "predictor_single_call_us": 50.0,
     "reproduce_quick_s": 300.0,
@@ -62,19 +69,24 @@ def _quiet(_: str) -> None:
 
 # -- measuring ---------------------------------------------------------------------------------
 def measure(fn: Callable[[], Any], repeats: int, warmup: int = 1,
-            setup: Callable[[], Any] | None = None) -> list[float]:
+            setup: Callable[[], Any] | None = None,
+            cpu_times: list[float] | None = None) -> list[float]:
     """Wall times (s) of ``repeats`` calls of ``fn`` after ``warmup`` untimed ones.
 
-    ``setup``, if given, runs (untimed) before every call, the warm-up ones included.
+    ``setup``, if given, runs (untimed) before every call, the warm-up ones included; the
+    process CPU time of each timed call is appended to ``cpu_times`` if given.
     """
     times = []
     for i in range(warmup + repeats):
         if setup is not None:
             setup()
+        c0 = time.process_time()
         t0 = time.perf_counter()
         fn()
         if i >= warmup:
             times.append(time.perf_counter() - t0)
+            if cpu_times is not None:
+                cpu_times.append(time.process_time() - c0)
     return times
 
 
@@ -159,24 +171,79 @@ class SimLoop:
 
 
 def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: bool = False,
-                    progress: Progress = _quiet) -> dict[str, Any]:
-    """Vehicle-steps per second, with controllers and physics only, per batch size."""
+                    progress: Progress = _quiet, model: str | None = None) -> dict[str, Any]:
+    """Vehicle-steps per second, with controllers and physics only, per batch size.
+
+    ``model`` (``"rigid-body"`` or ``"point-mass"``) overrides ``cfg``'s ``[vehicle] model``.
+    """
+    if model is not None:
+        cfg = cfg.with_overrides({"vehicle": {"model": model}}, source="bench")
     out: dict[str, Any] = {}
     repeats = 3 if quick else 5
     for n in batches:
-        progress(f"simulator: batch of {n}")
+        progress(f"simulator ({cfg.vehicle.model}): batch of {n}")
         loop = SimLoop(cfg, n)
         # About 0.1-0.3 s per repetition on a 2-core machine.
         periods = max(4, int((100 if n <= 64 else 60 if n <= 256 else 24) * (0.5 if quick else 1)))
         steps = loop.vehicle_steps_per_period * periods
         row = {}
         for key, ctl in (("with_controllers", True), ("physics_only", False)):
+            cpu: list[float] = []
             times = measure(lambda loop=loop, k=periods, ctl=ctl: loop.run(k, ctl), repeats,
-                            warmup=1, setup=loop.reset)
+                            warmup=1, setup=loop.reset, cpu_times=cpu)
             row[key] = figure([steps / t for t in times], "vehicle-steps/s")
+            # Per second of this process's CPU time: what wall time would be on an idle core
+            # (on a shared machine the wall-time figure also counts other processes' turns).
+            row[key]["per_cpu_s"] = float(statistics.median(steps / max(c, 1e-9) for c in cpu))
         row["with_controllers"]["note"] = (
-            f"{n} trials x 2 vehicles, 500 Hz physics, LQR + observer at 100 Hz")
+            f"{cfg.vehicle.model}, {n} trials x 2 vehicles, 500 Hz physics, LQR + observer at "
+            "100 Hz")
+        row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
         out[str(n)] = row
+    return out
+
+
+def bench_vehicle_step(cfg: Any, batches: tuple[int, ...] = (1, 256, 1024), quick: bool = False,
+                       progress: Progress = _quiet) -> dict[str, Any]:
+    """Vehicle-steps per second of the vehicles' own step (``Fleet.step``: for rigid bodies the
+    autopilot, rotor wrench and attitude step) on 2n vehicles, without the rest of the world:
+    per model and batch, wall and per CPU-second."""
+    from aerodock.fleet import build_fleet
+    from aerodock.vehicle import AttitudeCommand
+
+    out: dict[str, Any] = {}
+    repeats = 3 if quick else 5
+    dt = 1.0 / cfg.sim.physics_rate_hz
+    for model in ("rigid-body", "point-mass"):
+        fleet = build_fleet(cfg.with_overrides({"vehicle": {"model": model}}, source="bench"))
+        row: dict[str, Any] = {}
+        for n in batches:
+            progress(f"vehicle step ({model}): batch of {n}")
+            rng = np.random.default_rng(0)
+            start = fleet.hover(np.tile([0.0, 0.0, -2.0], (2 * n, 1)), 0.0, np.ones(2 * n))
+            cmd = AttitudeCommand(np.full(n, 0.05), np.full(n, -0.03), np.full(n, 0.1),
+                                  np.full(n, 7.5))
+            targets = fleet.targets(cmd, cmd, start, n, dt)
+            force = 0.1 * rng.standard_normal((2 * n, 3))
+            torque = 1e-3 * rng.standard_normal((2 * n, 3))
+            noise = 0.02 * rng.standard_normal((2 * n, 3))
+            steps = max(20, (200 if n <= 256 else 60) // (2 if quick else 1))
+
+            def fly(fleet: Any = fleet, start: Any = start, targets: Any = targets,
+                    force: np.ndarray = force, torque: np.ndarray = torque,
+                    noise: np.ndarray = noise, steps: int = steps) -> None:
+                state = start
+                for _ in range(steps):
+                    state, _ = fleet.step(state, targets, force, torque, dt, noise)
+
+            cpu: list[float] = []
+            times = measure(fly, repeats, warmup=1, cpu_times=cpu)
+            fig = figure([2 * n * steps / t for t in times], "vehicle-steps/s",
+                         f"{model}, Fleet.step alone, {2 * n} vehicles")
+            fig["per_cpu_s"] = float(statistics.median(2 * n * steps / max(c, 1e-9)
+                                                       for c in cpu))
+            row[str(n)] = fig
+        out[model] = row
     return out
 
 
@@ -858,7 +925,11 @@ def machine_info() -> dict[str, Any]:
             versions[mod] = version(mod)
         except Exception:  # noqa: BLE001 - not installed
             versions[mod] = None
-    return {"cpu": cpu, "cores": os.cpu_count(),
+    try:
+        load = [round(x, 2) for x in os.getloadavg()]
+    except (OSError, AttributeError):
+        load = None
+    return {"cpu": cpu, "cores": os.cpu_count(), "load_average_1_5_15_min": load,
             "memory_gib": None if mem_gib is None else round(mem_gib, 1),
             "os": f"{platform.system()} {platform.release()}", "versions": versions}
 
@@ -870,14 +941,18 @@ def _value(fig: Any) -> float | None:
 def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
     """The issue's targets (benchmarks, not tests): measured value, threshold, met or not."""
     sim = figs.get("simulator", {}).get("256", {})
+    point_mass = figs.get("simulator_point_mass", {}).get("256", {})
     numpy_pred = figs.get("predictor", {}).get("numpy", {})
     peer = figs.get("peer") or {}
     ratios = peer.get("ratios") or {}
     rows = [
-        ("vehicle-steps/s at a batch of 256, physics (World.step)", ">=",
+        ("vehicle-steps/s at a batch of 256, rigid-body, physics (World.step)", ">=",
          TARGETS["vehicle_steps_per_s_at_256"], _value(sim.get("physics_only"))),
-        ("vehicle-steps/s at a batch of 256, with controllers at 100 Hz", ">=",
+        ("vehicle-steps/s at a batch of 256, rigid-body, with controllers at 100 Hz", ">=",
          TARGETS["vehicle_steps_per_s_at_256"], _value(sim.get("with_controllers"))),
+        ("vehicle-steps/s at a batch of 256, point-mass, with controllers at 100 Hz", ">=",
+         TARGETS["point_mass_vehicle_steps_per_s_at_256"],
+         _value(point_mass.get("with_controllers"))),
         ("speed-up over RotorPy sequential, single trial", ">=",
          TARGETS["rotorpy_sequential_speedup"], ratios.get("single_trial")),
         ("NumPy predictor, single call (us)", "<", TARGETS["predictor_single_call_us"],
@@ -894,31 +969,52 @@ def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
     return out
 
 
+PARTS = ("simulator", "docking", "predictor", "memory", "reproduce", "gym", "peer")
+
+
 def run_all(cfg: Any, quick: bool = False, progress: Progress = _quiet,
             include_reproduce: bool | None = None, include_peer: bool = True,
-            config_path: Path | None = None) -> dict[str, Any]:
+            config_path: Path | None = None, only: str | None = None) -> dict[str, Any]:
     """Every figure (see the module docstring), as a JSON-ready document.
 
-    ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses.
+    ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses; ``only`` (one
+    of :data:`PARTS`) measures that part alone (``predictor`` includes training).
     """
+    if only is not None and only not in PARTS:
+        raise ValueError(f"unknown bench part {only!r}; choose one of {', '.join(PARTS)}")
+
+    def wanted(part: str) -> bool:
+        return only is None or only == part
+
     started = time.perf_counter()
     figs: dict[str, Any] = {}
-    figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress)
-    figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
-    figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
-    figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
-    figs["memory"] = bench_memory(progress=progress, config_path=config_path)
+    if wanted("simulator"):
+        figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                            model="rigid-body")
+        figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                                       model="point-mass")
+        figs["vehicle_step"] = bench_vehicle_step(cfg, quick=quick, progress=progress)
+    if wanted("docking"):
+        figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
+    if wanted("predictor"):
+        figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
+        figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
+    if wanted("memory"):
+        figs["memory"] = bench_memory(progress=progress, config_path=config_path)
     if include_reproduce is None:
-        include_reproduce = not quick
-    figs["reproduce_quick_s"] = (bench_reproduce(progress, config_path) if include_reproduce
-                                 else unavailable("skipped with --quick (takes minutes)", "s"))
-    try:
-        from aerodock.envs.bench import bench_vector_env
-    except ImportError as err:  # gymnasium is an optional extra
-        figs["gym_vector_env"] = {"1": unavailable(_reason(err), "env-steps/s")}
-    else:
-        figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
-    if include_peer:
+        include_reproduce = not quick or only == "reproduce"
+    if wanted("reproduce"):
+        figs["reproduce_quick_s"] = (
+            bench_reproduce(progress, config_path) if include_reproduce
+            else unavailable("skipped with --quick (takes minutes)", "s"))
+    if wanted("gym"):
+        try:
+            from aerodock.envs.bench import bench_vector_env
+        except ImportError as err:  # gymnasium is an optional extra
+            figs["gym_vector_env"] = {"1": unavailable(_reason(err), "env-steps/s")}
+        else:
+            figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
+    if include_peer and wanted("peer"):
         figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
     return {
         "machine": machine_info(),
@@ -956,12 +1052,19 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
             return
         spread = (f"{_fmt(fig['min'], unit)} - {_fmt(fig['max'], unit)} (x{fig['repeats']})"
                   if fig.get("repeats", 1) > 1 else "one run")
-        rows.append((name, _fmt(fig["value"], unit), spread, unit, fig.get("note", "")))
+        note = fig.get("note", "")
+        if "per_cpu_s" in fig:
+            note = f"{note}; {_fmt(fig['per_cpu_s'], unit)} per CPU-second".lstrip("; ")
+        rows.append((name, _fmt(fig["value"], unit), spread, unit, note))
 
     figs = doc["figures"]
-    for n, row in figs.get("simulator", {}).items():
-        add(f"simulator, batch {n}, with controllers", row.get("with_controllers"))
-        add(f"simulator, batch {n}, physics only", row.get("physics_only"))
+    for key, model in (("simulator", "rigid-body"), ("simulator_point_mass", "point-mass")):
+        for n, row in figs.get(key, {}).items():
+            add(f"simulator {model}, batch {n}, with controllers", row.get("with_controllers"))
+            add(f"simulator {model}, batch {n}, physics only", row.get("physics_only"))
+    for model, row in figs.get("vehicle_step", {}).items():
+        for n, fig in row.items():
+            add(f"vehicle step {model}, batch {n} (Fleet.step alone)", fig)
     for n, fig in figs.get("gym_vector_env", {}).items():
         add(f"gym vector env, {n} envs", fig)
     for key, label in (("trial_1", "docking trial (1)"),
@@ -997,6 +1100,8 @@ def bench_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print the numbers as JSON.")] = False,
     config: Annotated[Path | None, typer.Option(
         "--config", help="TOML file overriding aerodock's defaults.")] = None,
+    only: Annotated[str | None, typer.Option(
+        "--only", help=f"Measure one part alone: {', '.join(PARTS)}.")] = None,
 ) -> None:
     """Measure the speed of every hot path: simulator, docking, learnt model, training,
     `reproduce --quick`, memory, and RotorPy on the same scenario (if installed)."""
@@ -1004,6 +1109,10 @@ def bench_command(
     from rich.table import Table
 
     from aerodock.config import load_config
+
+    if only is not None and only not in PARTS:
+        typer.echo(f"error: unknown --only {only!r}; choose one of {', '.join(PARTS)}", err=True)
+        raise typer.Exit(2)
 
     err = Console(stderr=True)
     with err.status("benchmarking") as status:
@@ -1013,13 +1122,17 @@ def bench_command(
             else:
                 err.print(f"bench: {msg}", highlight=False)
 
-        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config)
+        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config,
+                      only=only)
     if as_json:
         typer.echo(json.dumps(doc, indent=2))
         return
     m = doc["machine"]
+    load = m.get("load_average_1_5_15_min")
     table = Table(title=f"aerodock bench{' --quick' if quick else ''}: {m['cpu']}, "
-                  f"{m['cores']} cores, Python {m['versions']['python']}")
+                  f"{m['cores']} cores, Python {m['versions']['python']}"
+                  + (f", load average {load[0]:g} / {load[1]:g} / {load[2]:g} (1/5/15 min, "
+                     "at the end)" if load else ""))
     for col, justify in (("figure", "left"), ("median", "right"), ("spread (min - max)", "right"),
                          ("unit", "left"), ("note", "left")):
         table.add_column(col, justify=justify)  # type: ignore[arg-type]

@@ -15,6 +15,7 @@ Every state exposes ``p``, ``v``, ``R``, ``rpy``, ``thrust_n`` and ``thrust_gain
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -39,12 +40,18 @@ from aerodock.vehicle import (
 )
 
 
+@functools.cache
+def _field_names(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in fields(cls))
+
+
 def _concat(cls: type, a: Any, b: Any) -> Any:
-    return cls(*(np.concatenate([getattr(a, f.name), getattr(b, f.name)]) for f in fields(cls)))
+    return cls(*[np.concatenate([getattr(a, name), getattr(b, name)])
+                 for name in _field_names(cls)])
 
 
 def _rows(cls: type, state: Any, sl: slice) -> Any:
-    return cls(*(getattr(state, f.name)[sl] for f in fields(cls)))
+    return cls(*[getattr(state, name)[sl] for name in _field_names(cls)])
 
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:

@@ -8,11 +8,14 @@ The vehicle DESIGN.md asks for, batch-first and pure (one call advances N vehicl
     d omega_i/dt = (omega_cmd_i - omega_i) / tau_motor,   f_i = k_T omega_i^2 (x thrust gain)
 
 with ``T = sum f_i``, rotor torques ``tau = sum r_i x (-f_i e3) + s_i c_tau f_i e3`` (X layout,
-spin directions as PX4's quad X), rotor drag ``F_rotor_drag = -k_d (sum omega_i) [v_bx, v_by,
-(k_z/k_d) v_bz]`` (the H-force of blades in edgewise flow, as RotorPy models it) and quadratic
-parasitic drag. External forces (downwash, cable, contact) arrive as a world force and a body
-torque about the centre of mass, so off-centre loads (the wake on each rotor disk, the cable
-anchor below the leader) tilt the vehicle.
+spin directions as PX4's quad X), rotor drag as RotorPy models it (the H-force of blades in
+edgewise flow and the induced-inflow force along the axis): on rotor ``i``, with its local
+airspeed ``u_i = v_b + w x r_i`` (body frame), ``H_i = -omega_i diag(k_d, k_d, k_z) u_i`` acting
+at the rotor hub, so ``F_rotor_drag = sum H_i`` with the moment ``sum r_i x H_i`` (the rotors'
+damping of roll, pitch and yaw rates), and quadratic parasitic drag. External forces (downwash,
+cable, contact) arrive as a world force and a body torque about the centre of mass, so
+off-centre loads (the wake on each rotor disk, the cable anchor below the leader) tilt the
+vehicle.
 
 The autopilot (:mod:`aerodock.autopilot`) runs inside the step at the physics rate, on the gyro's
 noisy rates: it is part of the vehicle, as on the aircraft. Integration: angular velocity and
@@ -27,7 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.autopilot import AutopilotGains, attitude_target, mix, rate_control, rate_setpoint
+from aerodock.autopilot import (
+    AutopilotGains,
+    attitude_target,
+    mix,
+    per_axis,
+    rate_control,
+    rate_setpoint,
+)
 from aerodock.config import Config
 from aerodock.geometry import rotmat_to_euler
 from aerodock.vehicle import AttitudeCommand
@@ -54,6 +64,7 @@ class RigidBodyParams:
     gains: AutopilotGains
     mixer_inv: np.ndarray  # (4, 4): [T, tau_x, tau_y, tau_z] -> rotor thrusts
     rotor_torque_map: np.ndarray  # (4, 3): rotor thrusts -> body torque
+    rotor_drag_sums: np.ndarray  # (4, 6): rotor speeds -> sums of omega_i [1, x, y, x^2, y^2, xy]
 
     @classmethod
     def from_config(cls, cfg: Config) -> RigidBodyParams:
@@ -71,6 +82,8 @@ class RigidBodyParams:
         # tau = r x (-f e3) = (-y f, x f, 0); yaw reaction s c_tau f.
         torque_map = np.stack([-offsets[:, 1], offsets[:, 0], spin * v.rotor_torque_ratio_m],
                               axis=1)
+        x, y = offsets[:, 0], offsets[:, 1]  # the rotor disks lie in the body x-y plane
+        drag_sums = np.stack([np.ones(4), x, y, x * x, y * y, x * y], axis=1)
         mixer = np.vstack([np.ones(4), torque_map.T])
         gains = AutopilotGains(
             attitude_p=np.asarray(a.attitude_p, dtype=float),
@@ -88,6 +101,7 @@ class RigidBodyParams:
             rotor_thrust_max_n=v.thrust_max_g * v.mass_kg * g / 4.0,
             tilt_max_rad=np.deg2rad(v.tilt_max_deg), gravity_mps2=g, gains=gains,
             mixer_inv=np.linalg.inv(mixer).T.copy(), rotor_torque_map=torque_map,
+            rotor_drag_sums=drag_sums,
         )
 
     @property
@@ -167,8 +181,11 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
     tilt = params.tilt_max_rad
     roll = np.broadcast_to(np.clip(cmd.roll_rad, -tilt, tilt), (n,))
     pitch = np.broadcast_to(np.clip(cmd.pitch_rad, -tilt, tilt), (n,))
+    r_des = attitude_target(roll, pitch, state.yaw_setpoint)
+    # Stored transposed in memory: the autopilot multiplies by R_des^T at every physics step.
+    r_des = np.ascontiguousarray(r_des.transpose(0, 2, 1)).transpose(0, 2, 1)
     return RigidTargets(
-        attitude_target(roll, pitch, state.yaw_setpoint),
+        r_des,
         np.broadcast_to(np.asarray(cmd.yaw_rate_radps, dtype=float), (n,)),
         np.broadcast_to(np.clip(cmd.thrust_n, 0.0, params.thrust_max_n), (n,)),
     )
@@ -182,7 +199,58 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                                     params.inertia_kgm2, dt_s)
     f_cmd = mix(targets.thrust_n, torque, params.mixer_inv, params.rotor_thrust_max_n)
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
-    return np.sqrt(f_cmd / params.thrust_coeff), integral
+    speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
+    return np.sqrt(speed, out=speed), integral
+
+
+def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
+                w_radps: np.ndarray, params: RigidBodyParams) -> tuple[np.ndarray, np.ndarray]:
+    """The rotors' force and torque on N vehicles, body FRD: ((n, 3) N, (n, 3) N m).
+
+    Thrust ``-f_i e3`` and yaw reaction at each rotor, and rotor drag at each hub:
+    ``H_i = -omega_i diag(k_d, k_d, k_z) (v_b + w x r_i)`` (RotorPy's H-force and induced-inflow
+    terms, per rotor on its local airspeed). With the hubs in the body x-y plane the sums over
+    rotors reduce to the weighted sums ``S = sum omega_i [1, x_i, y_i, x_i^2, y_i^2, x_i y_i]``.
+
+    Args:
+        rotor_speed: (n, 4) rotor speeds, rad/s.
+        thrust_gain: (n,) multiplicative thrust error.
+        v_body_mps: (n, 3) velocity relative to the air, body frame.
+        w_radps: (n, 3) body rates.
+        params: vehicle constants.
+    """
+    f = rotor_thrusts_n(rotor_speed, thrust_gain, params)
+    # Component-major (3, n) and (6, n) work arrays: every operation runs on contiguous rows of
+    # n (a (n, 1) x (3,) broadcast would call the inner loop once per vehicle).
+    tmap = params.rotor_torque_map[:, :, None]
+    torque = tmap[0] * f[:, 0]
+    torque += tmap[1] * f[:, 1]
+    torque += tmap[2] * f[:, 2]
+    torque += tmap[3] * f[:, 3]
+    force = np.zeros_like(torque)
+    thrust = np.add(f[:, 0], f[:, 1], out=force[2])
+    thrust += f[:, 2]
+    thrust += f[:, 3]
+    np.negative(thrust, out=force[2])
+    kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
+    if kd or kz:
+        g = params.rotor_drag_sums[:, :, None]
+        sums = g[0] * rotor_speed[:, 0]
+        sums += g[1] * rotor_speed[:, 1]
+        sums += g[2] * rotor_speed[:, 2]
+        sums += g[3] * rotor_speed[:, 3]
+        s, sx, sy, sxx, syy, sxy = sums
+        vx, vy, vz = v_body_mps.T
+        wx, wy, wz = w_radps.T
+        axial = s * vz + wx * sy - wy * sx  # sum omega_i (u_i)_z
+        force[0] -= kd * (s * vx - wz * sy)
+        force[1] -= kd * (s * vy + wz * sx)
+        force[2] -= kz * axial
+        torque[0] -= kz * (sy * vz + wx * syy - wy * sxy)
+        torque[1] += kz * (sx * vz + wx * sxy - wy * sxx)
+        torque[2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
+    return force.T, torque.T
+    return force, torque
 
 
 def step_rigid_body(
@@ -206,41 +274,58 @@ def step_rigid_body(
     m = params.mass_kg
     rot = state.R
     omega = state.rotor_speed
-    f = rotor_thrusts_n(omega, state.thrust_gain, params)
-    thrust = f.sum(axis=1)
-    tmap = params.rotor_torque_map
-    torque = f[:, 0:1] * tmap[0]
-    torque += f[:, 1:2] * tmap[1]
-    torque += f[:, 2:3] * tmap[2]
-    torque += f[:, 3:4] * tmap[3]
+    v = state.v
+    w = state.w
+    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
+    force_body, torque = body_wrench(omega, state.thrust_gain, v_body, w, params)
     if ext_torque_nm is not None:
         torque += ext_torque_nm
-    # Body-frame forces: rotor drag (H-force) and thrust.
-    v = state.v
-    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    drag = omega.sum(axis=1)
-    force_body = v_body * (-params.rotor_drag_coeff * drag)[:, None]
-    force_body[:, 2] *= params.rotor_drag_z_coeff / max(params.rotor_drag_coeff, 1e-30)
-    force_body[:, 2] -= thrust
     accel = np.matmul(rot, force_body[:, :, None])[:, :, 0]
     if params.parasitic_drag_coeff:
-        speed = np.sqrt((v * v).sum(axis=1))
-        accel -= (params.parasitic_drag_coeff * speed)[:, None] * v
+        vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
+        speed = vx * vx
+        speed += vy * vy
+        speed += vz * vz
+        np.sqrt(speed, out=speed)
+        speed *= params.parasitic_drag_coeff
+        accel -= speed[:, None] * v
     accel += ext_force_n
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    w = state.w
-    jw = w * params.inertia_kgm2
-    gyro = np.cross(w, jw)
-    w_dot = (torque - gyro) / params.inertia_kgm2
-    w_new = w + w_dot * dt_s
-    v_new = v + accel * dt_s
-    p_new = state.p + (v + v_new) * (0.5 * dt_s)
-    rot_new = _rotate(rot, (w + w_new) * (0.5 * dt_s))
+    inertia = per_axis(params.inertia_kgm2, w.shape[0])
+    jw = w * inertia
+    wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
+    jx, jy, jz = jw[:, 0], jw[:, 1], jw[:, 2]
+    # torque -= w x J w (the components of np.cross, written out: no axis juggling per call).
+    gyro = wy * jz
+    gyro -= wz * jy
+    torque[:, 0] -= gyro
+    np.multiply(wz, jx, out=gyro)
+    gyro -= wx * jz
+    torque[:, 1] -= gyro
+    np.multiply(wx, jy, out=gyro)
+    gyro -= wy * jx
+    torque[:, 2] -= gyro
+    torque /= inertia  # the angular acceleration
+    torque *= dt_s
+    w_new = np.add(w, torque, out=np.empty_like(w))
+    accel_dt = accel * dt_s
+    v_new = v + accel_dt
+    mean = v + v_new
+    mean *= 0.5 * dt_s
+    p_new = state.p + mean
+    np.add(w, w_new, out=mean)
+    mean *= 0.5 * dt_s
+    rot_new = _rotate(rot, mean)
     alpha = 1.0 - np.exp(-dt_s / params.motor_tau_s)
-    omega_new = omega + (rotor_speed_cmd - omega) * alpha
-    thrust_new = rotor_thrusts_n(omega_new, state.thrust_gain, params).sum(axis=1)
+    omega_new = rotor_speed_cmd - omega
+    omega_new *= alpha
+    omega_new += omega
+    f_new = rotor_thrusts_n(omega_new, state.thrust_gain, params)
+    thrust_new = f_new[:, 0] + f_new[:, 1]
+    thrust_new += f_new[:, 2]
+    thrust_new += f_new[:, 3]
     return RigidBodyState(p_new, v_new, rot_new, w_new, omega_new, state.rate_integral,
                           state.yaw_setpoint, state.thrust_gain, thrust_new), accel
 
@@ -271,27 +356,40 @@ def step_with_autopilot(
 
 def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """``R exp([phi]x)`` for (n, 3, 3) ``R`` and (n, 3) body rotation vectors (Rodrigues)."""
-    theta2 = (phi * phi).sum(axis=1)
-    small = theta2 < 1e-12
-    theta = np.sqrt(theta2)
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I.
     x, y, z = phi[:, 0], phi[:, 1], phi[:, 2]
-    d = np.empty_like(rot)
-    bp = b[:, None] * phi
-    outer = bp[:, :, None] * phi[:, None, :]
-    d[:] = outer
-    diag = 1.0 - b * theta2
-    d[:, 0, 0] += diag
-    d[:, 1, 1] += diag
-    d[:, 2, 2] += diag
-    ax, ay, az = a * x, a * y, a * z
-    d[:, 0, 1] -= az
-    d[:, 1, 0] += az
-    d[:, 0, 2] += ay
-    d[:, 2, 0] -= ay
-    d[:, 1, 2] -= ax
-    d[:, 2, 1] += ax
-    return np.matmul(rot, d)
+    theta2 = x * x
+    theta2 += y * y
+    theta2 += z * z
+    theta = np.sqrt(theta2)
+    small = theta2 < 1e-12
+    if small.any():  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
+        safe = np.where(small, 1.0, theta)
+        a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+        b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    else:
+        a = np.sin(theta)
+        a /= theta
+        b = 1.0 - np.cos(theta)
+        b /= theta * theta
+    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I, built component-major (3, 3, n)
+    # so that every operation runs on a contiguous row of n.
+    n = phi.shape[0]
+    d = np.empty((3, 3, n))
+    diag = b * theta2
+    np.subtract(1.0, diag, out=diag)
+    for i, p_i in enumerate((x, y, z)):
+        bp = b * p_i
+        np.multiply(bp, x, out=d[i, 0])
+        np.multiply(bp, y, out=d[i, 1])
+        np.multiply(bp, z, out=d[i, 2])
+        d[i, i] += diag
+    ax = a * x
+    ay = a * y
+    az = a * z
+    d[0, 1] -= az
+    d[1, 0] += az
+    d[0, 2] += ay
+    d[2, 0] -= ay
+    d[1, 2] -= ax
+    d[2, 1] += ax
+    return np.matmul(rot, d.transpose(2, 0, 1))

@@ -69,12 +69,15 @@ def test_sim_loop_counts_vehicle_steps(cfg):
     assert loop.world.step_index == 3 * loop.world.substeps
 
 
-def test_simulator_and_docking_figures(cfg):
-    sim = bench.bench_simulator(cfg, batches=(2,), quick=True)
+@pytest.mark.parametrize("model", ["rigid-body", "point-mass"])
+def test_simulator_and_docking_figures(cfg, model):
+    sim = bench.bench_simulator(cfg, batches=(2,), quick=True, model=model)
     for key in ("with_controllers", "physics_only"):
         fig = sim["2"][key]
         assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["repeats"] == 3
         assert fig["min"] <= fig["value"] <= fig["max"]
+        assert fig["note"].startswith(model)
+        assert fig["per_cpu_s"] > 0
 
 
 def test_predictor_figures_without_a_trained_model():
@@ -95,13 +98,14 @@ def test_memory_figure_from_a_subprocess():
 
 def test_targets_report_met_unmet_and_unmeasured():
     figs = {
-        "simulator": {"256": {"physics_only": {"value": 2e6}, "with_controllers": {"value": 9e5}}},
+        "simulator": {"256": {"physics_only": {"value": 6e5}, "with_controllers": {"value": 4e5}}},
+        "simulator_point_mass": {"256": {"with_controllers": {"value": 1.2e6}}},
         "predictor": {"numpy": {"single_call_us": {"value": 20.0}}},
         "peer": {"ratios": {"single_trial": 25.0}},
         "reproduce_quick_s": bench.unavailable("not available", "s"),
     }
     met = [t["met"] for t in bench.targets(figs)]
-    assert met == [True, False, True, True, None]
+    assert met == [True, False, True, True, True, None]
 
 
 def test_peer_reference_is_a_rest_to_rest_minimum_jerk_move():
@@ -144,9 +148,33 @@ def test_bench_command_help_and_table_rows():
         "peer": {"ratios": {"single_trial": 30.0}},
     }}
     rows = bench.table_rows(doc)
-    assert ("simulator, batch 1, with controllers", "20,000", "10,000 - 30,000 (x3)",
+    assert ("simulator rigid-body, batch 1, with controllers", "20,000", "10,000 - 30,000 (x3)",
             "vehicle-steps/s", "") in rows
-    assert ("simulator, batch 1, physics only", "null", "", "vehicle-steps/s", "why") in rows
+    assert ("simulator rigid-body, batch 1, physics only", "null", "", "vehicle-steps/s",
+            "why") in rows
     assert any(r[0] == "predictor numpy" and r[1] == "null" for r in rows)
     assert ("ratio: single trial", "30.0x", "", "", "") in rows
     json.dumps(doc)  # JSON-ready
+
+
+def test_bench_only_one_part_and_bad_part(cfg, monkeypatch):
+    monkeypatch.setattr(bench, "SIM_BATCHES", (1,))
+    monkeypatch.setattr(bench, "bench_simulator",
+                        lambda cfg, quick, progress, model: {"1": {"model": model}})
+    monkeypatch.setattr(bench, "bench_vehicle_step", lambda cfg, quick, progress: {})
+    doc = bench.run_all(cfg, quick=True, only="simulator")
+    assert set(doc["figures"]) == {"simulator", "simulator_point_mass", "vehicle_step"}
+    assert doc["figures"]["simulator_point_mass"]["1"]["model"] == "point-mass"
+    app = typer.Typer()
+    app.command("bench")(bench.bench_command)
+    app.command("other")(lambda: None)
+    result = CliRunner().invoke(app, ["bench", "--only", "nonsense"])
+    assert result.exit_code == 2 and "error: unknown --only" in result.output
+
+
+def test_vehicle_step_figures(cfg):
+    out = bench.bench_vehicle_step(cfg, batches=(2,), quick=True)
+    for model in ("rigid-body", "point-mass"):
+        fig = out[model]["2"]
+        assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["per_cpu_s"] > 0
+        assert fig["note"].startswith(model)

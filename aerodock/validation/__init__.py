@@ -1,0 +1,1 @@
+"""Validation of aerodock's models against independent simulators (peers)."""
