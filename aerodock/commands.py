@@ -11,7 +11,16 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from aerodock.cli import ConfigOpt, JsonOpt, SeedOpt, _config, app, fail, print_json
+from aerodock.cli import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    _config,
+    app,
+    check_number,
+    fail,
+    print_json,
+)
 from aerodock.control.compensation import Compensation
 
 err_console = Console(stderr=True)
@@ -50,11 +59,23 @@ def dock(
 ) -> None:
     """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
     from aerodock.flightlog import save_flightlogs
+    from aerodock.limits import check_campaign_size
     from aerodock.mission import MissionSpec, run_campaign
 
-    cfg = _config(config)
+    check_number("--offset", offset, 0.0, 100.0)
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
+    cfg = _config(config)
+    if offset is not None:
+        # Validated like a config value (range, docking point above the ground), named as given.
+        cfg = cfg.with_overrides({"platform": {"cable_length_m": float(offset)}},
+                                 source=f"--offset {offset:g}")
+    check_campaign_size(cfg, trials, keep_logs=save_logs is not None)
+    if save_logs is not None:
+        from aerodock.fileio import check_writable_target
+
+        check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
                        leader_fixed=leader_fixed, compensation=compensation, seed=seed)

@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash.base import BodyState
-from aerodock.learning.features import N_FEATURES, check_inputs, feature_map
-from aerodock.learning.modelfile import ModelSpec, load_model_dir
+from aerodock.learning.features import N_FEATURES, check_eps, check_inputs, feature_map
+from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
 
 
 def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
@@ -80,6 +80,7 @@ class Predictor:
         if spec.kind == "zero":
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
+        check_eps(spec.eps_pos_m, spec.eps_vel_mps)
         layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64))
                   for w, b in weights]
         if len(layers) != len(spec.weight_shapes()):
@@ -104,12 +105,23 @@ class Predictor:
         """Load a model directory (a :class:`ZeroPredictor` for a ``"zero"`` model).
 
         Raises:
-            ModelFileError: missing, corrupt or mismatched model files.
+            ModelFileError: missing, corrupt or mismatched model files, or values the runtime
+                cannot use (e.g. feature constants out of range); one line naming the file.
         """
-        spec, weights, doc = load_model_dir(path)
-        if spec.kind == "zero":
-            return ZeroPredictor(meta=doc)
-        return cls(spec, weights, doc)
+        where = Path(path)
+        if where.name != MODEL_JSON:
+            where = where / MODEL_JSON
+        try:
+            spec, weights, doc = load_model_dir(path)
+            if spec.kind == "zero":
+                return ZeroPredictor(meta=doc)
+            return cls(spec, weights, doc)
+        except ModelFileError:
+            raise
+        except RecursionError:
+            raise ModelFileError(f"{where}: nested too deeply (corrupt model file)") from None
+        except (ValueError, TypeError, OverflowError) as err:
+            raise ModelFileError(f"{where}: {' '.join(str(err).split())}") from None
 
     # -- batched ---------------------------------------------------------------------------
     def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
