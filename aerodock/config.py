@@ -24,64 +24,95 @@ from typing import Any
 
 DEFAULTS_NAME = "defaults.toml"
 
-_OPEN, _CLOSED = True, False
-# Every numeric key's range: (low, high, low_is_open). Values must be finite; the bounds keep
-# them physical and keep a run's memory and time bounded (durations <= 10 min of flight, rates
-# <= 20 kHz). Keys of the default downwash field are listed under "downwash.params.".
-_RANGES: dict[str, tuple[float, float, bool]] = {
-    "vehicle.mass_kg": (0, 100, _OPEN), "vehicle.diagonal_m": (0, 10, _OPEN),
-    "vehicle.rotor_radius_m": (0, 5, _OPEN), "vehicle.n_rotors": (1, 16, _CLOSED),
-    "vehicle.drag_coeff_kgps": (0, 100, _CLOSED), "vehicle.tau_attitude_s": (0, 10, _OPEN),
-    "vehicle.tau_thrust_s": (0, 10, _OPEN), "vehicle.tilt_max_deg": (0, 89, _OPEN),
+# Every numeric key's range, (low, high), both inclusive. Values must be finite; the bounds keep
+# them physical (a 1e-300 m rotor has no disk area: NaN forces), keep the arithmetic finite, and
+# keep a run's memory and time bounded (durations <= 10 min of flight, rates <= 20 kHz). Keys of
+# the default downwash field are listed under "downwash.params.".
+_RANGES: dict[str, tuple[float, float]] = {
+    "vehicle.mass_kg": (0.001, 100),
+    "vehicle.diagonal_m": (0.01, 10),
+    "vehicle.rotor_radius_m": (0.001, 5),
+    "vehicle.n_rotors": (1, 16),
+    "vehicle.drag_coeff_kgps": (0, 100),
+    "vehicle.tau_attitude_s": (0.001, 10),
+    "vehicle.tau_thrust_s": (0.001, 10),
+    "vehicle.tilt_max_deg": (1, 89),
     # Hover needs 1 g; 10 % more is the least that leaves any authority to manoeuvre.
-    "vehicle.thrust_max_g": (1.1, 10, _CLOSED), "vehicle.thrust_gain_sd": (0, 0.5, _CLOSED),
-    "vehicle.accel_noise_mps2": (0, 100, _CLOSED),
-    "mocap.pos_noise_m": (0, 10, _CLOSED), "mocap.vel_noise_mps": (0, 100, _CLOSED),
-    "mocap.latency_s": (0, 10, _CLOSED),
-    "sim.physics_rate_hz": (0, 20000, _OPEN), "sim.control_rate_hz": (0, 20000, _OPEN),
-    "sim.gravity_mps2": (0, 100, _OPEN), "sim.air_density_kgpm3": (0, 100, _OPEN),
-    "downwash.params.core_length_m": (0, 100, _OPEN),
-    "downwash.params.half_width0_m": (0, 100, _OPEN),
-    "downwash.params.spread_rate": (0, 10, _CLOSED),
-    "downwash.params.ingest_coeff": (0, 10, _CLOSED),
-    "downwash.params.planar_ratio": (0, 10, _CLOSED),
-    "downwash.params.turb_vertical": (0, 10, _CLOSED),
-    "downwash.params.turb_lateral": (0, 10, _CLOSED),
-    "downwash.params.turb_corr_time_s": (0, 100, _OPEN),
-    "downwash.params.bar_drag_coeff": (0, 100, _CLOSED),
-    "platform.cable_length_m": (0, 100, _OPEN), "platform.cable_spacing_m": (0, 10, _OPEN),
-    "platform.bar_length_m": (0, 10, _OPEN), "platform.bar_diameter_m": (0, 1, _OPEN),
-    "platform.bar_mass_kg": (0, 100, _OPEN), "platform.anchor_below_leader_m": (0, 10, _CLOSED),
-    "platform.yaw_damping": (0, 1000, _CLOSED), "platform.swing_damping": (0, 1000, _CLOSED),
-    "gripper.aperture_m": (0, 10, _OPEN), "gripper.gate_height_m": (0, 10, _OPEN),
-    "gripper.mount_height_m": (0, 10, _CLOSED), "gripper.sensor_rate_hz": (0, 20000, _OPEN),
-    "gripper.sensor_noise_n": (0, 1000, _CLOSED), "gripper.sensor_bias_sd_n": (0, 1000, _CLOSED),
-    "gripper.calibration_samples": (1, 100000, _CLOSED),
-    "gripper.contact_threshold_n": (0, 10000, _OPEN),
-    "gripper.contact_stiffness_npm": (0, 1e7, _OPEN),
-    "gripper.contact_damping_nspm": (0, 1e5, _CLOSED), "gripper.latency_s": (0, 10, _CLOSED),
-    "gripper.close_time_s": (0, 10, _OPEN),
-    "control.q_diag": (0, 1e6, _CLOSED), "control.terminal_q_diag": (0, 1e6, _CLOSED),
-    "control.r_diag": (0, 1e6, _OPEN), "control.terminal_r_diag": (0, 1e6, _OPEN),
-    "control.observer_bias_tau_s": (0, 1e4, _OPEN),
-    "control.observer_pos_noise_m": (0, 10, _CLOSED),
-    "control.observer_vel_noise_mps": (0, 100, _CLOSED),
-    "control.yaw_rate_max_radps": (0, 100, _OPEN),
-    "planner.horizon_hover_s": (0, 600, _OPEN), "planner.horizon_moving_s": (0, 600, _OPEN),
-    "planner.hold_s": (0, 600, _CLOSED), "planner.replan_threshold_m": (0, 100, _OPEN),
-    "mission.offset_m": (0, 100, _OPEN), "mission.start_radius_m": (0, 100, _OPEN),
-    "mission.start_below_m": (0, 100, _CLOSED), "mission.start_jitter_m": (0, 10, _CLOSED),
-    "mission.dock_window_s": (0, 600, _OPEN), "mission.leader_lost_s": (0, 600, _OPEN),
-    "mission.abort_tracking_m": (0, 100, _OPEN), "mission.clearance_m": (0, 10, _CLOSED),
-    "mission.post_dock_thrust_fraction": (0, 1, _CLOSED),
-    "mission.leader_speed_mps": (0, 100, _CLOSED), "mission.leader_altitude_m": (0, 1e4, _OPEN),
-    "mission.insertion_m": (0, 1, _CLOSED), "mission.terminal_s": (0, 600, _CLOSED),
-    "mission.active_trigger_delay_s": (0, 600, _CLOSED), "mission.post_dock_s": (0, 600, _CLOSED),
-    "mission.backoff_s": (0, 600, _OPEN), "mission.backoff_distance_m": (0, 100, _CLOSED),
-    "curriculum.stage0_depth_m": (0, 100, _OPEN), "curriculum.stage_step_m": (0, 100, _OPEN),
-    "curriculum.min_depth_m": (0, 100, _OPEN), "curriculum.flights_per_stage": (1, 1000, _CLOSED),
-    "curriculum.free_air_m": (0, 100, _OPEN), "curriculum.leader_drift_max_mps": (0, 100, _CLOSED),
-    "curriculum.drift_fraction": (0, 1, _CLOSED),
+    "vehicle.thrust_max_g": (1.1, 10),
+    "vehicle.thrust_gain_sd": (0, 0.5),
+    "vehicle.accel_noise_mps2": (0, 100),
+    "mocap.pos_noise_m": (0, 10),
+    "mocap.vel_noise_mps": (0, 100),
+    "mocap.latency_s": (0, 10),
+    "sim.physics_rate_hz": (1, 20000),
+    "sim.control_rate_hz": (1, 20000),
+    "sim.gravity_mps2": (0.1, 100),
+    "sim.air_density_kgpm3": (0.01, 100),
+    "downwash.params.core_length_m": (0.001, 100),
+    "downwash.params.half_width0_m": (0.001, 100),
+    "downwash.params.spread_rate": (0, 10),
+    "downwash.params.ingest_coeff": (0, 10),
+    "downwash.params.planar_ratio": (0, 10),
+    "downwash.params.turb_vertical": (0, 10),
+    "downwash.params.turb_lateral": (0, 10),
+    "downwash.params.turb_corr_time_s": (0.001, 100),
+    "downwash.params.bar_drag_coeff": (0, 100),
+    "platform.cable_length_m": (0.01, 100),
+    "platform.cable_spacing_m": (0.01, 10),
+    "platform.bar_length_m": (0.01, 10),
+    "platform.bar_diameter_m": (0.0005, 1),
+    "platform.bar_mass_kg": (0.001, 100),
+    "platform.anchor_below_leader_m": (0, 10),
+    "platform.yaw_damping": (0, 1000),
+    "platform.swing_damping": (0, 1000),
+    "gripper.aperture_m": (0.001, 10),
+    "gripper.gate_height_m": (0.001, 10),
+    "gripper.mount_height_m": (0, 10),
+    "gripper.sensor_rate_hz": (1, 20000),
+    "gripper.sensor_noise_n": (0, 1000),
+    "gripper.sensor_bias_sd_n": (0, 1000),
+    "gripper.calibration_samples": (1, 100000),
+    "gripper.contact_threshold_n": (0.0001, 10000),
+    "gripper.contact_stiffness_npm": (1, 1e7),
+    "gripper.contact_damping_nspm": (0, 1e5),
+    "gripper.latency_s": (0, 10),
+    "gripper.close_time_s": (0.001, 10),
+    "control.q_diag": (0, 1e6),
+    "control.terminal_q_diag": (0, 1e6),
+    "control.r_diag": (1e-06, 1e6),
+    "control.terminal_r_diag": (1e-06, 1e6),
+    "control.observer_bias_tau_s": (0.01, 1e4),
+    "control.observer_pos_noise_m": (0, 10),
+    "control.observer_vel_noise_mps": (0, 100),
+    "control.yaw_rate_max_radps": (0.01, 100),
+    "planner.horizon_hover_s": (0.1, 600),
+    "planner.horizon_moving_s": (0.1, 600),
+    "planner.hold_s": (0, 600),
+    "planner.replan_threshold_m": (0.0001, 100),
+    "mission.offset_m": (0.01, 100),
+    "mission.start_radius_m": (0.01, 100),
+    "mission.start_below_m": (0, 100),
+    "mission.start_jitter_m": (0, 10),
+    "mission.dock_window_s": (0.01, 600),
+    "mission.leader_lost_s": (0.01, 600),
+    "mission.abort_tracking_m": (0.001, 100),
+    "mission.clearance_m": (0, 10),
+    "mission.post_dock_thrust_fraction": (0, 1),
+    "mission.leader_speed_mps": (0, 100),
+    "mission.leader_altitude_m": (0.1, 1e4),
+    "mission.insertion_m": (0, 1),
+    "mission.terminal_s": (0, 600),
+    "mission.active_trigger_delay_s": (0, 600),
+    "mission.post_dock_s": (0, 600),
+    "mission.backoff_s": (0.1, 600),
+    "mission.backoff_distance_m": (0, 100),
+    "curriculum.stage0_depth_m": (0.05, 100),
+    "curriculum.stage_step_m": (0.01, 100),
+    "curriculum.min_depth_m": (0.05, 100),
+    "curriculum.flights_per_stage": (1, 1000),
+    "curriculum.free_air_m": (0.01, 100),
+    "curriculum.leader_drift_max_mps": (0, 100),
+    "curriculum.drift_fraction": (0, 1),
 }
 _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
             "curriculum.model": {"so2", "so2-ext", "mlp"}}
@@ -216,21 +247,20 @@ def _merge_downwash(target: dict, user: Any, reference: dict, source: str) -> No
     target["params"] = base
 
 
-def _range_text(low: float, high: float, low_open: bool) -> str:
-    return f"{'>' if low_open else '>='} {low:g} and <= {high:g}"
+def _range_text(low: float, high: float) -> str:
+    return f">= {low:g} and <= {high:g}"
 
 
-def _check_number(value: Any, dotted: str, source: str) -> None:
+def _check_number(value: Any, dotted: str, source: str,
+                  rule: tuple[float, float] | None = None) -> None:
     if not math.isfinite(value):
         raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
-    rule = _RANGES.get(dotted)
+    rule = rule or _RANGES.get(dotted)
     if rule is None:
         return
-    low, high, low_open = rule
-    if (value <= low if low_open else value < low) or value > high:
-        raise ConfigError(
-            f"{source}: '{dotted}' must be {_range_text(low, high, low_open)}, got {value!r}"
-        )
+    low, high = rule
+    if not low <= value <= high:
+        raise ConfigError(f"{source}: '{dotted}' must be {_range_text(low, high)}, got {value!r}")
 
 
 def _check_plugin_params(params: Mapping[str, Any], source: str, prefix: str) -> None:
@@ -261,17 +291,12 @@ def _validate(data: dict[str, Any], source: str) -> None:
                 choices = "|".join(sorted(_CHOICES[dotted]))
                 raise ConfigError(f"{source}: '{dotted}' must be one of {choices}, got {value!r}")
             if dotted in _LENGTHS:
-                low, high, low_open = _RANGES[dotted]
+                low, high = _RANGES[dotted]
                 if len(value) != _LENGTHS[dotted] or not all(_is_number(v) for v in value):
                     raise ConfigError(f"{source}: '{dotted}' must be {_LENGTHS[dotted]} numbers "
-                                      f"{_range_text(low, high, low_open)}, got {value!r}")
+                                      f"{_range_text(low, high)}, got {value!r}")
                 for i, item in enumerate(value):
-                    _check_number(item, f"{dotted}[{i}]", source)
-                    if (item <= low if low_open else item < low) or item > high:
-                        raise ConfigError(
-                            f"{source}: '{dotted}' must be {_LENGTHS[dotted]} numbers "
-                            f"{_range_text(low, high, low_open)}, got {value!r}"
-                        )
+                    _check_number(item, f"{dotted}[{i}]", source, (low, high))
             elif _is_number(value):
                 _check_number(value, dotted, source)
     _check_consistency(data, source)

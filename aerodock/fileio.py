@@ -15,6 +15,7 @@ import os
 import stat
 import struct
 import tempfile
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -33,6 +34,7 @@ _TMP_SUFFIX = ".tmp"
 READ_ERRORS: tuple[type[BaseException], ...] = (
     zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError, TypeError,
     NotImplementedError, RuntimeError, OverflowError, UnicodeError, struct.error,
+    SyntaxError, tokenize.TokenError, RecursionError,
 )
 
 
