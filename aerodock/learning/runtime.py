@@ -45,6 +45,26 @@ def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
 
 
 
+def _check_weights_sizes(path: Path) -> None:
+    """Check the array sizes ``weights.npz`` declares before anything is read (a corrupt header
+    could otherwise make NumPy allocate terabytes)."""
+    from aerodock.fileio import READ_ERRORS, check_npz_sizes
+    from aerodock.learning.modelfile import WEIGHTS_NPZ
+
+    directory = path.parent if path.name == MODEL_JSON else path
+    weights = directory / WEIGHTS_NPZ
+    if not weights.is_file():
+        return  # load_model_dir says what is missing
+    try:
+        with np.load(weights, allow_pickle=False) as data:
+            check_npz_sizes(data, weights, ModelFileError)
+    except ModelFileError:
+        raise
+    except READ_ERRORS as err:
+        raise ModelFileError(f"{weights}: corrupt weights file ({type(err).__name__}: "
+                             f"{' '.join(str(err).split())})") from None
+
+
 def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray, np.ndarray]:
     """Model inputs ``x = [p_B - p_A, v_A, v_B]`` (n, 9) and ``leader_R`` (n, 3, 3)."""
     lp, fp = np.asarray(leader.p, dtype=float), np.asarray(follower.p, dtype=float)
@@ -85,13 +105,18 @@ class Predictor:
                   for w, b in weights]
         if len(layers) != len(spec.weight_shapes()):
             raise ValueError("weights do not match the spec's layer sizes")
-        w0, b0 = layers[0]
-        w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
-        b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
-        layers[0] = (w0, b0)
-        wl, bl = layers[-1]
-        out_std = np.asarray(spec.out_std, dtype=np.float64)
-        layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            w0, b0 = layers[0]
+            w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
+            b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
+            layers[0] = (w0, b0)
+            wl, bl = layers[-1]
+            out_std = np.asarray(spec.out_std, dtype=np.float64)
+            layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        with np.errstate(over="ignore", invalid="ignore"):
+            finite = all(np.all(np.isfinite(w)) and np.all(np.isfinite(b)) for w, b in layers)
+        if not finite:
+            raise ValueError("weights and normalisation overflow to non-finite values")
         self._layers = [(np.ascontiguousarray(w), np.ascontiguousarray(b)) for w, b in layers]
         self._layers_t = [(np.ascontiguousarray(w.T), b) for w, b in self._layers]
         self._act = spec.activation
@@ -112,6 +137,7 @@ class Predictor:
         if where.name != MODEL_JSON:
             where = where / MODEL_JSON
         try:
+            _check_weights_sizes(Path(path))
             spec, weights, doc = load_model_dir(path)
             if spec.kind == "zero":
                 return ZeroPredictor(meta=doc)

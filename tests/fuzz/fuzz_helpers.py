@@ -84,7 +84,7 @@ def run_cli(args: list[Any], family: str = "cli") -> Result:
         errors = [line for line in res.err.splitlines() if line.startswith("error:")]
         if len(errors) != 1:
             res.problems.append(f"{len(errors)} 'error:' lines")
-    if rc == 0 and "--json" in args:
+    if rc == 0 and "--json" in args and "--help" not in args:
         try:
             doc = json.loads(res.out, parse_constant=_reject_constant)
         except ValueError as exc:
