@@ -236,6 +236,12 @@ def export_command(
         _fail(_one_line(err))
     if out.is_dir():
         _fail(f"{out}: is a directory; give a file name such as model.onnx")
+    from aerodock.fileio import check_writable_target
+
+    try:
+        check_writable_target(out)
+    except OSError as err:
+        _fail(str(err))
     try:
         from aerodock.learning.export import check_onnx, export_onnx
     except ImportError:
