@@ -10,8 +10,10 @@ from fuzz_helpers import TALLY
 
 
 @pytest.fixture(autouse=True)
-def _no_debug(monkeypatch):
+def _isolated(monkeypatch, tmp_path):
+    """No traceback mode, and a scratch working folder: a fuzzed ``--out -inf`` writes there."""
     monkeypatch.delenv("AERODOCK_DEBUG", raising=False)
+    monkeypatch.chdir(tmp_path)
 
 
 @pytest.fixture(scope="session")
