@@ -156,3 +156,25 @@ def test_damaged_flightlogs_through_the_cli(flightlog_file, model_dir, tmp_path)
     assert (model_dir / "model.json").read_text() == good_model
     assert_clean(results)
     json.loads(good_model)
+
+
+def test_damaged_dataset_files(flightlog_file, tmp_path):
+    """Dataset files (``save_dataset``) damaged at random: a DataError or a valid dataset."""
+    from aerodock.learning.dataset import DataError, build_dataset, load_data_paths, save_dataset
+
+    base = save_dataset(tmp_path / "base_ds.npz", build_dataset(load_flightlogs(flightlog_file)))
+    blob = base.read_bytes()
+    rng = random.Random(31)
+    for i in range(n_cases(200)):
+        path = tmp_path / f"d{i % 20}.npz"
+        if i % 2:
+            path.write_bytes(mutate_bytes(blob, rng))
+        else:
+            _structural(base, path, rng)
+        try:
+            ds = load_data_paths([path])
+        except DataError as err:
+            assert "\n" not in str(err)
+        else:
+            assert np.all(np.isfinite(ds.x)) and np.all(np.isfinite(ds.y))
+        count("dataset-load")
