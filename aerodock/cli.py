@@ -129,8 +129,10 @@ def field_plot(
     """Draw the field (or a learnt model) as a vertical slice through the wake."""
     from aerodock.downwash import build_field
     from aerodock.downwash.probe import plot_field_slice
+    from aerodock.fileio import check_writable_target
 
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
+    check_writable_target(out)
     cfg = _config(config)
     if model is not None:
         from aerodock.learning.runtime import Predictor

@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import os
 import random
 
 from fuzz_helpers import NASTY_CLI, assert_clean, n_cases, run_cli
 
 
 def _commands(flightlog, model, tmp):
-    """Templates: (command, {option: plausible values})."""
-    paths = [str(flightlog), str(tmp / "absent.npz"), str(tmp), "/dev/null", str(model)]
+    """Templates: (command, {option: plausible values}).
+
+    The non-regular output target is a FIFO made here: a fuzzer must never be able to touch a
+    system file such as /dev/null (an unguarded os.replace would turn it into a regular file).
+    """
+    fifo = tmp / "fifo"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    paths = [str(flightlog), str(tmp / "absent.npz"), str(tmp), str(fifo), str(model)]
     return [
         (["field", "probe"], {"--separation": ["0.36", "0.64", "-0.2"], "--radial": ["0", "0.1"],
                               "--leader-speed": ["0", "0.5"], "--samples": ["20", "2", "50"],
@@ -20,13 +28,13 @@ def _commands(flightlog, model, tmp):
                     "--model": [str(model), paths[1]], "--seed": ["0", "3"]}),
         (["evaluate"], {"--model": [str(model), paths[1], str(flightlog)],
                         "--data": paths[:3], "--lateral-radius": ["0.2", "1"]}),
-        (["train"], {"--data": paths[:4], "--out": [str(tmp / "t"), "/dev/null", str(flightlog)],
+        (["train"], {"--data": paths[:3], "--out": [str(tmp / "t"), str(fifo), str(flightlog)],
                      "--model": ["so2", "mlp", "zero", "bogus"], "--minutes": ["0.01", "1"],
                      "--max-epochs": ["1", "2"]}),
         (["export"], {"--model": [str(model), paths[1]],
-                      "--out": [str(tmp / "m.onnx"), str(tmp), "/dev/null"]}),
+                      "--out": [str(tmp / "m.onnx"), str(tmp), str(fifo)]}),
         (["ingest"], {"--format": ["csv", "neural-swarm", "ulog", "rosbag", "pdf"],
-                      "--out": [str(tmp / "i.npz"), str(tmp), "/dev/null"],
+                      "--out": [str(tmp / "i.npz"), str(tmp), str(fifo)],
                       "--mass-kg": ["0.03", "1"]}),
     ]
 
@@ -36,7 +44,7 @@ def _random_args(rng, templates, flightlog):
     command, options = rng.choices(templates, weights=[3, 0.6, 2, 2, 1, 2])[0]
     args = list(command)
     if command == ["ingest"]:
-        args.append(rng.choice([str(flightlog), "/dev/null", "absent.csv"]))
+        args.append(rng.choice([str(flightlog), "absent.csv"]))
     for option, values in options.items():
         if rng.random() < 0.3:
             continue
