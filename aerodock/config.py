@@ -34,8 +34,8 @@ _RANGES: dict[str, tuple[float, float]] = {
     "vehicle.rotor_radius_m": (0.001, 5),
     "vehicle.n_rotors": (1, 16),
     "vehicle.drag_coeff_kgps": (0, 100),
-    "vehicle.tau_attitude_s": (0.001, 10),
-    "vehicle.tau_thrust_s": (0.001, 10),
+    "vehicle.tau_attitude_s": (1e-06, 10),
+    "vehicle.tau_thrust_s": (1e-06, 10),
     "vehicle.tilt_max_deg": (1, 89),
     # Hover needs 1 g; 10 % more is the least that leaves any authority to manoeuvre.
     "vehicle.thrust_max_g": (1.1, 10),
@@ -114,6 +114,9 @@ _RANGES: dict[str, tuple[float, float]] = {
     "curriculum.leader_drift_max_mps": (0, 100),
     "curriculum.drift_fraction": (0, 1),
 }
+# A numeric key without an entry above (e.g. one added to defaults.toml later): non-negative, as
+# every key used to be, and bounded so that products and squares stay finite.
+_DEFAULT_RANGE = (0.0, 1e6)
 _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
             "curriculum.model": {"so2", "so2-ext", "mlp"}}
 _LENGTHS = {
@@ -255,10 +258,7 @@ def _check_number(value: Any, dotted: str, source: str,
                   rule: tuple[float, float] | None = None) -> None:
     if not math.isfinite(value):
         raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
-    rule = rule or _RANGES.get(dotted)
-    if rule is None:
-        return
-    low, high = rule
+    low, high = rule or _RANGES.get(dotted, _DEFAULT_RANGE)
     if not low <= value <= high:
         raise ConfigError(f"{source}: '{dotted}' must be {_range_text(low, high)}, got {value!r}")
 

@@ -118,15 +118,23 @@ def test_with_overrides_validates(cfg):
                       .platform.cable_length_m, 1.0)
 
 
-def test_every_numeric_key_has_a_range():
-    from aerodock.config import _RANGES, _defaults
+def test_ranges_name_real_keys_and_hold_the_defaults():
+    """Every range names a key of defaults.toml, and every default satisfies its rule (keys
+    without an entry get the fallback: finite, 0 to 1e6)."""
+    from aerodock.config import _DEFAULT_RANGE, _RANGES, _defaults
 
-    for section, table in _defaults().items():
+    defaults = _defaults()
+    flat = {}
+    for section, table in defaults.items():
         for key, value in table.items():
             if isinstance(value, dict):
-                assert all(f"{section}.{key}.{k}" in _RANGES for k in value)
+                flat.update({f"{section}.{key}.{k}": v for k, v in value.items()})
             elif isinstance(value, int | float | list) and not isinstance(value, bool):
-                assert f"{section}.{key}" in _RANGES, f"{section}.{key}"
+                flat[f"{section}.{key}"] = value
+    assert set(_RANGES) <= set(flat)
+    for key, value in flat.items():
+        low, high = _RANGES.get(key, _DEFAULT_RANGE)
+        assert all(low <= v <= high for v in (value if isinstance(value, list) else [value])), key
 
 
 def test_plugin_without_params_gets_none_of_the_jets(tmp_path):
