@@ -334,9 +334,13 @@ def load_dataset(path: str | Path) -> Dataset:
     except (*READ_ERRORS, MemoryError) as err:
         raise DataError(f"{path}: corrupt or unreadable dataset file ({type(err).__name__}: "
                         f"{one_line(err)})") from None
-    for name in ("x", "leader_R", "y", "t_s", "flight_id"):
-        if arrays[name].dtype.kind not in ("iu" if name == "flight_id" else "fiu"):
-            raise DataError(f"{path}: {name} has dtype {arrays[name].dtype}, not numbers")
+    if ytm is not None:
+        arrays_checked = {**arrays, "y_true_mean": ytm}
+    else:
+        arrays_checked = arrays
+    for name, arr in arrays_checked.items():
+        if arr.dtype.kind not in ("iu" if name == "flight_id" else "fiu"):
+            raise DataError(f"{path}: {name} has dtype {arr.dtype}, not numbers")
     for name in ("x", "leader_R", "y", "t_s"):
         if not np.all(np.isfinite(arrays[name])):
             raise DataError(f"{path}: {name} contains NaN or infinite values")
@@ -346,6 +350,9 @@ def load_dataset(path: str | Path) -> Dataset:
         ds = Dataset(**arrays, y_true_mean=ytm, meta=meta)
     except DataError as err:
         raise DataError(f"{path}: {str(err).removeprefix('dataset: ')}") from None
+    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as err:
+        raise DataError(f"{path}: inconsistent dataset contents or metadata "
+                        f"({type(err).__name__}: {one_line(err)})") from None
     return ds
 
 

@@ -24,6 +24,8 @@ BAD_META = [
     "[]", "3", '"text"', "null", "{", "", "[" * 5000 + "]" * 5000, '{"a":' * 5000 + "1" +
     "}" * 5000, '{"name": 3}', '{"name": null, "source": []}', '{"label_basis": 5}',
     '{"leader_mass_kg": "x", "follower_mass_kg": -1}', '{"follower_mass_kg": NaN}',
+    '{"flights": 3}', '{"flights": [1, "a", null]}', '{"flights": [{"dt_s": "x"}]}',
+    '{"sources": 5, "warnings": 7, "labels": []}', '{"flights": [{"name": []}]}',
 ]
 
 
@@ -47,7 +49,7 @@ def _structural(base, path, rng: random.Random) -> None:
         name = rng.choice(names)
         key = name[:-4]
         roll = rng.random()
-        if key.endswith("/meta") and roll < 0.7:
+        if key.endswith("meta") and roll < 0.7:
             replace[name] = npy_bytes(np.array(rng.choice(BAD_META)))
         elif roll < 0.15:
             drop = (name,)
@@ -158,13 +160,14 @@ def test_damaged_flightlogs_through_the_cli(flightlog_file, model_dir, tmp_path)
     json.loads(good_model)
 
 
-def test_damaged_dataset_files(flightlog_file, tmp_path):
+def test_damaged_dataset_files(flightlog_file, model_dir, tmp_path):
     """Dataset files (``save_dataset``) damaged at random: a DataError or a valid dataset."""
     from aerodock.learning.dataset import DataError, build_dataset, load_data_paths, save_dataset
 
     base = save_dataset(tmp_path / "base_ds.npz", build_dataset(load_flightlogs(flightlog_file)))
     blob = base.read_bytes()
     rng = random.Random(31)
+    results = []
     for i in range(n_cases(200)):
         path = tmp_path / f"d{i % 20}.npz"
         if i % 2:
@@ -177,4 +180,9 @@ def test_damaged_dataset_files(flightlog_file, tmp_path):
             assert "\n" not in str(err)
         else:
             assert np.all(np.isfinite(ds.x)) and np.all(np.isfinite(ds.y))
+            if len(results) < n_cases(20):  # the loadable ones through the CLI as well
+                args = (["evaluate", "--model", model_dir] if len(results) % 2 else
+                        ["train", "--out", tmp_path / "t", "--max-epochs", "1"])
+                results.append(run_cli([*args, "--data", path, "--json"], family="cli-dataset"))
         count("dataset-load")
+    assert_clean(results)
