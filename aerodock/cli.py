@@ -1,11 +1,18 @@
 """The ``aerodock`` command line (Typer). Every command has ``--help``; numbers print as JSON
-with ``--json``; bad input gives a one-line ``error:`` message and exit code 2 (set
-``AERODOCK_DEBUG=1`` for a traceback)."""
+with ``--json`` (strict JSON: a NaN or an infinity is refused, never printed); bad input, usage
+errors included, give a one-line ``error:`` message and exit code 2 (set ``AERODOCK_DEBUG=1`` for
+a traceback). A repeatable option takes several values after one flag (``--data a.npz b.npz``)
+in commands without positional arguments.
+
+``run(argv)`` is the whole command line as a function returning the exit code (what the tests
+call in-process); ``main()`` is the console entry point around it.
+"""
 
 from __future__ import annotations
 
-import json
+import math
 import os
+import signal
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -14,7 +21,7 @@ import numpy as np
 import typer
 
 from aerodock.config import Config, load_config
-from aerodock.fileio import json_default
+from aerodock.fileio import dumps_json, one_line
 
 app = typer.Typer(
     add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -37,9 +44,26 @@ def fail(message: str, code: int = 2) -> None:
 
 
 def print_json(obj: Any) -> None:
-    """Print ``obj`` as indented JSON on stdout."""
-    typer.echo(json.dumps(obj, indent=2, default=json_default))
+    """Print ``obj`` as indented, strict JSON on stdout.
 
+    A NaN or an infinity anywhere in ``obj`` is refused (JSON has no such numbers): a one-line
+    error naming the key, exit code 2, nothing on stdout.
+    """
+    try:
+        text = dumps_json(obj)
+    except ValueError as err:
+        fail(str(err))
+    typer.echo(text)
+
+
+def check_number(option: str, value: float | None, low: float, high: float) -> None:
+    """Refuse a numeric option that is not finite or lies outside ``[low, high]``."""
+    if value is None:
+        return
+    if not math.isfinite(value):
+        fail(f"{option} must be a finite number, got {value}")
+    if not low <= value <= high:
+        fail(f"{option} must be between {low:g} and {high:g}, got {value!r}")
 
 
 def _config(path: Path | None) -> Config:
@@ -65,10 +89,13 @@ def field_probe(
     --bar, of the force in N on the docking bar there)."""
     from aerodock.downwash import build_field
     from aerodock.downwash.probe import probe_bar, probe_bodies, probe_field
+    from aerodock.limits import MAX_PROBE_SAMPLES
 
+    check_number("--separation", separation, -100.0, 100.0)
+    check_number("--radial", radial, -100.0, 100.0)
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
+    check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
     cfg = _config(config)
-    if samples < 2:
-        fail(f"--samples must be >= 2, got {samples}")
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     dt = 1.0 / cfg.sim.physics_rate_hz
     if bar:
@@ -138,7 +165,10 @@ def field_plot(
     from aerodock.downwash import build_field
     from aerodock.downwash.mean import EstimatedMean, mean_acceleration_fn
     from aerodock.downwash.probe import plot_field_slice
+    from aerodock.fileio import check_writable_target
 
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
+    check_writable_target(out)
     cfg = _config(config)
     if model is not None:
         from aerodock.learning.runtime import Predictor
@@ -161,21 +191,105 @@ def _register_optional() -> None:
     from aerodock import commands  # noqa: F401  (registers dock, reproduce, ... on `app`)
 
 
-def main() -> None:
-    """Console entry point: run the app; turn errors into one-line messages."""
+def _click_exceptions() -> Any:
+    """Click's exceptions module, of the click Typer runs on (recent Typer vendors a copy)."""
+    import importlib
+
+    import typer.core
+
+    package = getattr(typer.core, "_click", None) or typer.core.click
+    return importlib.import_module(f"{package.__name__}.exceptions")
+
+
+def _expand_repeatable(args: list[str]) -> list[str]:
+    """``--data a b`` -> ``--data a --data b`` for the repeatable options of the subcommand.
+
+    Only in commands without positional arguments (there a value list is unambiguous); a value
+    list ends at the next token starting with ``-``.
+    """
+    group = typer.main.get_command(app)
+    names = [a for a in args if not a.startswith("-")]
+    command: Any = group
+    for name in names[:2]:
+        sub = getattr(command, "commands", {}).get(name)
+        if sub is None:
+            break
+        command = sub
+    params = getattr(command, "params", [])
+    if command is group or any(p.param_type_name == "argument" for p in params):
+        return args
+    repeatable = {o for p in params
+                  if p.param_type_name == "option" and getattr(p, "multiple", False)
+                  for o in p.opts}
+    out: list[str] = []
+    current: str | None = None
+    taken = 0
+    for arg in args:
+        flag = arg.split("=", 1)[0]
+        if flag in repeatable:
+            current, taken = flag, int("=" in arg)
+            out.append(arg)
+        elif current is not None and not arg.startswith("-"):
+            if taken:
+                out.append(current)
+            out.append(arg)
+            taken += 1
+        else:
+            current = None
+            out.append(arg)
+    return out
+
+
+def run(argv: list[str] | None = None) -> int:
+    """The command line as a function: run ``argv`` and return the exit code.
+
+    Usage errors and bad input print one ``error:`` line on stderr and return 2; an interrupt
+    returns 130; an unexpected failure (a bug) returns 1 with its type name.
+    """
+    click = _click_exceptions()
     _register_optional()
+    args = list(sys.argv[1:] if argv is None else argv)
     try:
-        app()
-    except KeyboardInterrupt:
+        args = _expand_repeatable(args)
+        rv = typer.main.get_command(app).main(args=args, prog_name="aerodock",
+                                              standalone_mode=False)
+        return rv if isinstance(rv, int) else 0
+    except getattr(click, "NoArgsIsHelpError", ()) as err:
+        typer.echo(err.ctx.get_help())
+        return 0
+    except click.UsageError as err:
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        typer.echo(f"error: {one_line(err.format_message())}{hint}", err=True)
+        return 2
+    except click.ClickException as err:
+        typer.echo(f"error: {one_line(err.format_message())}", err=True)
+        return 2
+    except (KeyboardInterrupt, typer.Abort):
         typer.echo("interrupted", err=True)
-        sys.exit(130)
+        return 130
     except Exception as err:  # noqa: BLE001 - the one place errors become messages
         if os.environ.get("AERODOCK_DEBUG"):
             raise
-        expected = isinstance(err, ValueError | OSError)
-        detail = str(err).splitlines()[0] if str(err) else type(err).__name__
+        expected = isinstance(err, ValueError | OSError | MemoryError)
+        if isinstance(err, MemoryError):
+            detail = "out of memory (the input or the run is too large)"
+        elif isinstance(err, OSError) and err.strerror and err.filename:
+            detail = f"{err.filename}: {err.strerror}"
+        else:
+            detail = one_line(err)
         msg = detail if expected else f"{type(err).__name__}: {detail}"
         typer.echo(f"error: {msg}", err=True)
         if not expected:
             typer.echo("(set AERODOCK_DEBUG=1 for a traceback)", err=True)
-        sys.exit(2 if expected else 1)
+        return 2 if expected else 1
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    # SIGTERM unwinds like an interrupt, so atomic writes remove their temporary files.
+    raise SystemExit(128 + signum)
+
+
+def main() -> None:
+    """Console entry point: run the app; turn errors into one-line messages."""
+    signal.signal(signal.SIGTERM, _terminate)
+    sys.exit(run())

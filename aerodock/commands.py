@@ -12,7 +12,16 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from aerodock.cli import ConfigOpt, JsonOpt, SeedOpt, _config, app, fail, print_json
+from aerodock.cli import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    _config,
+    app,
+    check_number,
+    fail,
+    print_json,
+)
 from aerodock.control.compensation import Compensation
 
 err_console = Console(stderr=True)
@@ -68,11 +77,24 @@ def dock(
     """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
     from aerodock.control.profiles import controller_config
     from aerodock.flightlog import save_flightlogs
+    from aerodock.limits import check_campaign_size
     from aerodock.mission import MissionSpec, run_campaign
 
     cfg = controller_config(_config(config), controller)
+    check_number("--offset", offset, 0.0, 100.0)
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
+    cfg = _config(config)
+    if offset is not None:
+        # Validated like a config value (range, docking point above the ground), named as given.
+        cfg = cfg.with_overrides({"platform": {"cable_length_m": float(offset)}},
+                                 source=f"--offset {offset:g}")
+    check_campaign_size(cfg, trials, keep_logs=save_logs is not None)
+    if save_logs is not None:
+        from aerodock.fileio import check_writable_target
+
+        check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
     from aerodock.faults import load_faults
     from aerodock.learning.modelfile import model_vehicle_warnings

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import copy
 import importlib
+import math
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -22,26 +24,117 @@ from typing import Any
 
 DEFAULTS_NAME = "defaults.toml"
 
-# Keys that must be strictly positive; every other numeric key must be >= 0 unless signed.
-_STRICTLY_POSITIVE_SUFFIXES = ("_kg", "_hz")
-_STRICTLY_POSITIVE = {
-    "vehicle.diagonal_m", "vehicle.rotor_radius_m", "vehicle.n_rotors", "vehicle.tau_attitude_s",
-    "vehicle.tau_thrust_s", "vehicle.tilt_max_deg", "vehicle.thrust_max_g",
-    "vehicle.rotor_thrust_coeff", "vehicle.motor_tau_s",
-    "sim.gravity_mps2", "sim.air_density_kgpm3",
-    "platform.cable_length_m", "platform.bar_length_m", "platform.bar_diameter_m",
-    "platform.cable_spacing_m",
-    "gripper.aperture_m", "gripper.gate_height_m", "gripper.close_time_s",
-    "gripper.calibration_samples", "gripper.contact_threshold_n",
-    "gripper.contact_stiffness_npm",
-    "control.observer_bias_tau_s", "control.yaw_rate_max_radps",
-    "planner.horizon_hover_s", "planner.horizon_moving_s", "planner.replan_threshold_m",
-    "mission.dock_window_s", "mission.leader_lost_s", "mission.abort_tracking_m",
-    "mission.start_radius_m", "mission.leader_altitude_m",
-    "curriculum.stage_step_m", "curriculum.min_depth_m", "curriculum.flights_per_stage",
-    "curriculum.free_air_m",
+# Every numeric key's range, (low, high), both inclusive. Values must be finite; the bounds keep
+# them physical (a 1e-300 m rotor has no disk area: NaN forces), keep the arithmetic finite, and
+# keep a run's memory and time bounded (durations <= 10 min of flight, rates <= 20 kHz). Keys of
+# the default downwash field are listed under "downwash.params.".
+_RANGES: dict[str, tuple[float, float]] = {
+    "vehicle.mass_kg": (0.001, 100),
+    "vehicle.diagonal_m": (0.01, 10),
+    "vehicle.rotor_radius_m": (0.001, 5),
+    "vehicle.n_rotors": (1, 16),
+    "vehicle.drag_coeff_kgps": (0, 100),
+    "vehicle.tau_attitude_s": (1e-06, 10),
+    "vehicle.tau_thrust_s": (1e-06, 10),
+    "vehicle.tilt_max_deg": (1, 89),
+    # Hover needs 1 g; 10 % more is the least that leaves any authority to manoeuvre.
+    "vehicle.thrust_max_g": (1.1, 10),
+    "vehicle.thrust_gain_sd": (0, 0.5),
+    "vehicle.accel_noise_mps2": (0, 100),
+    "vehicle.inertia_kgm2": (1e-07, 1000),
+    "vehicle.rotor_thrust_coeff": (1e-10, 0.01),
+    "vehicle.rotor_torque_ratio_m": (0, 1),
+    "vehicle.motor_tau_s": (0.0001, 10),
+    "vehicle.rotor_drag_coeff": (0, 1),
+    "vehicle.rotor_drag_z_coeff": (0, 1),
+    "vehicle.parasitic_drag_coeff": (0, 100),
+    "autopilot.attitude_p": (0, 1000),
+    "autopilot.rate_p": (0, 10000),
+    "autopilot.rate_i": (0, 100000),
+    "autopilot.rate_integral_max_radps2": (0, 10000),
+    "autopilot.rate_max_dps": (1, 3600),
+    "imu.gyro_noise_radps": (0, 10),
+    "imu.accel_vibration_mps2": (0, 1000),
+    "imu.accel_bias_sd_mps2": (0, 100),
+    "imu.attitude_noise_rad": (0, 1),
+    "mocap.pos_noise_m": (0, 10),
+    "mocap.vel_noise_mps": (0, 100),
+    "mocap.latency_s": (0, 10),
+    "sim.physics_rate_hz": (1, 20000),
+    "sim.control_rate_hz": (1, 20000),
+    "sim.gravity_mps2": (0.1, 100),
+    "sim.air_density_kgpm3": (0.01, 100),
+    "downwash.params.core_length_m": (0.001, 100),
+    "downwash.params.half_width0_m": (0.001, 100),
+    "downwash.params.spread_rate": (0, 10),
+    "downwash.params.ingest_coeff": (0, 10),
+    "downwash.params.planar_ratio": (0, 10),
+    "downwash.params.turb_vertical": (0, 10),
+    "downwash.params.turb_lateral": (0, 10),
+    "downwash.params.turb_corr_time_s": (0.001, 100),
+    "downwash.params.bar_drag_coeff": (0, 100),
+    "platform.cable_length_m": (0.01, 100),
+    "platform.cable_spacing_m": (0.01, 10),
+    "platform.bar_length_m": (0.01, 10),
+    "platform.bar_diameter_m": (0.0005, 1),
+    "platform.bar_mass_kg": (0.001, 100),
+    "platform.anchor_below_leader_m": (0, 10),
+    "platform.yaw_damping": (0, 1000),
+    "platform.swing_damping": (0, 1000),
+    "gripper.aperture_m": (0.001, 10),
+    "gripper.gate_height_m": (0.001, 10),
+    "gripper.mount_height_m": (0, 10),
+    "gripper.sensor_rate_hz": (1, 20000),
+    "gripper.sensor_noise_n": (0, 1000),
+    "gripper.sensor_bias_sd_n": (0, 1000),
+    "gripper.calibration_samples": (1, 100000),
+    "gripper.contact_threshold_n": (0.0001, 10000),
+    "gripper.contact_stiffness_npm": (1, 1e7),
+    "gripper.contact_damping_nspm": (0, 1e5),
+    "gripper.latency_s": (0, 10),
+    "gripper.close_time_s": (0.001, 10),
+    "control.q_diag": (0, 1e6),
+    "control.terminal_q_diag": (0, 1e6),
+    "control.r_diag": (1e-06, 1e6),
+    "control.terminal_r_diag": (1e-06, 1e6),
+    "control.observer_bias_tau_s": (0.01, 1e4),
+    "control.observer_pos_noise_m": (0, 10),
+    "control.observer_vel_noise_mps": (0, 100),
+    "control.yaw_rate_max_radps": (0.01, 100),
+    "planner.horizon_hover_s": (0.1, 600),
+    "planner.horizon_moving_s": (0.1, 600),
+    "planner.hold_s": (0, 600),
+    "planner.replan_threshold_m": (0.0001, 100),
+    "mission.offset_m": (0.01, 100),
+    "mission.start_radius_m": (0.01, 100),
+    "mission.start_below_m": (0, 100),
+    "mission.start_jitter_m": (0, 10),
+    "mission.dock_window_s": (0.01, 600),
+    "mission.leader_lost_s": (0.01, 600),
+    "mission.abort_tracking_m": (0.001, 100),
+    "mission.clearance_m": (0, 10),
+    "mission.post_dock_thrust_fraction": (0, 1),
+    "mission.leader_speed_mps": (0, 100),
+    "mission.leader_altitude_m": (0.1, 1e4),
+    "mission.insertion_m": (0, 1),
+    "mission.terminal_s": (0, 600),
+    "mission.active_trigger_delay_s": (0, 600),
+    "mission.post_dock_s": (0, 600),
+    "mission.backoff_s": (0.1, 600),
+    "mission.backoff_distance_m": (0, 100),
+    "mission.settle_s": (0, 600),
+    "mission.status_delay_s": (0, 10),
+    "curriculum.stage0_depth_m": (0.05, 100),
+    "curriculum.stage_step_m": (0.01, 100),
+    "curriculum.min_depth_m": (0.05, 100),
+    "curriculum.flights_per_stage": (1, 1000),
+    "curriculum.free_air_m": (0.01, 100),
+    "curriculum.leader_drift_max_mps": (0, 100),
+    "curriculum.drift_fraction": (0, 1),
 }
-_SIGNED: set[str] = set()
+# A numeric key without an entry above (e.g. one added to defaults.toml later): non-negative, as
+# every key used to be, and bounded so that products and squares stay finite.
+_DEFAULT_RANGE = (0.0, 1e6)
 _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
             "vehicle.model": {"rigid-body", "point-mass"},
             "curriculum.model": {"so2", "so2-ext", "mlp"}}
@@ -52,6 +145,7 @@ _LENGTHS = {
     "autopilot.rate_i": 3, "autopilot.rate_max_dps": 3,
 }
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
+_FIELD_PATH = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*")
 
 
 class ConfigError(ValueError):
@@ -120,58 +214,121 @@ def _type_name(value: Any) -> str:
             list: "a list", dict: "a table"}.get(type(value), type(value).__name__)
 
 
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: str) -> None:
+    if not isinstance(user, Mapping):
+        raise ConfigError(f"{source}: '{prefix.rstrip('.') or 'the file'}' must be a table")
     for key, value in user.items():
         dotted = f"{prefix}{key}"
-        if prefix == "downwash." and key == "params":
-            # Plug-in parameters are the factory's own keyword arguments: checked on load.
-            if user.get("field", target.get("field")) != _DEFAULT_FIELD:
-                target["params"] = dict(value)
-            else:
-                _merge(target["params"], value, reference["params"], source, f"{dotted}.")
-            continue
         if key not in reference:
             raise ConfigError(f"{source}: unknown key '{dotted}'")
+        if dotted == "downwash":
+            _merge_downwash(target[key], value, reference[key], source)
+            continue
         default = reference[key]
         if isinstance(default, dict):
             if not isinstance(value, Mapping):
                 raise ConfigError(f"{source}: '{dotted}' must be a table")
             _merge(target[key], value, default, source, f"{dotted}.")
             continue
-        numeric = isinstance(default, int | float) and not isinstance(default, bool)
-        if numeric and (isinstance(value, bool) or not isinstance(value, int | float)):
+        numeric = _is_number(default)
+        if numeric and not _is_number(value):
             raise ConfigError(f"{source}: '{dotted}' must be a number, got {value!r}")
         if not numeric and type(value) is not type(default):
             raise ConfigError(f"{source}: '{dotted}' must be {_type_name(default)}, got {value!r}")
+        if isinstance(default, int) and numeric:
+            if not (isinstance(value, int) or (math.isfinite(value) and value.is_integer())):
+                raise ConfigError(f"{source}: '{dotted}' must be an integer, got {value!r}")
+            value = int(value)
         target[key] = float(value) if isinstance(default, float) else value
+
+
+def _merge_downwash(target: dict, user: Any, reference: dict, source: str) -> None:
+    """``[downwash]``: a field and its own parameters; one field's never reach another."""
+    if not isinstance(user, Mapping):
+        raise ConfigError(f"{source}: 'downwash' must be a table")
+    for key in user:
+        if key not in reference:
+            raise ConfigError(f"{source}: unknown key 'downwash.{key}'")
+    field_path = user.get("field", target["field"])
+    if not isinstance(field_path, str):
+        raise ConfigError(f"{source}: 'downwash.field' must be a string, got {field_path!r}")
+    params = user.get("params")
+    if params is not None and not isinstance(params, Mapping):
+        raise ConfigError(f"{source}: 'downwash.params' must be a table, got {params!r}")
+    changed = field_path != target["field"]
+    if field_path == _DEFAULT_FIELD:
+        base = copy.deepcopy(reference["params"]) if changed else target["params"]
+        if params is not None:
+            _merge(base, params, reference["params"], source, "downwash.params.")
+    else:
+        # Plug-in parameters are the factory's own keyword arguments (checked when it is built).
+        base = dict(params) if params is not None else ({} if changed else target["params"])
+    target["field"] = field_path
+    target["params"] = base
+
+
+def _range_text(low: float, high: float) -> str:
+    return f">= {low:g} and <= {high:g}"
+
+
+def _check_number(value: Any, dotted: str, source: str,
+                  rule: tuple[float, float] | None = None) -> None:
+    if not math.isfinite(value):
+        raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
+    low, high = rule or _RANGES.get(dotted, _DEFAULT_RANGE)
+    if not low <= value <= high:
+        raise ConfigError(f"{source}: '{dotted}' must be {_range_text(low, high)}, got {value!r}")
+
+
+def _check_plugin_params(params: Mapping[str, Any], source: str, prefix: str) -> None:
+    for key, value in params.items():
+        dotted = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            _check_plugin_params(value, source, f"{dotted}.")
+        elif isinstance(value, list):
+            for item in value:
+                if isinstance(item, float) and not math.isfinite(item):
+                    raise ConfigError(f"{source}: '{dotted}' must hold finite numbers")
+        elif isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
 
 
 def _validate(data: dict[str, Any], source: str) -> None:
     for section, table in data.items():
         for key, value in table.items():
             dotted = f"{section}.{key}"
+            if dotted == "downwash.params":
+                if data["downwash"]["field"] == _DEFAULT_FIELD:
+                    for pkey, pvalue in value.items():
+                        _check_number(pvalue, f"{dotted}.{pkey}", source)
+                else:
+                    _check_plugin_params(value, source, f"{dotted}.")
+                continue
             if dotted in _CHOICES and value not in _CHOICES[dotted]:
                 choices = "|".join(sorted(_CHOICES[dotted]))
                 raise ConfigError(f"{source}: '{dotted}' must be one of {choices}, got {value!r}")
             if dotted in _LENGTHS:
-                if len(value) != _LENGTHS[dotted] or not all(
-                    isinstance(v, int | float) and v >= 0 for v in value
-                ):
-                    raise ConfigError(
-                        f"{source}: '{dotted}' must be {_LENGTHS[dotted]} non-negative numbers"
-                    )
-                if "r_diag" in key and min(value) <= 0:
-                    raise ConfigError(f"{source}: '{dotted}' must be strictly positive")
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                continue
-            if dotted in _SIGNED:
-                continue
-            strict = dotted in _STRICTLY_POSITIVE or key.endswith(_STRICTLY_POSITIVE_SUFFIXES)
-            if strict and not value > 0:
-                raise ConfigError(f"{source}: '{dotted}' must be > 0, got {value!r}")
-            if not strict and value < 0 and section != "downwash":
-                raise ConfigError(f"{source}: '{dotted}' must be >= 0, got {value!r}")
-    sim = data["sim"]
+                low, high = _RANGES[dotted]
+                if len(value) != _LENGTHS[dotted] or not all(_is_number(v) for v in value):
+                    raise ConfigError(f"{source}: '{dotted}' must be {_LENGTHS[dotted]} numbers "
+                                      f"{_range_text(low, high)}, got {value!r}")
+                for i, item in enumerate(value):
+                    _check_number(item, f"{dotted}[{i}]", source, (low, high))
+            elif _is_number(value):
+                _check_number(value, dotted, source)
+    _check_consistency(data, source)
+    # Fail now, not mid-run, on an unknown or broken plug-in.
+    resolve_factory(data["downwash"]["field"], source)
+
+
+def _check_consistency(data: dict[str, Any], source: str) -> None:
+    """Rules between keys: rates, depth bands, and set-ups no vehicle can fly."""
+    sim, platform = data["sim"], data["platform"]
+    gripper, mission = data["gripper"], data["mission"]
     if sim["physics_rate_hz"] < sim["control_rate_hz"]:
         raise ConfigError(f"{source}: 'sim.physics_rate_hz' must be >= 'sim.control_rate_hz'")
     ratio = sim["physics_rate_hz"] / sim["control_rate_hz"]
@@ -179,22 +336,64 @@ def _validate(data: dict[str, Any], source: str) -> None:
         raise ConfigError(
             f"{source}: 'sim.physics_rate_hz' must be a multiple of 'sim.control_rate_hz'"
         )
-    # Fail now, not mid-run, on an unknown or broken plug-in.
-    resolve_factory(data["downwash"]["field"], source)
+    lo, hi = data["curriculum"]["stage0_depth_m"]
+    if not lo < hi:
+        raise ConfigError(f"{source}: 'curriculum.stage0_depth_m' must be [low, high] with "
+                          f"low < high, got {[lo, hi]}")
+    if data["curriculum"]["min_depth_m"] > lo:
+        raise ConfigError(f"{source}: 'curriculum.min_depth_m' must be <= the low end of "
+                          f"'curriculum.stage0_depth_m' ({lo:g} m)")
+    if gripper["aperture_m"] <= platform["bar_diameter_m"]:
+        raise ConfigError(
+            f"{source}: 'gripper.aperture_m' ({gripper['aperture_m']:g} m) must be wider than "
+            f"'platform.bar_diameter_m' ({platform['bar_diameter_m']:g} m): the bar cannot enter"
+        )
+    altitude = mission["leader_altitude_m"]
+    dock_below_m = (platform["anchor_below_leader_m"] + platform["cable_length_m"]
+                    + platform["bar_diameter_m"] / 2 - mission["insertion_m"]
+                    + gripper["mount_height_m"])
+    if dock_below_m >= altitude:
+        raise ConfigError(
+            f"{source}: the docking point is {dock_below_m:g} m below the leader, at or below "
+            f"the ground ('mission.leader_altitude_m' = {altitude:g} m; "
+            "'platform.cable_length_m' and the offsets are too long)"
+        )
+    start_below_m = dock_below_m + mission["start_below_m"] + 3 * mission["start_jitter_m"]
+    if start_below_m >= altitude:
+        raise ConfigError(
+            f"{source}: the follower would start {start_below_m:g} m below the leader, at or "
+            f"below the ground ('mission.leader_altitude_m' = {altitude:g} m; lower "
+            "'mission.start_below_m' or raise the leader)"
+        )
+    if hi >= altitude:
+        raise ConfigError(
+            f"{source}: 'curriculum.stage0_depth_m' reaches {hi:g} m below the leader, at or "
+            f"below the ground ('mission.leader_altitude_m' = {altitude:g} m)"
+        )
 
 
 def resolve_factory(path: str, source: str = "config") -> Any:
-    """Import ``"package.module:attr"`` and return the attribute (a field factory)."""
-    module_name, _, attr = path.partition(":")
-    if not module_name or not attr:
+    """Import ``"package.module:attr"`` and return the attribute (a field factory).
+
+    Raises:
+        ConfigError: a malformed path, or a module that cannot be imported (whatever it raises,
+            including ``SystemExit``), or a missing attribute.
+    """
+    if not isinstance(path, str) or not _FIELD_PATH.fullmatch(path):
         raise ConfigError(
             f"{source}: 'downwash.field' must look like 'package.module:factory', got {path!r}"
         )
+    module_name, _, attr = path.partition(":")
     try:
         module = importlib.import_module(module_name)
     except ImportError as err:
         raise ConfigError(
             f"{source}: 'downwash.field' plug-in module {module_name!r} cannot be imported ({err})"
+        ) from None
+    except (Exception, SystemExit) as err:  # a plug-in's own code failed while importing
+        raise ConfigError(
+            f"{source}: 'downwash.field' plug-in module {module_name!r} failed on import "
+            f"({type(err).__name__}: {err})"
         ) from None
     try:
         return getattr(module, attr)
@@ -222,6 +421,8 @@ def load_config(path: str | Path | None = None) -> Config:
             raise ConfigError(f"{source}: cannot read config file ({err})") from None
         except tomllib.TOMLDecodeError as err:
             raise ConfigError(f"{source}: invalid TOML ({err})") from None
+        except RecursionError:
+            raise ConfigError(f"{source}: invalid TOML (nested too deeply)") from None
         _merge(data, user, _defaults(), source, prefix="")
     _validate(data, source)
     return Config(data, source)

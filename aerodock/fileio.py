@@ -1,9 +1,23 @@
-"""Atomic file writes: a failure (or an interrupt) never leaves a half-written file behind."""
+"""Files: atomic writes, strict JSON and guarded ``.npz`` reading.
+
+* :func:`atomic_open` -- a failure (or an interrupt) never leaves a half-written file behind, and
+  the new file gets the permissions an ordinary ``open`` would give it (the umask applies).
+* :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused.
+* :func:`check_npz_header` -- the ``format``/``version`` keys of an aerodock ``.npz`` file and
+  the sizes its members declare, checked before any array is read.
+"""
 
 from __future__ import annotations
 
+import json
+import math
 import os
+import stat
+import struct
 import tempfile
+import tokenize
+import zipfile
+import zlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -11,20 +25,106 @@ from typing import IO, Any
 
 import numpy as np
 
+# Largest uncompressed ``.npz`` aerodock reads (all members together): an hour of two-vehicle
+# flight at 100 Hz is about 100 MB, so this leaves room while refusing files that declare
+# terabytes (a corrupt or hostile header would otherwise make NumPy allocate before reading).
+MAX_NPZ_BYTES = 4 * 1024**3
+_TMP_SUFFIX = ".tmp"
+# What reading a damaged zip/npy member can raise (zlib, zipfile, NumPy's header parser).
+READ_ERRORS: tuple[type[BaseException], ...] = (
+    zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError, TypeError,
+    NotImplementedError, RuntimeError, OverflowError, UnicodeError, struct.error,
+    SyntaxError, tokenize.TokenError, RecursionError,
+)
+
+
+def one_line(err: BaseException | str) -> str:
+    """The text of an error (or a string) as one line; the type name if it has no text."""
+    text = " ".join(str(err).split())
+    return text or (type(err).__name__ if isinstance(err, BaseException) else "")
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def check_writable_target(path: str | Path) -> Path:
+    """Refuse an output path that exists and is not a regular file (a FIFO, a device, a folder).
+
+    Raises:
+        IsADirectoryError: ``path`` is a folder.
+        OSError: ``path`` is another kind of non-regular file.
+    """
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return path
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{path}: is a folder; give a file name")
+    if not stat.S_ISREG(mode):
+        raise OSError(f"{path}: not a regular file (a FIFO, device or socket); "
+                      "refusing to replace it")
+    return path
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_temps(path: str | Path) -> list[Path]:
+    """Remove temporary files of :func:`atomic_open` for ``path`` left by killed processes.
+
+    A process killed with SIGKILL cannot clean up; its temporary file names its process id, so
+    the next write to the same path removes it once that process is gone. Returns the removed
+    files.
+    """
+    path = Path(path)
+    removed = []
+    for tmp in path.parent.glob(f".{path.name}.*{_TMP_SUFFIX}"):
+        pid_text = tmp.name[len(path.name) + 2:].split(".", 1)[0]
+        if pid_text.isdigit() and not _pid_alive(int(pid_text)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
 
 @contextmanager
-def atomic_open(path: str | Path, mode: str = "wb", suffix: str = ".tmp") -> Iterator[IO[Any]]:
+def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path``; on success it replaces ``path`` in one step.
 
     Any existing file at ``path`` stays untouched until the new one is complete; on an error
-    the temporary file is removed and the error propagates.
+    (or an interrupt) the temporary file is removed and the error propagates. The new file gets
+    the mode of the file it replaces, or ``0o666`` less the umask. A ``path`` that exists but
+    is not a regular file (a FIFO, a device node, a folder) is refused.
+
+    Raises:
+        OSError: ``path`` is not a regular file, or the write failed.
     """
-    path = Path(path)
+    path = check_writable_target(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    remove_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                               suffix=suffix)
     try:
+        try:
+            old_mode = stat.S_IMODE(path.stat().st_mode)
+        except FileNotFoundError:
+            old_mode = 0o666 & ~_umask()
+        os.fchmod(fd, old_mode)
         with os.fdopen(fd, mode) as fh:
             yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        check_writable_target(path)  # it may have changed while we wrote
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -42,16 +142,108 @@ def json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def _first_non_finite(obj: Any, where: str = "") -> str | None:
+    if isinstance(obj, float | np.floating):
+        return None if math.isfinite(obj) else where or "value"
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "fc" and not np.all(np.isfinite(obj)):
+            return where or "array"
+        return None
+    if isinstance(obj, dict):
+        items = obj.items()
+    elif isinstance(obj, list | tuple):
+        items = enumerate(obj)
+    else:
+        return None
+    for key, value in items:
+        found = _first_non_finite(value, f"{where}.{key}" if where else str(key))
+        if found:
+            return found
+    return None
+
+
+def dumps_json(obj: Any, indent: int | None = 2) -> str:
+    """Strict JSON text for ``obj`` (NumPy values and paths allowed).
+
+    Raises:
+        ValueError: ``obj`` holds a NaN or an infinity (JSON has no such numbers); the message
+            names the first such key.
+    """
+    try:
+        return json.dumps(obj, indent=indent, default=json_default, allow_nan=False)
+    except ValueError:
+        where = _first_non_finite(obj) or "a value"
+        raise ValueError(f"result has a non-finite number at '{where}'; refusing to print "
+                         "invalid JSON") from None
+
+
+def npz_int(data: Any, key: str, path: Path, error: type[Exception]) -> int:
+    """An integer scalar stored under ``key`` in an opened ``.npz`` (e.g. ``version``).
+
+    Raises ``error`` naming ``path`` if it is missing or is not one integer.
+    """
+    if key not in data.files:
+        raise error(f"{path}: '{key}' missing")
+    value = data[key]
+    if value.shape != () or value.dtype.kind not in "iu":
+        raise error(f"{path}: '{key}' must be one integer, got {value.dtype} {value.shape}")
+    return int(value)
+
+
+def check_npz_sizes(data: Any, path: Path, error: type[Exception],
+                    max_bytes: int = MAX_NPZ_BYTES) -> None:
+    """Check the sizes every member of an opened ``.npz`` declares, before reading any of them.
+
+    Each ``.npy`` header's shape and dtype must fit in the member's stored size, and all members
+    together in ``max_bytes``; object arrays are refused. Raises ``error`` naming ``path``.
+    """
+    zf: zipfile.ZipFile | None = getattr(data, "zip", None)
+    if zf is None:
+        return
+    total = 0
+    for info in zf.infolist():
+        total += info.file_size
+        if total > max_bytes:
+            raise error(f"{path}: holds more than {max_bytes / 1024**3:.0f} GiB uncompressed "
+                        "(the limit aerodock reads)")
+        if not info.filename.endswith(".npy"):
+            continue
+        try:
+            with zf.open(info) as fh:
+                version = np.lib.format.read_magic(fh)
+                if version == (1, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+                else:
+                    shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+                header_bytes = fh.tell()
+        except READ_ERRORS as err:
+            raise error(f"{path}: corrupt member {info.filename} "
+                        f"({type(err).__name__}: {one_line(err)})") from None
+        if dtype.hasobject:
+            raise error(f"{path}: member {info.filename} holds Python objects (not allowed)")
+        declared = math.prod(shape) * dtype.itemsize
+        if declared > info.file_size - header_bytes:
+            raise error(f"{path}: member {info.filename} declares {declared} bytes but holds "
+                        f"{info.file_size - header_bytes} (corrupt file)")
+
+
 def check_npz_header(data: Any, path: Path, format_name: str, max_version: int, what: str,
                      error: type[Exception]) -> set[str]:
-    """Check an opened ``.npz``'s ``format`` and ``version`` keys; returns its key set.
+    """Check an opened ``.npz``'s ``format`` and ``version`` keys and its members' sizes.
 
-    Raises ``error`` with a one-line message naming ``path`` for a foreign or newer file.
+    Returns its key set. Raises ``error`` with a one-line message naming ``path`` for a foreign
+    or newer file, or for members whose declared sizes do not fit the file.
     """
+    check_npz_sizes(data, path, error)
     keys = set(data.files)
-    if "format" not in keys or str(data["format"]) != format_name:
+    if "format" not in keys:
         raise error(f"{path}: not an aerodock {what} file")
-    version = int(data["version"])
+    fmt = data["format"]
+    if fmt.shape != () or fmt.dtype.kind != "U" or str(fmt) != format_name:
+        raise error(f"{path}: not an aerodock {what} file")
+    version = npz_int(data, "version", path, error)
+    if version < 1:
+        raise error(f"{path}: bad {what} format version {version}")
     if version > max_version:
         raise error(f"{path}: {what} format version {version} is newer than this aerodock "
                     f"({max_version}); upgrade aerodock")

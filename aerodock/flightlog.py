@@ -34,14 +34,20 @@ Fields (T samples):
 from __future__ import annotations
 
 import json
-import zipfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open, check_npz_header, json_default
+from aerodock.fileio import (
+    READ_ERRORS,
+    atomic_open,
+    check_npz_header,
+    json_default,
+    npz_int,
+    one_line,
+)
 
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
@@ -51,6 +57,9 @@ VEC3_FIELDS = (
 )
 QUAT_FIELDS = ("leader_quat", "follower_quat")
 FIELDS = ("t_s", *VEC3_FIELDS, *QUAT_FIELDS, "follower_thrust_n")
+# Largest magnitude of a position (m), velocity (m/s), acceleration (m/s²) or thrust (N): far
+# beyond any flight, yet small enough that squares and products stay finite downstream.
+MAX_ABS_VALUE = 1e6
 
 
 class FlightLogError(ValueError):
@@ -89,6 +98,14 @@ class FlightLog:
                 raise FlightLogError(f"{where}: {name} has shape {arr.shape}, expected {expected}")
             if not np.all(np.isfinite(arr)):
                 raise FlightLogError(f"{where}: {name} contains NaN or infinite values")
+            if name != "t_s" and arr.size and np.max(np.abs(arr)) > MAX_ABS_VALUE:
+                raise FlightLogError(f"{where}: {name} has values beyond {MAX_ABS_VALUE:g} "
+                                     "(not SI units?)")
+            if name in QUAT_FIELDS and arr.size:
+                norm = np.linalg.norm(arr, axis=1)
+                if np.any(np.abs(norm - 1.0) > 0.1):
+                    raise FlightLogError(f"{where}: {name} holds quaternions of norm "
+                                         f"{norm[np.argmax(np.abs(norm - 1.0))]:.3g}, not unit")
         for key, arr in self.extra.items():
             if np.shape(arr)[:1] != (n,):
                 raise FlightLogError(f"{where}: extra {key!r} must have {n} rows")
@@ -138,34 +155,61 @@ def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
     return path
 
 
+def _meta(data: Any, key: str, path: Path) -> dict[str, Any]:
+    """The JSON metadata of one flight, which must be a JSON object."""
+    value = data[key]
+    if value.shape != () or value.dtype.kind != "U":
+        raise FlightLogError(f"{path}: {key} must be one JSON string")
+    try:
+        meta = json.loads(str(value))
+    except RecursionError:
+        raise FlightLogError(f"{path}: {key} is nested too deeply") from None
+    except json.JSONDecodeError as err:
+        raise FlightLogError(f"{path}: {key} is not valid JSON ({err})") from None
+    if not isinstance(meta, dict):
+        raise FlightLogError(f"{path}: {key} must be a JSON object, got {type(meta).__name__}")
+    return meta
+
+
 def load_flightlogs(path: str | Path) -> list[FlightLog]:
     """Read every flight in an aerodock FlightLog file.
 
     Raises:
-        FlightLogError: missing file, not an aerodock FlightLog, newer version, or bad contents.
+        FlightLogError: missing file, not an aerodock FlightLog, newer version, or bad contents
+            (one line naming the file).
     """
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as data:
             keys = check_npz_header(data, path, FORMAT_NAME, FORMAT_VERSION, "FlightLog",
                                     FlightLogError)
+            n_flights = npz_int(data, "n_flights", path, FlightLogError)
+            if not 0 <= n_flights <= len(keys):
+                raise FlightLogError(f"{path}: n_flights = {n_flights} does not match the file")
             logs = []
-            for i in range(int(data["n_flights"])):
-                missing = [n for n in FIELDS if f"f{i}/{n}" not in keys]
+            for i in range(n_flights):
+                missing = [n for n in (*FIELDS, "meta") if f"f{i}/{n}" not in keys]
                 if missing:
                     raise FlightLogError(f"{path}: flight {i} lacks {', '.join(missing)}")
-                meta = json.loads(str(data[f"f{i}/meta"]))
+                meta = _meta(data, f"f{i}/meta", path)
                 meta.setdefault("name", f"{path.stem}[{i}]")
                 prefix = f"f{i}/extra/"
                 extra = {k[len(prefix):]: data[k] for k in keys if k.startswith(prefix)}
-                logs.append(
-                    FlightLog(**{n: data[f"f{i}/{n}"] for n in FIELDS}, meta=meta, extra=extra)
-                )
+                arrays = {n: data[f"f{i}/{n}"] for n in FIELDS}
+                for name, arr in arrays.items():
+                    if arr.dtype.kind not in "fiu":
+                        raise FlightLogError(f"{path}: flight {i} {name} is not numeric "
+                                             f"({arr.dtype})")
+                logs.append(FlightLog(**arrays, meta=meta, extra=extra))
             return logs
     except FileNotFoundError:
         raise FlightLogError(f"{path}: file not found") from None
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
-        if isinstance(err, FlightLogError):
-            raise
-        raise FlightLogError(f"{path}: corrupt or unreadable FlightLog file ({err})") from None
-
+    except IsADirectoryError:
+        raise FlightLogError(f"{path}: is a folder, not a FlightLog file") from None
+    except FlightLogError:
+        raise
+    except MemoryError:
+        raise FlightLogError(f"{path}: too large to read into memory") from None
+    except READ_ERRORS as err:
+        raise FlightLogError(f"{path}: corrupt or unreadable FlightLog file "
+                             f"({type(err).__name__}: {one_line(err)})") from None

@@ -22,8 +22,12 @@ _WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3")
 def build_field(cfg: Config) -> DownwashField:
     """Instantiate the configured field: ``[downwash] field`` with ``[downwash.params]``.
 
+    Only the configured field's own parameters are passed (the config never carries the
+    default field's parameters over to a plug-in), plus the world constants its signature names.
+
     Raises:
-        ConfigError: unknown plug-in, bad parameters, or an object that is not a field.
+        ConfigError: unknown plug-in, bad parameters, a factory that fails (whatever it raises,
+            including ``SystemExit``), or an object that is not a field.
     """
     path = cfg.downwash.field
     factory = resolve_factory(path, cfg.source)
@@ -43,6 +47,9 @@ def build_field(cfg: Config) -> DownwashField:
         raise ConfigError(f"{cfg.source}: 'downwash.params' do not fit {path} ({err})") from None
     except ValueError as err:
         raise ConfigError(f"{cfg.source}: 'downwash.params': {err}") from None
+    except (Exception, SystemExit) as err:  # a plug-in's own code failed
+        raise ConfigError(f"{cfg.source}: 'downwash.field' {path} failed to build "
+                          f"({type(err).__name__}: {err})") from None
     if not isinstance(field, DownwashField):
         raise ConfigError(
             f"{cfg.source}: 'downwash.field' {path} does not build a field "

@@ -279,6 +279,11 @@ def load_mapping(
         merged[key] = str(merged[key]).lower()
         if merged[key] not in allowed:
             raise IngestError(where, f"{key} = {merged[key]!r}; use {' or '.join(allowed)}")
+    gap = merged["max_gap_s"]
+    if (isinstance(gap, bool) or not isinstance(gap, int | float)
+            or not 0 < gap <= 60):  # also false for NaN
+        raise IngestError(where, f"max_gap_s must be a number of seconds in (0, 60], got {gap!r}")
+    merged["max_gap_s"] = float(gap)
     for role in ("leader", "follower"):
         for key, value in merged[role].items():
             if key == "mass_kg":

@@ -7,15 +7,16 @@ The integrator registers them on the ``aerodock`` app::
     app.command("evaluate")(learn_cmds.evaluate_command)
     app.command("export")(learn_cmds.export_command)
 
-Bad input (missing/corrupt data or model files, unknown model kind, too little data) prints
-``error: <one line>`` on stderr and exits with code 2, without a traceback. Progress goes to
+Bad input (missing/corrupt data or model files, unknown model kind, too little or degenerate
+data) prints ``error: <one line>`` on stderr and exits with code 2, without a traceback; ``train``
+refuses to write a model whose training did not give finite weights, so a good model already in
+``--out`` is never replaced by a broken one. Progress goes to
 stderr, so ``--json`` output on stdout stays machine-readable. PyTorch is imported only by the
 commands that need it (``train``, ``export``).
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Annotated, Any, NoReturn
@@ -28,7 +29,8 @@ DataOpt = Annotated[
     list[Path],
     typer.Option(
         "--data",
-        help="FlightLog file, dataset file, or folder of them; repeat --data for several.",
+        help="FlightLog file, dataset file, or folder of them; several after one --data "
+             "(--data a.npz b.npz) or --data repeated.",
     ),
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print the numbers as JSON on stdout.")]
@@ -45,7 +47,13 @@ def _one_line(err: BaseException) -> str:
 
 
 def _echo_json(obj: Any) -> None:
-    typer.echo(json.dumps(obj, indent=2, default=str))
+    from aerodock.fileio import dumps_json
+
+    try:
+        text = dumps_json(obj)
+    except ValueError as err:
+        _fail(str(err))
+    typer.echo(text)
 
 
 def _load_data(paths: list[Path]) -> Any:
@@ -85,8 +93,8 @@ def train_command(
 
     if model not in TRAINABLE:
         _fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
-    if minutes is not None and not minutes > 0:
-        _fail(f"--minutes must be positive, got {minutes}")
+    if minutes is not None and not (minutes > 0 and math.isfinite(minutes)):
+        _fail(f"--minutes must be a positive finite number, got {minutes}")
     if max_epochs < 1:
         _fail(f"--max-epochs must be at least 1, got {max_epochs}")
     if out.exists() and not out.is_dir():
@@ -98,9 +106,13 @@ def train_command(
 
         ds = take_minutes(ds, minutes, np.random.default_rng(seed))
     try:
-        from aerodock.learning.train import train_model
+        from aerodock.learning.train import check_trainable, train_model
     except ImportError:
         _fail("training needs PyTorch: pip install 'aerodock[learn]'")
+    try:
+        check_trainable(ds)
+    except ValueError as err:
+        _fail(_one_line(err))
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -187,8 +199,8 @@ def evaluate_command(
     from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
 
-    if not lateral_radius > 0:
-        _fail(f"--lateral-radius must be positive, got {lateral_radius}")
+    if not (lateral_radius > 0 and math.isfinite(lateral_radius)):
+        _fail(f"--lateral-radius must be a positive finite number, got {lateral_radius}")
     try:
         predictor = Predictor.load(model)
     except ModelFileError as err:
@@ -227,6 +239,12 @@ def export_command(
         _fail(f"{out}: is a directory; give a file name such as model.onnx")
     if dtype not in ("float32", "float64"):
         _fail(f"--dtype {dtype!r}: use float32 or float64")
+    from aerodock.fileio import check_writable_target
+
+    try:
+        check_writable_target(out)
+    except OSError as err:
+        _fail(str(err))
     try:
         import onnx  # noqa: F401
 

@@ -14,7 +14,6 @@ string ``"aerodock-dataset"``), ``version`` (1), ``x``, ``leader_R``, ``y``, ``f
 from __future__ import annotations
 
 import json
-import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open, check_npz_header
+from aerodock.fileio import READ_ERRORS, atomic_open, check_npz_header, one_line
 from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.geometry import quat_to_rotmat
@@ -308,8 +307,9 @@ def _npz_format(path: Path) -> str | None:
             return str(data["format"]) if "format" in data.files else None
     except FileNotFoundError:
         raise DataError(f"{path}: file not found") from None
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as err:
-        raise DataError(f"{path}: not a readable .npz file ({err})") from None
+    except (*READ_ERRORS, MemoryError) as err:
+        raise DataError(f"{path}: not a readable .npz file ({type(err).__name__}: "
+                        f"{one_line(err)})") from None
 
 
 def load_dataset(path: str | Path) -> Dataset:
@@ -332,10 +332,18 @@ def load_dataset(path: str | Path) -> Dataset:
             meta = json.loads(str(data["meta"]))
     except FileNotFoundError:
         raise DataError(f"{path}: file not found") from None
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
-        if isinstance(err, DataError):
-            raise
-        raise DataError(f"{path}: corrupt or unreadable dataset file ({err})") from None
+    except DataError:
+        raise
+    except (*READ_ERRORS, MemoryError) as err:
+        raise DataError(f"{path}: corrupt or unreadable dataset file ({type(err).__name__}: "
+                        f"{one_line(err)})") from None
+    if ytm is not None:
+        arrays_checked = {**arrays, "y_true_mean": ytm}
+    else:
+        arrays_checked = arrays
+    for name, arr in arrays_checked.items():
+        if arr.dtype.kind not in ("iu" if name == "flight_id" else "fiu"):
+            raise DataError(f"{path}: {name} has dtype {arr.dtype}, not numbers")
     for name in ("x", "leader_R", "y", "t_s"):
         if not np.all(np.isfinite(arrays[name])):
             raise DataError(f"{path}: {name} contains NaN or infinite values")
@@ -345,6 +353,9 @@ def load_dataset(path: str | Path) -> Dataset:
         ds = Dataset(**arrays, y_true_mean=ytm, meta=meta)
     except DataError as err:
         raise DataError(f"{path}: {str(err).removeprefix('dataset: ')}") from None
+    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as err:
+        raise DataError(f"{path}: inconsistent dataset contents or metadata "
+                        f"({type(err).__name__}: {one_line(err)})") from None
     return ds
 
 

@@ -163,6 +163,27 @@ def _feature_map_generic(
     return z, out_map
 
 
+EPS_RANGE = (1e-9, 1.0)
+"""Accepted range of ``eps_pos_m`` (m) and ``eps_vel_mps`` (m/s): outside it the regularisation
+either underflows (``eps**2 == 0``: a division by zero on the leader's axis) or swamps the
+features."""
+
+
+def check_eps(eps_pos_m: float, eps_vel_mps: float) -> None:
+    """Validate the feature regularisation constants.
+
+    Raises:
+        ValueError: a constant that is not a finite number in :data:`EPS_RANGE`.
+    """
+    low, high = EPS_RANGE
+    for name, value in (("eps_pos_m", eps_pos_m), ("eps_vel_mps", eps_vel_mps)):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.floating):
+            raise ValueError(f"features.{name} must be a number, got {value!r}")
+        if not low <= value <= high:  # also false for NaN
+            raise ValueError(f"features.{name} must be between {low:g} and {high:g}, "
+                             f"got {value!r}")
+
+
 def check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Validate model inputs: ``x`` (n, 9) and ``leader_R`` (n, 3, 3), as float arrays."""
     x = np.asarray(x, dtype=float)
@@ -198,6 +219,7 @@ def feature_map(
     x, leader_R = check_inputs(x, leader_R)
     if kind == "mlp":
         return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
+    check_eps(eps_pos_m, eps_vel_mps)
     return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps)
 
 

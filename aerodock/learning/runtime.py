@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash.base import BodyState
-from aerodock.learning.features import N_FEATURES, check_inputs, feature_map
-from aerodock.learning.modelfile import ModelSpec, load_model_dir
+from aerodock.learning.features import N_FEATURES, check_eps, check_inputs, feature_map
+from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
 
 
 def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
@@ -43,6 +43,26 @@ def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
     h *= s
     return h
 
+
+
+def _check_weights_sizes(path: Path) -> None:
+    """Check the array sizes ``weights.npz`` declares before anything is read (a corrupt header
+    could otherwise make NumPy allocate terabytes)."""
+    from aerodock.fileio import READ_ERRORS, check_npz_sizes
+    from aerodock.learning.modelfile import WEIGHTS_NPZ
+
+    directory = path.parent if path.name == MODEL_JSON else path
+    weights = directory / WEIGHTS_NPZ
+    if not weights.is_file():
+        return  # load_model_dir says what is missing
+    try:
+        with np.load(weights, allow_pickle=False) as data:
+            check_npz_sizes(data, weights, ModelFileError)
+    except ModelFileError:
+        raise
+    except READ_ERRORS as err:
+        raise ModelFileError(f"{weights}: corrupt weights file ({type(err).__name__}: "
+                             f"{' '.join(str(err).split())})") from None
 
 
 def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray, np.ndarray]:
@@ -80,17 +100,23 @@ class Predictor:
         if spec.kind == "zero":
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
+        check_eps(spec.eps_pos_m, spec.eps_vel_mps)
         layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64))
                   for w, b in weights]
         if len(layers) != len(spec.weight_shapes()):
             raise ValueError("weights do not match the spec's layer sizes")
-        w0, b0 = layers[0]
-        w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
-        b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
-        layers[0] = (w0, b0)
-        wl, bl = layers[-1]
-        out_std = np.asarray(spec.out_std, dtype=np.float64)
-        layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            w0, b0 = layers[0]
+            w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
+            b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
+            layers[0] = (w0, b0)
+            wl, bl = layers[-1]
+            out_std = np.asarray(spec.out_std, dtype=np.float64)
+            layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        with np.errstate(over="ignore", invalid="ignore"):
+            finite = all(np.all(np.isfinite(w)) and np.all(np.isfinite(b)) for w, b in layers)
+        if not finite:
+            raise ValueError("weights and normalisation overflow to non-finite values")
         self._layers = [(np.ascontiguousarray(w), np.ascontiguousarray(b)) for w, b in layers]
         self._layers_t = [(np.ascontiguousarray(w.T), b) for w, b in self._layers]
         self._act = spec.activation
@@ -104,12 +130,24 @@ class Predictor:
         """Load a model directory (a :class:`ZeroPredictor` for a ``"zero"`` model).
 
         Raises:
-            ModelFileError: missing, corrupt or mismatched model files.
+            ModelFileError: missing, corrupt or mismatched model files, or values the runtime
+                cannot use (e.g. feature constants out of range); one line naming the file.
         """
-        spec, weights, doc = load_model_dir(path)
-        if spec.kind == "zero":
-            return ZeroPredictor(meta=doc)
-        return cls(spec, weights, doc)
+        where = Path(path)
+        if where.name != MODEL_JSON:
+            where = where / MODEL_JSON
+        try:
+            _check_weights_sizes(Path(path))
+            spec, weights, doc = load_model_dir(path)
+            if spec.kind == "zero":
+                return ZeroPredictor(meta=doc)
+            return cls(spec, weights, doc)
+        except ModelFileError:
+            raise
+        except RecursionError:
+            raise ModelFileError(f"{where}: nested too deeply (corrupt model file)") from None
+        except (ValueError, TypeError, OverflowError) as err:
+            raise ModelFileError(f"{where}: {' '.join(str(err).split())}") from None
 
     # -- batched ---------------------------------------------------------------------------
     def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:

@@ -80,6 +80,43 @@ class TrainedModel:
         return self.model(xt, rt).double().numpy()
 
 
+# Largest |value| of a model input (m, m/s) or label (m/s²) training accepts: far beyond any
+# flight, and small enough that float32 squares and sums stay finite.
+MAX_ABS_INPUT = 1e6
+
+
+def check_trainable(ds: Dataset, min_samples: int = 20) -> None:
+    """Refuse data no model can be trained on: too few samples, non-finite or absurd values.
+
+    Raises:
+        ValueError: one line saying what is wrong with the data.
+    """
+    if ds.n < min_samples:
+        raise ValueError(f"too few samples to train on ({ds.n} < {min_samples})")
+    for name, arr in (("inputs x", ds.x), ("labels y", ds.y), ("leader_R", ds.leader_R)):
+        arr = np.asarray(arr, dtype=float)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"degenerate data: {name} contain NaN or infinite values")
+        if arr.size and np.max(np.abs(arr)) > MAX_ABS_INPUT:
+            raise ValueError(f"degenerate data: {name} reach {np.max(np.abs(arr)):.3g}, beyond "
+                             f"{MAX_ABS_INPUT:g} (not SI units?)")
+    rot = np.asarray(ds.leader_R, dtype=float)
+    gram = np.einsum("nji,njk->nik", rot, rot)
+    if rot.size and np.max(np.abs(gram - np.eye(3))) > 1e-2:
+        raise ValueError("degenerate data: leader_R holds matrices that are not rotations")
+
+
+def _check_trained(model: nn.Module, train_mse: float) -> None:
+    """Refuse a model whose training diverged (nothing is written then)."""
+    finite = math.isfinite(train_mse) and all(
+        bool(torch.all(torch.isfinite(t))) for t in model.state_dict().values()
+        if torch.is_floating_point(t)
+    )
+    if not finite:
+        raise ValueError("training diverged: the model has non-finite weights or loss "
+                         "(degenerate data?); no model written")
+
+
 def validation_split(
     ds: Dataset, val_fraction: float, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray, str]:
@@ -152,16 +189,15 @@ def train_model(
         The trained model (best validation epoch) and its record.
 
     Raises:
-        ValueError: unknown kind, bad options, or too few samples.
+        ValueError: unknown kind, bad options, too few samples, degenerate data
+            (:func:`check_trainable`), or a training that diverged to non-finite weights.
     """
     check_kind(kind)
     if not 0.0 <= val_fraction < 1.0:
         raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
     if max_epochs < 1 or patience < 1 or batch_size < 1:
         raise ValueError("max_epochs, patience and batch_size must be positive")
-    min_samples = 20
-    if train.n < min_samples:
-        raise ValueError(f"too few samples to train on ({train.n} < {min_samples})")
+    check_trainable(train)
     info: dict[str, Any] = {
         "kind": kind, "seed": seed, "data": train.summary(), "spectral_norm": spectral_norm,
         "hyperparameters": {
@@ -248,6 +284,7 @@ def train_model(
     finally:
         if num_threads:
             torch.set_num_threads(old_threads)
+    _check_trained(model, train_mse)
     info.update({
         "split": split,
         "n_train": int(n_tr),

@@ -66,3 +66,105 @@ def test_dock_saves_flightlogs(tmp_path):
     logs = load_flightlogs(out["logs"])
     assert len(logs) == 2
     assert "true_field_mean_mps2" in logs[0].extra
+
+
+def run_inprocess(*args):
+    """``aerodock ARGS`` in-process: (exit code, stdout, stderr)."""
+    import io
+    from contextlib import redirect_stderr, redirect_stdout
+
+    from aerodock.cli import run
+
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        rc = run([str(a) for a in args])
+    return rc, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("args", [
+    ["dock", "--bogus"], ["dock", "--trials", "abc"], ["field", "probe", "--radial", "0"],
+    ["nosuchcommand"], ["dock", "--compensation", "psychic"],
+])
+def test_usage_errors_are_one_line(args):
+    rc, out, err = run_inprocess(*args)
+    assert rc == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:"), err
+    assert "--help" in lines[0]
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    (["dock", "--trials", "1", "--leader-speed", "nan", "--json"], "--leader-speed"),
+    (["dock", "--trials", "1", "--offset", "inf", "--json"], "--offset"),
+    (["dock", "--trials", "1", "--offset", "5", "--json"], "ground"),
+    (["dock", "--trials", "10000000"], "limit of 10000"),
+    (["dock", "--trials", "2000", "--save-logs", "x"], "over the limit of"),
+    (["field", "probe", "--separation", "nan", "--radial", "0", "--json"], "--separation"),
+    (["field", "probe", "--separation", "0.3", "--radial", "0", "--samples", "100000000"],
+     "between 2 and 200000"),
+])
+def test_bad_numbers_and_sizes_are_refused(args, needle):
+    rc, out, err = run_inprocess(*args)
+    assert rc == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and needle in err, err
+
+
+def test_print_json_refuses_nan(capsys):
+    import typer
+
+    from aerodock.cli import print_json
+
+    with pytest.raises(typer.Exit) as exc:
+        print_json({"a": {"b": [1.0, float("nan")]}})
+    assert exc.value.exit_code == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "a.b.1" in captured.err
+
+
+def test_several_paths_after_one_data(tmp_path):
+    from aerodock.cli import _expand_repeatable
+
+    assert _expand_repeatable(["train", "--data", "a.npz", "b.npz", "--out", "m"]) == [
+        "train", "--data", "a.npz", "--data", "b.npz", "--out", "m"]
+    assert _expand_repeatable(["evaluate", "--data=a", "b", "--json"]) == [
+        "evaluate", "--data=a", "--data", "b", "--json"]
+    # commands with positional arguments are left alone
+    assert _expand_repeatable(["ingest", "a.csv", "b.csv", "--out", "x"]) == [
+        "ingest", "a.csv", "b.csv", "--out", "x"]
+
+
+@pytest.fixture(scope="module")
+def flights(tmp_path_factory):
+    from aerodock.config import load_config
+    from aerodock.flightlog import save_flightlogs
+    from aerodock.mission import MissionSpec, run_campaign
+
+    result = run_campaign(load_config(), MissionSpec(trials=2, seed=1), record="full")
+    folder = tmp_path_factory.mktemp("flights")
+    return [save_flightlogs(folder / f"f{i}.npz", [log]) for i, log in enumerate(result.logs)]
+
+
+def test_train_on_two_paths_and_degenerate_data_keeps_the_good_model(flights, tmp_path):
+    import json as _json
+
+    import numpy as np
+
+    from aerodock.flightlog import load_flightlogs
+
+    model = tmp_path / "model"
+    rc, out, err = run_inprocess("train", "--data", *flights, "--out", model, "--max-epochs",
+                                 "2", "--json")
+    assert rc == 0, err
+    assert _json.loads(out)["n_flights"] == 2
+    good = (model / "model.json").read_bytes(), (model / "weights.npz").read_bytes()
+    # degenerate: a dataset file with labels of 1e30 m/s² (float32 overflows to inf, the
+    # loss to NaN) -> refused, the good model untouched
+    from dataclasses import replace
+
+    from aerodock.learning.dataset import build_dataset, save_dataset
+
+    ds = build_dataset(load_flightlogs(flights[0]))
+    bad = save_dataset(tmp_path / "bad.npz", replace(ds, y=np.full_like(ds.y, 1e30)))
+    rc, out, err = run_inprocess("train", "--data", bad, "--out", model, "--max-epochs", "2")
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "degenerate" in err, err
+    assert ((model / "model.json").read_bytes(), (model / "weights.npz").read_bytes()) == good

@@ -33,8 +33,8 @@ def test_user_file_overrides_a_subset(tmp_path):
 @pytest.mark.parametrize(
     ("text", "needle"),
     [
-        ("[vehicle]\nmass_kg = -0.7\n", "'vehicle.mass_kg' must be > 0"),
-        ("[sim]\ncontrol_rate_hz = 0\n", "'sim.control_rate_hz' must be > 0"),
+        ("[vehicle]\nmass_kg = -0.7\n", "'vehicle.mass_kg' must be >= 0.001 and <= 100"),
+        ("[sim]\ncontrol_rate_hz = 0\n", "'sim.control_rate_hz' must be >= 1"),
         ("[vehicle]\nmas_kg = 1.0\n", "unknown key 'vehicle.mas_kg'"),
         ("[nonsense]\nx = 1\n", "unknown key 'nonsense'"),
         ("[vehicle]\nmass_kg = \"heavy\"\n", "'vehicle.mass_kg' must be a number"),
@@ -45,6 +45,31 @@ def test_user_file_overrides_a_subset(tmp_path):
         ("[downwash]\nfield = \"nocolon\"\n", "package.module:factory"),
         ("[sim]\nphysics_rate_hz = 330\n", "multiple of"),
         ("not toml at all", "invalid TOML"),
+        # issue 12: finiteness, ranges, integers, booleans, tables, plug-in paths
+        ("[gripper]\nlatency_s = nan\n", "'gripper.latency_s' must be a finite number"),
+        ("[mission]\nclearance_m = inf\n", "'mission.clearance_m' must be a finite number"),
+        ("[vehicle]\nmass_kg = 1e308\n", "'vehicle.mass_kg' must be >= 0.001 and <= 100"),
+        ("[vehicle]\nrotor_radius_m = 1e-300\n", "'vehicle.rotor_radius_m' must be >= 0.001"),
+        ("[vehicle]\nn_rotors = 4.5\n", "'vehicle.n_rotors' must be an integer"),
+        ("[control]\nq_diag = [true, 1, 8, 0.01, 0.01, 0.1, 1]\n", "'control.q_diag' must be 7"),
+        ("[control]\nq_diag = [1, 1, nan, 0.01, 0.01, 0.1, 1]\n", "'control.q_diag[2]'"),
+        ("[curriculum]\nstage0_depth_m = [1.8, 1.5]\n", "low < high"),
+        ("[control]\nr_diag = [0.8, 0.8, 0, 1]\n", "'control.r_diag[2]' must be >= 1e-06"),
+        ("[control]\nq_diag = [1, 1, 1e308, 0.01, 0.01, 0.1, 1]\n", "'control.q_diag[2]'"),
+        ("[downwash.params]\nspread_rate = -0.15\n", "'downwash.params.spread_rate' must be >= 0"),
+        ("[downwash.params]\nturb_vertical = nan\n", "'downwash.params.turb_vertical'"),
+        ("[downwash]\nparams = 3\n", "'downwash.params' must be a table"),
+        ("[downwash]\nfield = \".jet:X\"\n", "package.module:factory"),
+        ("[mission]\ndock_window_s = 1e6\n", "'mission.dock_window_s' must be >= 0.01 and <= 600"),
+        ("[sim]\nphysics_rate_hz = 1e9\n", "'sim.physics_rate_hz' must be >= 1 and <= 20000"),
+        ("downwash = 3\n", "'downwash' must be a table"),
+        # physically impossible set-ups
+        ("[gripper]\naperture_m = 0.008\n", "must be wider than 'platform.bar_diameter_m'"),
+        ("[vehicle]\nthrust_max_g = 0.5\n", "'vehicle.thrust_max_g' must be >= 1.1"),
+        ("[vehicle]\nthrust_max_g = 1.0\n", "'vehicle.thrust_max_g' must be >= 1.1"),
+        ("[mission]\nleader_altitude_m = 0.4\n", "docking point is"),
+        ("[platform]\ncable_length_m = 2.6\n", "at or below the ground"),
+        ("[mission]\nstart_below_m = 2.0\n", "the follower would start"),
     ],
 )
 def test_invalid_values_give_one_line_errors(tmp_path, text, needle):
@@ -91,3 +116,53 @@ def test_with_overrides_validates(cfg):
         cfg.with_overrides({"platform": {"cable_length_m": 0.0}})
     assert np.isclose(cfg.with_overrides({"platform": {"cable_length_m": 1.0}})
                       .platform.cable_length_m, 1.0)
+
+
+def test_ranges_name_real_keys_and_hold_the_defaults():
+    """Every range names a key of defaults.toml, and every default satisfies its rule (keys
+    without an entry get the fallback: finite, 0 to 1e6)."""
+    from aerodock.config import _DEFAULT_RANGE, _RANGES, _defaults
+
+    defaults = _defaults()
+    flat = {}
+    for section, table in defaults.items():
+        for key, value in table.items():
+            if isinstance(value, dict):
+                flat.update({f"{section}.{key}.{k}": v for k, v in value.items()})
+            elif isinstance(value, int | float | list) and not isinstance(value, bool):
+                flat[f"{section}.{key}"] = value
+    assert set(_RANGES) <= set(flat)
+    for key, value in flat.items():
+        low, high = _RANGES.get(key, _DEFAULT_RANGE)
+        assert all(low <= v <= high for v in (value if isinstance(value, list) else [value])), key
+
+
+def test_plugin_without_params_gets_none_of_the_jets(tmp_path):
+    """Switching the field to a plug-in without a params table must not pass the jet's."""
+    text = '[downwash]\nfield = "aerodock.downwash.template:UniformColumnField"\n'
+    cfg = load_config(_write(tmp_path, text))
+    assert cfg.data["downwash"]["params"] == {}
+    assert type(build_field(cfg)).__name__ == "UniformColumnField"
+    back = cfg.with_overrides({"downwash": {"field": "aerodock.downwash.jet:RoundJetField"}})
+    assert back.data["downwash"]["params"] == load_config().data["downwash"]["params"]
+
+
+@pytest.mark.parametrize(("body", "needle"), [
+    ("raise RuntimeError('boom')\n", "failed on import (RuntimeError: boom)"),
+    ("import sys\nsys.exit(3)\n", "failed on import (SystemExit: 3)"),
+    ("def F(**kw):\n    raise KeyError('k')\n", "failed to build (KeyError"),
+    ("def F(**kw):\n    import sys\n    sys.exit(4)\n", "failed to build (SystemExit: 4)"),
+])
+def test_plugin_failures_are_config_errors(tmp_path, monkeypatch, body, needle):
+    name = f"plug_{abs(hash(body))}"
+    (tmp_path / f"{name}.py").write_text(body)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    path = _write(tmp_path, f'[downwash]\nfield = "{name}:F"\n')
+    with pytest.raises(ConfigError) as err:
+        build_field(load_config(path))
+    assert needle in str(err.value) and str(path) in str(err.value)
+
+
+def test_integral_float_is_accepted_for_an_integer_key(tmp_path):
+    cfg = load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6.0\n"))
+    assert cfg.vehicle.n_rotors == 6 and isinstance(cfg.vehicle.n_rotors, int)

@@ -1,0 +1,185 @@
+"""kill -9 during ``ingest``, ``train`` and ``export``: the old output stays intact or the new one
+is complete, never a mix; temporary files of a killed write are removed by the next write.
+
+Each command first runs to completion (its output is the "old" one, and its duration sets the
+range of kill moments); then it runs again and is killed with SIGKILL at random moments.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ENTRY = "from aerodock.cli import main; main()"
+# Widens the window between the two files of a model directory: sleeps after any os.replace
+# whose target is a weights.npz, and says so on stderr (the test kills it then).
+SLOW_MODEL_WRITE = (
+    "import os, sys, time\n"
+    "_replace = os.replace\n"
+    "def _slow(src, dst, *a, **k):\n"
+    "    _replace(src, dst, *a, **k)\n"
+    "    if str(dst).endswith('weights.npz'):\n"
+    "        print('WEIGHTS-REPLACED', file=sys.stderr, flush=True)\n"
+    "        time.sleep(5)\n"
+    "os.replace = _slow\n"
+    "from aerodock.cli import main; main()\n"
+)
+
+
+def _start(args: list, code: str = ENTRY) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", code, *map(str, args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _run(args: list) -> float:
+    t0 = time.perf_counter()
+    proc = _start(args)
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, err
+    return time.perf_counter() - t0
+
+
+def _kill_at(args: list, delay_s: float) -> int | None:
+    proc = _start(args)
+    try:
+        proc.wait(timeout=delay_s)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGKILL)
+    proc.communicate()
+    return proc.returncode
+
+
+def _digest(paths: list[Path]) -> str:
+    h = hashlib.sha256()
+    for p in paths:
+        h.update(p.read_bytes() if p.exists() else b"<absent>")
+    return h.hexdigest()
+
+
+def _temps(folder: Path) -> list[Path]:
+    return [p for p in folder.iterdir() if p.name.endswith(".tmp")]
+
+
+def _moments(duration_s: float, n: int, seed: int) -> list[float]:
+    rng = random.Random(seed)
+    return sorted(rng.uniform(0.05, 1.0) * duration_s for _ in range(n))
+
+
+def test_kill_during_ingest(shared_data, tmp_path):
+    from fuzz_helpers import run_cli
+
+    from aerodock.flightlog import load_flightlogs
+
+    files = sorted(shared_data("neural-swarm", "swap_ss").glob("cf5?_0*.csv"))
+    out = tmp_path / "real.npz"
+    old_args = ["ingest", "--format", "neural-swarm", *files[:4], "--out", out]
+    new_args = ["ingest", "--format", "neural-swarm", *files, "--out", out]
+    duration = _run(new_args)
+    n_new = len(load_flightlogs(out))
+    for delay in _moments(duration, 3, seed=1):
+        assert run_cli(old_args).rc == 0
+        old = _digest([out])
+        assert len(load_flightlogs(out)) < n_new
+        _kill_at(new_args, delay)
+        logs = load_flightlogs(out)  # never a half-written file
+        assert _digest([out]) == old or len(logs) == n_new, f"mixed output after {delay:.2f} s"
+    assert run_cli(old_args).rc == 0
+    assert not _temps(tmp_path), "a killed ingest's temporary file outlived the next write"
+
+
+@pytest.fixture(scope="module")
+def data_file(tmp_path_factory) -> Path:
+    from aerodock.config import load_config
+    from aerodock.flightlog import save_flightlogs
+    from aerodock.mission import MissionSpec, run_campaign
+
+    result = run_campaign(load_config(), MissionSpec(trials=2, seed=5), record="full")
+    return save_flightlogs(tmp_path_factory.mktemp("kill") / "data.npz", result.logs)
+
+
+@pytest.fixture(scope="module")
+def models(data_file, tmp_path_factory) -> dict[str, Path]:
+    """Two small trained models (in-process: only the runs that get killed are subprocesses)."""
+    from fuzz_helpers import run_cli
+
+    folder = tmp_path_factory.mktemp("models")
+    out = {}
+    for name, kind in (("old", "mlp"), ("new", "so2")):
+        res = run_cli(["train", "--data", data_file, "--out", folder / name, "--model", kind,
+                       "--max-epochs", "2", "--seed", "1"], family="setup")
+        assert res.rc == 0, res.err
+        out[name] = folder / name
+    return out
+
+
+def _model_state(model: Path) -> tuple[bool, str | None]:
+    """(whether both files load together as one model, its kind)."""
+    from aerodock.learning.modelfile import ModelFileError
+    from aerodock.learning.runtime import Predictor
+
+    try:
+        return True, Predictor.load(model).kind
+    except ModelFileError:
+        return False, None
+
+
+def test_kill_during_train(data_file, models, tmp_path):
+    """The old model (mlp) stays, or the new one (so2) is complete; never a mix."""
+    model = tmp_path / "model"
+    new_args = ["train", "--data", data_file, "--out", model, "--model", "so2",
+                "--max-epochs", "3"]
+    shutil.copytree(models["old"], model)
+    duration = _run(new_args)
+    assert _model_state(model) == (True, "so2")
+    for delay in _moments(duration, 2, seed=2):
+        shutil.rmtree(model)
+        shutil.copytree(models["old"], model)
+        old = _digest([model / "model.json", model / "weights.npz"])
+        _kill_at(new_args, delay)
+        intact = _digest([model / "model.json", model / "weights.npz"]) == old
+        assert intact or _model_state(model) == (True, "so2"), (
+            f"mixed model directory after a kill at {delay:.2f} s")
+
+
+def test_kill_between_the_two_model_files(data_file, models, tmp_path):
+    """A kill right after weights.npz is replaced (the window a slow disk widens)."""
+    model = tmp_path / "model"
+    shutil.copytree(models["old"], model)
+    old = _digest([model / "model.json", model / "weights.npz"])
+    proc = _start(["train", "--data", data_file, "--out", model, "--model", "so2",
+                   "--max-epochs", "2"], SLOW_MODEL_WRITE)
+    deadline = time.monotonic() + 300
+    for line in proc.stderr:
+        if "WEIGHTS-REPLACED" in line or time.monotonic() > deadline:
+            break
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGKILL)
+    proc.communicate()
+    intact = _digest([model / "model.json", model / "weights.npz"]) == old
+    assert intact or _model_state(model) == (True, "so2"), (
+        "weights.npz and model.json do not belong together")
+
+
+def test_kill_during_export(models, tmp_path):
+    import onnx
+    from fuzz_helpers import run_cli
+
+    out = tmp_path / "m.onnx"
+    new_args = ["export", "--model", models["new"], "--out", out]
+    duration = _run(new_args)
+    new = _digest([out])
+    for delay in _moments(duration, 2, seed=3):
+        assert run_cli(["export", "--model", models["old"], "--out", out]).rc == 0
+        old = _digest([out])
+        assert old != new
+        _kill_at(new_args, delay)
+        assert _digest([out]) in (old, new), f"mixed ONNX file after a kill at {delay:.2f} s"
+        onnx.checker.check_model(onnx.load(str(out)))

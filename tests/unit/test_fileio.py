@@ -1,0 +1,133 @@
+"""aerodock.fileio: atomic writes (mode, targets, leftovers), strict JSON, guarded npz headers."""
+
+from __future__ import annotations
+
+import io
+import os
+import stat
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+
+from aerodock.fileio import (
+    atomic_open,
+    check_npz_header,
+    dumps_json,
+    remove_stale_temps,
+)
+
+
+def _mode(path):
+    return stat.S_IMODE(path.stat().st_mode)
+
+
+def test_new_file_gets_the_umask_mode(tmp_path):
+    old = os.umask(0o027)
+    try:
+        with atomic_open(tmp_path / "a.bin") as fh:
+            fh.write(b"x")
+    finally:
+        os.umask(old)
+    assert _mode(tmp_path / "a.bin") == 0o640
+
+
+def test_replaced_file_keeps_its_mode(tmp_path):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"old")
+    path.chmod(0o604)
+    with atomic_open(path) as fh:
+        fh.write(b"new")
+    assert path.read_bytes() == b"new" and _mode(path) == 0o604
+
+
+def test_non_regular_targets_are_refused(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(OSError, match="not a regular file"):
+        with atomic_open(fifo) as fh:
+            fh.write(b"x")
+    assert stat.S_ISFIFO(fifo.stat().st_mode)
+    with pytest.raises(IsADirectoryError):
+        with atomic_open(tmp_path) as fh:
+            fh.write(b"x")
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
+def test_an_error_or_interrupt_leaves_the_old_file_and_no_temp(tmp_path):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"old")
+    for exc in (RuntimeError, KeyboardInterrupt):
+        with pytest.raises(exc):
+            with atomic_open(path) as fh:
+                fh.write(b"half")
+                raise exc()
+    assert path.read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.bin"]
+
+
+def test_temps_of_dead_processes_are_removed_by_the_next_write(tmp_path):
+    path = tmp_path / "a.bin"
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    stale = tmp_path / f".a.bin.{dead}.abc123.tmp"
+    stale.write_bytes(b"half")
+    mine = tmp_path / f".a.bin.{os.getpid()}.xyz.tmp"  # a live writer's: kept
+    mine.write_bytes(b"busy")
+    assert remove_stale_temps(path) == [stale]
+    assert mine.exists() and not stale.exists()
+
+
+def test_sigterm_unwinds_an_atomic_write(tmp_path):
+    code = ("import signal, time; from aerodock.cli import _terminate; "
+            "signal.signal(signal.SIGTERM, _terminate)\n"
+            "from aerodock.fileio import atomic_open\n"
+            f"with atomic_open({str(tmp_path / 'a.bin')!r}) as fh:\n"
+            "    fh.write(b'x'); print('ready', flush=True); time.sleep(30)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "ready"
+    proc.terminate()
+    assert proc.wait(timeout=30) == 143
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_dumps_json_is_strict():
+    assert dumps_json({"a": np.float64(1.5), "b": np.arange(2)}, indent=None) == \
+        '{"a": 1.5, "b": [0, 1]}'
+    for bad in ({"x": float("inf")}, {"x": [np.float32("nan")]}, {"x": np.array([np.nan])}):
+        with pytest.raises(ValueError, match="non-finite number at 'x"):
+            dumps_json(bad)
+
+
+def _npz(tmp_path, members: dict[str, bytes]):
+    path = tmp_path / "f.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, blob in members.items():
+            zf.writestr(name, blob)
+    return path
+
+
+def _npy(arr):
+    buf = io.BytesIO()
+    np.save(buf, arr)
+    return buf.getvalue()
+
+
+def _declares(shape):
+    header = repr({"descr": "<f8", "fortran_order": False, "shape": shape}).encode()
+    header += b" " * (63 - (len(header) + 10) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header + b"\0" * 8
+
+
+@pytest.mark.parametrize(("members", "needle"), [
+    ({"version.npy": _npy(np.array([1, 2]))}, "'version' must be one integer"),
+    ({"version.npy": _npy(np.array("1"))}, "'version' must be one integer"),
+    ({"version.npy": _npy(np.array(1)), "x.npy": _declares((10**13,))}, "declares"),
+    ({"version.npy": _npy(np.array(9))}, "newer than this aerodock"),
+])
+def test_npz_header_checks(tmp_path, members, needle):
+    path = _npz(tmp_path, {"format.npy": _npy(np.array("fmt")), **members})
+    with np.load(path, allow_pickle=False) as data, pytest.raises(ValueError, match=needle):
+        check_npz_header(data, path, "fmt", 1, "thing", ValueError)
