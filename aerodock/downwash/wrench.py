@@ -89,7 +89,11 @@ def bar_wake_force_n(field: Any, leader: BodyState, bar_p_m: np.ndarray, bar_v_m
     method = getattr(field, "bar_force_n", None)
     if method is None:
         return None
-    accepts = _keywords(getattr(method, "__func__", method))
+    func = getattr(method, "__func__", method)
+    try:
+        accepts = _keywords(func)
+    except TypeError:  # an unhashable callable: ask without the cache
+        accepts = _keywords.__wrapped__(func)
     kwargs: dict[str, Any] = {}
     if "dt" in accepts:
         kwargs["dt"] = dt
