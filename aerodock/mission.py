@@ -233,7 +233,7 @@ class MissionBatch:
         m = cfg.mission
         world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed)
         if comp == Compensation.ORACLE:
-            predictor = OraclePredictor(world.field)
+            predictor = OraclePredictor(world.field, dt_s=world.dt_s)
         elif comp != Compensation.MODEL:
             predictor = None  # a model given alongside 'none' or 'observer' is not flown
         self.predictor = predictor

@@ -23,6 +23,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
+from aerodock.downwash.mean import mean_acceleration_fn
 from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
 from aerodock.fleet import Fleet, build_fleet, concat_states, split_state
 from aerodock.geometry import rotmat_to_euler
@@ -99,6 +100,7 @@ class World:
         self._bar_mass = np.full(n, self.platform.bar_mass_kg)
         self._no_close = np.zeros(n, dtype=bool)
         self._zero_n = np.zeros(n)
+        self._mean_fn: Any = None  # built on first use (estimating a mean copies the field)
         self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
         imu = cfg.imu
         self._gyro_sd = imu.gyro_noise_radps if self.rigid else 0.0
@@ -186,11 +188,12 @@ class World:
         return lead, fol
 
     def true_mean_field_mps2(self) -> np.ndarray:
-        """(n, 3) the field's mean (turbulence-free) acceleration on the follower, if it has one."""
-        mean = getattr(self.field, "mean_acceleration", None)
-        if mean is None:
-            return np.full((self.n, 3), np.nan)
-        return mean(*self.body_states())
+        """(n, 3) the field's mean (turbulence-free) acceleration on the follower: its own
+        ``mean_acceleration``, or the estimate of :mod:`aerodock.downwash.mean` for a field
+        without one (evaluation only: no controller or label reads it)."""
+        if self._mean_fn is None:
+            self._mean_fn = mean_acceleration_fn(self.field, dt_s=self.dt_s)
+        return self._mean_fn(*self.body_states())
 
     def observe(self) -> tuple[Observation, Observation]:
         """Motion-capture measurements of (leader, follower), delayed and noisy.
