@@ -22,6 +22,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from aerodock.fileio import read_toml
+
 DEFAULTS_NAME = "defaults.toml"
 
 # Every numeric key's range, (low, high), both inclusive. Values must be finite; the bounds keep
@@ -413,16 +415,7 @@ def load_config(path: str | Path | None = None) -> Config:
     source = "defaults"
     if path is not None:
         source = str(path)
-        try:
-            user = tomllib.loads(Path(path).read_text())
-        except FileNotFoundError:
-            raise ConfigError(f"{source}: config file not found") from None
-        except (OSError, UnicodeDecodeError) as err:
-            raise ConfigError(f"{source}: cannot read config file ({err})") from None
-        except tomllib.TOMLDecodeError as err:
-            raise ConfigError(f"{source}: invalid TOML ({err})") from None
-        except RecursionError:
-            raise ConfigError(f"{source}: invalid TOML (nested too deeply)") from None
+        user = read_toml(path, "config file", ConfigError)
         _merge(data, user, _defaults(), source, prefix="")
     _validate(data, source)
     return Config(data, source)

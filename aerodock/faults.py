@@ -27,12 +27,13 @@ Every draw comes from the campaign's per-trial random streams: same file and see
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from aerodock.fileio import read_toml
 
 KINDS = ("follower_mocap_dropout", "leader_mocap_dropout", "latency_spike", "leader_state_lost",
          "contact_sensor_dead", "contact_sensor_stuck", "servo_slow", "servo_jammed",
@@ -133,15 +134,7 @@ def load_faults(path: str | Path) -> list[Fault]:
     Raises:
         FaultFileError: unreadable file, bad TOML, unknown kind or key, out-of-range value.
     """
-    try:
-        data = tomllib.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise FaultFileError(f"{path}: fault file not found") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise FaultFileError(f"{path}: cannot read fault file ({err})") from None
-    except tomllib.TOMLDecodeError as err:
-        raise FaultFileError(f"{path}: invalid TOML ({err})") from None
-    return parse_faults(data, str(path))
+    return parse_faults(read_toml(path, "fault file", FaultFileError), str(path))
 
 
 def draw_faults(faults: tuple[Fault, ...], n: int, rng: Any) -> list[FaultDraw]:

@@ -16,6 +16,7 @@ import stat
 import struct
 import tempfile
 import tokenize
+import tomllib
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -248,3 +249,23 @@ def check_npz_header(data: Any, path: Path, format_name: str, max_version: int, 
         raise error(f"{path}: {what} format version {version} is newer than this aerodock "
                     f"({max_version}); upgrade aerodock")
     return keys
+
+
+def read_toml(path: str | Path, what: str, error: type[Exception]) -> dict[str, Any]:
+    """Parse the TOML file at ``path``; every failure is one ``error`` naming the file.
+
+    Args:
+        path: the file.
+        what: what the file is, for the messages (e.g. ``"config file"``).
+        error: the exception class to raise (a ``ValueError`` subclass of the caller's).
+    """
+    try:
+        return tomllib.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise error(f"{path}: {what} not found") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise error(f"{path}: cannot read {what} ({err})") from None
+    except tomllib.TOMLDecodeError as err:
+        raise error(f"{path}: invalid TOML ({err})") from None
+    except RecursionError:
+        raise error(f"{path}: invalid TOML (nested too deeply)") from None

@@ -26,7 +26,6 @@ are the Cartesian product in the order above; a random study draws each axis ind
 from __future__ import annotations
 
 import itertools
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.control.compensation import Compensation
+from aerodock.fileio import read_toml
 
 AXES = ("cable_length_m", "leader_speed_mps", "mocap_noise_scale", "leader_dropout_s",
         "compensation")
@@ -176,14 +176,7 @@ def parse_spec(data: dict[str, Any], source: str = "spec", base_dir: Path | None
 def load_spec(path: str | Path) -> SweepSpec:
     """Read and validate a sweep specification file."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise SweepSpecError(f"{path}: sweep specification not found") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise SweepSpecError(f"{path}: cannot read ({err})") from None
-    except tomllib.TOMLDecodeError as err:
-        raise SweepSpecError(f"{path}: invalid TOML ({err})") from None
+    data = read_toml(path, "sweep specification", SweepSpecError)
     return parse_spec(data, str(path), path.parent)
 
 
