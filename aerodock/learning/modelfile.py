@@ -38,7 +38,6 @@ import math
 import os
 import shutil
 import tempfile
-import zipfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import READ_ERRORS, check_npz_sizes
 from aerodock.learning.features import (
     EPS_POS_M,
     EPS_VEL_MPS,
@@ -455,6 +455,8 @@ def load_model_dir(
         doc = json.loads(jpath.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
         raise ModelFileError(f"{jpath}: corrupt model.json ({err})") from None
+    except RecursionError:
+        raise ModelFileError(f"{jpath}: corrupt model.json (nested too deeply)") from None
     if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT:
         raise ModelFileError(f"{jpath}: not an aerodock model file")
     version = doc.get("version")
@@ -540,6 +542,9 @@ def _load_weights(
     weights = []
     try:
         with np.load(io.BytesIO(blob), allow_pickle=False) as data:
+            # The sizes each array declares, before any is read (a corrupt header could
+            # otherwise make NumPy allocate terabytes).
+            check_npz_sizes(data, wpath, ModelFileError)
             for i, (wshape, bshape) in enumerate(spec.weight_shapes()):
                 for name, shape in ((f"W{i}", wshape), (f"b{i}", bshape)):
                     if name not in data.files:
@@ -556,6 +561,7 @@ def _load_weights(
                 )
     except ModelFileError:
         raise
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as err:
-        raise ModelFileError(f"{wpath}: corrupt weights file ({err})") from None
+    except READ_ERRORS as err:
+        raise ModelFileError(f"{wpath}: corrupt weights file ({type(err).__name__}: "
+                             f"{' '.join(str(err).split())})") from None
     return weights

@@ -45,26 +45,6 @@ def _act_inplace(name: str, h: np.ndarray) -> np.ndarray:
 
 
 
-def _check_weights_sizes(path: Path) -> None:
-    """Check the array sizes ``weights.npz`` declares before anything is read (a corrupt header
-    could otherwise make NumPy allocate terabytes)."""
-    from aerodock.fileio import READ_ERRORS, check_npz_sizes
-    from aerodock.learning.modelfile import WEIGHTS_NPZ
-
-    directory = path.parent if path.name == MODEL_JSON else path
-    weights = directory / WEIGHTS_NPZ
-    if not weights.is_file():
-        return  # load_model_dir says what is missing
-    try:
-        with np.load(weights, allow_pickle=False) as data:
-            check_npz_sizes(data, weights, ModelFileError)
-    except ModelFileError:
-        raise
-    except READ_ERRORS as err:
-        raise ModelFileError(f"{weights}: corrupt weights file ({type(err).__name__}: "
-                             f"{' '.join(str(err).split())})") from None
-
-
 def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray, np.ndarray]:
     """Model inputs ``x = [p_B - p_A, v_A, v_B]`` (n, 9) and ``leader_R`` (n, 3, 3)."""
     lp, fp = np.asarray(leader.p, dtype=float), np.asarray(follower.p, dtype=float)
@@ -137,7 +117,6 @@ class Predictor:
         if where.name != MODEL_JSON:
             where = where / MODEL_JSON
         try:
-            _check_weights_sizes(Path(path))
             spec, weights, doc = load_model_dir(path)
             if spec.kind == "zero":
                 return ZeroPredictor(meta=doc)
