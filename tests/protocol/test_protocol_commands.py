@@ -173,5 +173,5 @@ def test_reproduce_quick(name, reproduce_runs):
             assert "| unavailable | unavailable |" in report
     else:
         assert math.isfinite(ratio) and ratio > 0
-    for fig in res["figures"]:
-        assert (Path(out) / fig).read_bytes()[:4] == b"\x89PNG", fig
+    for fig in res["figures"]:  # PNG figures and the report's animated docking (GIF)
+        assert (Path(out) / fig).read_bytes()[:4] in (b"\x89PNG", b"GIF8"), fig
