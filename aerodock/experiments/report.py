@@ -268,8 +268,9 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
             f"{m['docked']}/{m['trials']} [{pm[3]}] |")
     docks_with = sum(m["result"] == "dock" for m in cs["with_model"])
     docks_without = sum(w["result"] == "dock" for w in cs["without_model"])
-    lines += ["", f"Offsets docked (majority of repetitions): with model {docks_with}/6 "
-              f"(paper 6/6), without {docks_without}/6 (paper 0/6)."]
+    n_off = len(cs["with_model"])
+    lines += ["", f"Offsets docked (majority of repetitions): with model {docks_with}/{n_off} "
+              f"(paper 6/6), without {docks_without}/{n_off} (paper 0/6)."]
     if docks_without > 0:
         lines.append(f"Unlike the paper, the baseline docks at {docks_without} offset(s) here: in "
                      "our wake the force decays with depth, so at long cables the slow observer "

@@ -2,7 +2,8 @@
 
 1. curriculum data collection and training (the paper's SO(2) model) and the sample-efficiency
    study (SO(2), extended SO(2), plain MLP);
-2. the cable-length study (leader on a rigid stand, six offsets, with and without the model);
+2. the cable-length study (leader on a rigid stand, six offsets (three with ``--quick``), with
+   and without the model);
 3. docking with the leader hovering (d_p = 0.36 m, four start locations);
 4. the leader in motion at 0.25 m/s (meet at 6 s, hold formation for 5 s);
 5. the real-data study on the Neural-Swarm flights, when ``../shared/data`` is present;
@@ -42,6 +43,7 @@ class RunSize:
     """How big each experiment is (``--quick`` or full)."""
 
     cable_reps: int
+    cable_offsets_m: tuple[float, ...]
     hover_trials: int
     moving_trials: int
     se_minutes: tuple[float, ...]
@@ -54,10 +56,11 @@ class RunSize:
     cost_mixes: tuple[float, ...]
 
 
-QUICK = RunSize(cable_reps=2, hover_trials=24, moving_trials=12, se_minutes=(0.5, 1, 2, 5),
+QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
+                moving_trials=12, se_minutes=(0.5, 1, 2, 5),
                 se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0,
-                cost_trials=8, cost_taus_s=(4.0, 1.0, 0.25), cost_mixes=(0.0, 1.0))
-FULL = RunSize(cable_reps=10, hover_trials=200, moving_trials=100,
+                cost_trials=8, cost_taus_s=(4.0, 0.25), cost_mixes=(0.0, 1.0))
+FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
                test_flights_per_stage=4, se_max_time_s=None, cost_trials=60,
                cost_taus_s=(4.0, 2.0, 1.0, 0.5, 0.25), cost_mixes=(0.0, 0.25, 0.5, 1.0, 2.0))
@@ -100,10 +103,11 @@ def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
     # 2. Cable-length study -----------------------------------------------------------------
     t0 = time.perf_counter()
     say(f"2/5 cable-length study (leader on a rigid stand), {label}")
-    cable: dict[str, Any] = {"offsets_m": list(CABLE_OFFSETS_M), "repetitions": size.cable_reps,
-                             "without_model": [], "with_model": []}
+    cable: dict[str, Any] = {"offsets_m": list(size.cable_offsets_m),
+                             "repetitions": size.cable_reps, "without_model": [],
+                             "with_model": []}
     cable_traces: dict[str, dict[float, dict[str, np.ndarray]]] = {"without": {}, "with": {}}
-    for offset in CABLE_OFFSETS_M:
+    for offset in size.cable_offsets_m:
         for key, comp in (("without", Compensation.OBSERVER), ("with", Compensation.MODEL)):
             res = run_campaign(cfg, MissionSpec(
                 trials=size.cable_reps, offset_m=offset, leader_fixed=True, compensation=comp,

@@ -22,8 +22,8 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
                 "sample_efficiency"):
         assert key in res
     cs = res["cable_study"]
-    assert [r["offset_m"] for r in cs["with_model"]] == [0.36, 0.47, 0.64, 0.87, 1.11, 1.35]
-    assert len(cs["without_model"]) == 6
+    assert [r["offset_m"] for r in cs["with_model"]] == [0.36, 0.87, 1.35]  # quick: 3 of 6
+    assert len(cs["without_model"]) == 3
     for exp in ("hover_docking", "moving_leader"):
         for mode in ("with_model", "without_model"):
             d = res[exp][mode]
@@ -41,7 +41,7 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     for exp in ("cable_study", "hover_docking", "moving_leader"):
         assert exp in ctl["tuned"]
     costs = res["controller_costs"]
-    assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 1.0, 0.25]
+    assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 0.25]
     assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
     report = (out / "report.md").read_text()
     assert "figures/hover_docking.gif" in res["figures"]
