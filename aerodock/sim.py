@@ -3,15 +3,19 @@
 Batch-first and fixed-step: one :meth:`World.step` advances N independent trials by one physics
 step (``1 / sim.physics_rate_hz``); controllers run outside, every ``physics/control`` steps, and
 see the world only through :meth:`World.observe` (motion capture with noise and latency) and
-:meth:`World.observed_accel` (an accelerometer-like measurement). All randomness comes from the
-``numpy.random.Generator`` given to the constructor: same config and seed, same numbers.
+:meth:`World.observed_accel` (the follower's IMU: bias, vibration, noise). All randomness comes
+from the ``numpy.random.Generator`` given to the constructor: same config and seed, same numbers.
 
 The physics pipeline of one step (the downwash is one stage of it, as in crazyflow):
 
-1. forces: downwash on the follower, wake drag on the bar, gripper contact, cable tension;
-2. vehicles: :func:`aerodock.vehicle.step_vehicle` (leader fixed on a stand if configured);
+1. forces and torques: the wake's wrench on the follower's rotor disks
+   (:func:`aerodock.downwash.wrench.follower_wrench`), its drag on the bar, gripper contact, the
+   cables' pull at the leader's anchor, an injected rotor fault;
+2. vehicles: :class:`aerodock.fleet.Fleet` (rigid bodies under their autopilots on a noisy gyro,
+   or point masses; the leader fixed on a stand if configured);
 3. bar: :func:`aerodock.platform.step_bar` (with a captured follower hanging from it);
-4. gripper: :func:`aerodock.gripper.step_gripper` (sensor at its own rate, latencies, gate).
+4. the ground (z = 0), then the gripper: :func:`aerodock.gripper.step_gripper` (sensor at its own
+   rate, latencies, gate).
 """
 
 from __future__ import annotations
