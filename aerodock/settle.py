@@ -51,5 +51,6 @@ def settle(world: World, leader_ctl: PositionController, follower_ctl: PositionC
         obs_l, obs_f = world.observe()
         lout = leader_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, leader_ref(t))
         ff = None if feedforward is None else feedforward(obs_l, obs_f)
-        fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, follower_ref(t), None, ff)
+        accel = world.observed_accel() if follower_ctl.uses_accelerometer else None
+        fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, follower_ref(t), None, ff, accel)
         world.advance(lout.command, fout.command)

@@ -149,6 +149,7 @@ class World:
         self._v_at_last_accel = self.follower.v.copy()
         self._t_at_last_accel = 0.0
         self._steps_at_last_accel = 0
+        self._accel_reading: np.ndarray | None = None
         self.last_downwash_mps2 = np.zeros((n, 3))
         self.contact_seen = np.zeros(n, dtype=bool)
         self.ground_contact = np.zeros(n, dtype=bool)
@@ -231,7 +232,12 @@ class World:
         vibration (``imu.accel_vibration_mps2`` per sample at hover rotor speed, growing with the
         square of the rotor speed) and the residual bias (constant in the body frame), both
         averaged over the window's samples as the flight computer's filter does.
+
+        A second call before the world has moved returns the same reading (the controller and
+        the recorder read one accelerometer).
         """
+        if self._accel_reading is not None and self.step_index == self._steps_at_last_accel:
+            return self._accel_reading.copy()
         dt = max(self.t_s - self._t_at_last_accel, 1e-9)
         samples = max(self.step_index - self._steps_at_last_accel, 1)
         accel = (self.follower.v - self._v_at_last_accel) / dt
@@ -244,7 +250,8 @@ class World:
             sd = sd + (self.cfg.imu.accel_vibration_mps2 * load) ** 2
             accel = accel + np.matmul(self.follower.R, self._accel_bias_body[:, :, None])[:, :, 0]
         sd = np.sqrt(sd / samples)
-        return accel + sd[:, None] * self.rng.standard_normal((self.n, 3))
+        self._accel_reading = accel + sd[:, None] * self.rng.standard_normal((self.n, 3))
+        return self._accel_reading.copy()
 
     @property
     def captured(self) -> np.ndarray:

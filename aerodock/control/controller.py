@@ -1,10 +1,12 @@
 """The position controller both vehicles fly: LQR + reference feed-forward + compensation +
 inversion map, batch-first (one call computes the commands of N trials).
 
-``u = -K (x - x_ref) + [a_ref, psi_dot_ref]``, then ``u_1:3 -= b_hat`` (bias observer, if on) and
-``u_1:3 -= f_ext_hat`` (feed-forward predictor, if any), then the inversion map to roll, pitch and
-thrust with tilt and thrust saturation. Per-trial gain scheduling: ``terminal`` selects the stiffer
-terminal weights for the trials that are in their terminal phase.
+``u = -K (x - x_ref) + [a_ref, psi_dot_ref]``, then ``u_1:3 -= b_hat`` (bias observer, if on),
+``u_1:3 -= f_ext_hat`` (feed-forward predictor, if any) and, with ``control.rejection =
+"accelerometer"``, ``u_1:3 -= r_hat`` (the accelerometer observer's estimate of what the
+feed-forward leaves, :mod:`aerodock.control.accel_observer`), then the inversion map to roll,
+pitch and thrust with tilt and thrust saturation. Per-trial gain scheduling: ``terminal`` selects
+the stiffer terminal weights for the trials that are in their terminal phase.
 """
 
 from __future__ import annotations
@@ -14,10 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
-from aerodock.vehicle import AttitudeCommand, VehicleParams
+from aerodock.vehicle import AttitudeCommand, VehicleParams, rpy_to_rotmat
+
+REJECTIONS = ("bias-observer", "accelerometer")
 
 
 @dataclass(frozen=True)
@@ -38,7 +43,7 @@ class ControlOutput:
     command: AttitudeCommand
     applied_accel_mps2: np.ndarray  # (n, 3) u_1:3 actually sent (after saturation): the log's cmd
     feedforward_mps2: np.ndarray  # (n, 3) f_ext_hat subtracted (zeros without a predictor)
-    bias_mps2: np.ndarray  # (n, 3) b_hat subtracted (zeros without the observer)
+    bias_mps2: np.ndarray  # (n, 3) b_hat (+ r_hat) subtracted (zeros without an observer)
     saturated: np.ndarray  # (n,) bool: the tilt or thrust limit cut the desired acceleration
 
 
@@ -48,10 +53,15 @@ class PositionController:
     Args:
         cfg: configuration (``[control]`` weights, ``[vehicle]`` limits).
         n: number of trials.
-        use_observer: run and subtract the bias observer.
+        use_observer: run and subtract the bias observer, and with ``control.rejection =
+            "accelerometer"`` the accelerometer observer too (:meth:`step` then needs the
+            accelerometer's reading).
+        has_accelerometer: the caller passes this vehicle's accelerometer to :meth:`step` (the
+            follower: the simulated world models its IMU); without it the rejection is the bias
+            observer's alone.
     """
 
-    def __init__(self, cfg: Config, n: int, use_observer: bool):
+    def __init__(self, cfg: Config, n: int, use_observer: bool, has_accelerometer: bool = False):
         c = cfg.control
         self.params = VehicleParams.from_config(cfg)
         self.n = n
@@ -64,7 +74,19 @@ class PositionController:
                          c.observer_vel_noise_mps)
             if use_observer else None
         )
+        self.accel_observer = None
+        if use_observer and has_accelerometer and c.rejection == "accelerometer":
+            v = cfg.vehicle
+            motor_tau = v.motor_tau_s if v.model == "rigid-body" else v.tau_thrust_s
+            self.accel_observer = AccelObserver(n, self.dt_s, c.accel_observer_tau_s, motor_tau,
+                                                self.params.mass_kg, self.params.gravity_mps2,
+                                                c.accel_observer_axes)
         self._last_input = None  # what the observer should see as the applied acceleration
+
+    @property
+    def uses_accelerometer(self) -> bool:
+        """Whether :meth:`step` needs ``accel_mps2`` (the accelerometer observer is on)."""
+        return self.accel_observer is not None
 
     def reset(self, p: np.ndarray, v: np.ndarray, bias_mps2: np.ndarray | None = None,
               bias_sd_mps2: float | None = None) -> None:
@@ -72,11 +94,15 @@ class PositionController:
         (see :meth:`aerodock.control.observer.BiasObserver.reset`)."""
         if self.observer is not None:
             self.observer.reset(p, v, bias_mps2, bias_sd_mps2)
+        if self.accel_observer is not None:
+            self.accel_observer.reset(self.params.hover_thrust_n)
         self._last_input = None
 
     def step(self, p_meas: np.ndarray, v_meas: np.ndarray, rpy_meas: np.ndarray,
              ref: Reference, terminal: np.ndarray | None = None,
-             feedforward_mps2: np.ndarray | None = None) -> ControlOutput:
+             feedforward_mps2: np.ndarray | None = None,
+             accel_mps2: np.ndarray | None = None,
+             hold_accel_observer: np.ndarray | None = None) -> ControlOutput:
         """Commands for N trials from measured state and reference.
 
         Args:
@@ -85,16 +111,29 @@ class PositionController:
             ref: the reference.
             terminal: (n,) bool, trials using the terminal gains.
             feedforward_mps2: (n, 3) predicted external acceleration to cancel.
+            accel_mps2: (n, 3) the accelerometer's mean reading over the period just flown
+                (world NED, :meth:`aerodock.sim.World.observed_accel`); needed when
+                :attr:`uses_accelerometer`.
+            hold_accel_observer: (n,) bool, trials whose accelerometer estimate is held (in
+                contact with the bar).
         """
         n = self.n
         if self.observer is not None and self._last_input is not None:
             self.observer.update(p_meas, v_meas, self._last_input)
+        residual = None
+        if self.accel_observer is not None:
+            if accel_mps2 is None:
+                raise ValueError("control.rejection = 'accelerometer' needs the accelerometer")
+            self.accel_observer.update(accel_mps2, rpy_to_rotmat(rpy_meas), hold_accel_observer)
+            residual = self.accel_observer.residual_mps2
         gain = self.gain
         if terminal is not None and np.any(terminal):
             gain = np.where(terminal[:, None, None], self.gain_terminal, self.gain)
         accel, yaw_rate = lqr_command(gain, p_meas, v_meas, rpy_meas[:, 2], ref.p, ref.v, ref.a,
                                       ref.yaw_rad, ref.yaw_rate_radps)
         bias = self.observer.bias_mps2 if self.observer is not None else np.zeros((n, 3))
+        if residual is not None:
+            bias = bias + residual
         ff = np.zeros((n, 3)) if feedforward_mps2 is None else feedforward_mps2
         desired = accel - bias - ff
         p = self.params
@@ -103,8 +142,11 @@ class PositionController:
         )
         applied = attitude_thrust_to_accel(roll, pitch, rpy_meas[:, 2], thrust, p.mass_kg,
                                            p.gravity_mps2)
-        # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat.
-        self._last_input = applied + ff
+        # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat
+        # (and - r_hat: the bias observer then takes out what the accelerometer cannot see).
+        self._last_input = applied + ff if residual is None else applied + ff + residual
+        if self.accel_observer is not None:
+            self.accel_observer.commanded(thrust, ff)
         yaw_rate = np.clip(yaw_rate, -self.yaw_rate_max, self.yaw_rate_max)
         saturated = np.abs(applied - desired).max(axis=1) > 1e-6
         return ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,

@@ -6,6 +6,9 @@
   beside the paper's.
 - ``tuned``: the configuration as given (by default: stiffer terminal weights scheduled in the
   last ``mission.terminal_s`` before arrival). A separate, named row wherever it is reported.
+- ``ours``: ``tuned`` plus fast disturbance rejection from the accelerometer
+  (``control.rejection = "accelerometer"``, :mod:`aerodock.control.accel_observer`) on top of
+  the slow bias observer and the learnt feed-forward.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from aerodock.config import Config
 PAPER_Q_DIAG = (1.0, 1.0, 8.0, 0.01, 0.01, 0.1, 1.0)
 PAPER_R_DIAG = (0.8, 0.8, 0.8, 1.0)
 PAPER_OBSERVER_TAU_S = 4.0
-PROFILES = ("paper", "tuned")
+PROFILES = ("paper", "tuned", "ours")
 
 
 def controller_config(cfg: Config, profile: str) -> Config:
@@ -26,6 +29,9 @@ def controller_config(cfg: Config, profile: str) -> Config:
     """
     if profile == "tuned":
         return cfg
+    if profile == "ours":
+        return cfg.with_overrides({"control": {"rejection": "accelerometer"}},
+                                  source=f"{cfg.source} + our controller")
     if profile != "paper":
         raise ValueError(f"controller must be one of {'|'.join(PROFILES)}, got {profile!r}")
     return cfg.with_overrides({"control": {

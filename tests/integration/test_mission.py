@@ -175,3 +175,27 @@ def test_settled_start_converges_the_observers_without_truth(cfg):
     expected = cable_load + gain_err
     assert np.allclose(lead_ctl.observer.bias_mps2[:, 2], expected, atol=0.08)
     assert np.allclose(world.leader.p, lead_p, atol=0.03)
+
+
+def test_the_accelerometer_observer_cuts_the_sag_in_the_wake(cfg):
+    """Without any model, the follower's accelerometer observer (ours) holds the docking height
+    far better than the bias observer alone (tuned), on the same trials."""
+    from aerodock.control.profiles import controller_config
+
+    spec = MissionSpec(trials=8, offset_m=0.36, compensation="observer", seed=5)
+    tuned = run_campaign(cfg, spec).summary()
+    ours = run_campaign(controller_config(cfg, "ours"), spec).summary()
+    assert ours["terminal_err_down_median_m"] < 0.5 * tuned["terminal_err_down_median_m"]
+    assert ours["terminal_err_down_median_m"] < 0.04
+    assert ours["nan_trials"] == 0
+
+
+def test_one_accelerometer_reading_per_control_period(cfg):
+    world = World(cfg, 3, TrialRNG(1, 3))
+    world.reset(np.tile([0.0, 0.0, -2.5], (3, 1)), np.tile([1.0, 0.0, -2.0], (3, 1)))
+    first = world.observed_accel()
+    assert np.array_equal(world.observed_accel(), first)  # the recorder reads what it read
+    hover = AttitudeCommand(np.zeros(3), np.zeros(3), np.zeros(3),
+                            np.full(3, cfg.vehicle.mass_kg * cfg.sim.gravity_mps2))
+    world.advance(hover, hover)
+    assert not np.array_equal(world.observed_accel(), first)
