@@ -2,7 +2,9 @@
 
 Stage 0 flies the follower 1.5-1.8 m below the leader with the nominal controller (bias observer
 on); each stage trains a model on everything collected so far, deploys it as the follower's
-feed-forward, and collects the next stage 0.3 m closer, down to about 0.5 m. Every flight excites
+feed-forward, and collects the next stage 0.3 m closer, down to about 0.5 m; deep stages
+(``deep_depths_m``, beyond the paper) then go on to the docking depth, each flown with the model of
+the stage before. Every flight excites
 the wake: it starts in free air (so the labels' constant bias can be estimated), sweeps laterally
 through the wake, holds near the axis, moves vertically, and leaves to free air again; the leader
 hovers or drifts slowly so that leader speed is represented.
@@ -43,8 +45,10 @@ class Stage:
     depth_max_m: float
 
 
-def curriculum_stages(cfg: Config) -> list[Stage]:
-    """Stages from ``[curriculum]``: 0.3 m closer each time, down to ``min_depth_m``."""
+def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
+    """Stages from ``[curriculum]``: 0.3 m closer each time, down to ``min_depth_m`` (the
+    paper's curriculum), then, with ``deep``, one stage down to each of ``deep_depths_m`` (each
+    flown with the model of the stage before it)."""
     c = cfg.curriculum
     lo, hi = c.stage0_depth_m
     stages = []
@@ -53,6 +57,11 @@ def curriculum_stages(cfg: Config) -> list[Stage]:
         top = hi - k * c.stage_step_m
         stages.append(Stage(k, max(c.min_depth_m, lo - k * c.stage_step_m), top))
         k += 1
+    if deep:
+        for depth in c.deep_depths_m:
+            top = stages[-1].depth_min_m if stages else hi
+            if depth < top - 1e-9:
+                stages.append(Stage(len(stages), float(depth), top))
     return stages
 
 
@@ -77,6 +86,24 @@ def _waypoints(n: int, rng: TrialRNG, depth_min: float, depth_max: float,
     ])
 
 
+# Gap kept between the hanging bar and the top of the follower's gate in the curriculum flights.
+_BAR_GAP_M = 0.0
+_MIN_CABLE_M = 0.05
+
+
+def _bar_out_of_the_way(cfg: Config, depth_min_m: float) -> Config:
+    """``cfg`` with the leader's cables shortened, if needed, so that the bar hangs above the
+    follower's gate at the shallowest depth flown (the deep stages fly the follower above where
+    the bar would hang at full length; nobody collects data with the bar through the vehicle)."""
+    p, gp = cfg.platform, cfg.gripper
+    room = (depth_min_m - p.anchor_below_leader_m - gp.mount_height_m - gp.gate_height_m
+            - p.bar_diameter_m / 2 - _BAR_GAP_M)
+    if p.cable_length_m <= room:
+        return cfg
+    return cfg.with_overrides({"platform": {"cable_length_m": max(_MIN_CABLE_M, room)}},
+                              source=f"{cfg.source} + cables shortened for the curriculum")
+
+
 def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_max_m: float,
                        seed: int, predictor: AccelPredictor | None = None,
                        name: str = "flight", first_trial: int = 0) -> list[FlightLog]:
@@ -92,6 +119,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         first_trial: index of the first flight (for per-flight random streams).
     """
     n = n_flights
+    cfg = _bar_out_of_the_way(cfg, depth_min_m)
     rng = TrialRNG(seed, n, first_trial)
     c = cfg.curriculum
     world = World(cfg, n, rng, field=build_field(cfg))
@@ -106,7 +134,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     world.set_velocities(lead_v, lead_v)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_ctl = PositionController(cfg, n, use_observer=True)
-    fol_ctl = PositionController(cfg, n, use_observer=True)
+    fol_ctl = PositionController(cfg, n, use_observer=True, has_accelerometer=True)
     z = np.zeros((n, 3))
     zero_n = np.zeros(n)
 
@@ -145,7 +173,8 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         rel_p, rel_v, rel_a = plans[seg][2].sample(t)
         ref = Reference(lead_p0 + lead_v * t + rel_p, lead_v + rel_v, rel_a, zero_n, zero_n)
         ff = feedforward(obs_l, obs_f)
-        fout = fol_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, ref, None, ff)
+        accel = world.observed_accel() if fol_ctl.uses_accelerometer else None
+        fout = fol_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, ref, None, ff, accel)
         recorder.before_step(t, world, obs_l, obs_f, fout, ref.p, np.full(n, seg))
         world.advance(lout.command, fout.command)
         recorder.after_step(world)
@@ -154,6 +183,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         "label_basis": "command", "leader_mass_kg": mass, "follower_mass_kg": mass,
         **vehicle_meta(cfg),
         "depth_band_m": [depth_min_m, depth_max_m], "leader_speed_mps": float(speed[i]),
+        "cable_length_m": cfg.platform.cable_length_m,
         "compensation": "observer" if predictor is None else "observer+model", "seed": seed,
     })
 
@@ -162,7 +192,9 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
                    progress: Callable[[str], None] | None = None,
                    train_kwargs: dict[str, Any] | None = None) -> dict[str, Any]:
     """Collect the curriculum into ``out_dir`` (``stageK.npz`` FlightLogs and
-    ``models/stageK`` model dirs, plus ``models/final`` trained on everything).
+    ``models/stageK`` model dirs, plus ``models/final`` trained on everything). With deep stages
+    configured, ``models/paper`` is the model of the paper's curriculum (down to
+    ``min_depth_m``), trained before the deep stages were flown.
 
     Returns a JSON-ready summary (stages, minutes, per-stage validation loss, timings).
     """
@@ -180,6 +212,7 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
     kwargs = dict(train_kwargs or {})
     stages = curriculum_stages(cfg)
     trained = None
+    paper_stages = len(curriculum_stages(cfg, deep=False))
     for stage in stages:
         t0 = time.perf_counter()
         if progress:
@@ -199,6 +232,9 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
         trained = train_model(kind, build_dataset(logs), seed=seed, **kwargs)
         trained.save(out_dir / "models" / f"stage{stage.index}")
         predictor = trained.predictor()
+        if stage.index == paper_stages - 1:
+            trained.save(out_dir / "models" / "paper")
+            summary["paper_model"] = str(out_dir / "models" / "paper")
         summary["stages"].append({
             "stage": stage.index, "depth_band_m": [stage.depth_min_m, stage.depth_max_m],
             "flights": len(stage_logs), "minutes": sum(lg.duration_s for lg in stage_logs) / 60,

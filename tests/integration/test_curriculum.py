@@ -9,11 +9,28 @@ from aerodock.learning.curriculum import curriculum_stages, excitation_flights, 
 from aerodock.learning.runtime import Predictor
 
 
-def test_default_stages_follow_the_paper(cfg):
-    stages = curriculum_stages(cfg)
+def test_default_stages_follow_the_paper_then_go_deep(cfg):
+    stages = curriculum_stages(cfg, deep=False)
     assert (stages[0].depth_min_m, stages[0].depth_max_m) == (1.5, 1.8)
     assert np.allclose([s.depth_max_m for s in stages], [1.8, 1.5, 1.2, 0.9, 0.6])
     assert stages[-1].depth_min_m == 0.5
+    deep = curriculum_stages(cfg)
+    assert deep[:5] == stages
+    assert [(s.index, s.depth_min_m, s.depth_max_m) for s in deep[5:]] == [
+        (5, 0.3, 0.5), (6, 0.27, 0.3)]
+
+
+def test_deep_stages_fly_the_bar_above_the_follower(cfg):
+    from aerodock.learning.curriculum import _bar_out_of_the_way
+
+    assert _bar_out_of_the_way(cfg, 0.5).platform.cable_length_m == 0.36  # paper's stages as is
+    logs = excitation_flights(cfg, 2, 0.27, 0.3, seed=2)
+    gp = cfg.gripper
+    gate_top_depth = 0.27 - gp.mount_height_m - gp.gate_height_m  # at the shallowest depth
+    for log in logs:
+        assert log.meta["cable_length_m"] < 0.2
+        bar_depth = log.extra["bar_pos_m"][:, 2] - log.leader_pos_m[:, 2]
+        assert np.all(bar_depth < gate_top_depth + 0.005)  # the bar hangs above the gate
 
 
 def test_excitation_flights_sweep_through_the_wake(cfg):
@@ -29,9 +46,16 @@ def test_excitation_flights_sweep_through_the_wake(cfg):
 
 def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
     cfg = cfg.with_overrides({"curriculum": {"flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2],
-                                             "min_depth_m": 0.6}})
+                                             "min_depth_m": 0.6, "deep_depths_m": [0.45]}})
     summary = run_curriculum(cfg, tmp_path, seed=0, train_kwargs={"max_epochs": 5})
-    assert [s["stage"] for s in summary["stages"]] == [0, 1]
+    assert [s["stage"] for s in summary["stages"]] == [0, 1, 2]
+    assert summary["stages"][2]["depth_band_m"] == [0.45, 0.6]
+    # the paper's model: trained after the last paper stage, before the deep one
+    assert summary["paper_model"].endswith("paper")
+    paper = Predictor.load(tmp_path / "models" / "paper")
+    stage1 = Predictor.load(tmp_path / "models" / "stage1")
+    x = np.zeros((1, 9)) + [0, 0, 0.5, 0, 0, 0, 0, 0, 0]
+    assert np.array_equal(paper.predict(x, np.eye(3)[None]), stage1.predict(x, np.eye(3)[None]))
     stage1 = load_flightlogs(tmp_path / "stage1.npz")
     assert all(lg.meta["compensation"] == "observer+model" for lg in stage1)
     assert np.abs(stage1[0].extra["feedforward_mps2"]).max() > 0  # the stage-0 model flew
@@ -39,4 +63,4 @@ def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
     pred = Predictor.load(tmp_path / "models" / "final")
     assert pred.predict(np.zeros((1, 9)) + [0, 0, 0.8, 0, 0, 0, 0, 0, 0],
                         np.eye(3)[None]).shape == (1, 3)
-    assert abs(summary["minutes"] - 4 * 12.5 / 60) < 0.01
+    assert abs(summary["minutes"] - 6 * 12.5 / 60) < 0.01
