@@ -66,7 +66,8 @@ def dock(
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
     controller: Annotated[str, typer.Option(
         help="paper: Freyja's weights in every phase and the 4 s observer; tuned: the config's "
-             "weights (stiffer terminal phase by default).")] = "tuned",
+             "weights (stiffer terminal phase by default); ours: tuned + the accelerometer "
+             "observer.")] = "tuned",
     faults: Annotated[Path | None, typer.Option(
         help="TOML file of [[fault]] entries injected into every trial (see examples/).")] = None,
     seed: SeedOpt = 0,
@@ -80,12 +81,14 @@ def dock(
     from aerodock.limits import check_campaign_size
     from aerodock.mission import MissionSpec, run_campaign
 
-    cfg = controller_config(_config(config), controller)
     check_number("--offset", offset, 0.0, 100.0)
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
-    cfg = _config(config)
+    try:
+        cfg = controller_config(_config(config), controller)
+    except ValueError as exc:
+        fail(str(exc))
     if offset is not None:
         # Validated like a config value (range, docking point above the ground), named as given.
         cfg = cfg.with_overrides({"platform": {"cable_length_m": float(offset)}},
@@ -268,3 +271,52 @@ def reproduce(
                                 bar=bar_callback(bar))
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
                f"{results['timings_s']['total_s']:.0f} s)")
+
+
+@app.command("targets")
+def targets_command(
+    out: Annotated[Path, typer.Option(help="Folder for the curriculum (when no --model) and "
+                                           "targets.json.")] = Path("out/targets"),
+    model: Annotated[Path | None, typer.Option(
+        help="A trained model DIR (default: fly the deep curriculum first, into OUT/data).")] = None,
+    trials: Annotated[int, typer.Option(help="Trials per scenario and row.")] = 100,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Docking targets beyond the paper (d_p 0.36 and 0.27 m; leader at 0.25 and 0.5 m/s) for
+    the paper's controller and ours, with the learnt model, on the configured field."""
+    from aerodock.control.profiles import controller_config
+    from aerodock.experiments.report_controllers import targets_markdown
+    from aerodock.experiments.reproduce import _write_json_atomic
+    from aerodock.experiments.targets import targets
+    from aerodock.learning.runtime import Predictor
+    from aerodock.limits import check_campaign_size
+
+    if trials < 1:
+        fail(f"--trials must be >= 1, got {trials}")
+    cfg = _config(config)
+    check_campaign_size(cfg, trials)
+
+    def say(msg: str) -> None:
+        err_console.print(f"[dim]{msg}[/dim]")
+
+    out.mkdir(parents=True, exist_ok=True)
+    if model is None:
+        from aerodock.learning.curriculum import run_curriculum
+
+        say("curriculum (the paper's stages, then the deep ones)")
+        summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
+        model = Path(summary["final_model"])
+    predictor = Predictor.load(model)
+    with progress_bar():
+        res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
+                       "ours + model": (controller_config(cfg, "ours"), predictor)},
+                      trials, predictor, seed, say)
+    res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
+    _write_json_atomic(out / "targets.json", res)
+    if as_json:
+        print_json(res)
+        return
+    typer.echo("\n".join(targets_markdown({"targets": res})))
+    typer.echo(f"wrote {out / 'targets.json'}")

@@ -102,11 +102,14 @@ _RANGES: dict[str, tuple[float, float]] = {
     "control.observer_bias_tau_s": (0.01, 1e4),
     "control.observer_pos_noise_m": (0, 10),
     "control.observer_vel_noise_mps": (0, 100),
+    "control.accel_observer_tau_s": (0.001, 100),
     "control.yaw_rate_max_radps": (0.01, 100),
     "planner.horizon_hover_s": (0.1, 600),
     "planner.horizon_moving_s": (0.1, 600),
     "planner.hold_s": (0, 600),
     "planner.replan_threshold_m": (0.0001, 100),
+    "planner.rise_m": (0, 10),
+    "planner.rise_s": (0.05, 60),
     "mission.offset_m": (0.01, 100),
     "mission.start_radius_m": (0.01, 100),
     "mission.start_below_m": (0, 100),
@@ -129,6 +132,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     "curriculum.stage0_depth_m": (0.05, 100),
     "curriculum.stage_step_m": (0.01, 100),
     "curriculum.min_depth_m": (0.05, 100),
+    "curriculum.deep_depths_m": (0.05, 100),
     "curriculum.flights_per_stage": (1, 1000),
     "curriculum.free_air_m": (0.01, 100),
     "curriculum.leader_drift_max_mps": (0, 100),
@@ -139,6 +143,8 @@ _RANGES: dict[str, tuple[float, float]] = {
 _DEFAULT_RANGE = (0.0, 1e6)
 _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
             "vehicle.model": {"rigid-body", "point-mass"},
+            "control.rejection": {"bias-observer", "accelerometer"},
+            "control.accel_observer_axes": {"down", "all"},
             "curriculum.model": {"so2", "so2-ext", "mlp"}}
 _LENGTHS = {
     "control.q_diag": 7, "control.r_diag": 4,
@@ -146,6 +152,7 @@ _LENGTHS = {
     "vehicle.inertia_kgm2": 3, "autopilot.attitude_p": 3, "autopilot.rate_p": 3,
     "autopilot.rate_i": 3, "autopilot.rate_max_dps": 3,
 }
+_LISTS = {"curriculum.deep_depths_m": 10}  # lists of any length up to this
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
 _FIELD_PATH = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*")
 
@@ -320,6 +327,15 @@ def _validate(data: dict[str, Any], source: str) -> None:
                                       f"{_range_text(low, high)}, got {value!r}")
                 for i, item in enumerate(value):
                     _check_number(item, f"{dotted}[{i}]", source, (low, high))
+            elif dotted in _LISTS:
+                low, high = _RANGES[dotted]
+                if (not isinstance(value, list) or len(value) > _LISTS[dotted]
+                        or not all(_is_number(v) for v in value)):
+                    raise ConfigError(f"{source}: '{dotted}' must be a list of up to "
+                                      f"{_LISTS[dotted]} numbers {_range_text(low, high)}, "
+                                      f"got {value!r}")
+                for i, item in enumerate(value):
+                    _check_number(item, f"{dotted}[{i}]", source, (low, high))
             elif _is_number(value):
                 _check_number(value, dotted, source)
     _check_consistency(data, source)
@@ -345,6 +361,11 @@ def _check_consistency(data: dict[str, Any], source: str) -> None:
     if data["curriculum"]["min_depth_m"] > lo:
         raise ConfigError(f"{source}: 'curriculum.min_depth_m' must be <= the low end of "
                           f"'curriculum.stage0_depth_m' ({lo:g} m)")
+    planner = data["planner"]
+    horizon = min(planner["horizon_hover_s"], planner["horizon_moving_s"])
+    if planner["rise_m"] > 0 and planner["rise_s"] > horizon - 0.5:
+        raise ConfigError(f"{source}: 'planner.rise_s' ({planner['rise_s']:g} s) must leave at "
+                          f"least 0.5 s of the approach horizon ({horizon:g} s) to align")
     if gripper["aperture_m"] <= platform["bar_diameter_m"]:
         raise ConfigError(
             f"{source}: 'gripper.aperture_m' ({gripper['aperture_m']:g} m) must be wider than "

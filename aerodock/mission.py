@@ -268,13 +268,21 @@ class MissionBatch:
         if moving:
             world.set_velocities(lead_v, lead_v)
         self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
-        self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE)
+        self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE,
+                                               has_accelerometer=True)
         settle(world, self.leader_ctl, self.follower_ctl, self._leader_ref,
                lambda t: Reference(start + lead_vel * t, lead_v, zeros, zero_n, zero_n),
                settle_s, self._predict)
+        # Align, then rise (planner.rise_m > 0): the approach ends rise_m below the docking
+        # point rise_s early, and the final rise is vertical. rise_m = 0: the paper's single
+        # minimum-jerk approach to the docking point.
+        pl = cfg.planner
+        self.rise_m = float(pl.rise_m)
+        self.plan_end_s = self.arrival_s - (pl.rise_s if self.rise_m > 0 else 0.0)
+        self._below = np.array([0.0, 0.0, self.rise_m])
         self.plan = minjerk(start, lead_v, zeros,
-                            docking_point_m(leader_p0, lead_v, geom, self.arrival_s), lead_v,
-                            zeros, self.arrival_s, 0.0)
+                            docking_point_m(leader_p0, lead_v, geom, self.plan_end_s)
+                            + self._below, lead_v, zeros, self.plan_end_s, 0.0)
         # The docking status reaches the leader over the network, status_delay_s late.
         delay_ticks = int(round(m.status_delay_s / self.dt_s))
         self._status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
@@ -365,15 +373,24 @@ class MissionBatch:
         # Approaching when this period began (the triggers and the terminal window use it).
         self.was_active = active = self.active
         target_now = docking_point_m(obs_l_f.p, obs_l_f.v, geom)
-        if t < arrival_s - 0.3:
-            target_arr = docking_point_m(obs_l_f.p, obs_l_f.v, geom, arrival_s - t)
+        plan_end = self.plan_end_s
+        if t < plan_end - 0.3:
+            target_arr = docking_point_m(obs_l_f.p, obs_l_f.v, geom, plan_end - t) + self._below
             moved = np.linalg.norm(target_arr - plan.pf, axis=1) > cfg.planner.replan_threshold_m
             need = active & moved
             if np.any(need):
                 p_r, v_r, a_r = plan.sample(t)
-                new = minjerk(p_r, v_r, a_r, target_arr, obs_l_f.v, zeros, arrival_s - t, t)
+                new = minjerk(p_r, v_r, a_r, target_arr, obs_l_f.v, zeros, plan_end - t, t)
                 plan = _merge_plans(plan, new, need)
         p_ref, v_ref, a_ref = plan.sample(t)
+        if self.rise_m > 0 and t > plan_end:
+            # The vertical rise (minimum jerk, rest to rest relative to the leader).
+            rise_s = arrival_s - plan_end
+            s_, ds, dds = _minjerk_unit(min(1.0, (t - plan_end) / rise_s))
+            rising = active[:, None] & np.array([False, False, True])
+            p_ref = np.where(rising, p_ref - self.rise_m * s_, p_ref)
+            v_ref = np.where(rising, v_ref - self.rise_m * ds / rise_s, v_ref)
+            a_ref = np.where(rising, a_ref - self.rise_m * dds / rise_s**2, a_ref)
         holding = active & (t >= arrival_s)
         p_ref = np.where(holding[:, None], target_now, p_ref)
         v_ref = np.where(holding[:, None], obs_l_f.v, v_ref)
@@ -479,8 +496,15 @@ class MissionBatch:
         obs_f, obs_l_f, ff = self.obs_f, self.obs_l_f, self.ff
         terminal = (phase == Phase.TERMINAL) | self.holding
         yaw0 = np.zeros(n)
+        accel = hold = None
+        if self.follower_ctl.uses_accelerometer:
+            accel = world.observed_accel()
+            # The follower's own gripper: a load on the strain gauge or a gate on its way.
+            grip = world.gripper
+            hold = (grip.reading_n > gp.contact_threshold_n) | (grip.gate != GateState.OPEN)
         fout = self.follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy,
-                                      Reference(p_ref, v_ref, a_ref, yaw0, yaw0), terminal, ff)
+                                      Reference(p_ref, v_ref, a_ref, yaw0, yaw0), terminal, ff,
+                                      accel, hold)
         hanging = world.captured
         if np.any(hanging):
             # Docked: level attitude; thrust is the configured fraction of the weight plus the
@@ -599,6 +623,12 @@ class MissionBatch:
                 "seed": spec.seed, "trial": int(self.trials[i]),
             })
         return result
+
+
+def _minjerk_unit(x: float) -> tuple[float, float, float]:
+    """Rest-to-rest minimum-jerk profile on [0, 1]: (s, ds/dx, d2s/dx2) at ``x``."""
+    return (10 * x**3 - 15 * x**4 + 6 * x**5, 30 * x**2 - 60 * x**3 + 30 * x**4,
+            60 * x - 180 * x**2 + 120 * x**3)
 
 
 def _bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeometry,

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.experiments.report_controllers import controllers_markdown
+from aerodock.experiments.report_controllers import controllers_markdown, targets_markdown
 from aerodock.plots import _plt, _save, plot_altitudes, plot_trajectories
 
 # The paper's own numbers (Table "Statistics integrated over the final 0.5 s", Sec. Results).
@@ -311,6 +311,7 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
               "flights with the gripper disarmed, so that every trial holds formation for the "
               "full 5 s as in the paper's figure.", ""]
     lines += controllers_markdown(r)
+    lines += targets_markdown(r)
     rd = r.get("real_data")
     if rd:
         lines += ["## Real data (Neural-Swarm swap flights, leave flights out)", "",

@@ -29,40 +29,41 @@ def controllers_markdown(r: dict[str, Any]) -> list[str]:
     if not ctl:
         return []
     paper, tuned = r, ctl["tuned"]
+    cols = [("paper's controller", paper), ("tuned controller", tuned)]
+    if "ours" in ctl:
+        cols.append(("ours", ctl["ours"]))
     lines = [
         "## The paper's controller and ours, side by side", "",
         "Every table above flies **the paper's controller** "
-        f"({ctl['paper']['source']}: Q = diag{tuple(ctl['paper']['q_diag'])}). "
-        "The **tuned** column flies the configuration's controller "
+        f"({ctl['paper']['source']}: Q = diag{tuple(ctl['paper']['q_diag'])}) with the model of "
+        "the paper's curriculum (down to 0.5 m). "
+        "The **tuned** columns fly the configuration's controller "
         f"({ctl['tuned']['source']}: terminal Q = diag{tuple(ctl['tuned']['terminal_q_diag'])}, "
-        f"observer {ctl['tuned']['observer_bias_tau_s']:g} s), on the same world and seeds. "
-        "Docked trials with a Wilson 95 % interval.", "",
-        "| experiment | paper | paper's controller, without model | with model | "
-        "tuned controller, without model | with model |", "|---|---|---|---|---|---|",
+        f"observer {ctl['tuned']['observer_bias_tau_s']:g} s) with the same model, on the same "
+        "world and seeds.",
     ]
-    hp, ht = paper["hover_docking"], tuned["hover_docking"]
-    lines.append(f"| hover docking, d_p 0.36 m | 8/10 with model | {_rate(hp['without_model'])} | "
-                 f"{_rate(hp['with_model'])} | {_rate(ht['without_model'])} | "
-                 f"{_rate(ht['with_model'])} |")
-    lines.append("| terminal vertical error, median | < 0.06 m with model | "
-                 f"{hp['without_model']['terminal_err_down_median_m']:.3f} m | "
-                 f"{hp['with_model']['terminal_err_down_median_m']:.3f} m | "
-                 f"{ht['without_model']['terminal_err_down_median_m']:.3f} m | "
-                 f"{ht['with_model']['terminal_err_down_median_m']:.3f} m |")
-    lines.append("| terminal tilt RMS, median | - | "
-                 f"{hp['without_model']['terminal_tilt_rms_deg_median']:.1f} deg | "
-                 f"{hp['with_model']['terminal_tilt_rms_deg_median']:.1f} deg | "
-                 f"{ht['without_model']['terminal_tilt_rms_deg_median']:.1f} deg | "
-                 f"{ht['with_model']['terminal_tilt_rms_deg_median']:.1f} deg |")
-    mp, mt = paper["moving_leader"], tuned["moving_leader"]
-    lines.append(f"| leader moving 0.25 m/s | very limited | {_rate(mp['without_model'])} | "
-                 f"{_rate(mp['with_model'])} | {_rate(mt['without_model'])} | "
-                 f"{_rate(mt['with_model'])} |")
-    cp, ct = paper["cable_study"], tuned["cable_study"]
-    lines.append(f"| cable study (leader on a stand) | 6/6 with vs 0/6 without | "
-                 f"{_offsets_docked(cp, 'without_model')} | {_offsets_docked(cp, 'with_model')} "
-                 f"| {_offsets_docked(ct, 'without_model')} | "
-                 f"{_offsets_docked(ct, 'with_model')} |")
+    if "ours" in ctl:
+        lines[-1] += (f" **Ours** is {ctl['ours']['source']} (low-pass "
+                      f"{ctl['ours']['accel_observer_tau_s']:g} s).")
+    lines[-1] += " Docked trials with a Wilson 95 % interval."
+    lines += ["", "| experiment | paper | " + " | ".join(
+        f"{name}, without model | with model" for name, _ in cols) + " |",
+        "|---|---|" + "---|---|" * len(cols)]
+
+    def row(label: str, paper_fig: str, cell) -> None:
+        lines.append(f"| {label} | {paper_fig} | " + " | ".join(
+            f"{cell(c, 'without_model')} | {cell(c, 'with_model')}" for _, c in cols) + " |")
+
+    row("hover docking, d_p 0.36 m", "8/10 with model",
+        lambda c, k: _rate(c["hover_docking"][k]))
+    row("terminal vertical error, median", "< 0.06 m with model",
+        lambda c, k: f"{c['hover_docking'][k]['terminal_err_down_median_m']:.3f} m")
+    row("terminal tilt RMS, median", "-",
+        lambda c, k: f"{c['hover_docking'][k]['terminal_tilt_rms_deg_median']:.1f} deg")
+    row("rotor strikes (hover)", "-", lambda c, k: str(c["hover_docking"][k]["rotor_strikes"]))
+    row("leader moving 0.25 m/s", "very limited", lambda c, k: _rate(c["moving_leader"][k]))
+    row("cable study (leader on a stand)", "6/6 with vs 0/6 without",
+        lambda c, k: _offsets_docked(c["cable_study"], k))
     lines.append("")
     costs = r.get("controller_costs")
     if costs:
@@ -81,6 +82,47 @@ def controllers_markdown(r: dict[str, Any]) -> list[str]:
             q = p["terminal_q_diag"]
             lines.append(_cost_row(f"{p['mix']:g} (Q_z {q[2]:.0f}, Q_vz {q[5]:.1f})", p))
         lines.append("")
+    return lines
+
+
+def targets_markdown(r: dict[str, Any]) -> list[str]:
+    """Markdown lines: the targets beyond the paper, for each (controller, model) row."""
+    t = r.get("targets")
+    if not t:
+        return []
+    scen = t["scenarios"]
+    lines = ["## Beyond the paper: targets", "",
+             f"{t['trials']} trials per cell, the same seeds in every row; docked with a Wilson "
+             "95 % interval (target in the header; **bold**: met). Terminal vertical error: "
+             f"median, hover at d_p 0.36 m (target <= {t['err_down_target_m']} m).", "",
+             "| controller + model | " + " | ".join(
+                 f"{s['name'].replace('_', ' d_p ' if 'hover' in s['name'] else ' ')}"
+                 f"{' m' if 'hover' in s['name'] else ' m/s'} (>= {s['target_success']:.0%})"
+                 for s in scen) + " | terminal err down | tilt RMS | rotor strikes |",
+             "|---|" + "---|" * (len(scen) + 3)]
+    for name, row in t["rows"].items():
+        cells = []
+        for s in scen:
+            rec = row["scenarios"][s["name"]]
+            cell = _rate(rec)
+            cells.append(f"**{cell}**" if rec["met"] else cell)
+        hover = row["scenarios"]["hover_0.36"]
+        err = f"{hover['terminal_err_down_median_m']:.4f} m"
+        strikes = sum(row["scenarios"][s["name"]]["rotor_strikes"] for s in scen)
+        lines.append(f"| {name} | " + " | ".join(cells)
+                     + f" | {'**' + err + '**' if row['err_down_met'] else err} | "
+                     f"{hover['terminal_tilt_rms_deg_median']:.1f} deg | {strikes} |")
+    lines += ["", f"Learnt mean vertical force on the leader's axis against the field's "
+              f"(target: within {t['mean_rel_target']:.0%} at 0.36 m):", "",
+              "| model | where | depth | field | learnt | error |", "|---|---|---|---|---|---|"]
+    for label, key in (("deep curriculum", "learnt_mean"),
+                       ("paper's curriculum", "learnt_mean_paper_model")):
+        for m in t.get(key, []):
+            rel = m["relative_error"]
+            lines.append(f"| {label} | {m['where']} | {m['depth_m']:.3f} m | "
+                         f"{m['field_mean_down_mps2']:.2f} m/s² | {m['learnt_down_mps2']:.2f} "
+                         f"m/s² | {'-' if rel is None else f'{rel:+.1%}'} |")
+    lines.append("")
     return lines
 
 

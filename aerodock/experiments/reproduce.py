@@ -32,6 +32,7 @@ from aerodock.control.profiles import controller_config
 from aerodock.downwash import build_field
 from aerodock.downwash.mean import has_mean, mean_acceleration_fn, mean_source
 from aerodock.experiments.controller_costs import controller_costs
+from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import atomic_open
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
@@ -54,16 +55,18 @@ class RunSize:
     cost_trials: int
     cost_taus_s: tuple[float, ...]
     cost_mixes: tuple[float, ...]
+    target_trials: int
 
 
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
                 moving_trials=12, se_minutes=(0.5, 1, 2, 5),
                 se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0,
-                cost_trials=8, cost_taus_s=(4.0, 0.25), cost_mixes=(0.0, 1.0))
+                cost_trials=8, cost_taus_s=(4.0, 0.25), cost_mixes=(0.0, 1.0), target_trials=8)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
                test_flights_per_stage=4, se_max_time_s=None, cost_trials=60,
-               cost_taus_s=(4.0, 2.0, 1.0, 0.5, 0.25), cost_mixes=(0.0, 0.25, 0.5, 1.0, 2.0))
+               cost_taus_s=(4.0, 2.0, 1.0, 0.5, 0.25), cost_mixes=(0.0, 0.25, 0.5, 1.0, 2.0),
+               target_trials=100)
 
 
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
@@ -209,8 +212,11 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     epochs = None if bar is None else {"progress": lambda e, n, *_: bar("training epochs", e, n)}
     curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m),
                                 train_kwargs=epochs)
-    model_dir = Path(curriculum["final_model"])
-    predictor = Predictor.load(model_dir)
+    # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
+    # trained before the deep stages: the reproduction flies the paper's.
+    deep_predictor = Predictor.load(Path(curriculum["final_model"]))
+    predictor = (Predictor.load(Path(curriculum["paper_model"]))
+                 if "paper_model" in curriculum else deep_predictor)
     test_logs = []
     for st in curriculum_stages(cfg):
         test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
@@ -228,10 +234,11 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
             train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
                                              st.depth_max_m, seed + 4241 + st.index, predictor,
                                              name=f"pool{st.index}")
-    heldout_eval = evaluate(predictor, test_ds)
+    heldout_eval = evaluate(deep_predictor, test_ds)
     results["learning"] = {
         "curriculum": curriculum,
         "heldout": heldout_eval,
+        "heldout_paper_model": evaluate(predictor, test_ds),
         **_floor_ratio(heldout_eval, cfg),
     }
     timings["curriculum_s"] = time.perf_counter() - t0
@@ -266,6 +273,24 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
                   "observer_bias_tau_s": cfg.control.observer_bias_tau_s, **tuned},
     }
     timings.update({f"tuned_{k}": v for k, v in times.items()})
+    ours_cfg = controller_config(cfg, "ours")
+    ours, _, times = _docking_experiments(ours_cfg, size, deep_predictor, seed, say,
+                                          "our controller (accelerometer observer, deep model)")
+    results["controllers"]["ours"] = {
+        "source": "tuned + the accelerometer observer (INDI-like), with the deep curriculum's "
+                  "model", "accel_observer_tau_s": ours_cfg.control.accel_observer_tau_s,
+        "terminal_q_diag": list(ours_cfg.control.terminal_q_diag), **ours}
+    timings.update({f"ours_{k}": v for k, v in times.items()})
+    t0 = time.perf_counter()
+    say("    targets beyond the paper: d_p 0.36 and 0.27 m, leader at 0.25 and 0.5 m/s")
+    results["targets"] = targets({
+        "paper's controller + paper's model": (paper_cfg, predictor),
+        "paper's controller + deep model": (paper_cfg, deep_predictor),
+        "tuned + deep model": (cfg, deep_predictor),
+        "ours + deep model": (ours_cfg, deep_predictor),
+    }, size.target_trials, deep_predictor, seed + 5, say)
+    results["targets"]["learnt_mean_paper_model"] = learnt_mean_check(cfg, predictor)
+    timings["targets_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     say("    what each lever costs: observer time constant and terminal gains")
     results["controller_costs"] = controller_costs(cfg, size.cost_trials, predictor, seed + 3,

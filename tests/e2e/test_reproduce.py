@@ -40,6 +40,23 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert ctl["paper"]["observer_bias_tau_s"] == 4.0
     for exp in ("cable_study", "hover_docking", "moving_leader"):
         assert exp in ctl["tuned"]
+    # ours (accelerometer observer, deep curriculum's model) and the targets beyond the paper
+    assert ctl["ours"]["accel_observer_tau_s"] > 0
+    for exp in ("cable_study", "hover_docking", "moving_leader"):
+        assert exp in ctl["ours"]
+    tg = res["targets"]
+    assert [s["name"] for s in tg["scenarios"]] == ["hover_0.36", "hover_0.27", "moving_0.25",
+                                                    "moving_0.5"]
+    assert len(tg["rows"]) == 4
+    for row in tg["rows"].values():
+        for rec in row["scenarios"].values():
+            assert rec["trials"] == tg["trials"]
+            assert rec["met"] == (rec["success_rate"] >= rec["target_success"])
+    depths = [m["depth_m"] for m in tg["learnt_mean"]]
+    assert depths[0] == 0.36 and depths[1] > 0.36
+    stages = res["learning"]["curriculum"]["stages"]
+    assert stages[-1]["depth_band_m"][0] == 0.27  # the deep curriculum reaches the docking depth
+    assert res["learning"]["curriculum"]["paper_model"].endswith("paper")
     costs = res["controller_costs"]
     assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 0.25]
     assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
@@ -48,6 +65,7 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert "Cable-length study" in report and "8/10" in report
     assert "The paper's controller and ours, side by side" in report
     assert "What each lever costs" in report
+    assert "Beyond the paper: targets" in report
     for fig in res["figures"]:
         assert (out / fig).read_bytes()[:4] in (b"\x89PNG", b"GIF8"), fig  # + the docking GIF
         assert f"({fig})" in report

@@ -168,3 +168,15 @@ def test_train_on_two_paths_and_degenerate_data_keeps_the_good_model(flights, tm
     rc, out, err = run_inprocess("train", "--data", bad, "--out", model, "--max-epochs", "2")
     assert rc == 2 and len(err.strip().splitlines()) == 1 and "degenerate" in err, err
     assert ((model / "model.json").read_bytes(), (model / "weights.npz").read_bytes()) == good
+
+
+def test_dock_flies_the_controller_it_is_given():
+    """--controller changes what flies (it was once overwritten by the config)."""
+    runs = {c: json.loads(aerodock("dock", "--trials", "2", "--seed", "4", "--controller", c,
+                                   "--json").stdout) for c in ("paper", "tuned")}
+    assert runs["paper"]["controller"] == "paper"
+    assert (runs["paper"]["terminal_err_down_median_m"]
+            != runs["tuned"]["terminal_err_down_median_m"])
+    bad = aerodock("dock", "--trials", "2", "--controller", "bogus", check=False)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "controller" in bad.stderr
