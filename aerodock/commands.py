@@ -278,7 +278,8 @@ def targets_command(
     out: Annotated[Path, typer.Option(help="Folder for the curriculum (when no --model) and "
                                            "targets.json.")] = Path("out/targets"),
     model: Annotated[Path | None, typer.Option(
-        help="A trained model DIR (default: fly the deep curriculum first, into OUT/data).")] = None,
+        help="A trained model DIR (default: fly the deep curriculum first, into OUT/data).")
+    ] = None,
     trials: Annotated[int, typer.Option(help="Trials per scenario and row.")] = 100,
     config: ConfigOpt = None,
     seed: SeedOpt = 0,
