@@ -180,3 +180,9 @@ def test_dock_flies_the_controller_it_is_given():
     bad = aerodock("dock", "--trials", "2", "--controller", "bogus", check=False)
     assert bad.returncode == 2
     assert bad.stderr.strip().count("\n") == 0 and "controller" in bad.stderr
+
+
+def test_targets_refuses_bad_trials_in_one_line():
+    bad = aerodock("targets", "--trials", "0", check=False)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "--trials" in bad.stderr

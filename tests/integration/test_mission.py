@@ -199,3 +199,25 @@ def test_one_accelerometer_reading_per_control_period(cfg):
                             np.full(3, cfg.vehicle.mass_kg * cfg.sim.gravity_mps2))
     world.advance(hover, hover)
     assert not np.array_equal(world.observed_accel(), first)
+
+
+def test_targets_measure_every_scenario_and_the_learnt_mean(cfg):
+    """The targets table: each scenario flown (its own d_p and leader speed), the met flags
+    computed from the measured rates, the learnt mean compared where the field is known."""
+    from aerodock.control.compensation import OraclePredictor
+    from aerodock.control.profiles import controller_config
+    from aerodock.downwash import build_field
+    from aerodock.experiments.targets import SCENARIOS, targets
+
+    oracle = OraclePredictor(build_field(cfg))
+    res = targets({"ours + oracle": (controller_config(cfg, "ours"), oracle)}, 2, oracle, 3)
+    row = res["rows"]["ours + oracle"]["scenarios"]
+    assert list(row) == [s[0] for s in SCENARIOS]
+    for name, offset, speed, target in SCENARIOS:
+        assert (row[name]["offset_m"], row[name]["leader_speed_mps"]) == (offset, speed)
+        assert row[name]["trials"] == 2
+        assert row[name]["met"] == (row[name]["success_rate"] >= target)
+    at_036 = res["learnt_mean"][0]
+    assert at_036["depth_m"] == 0.36
+    assert abs(at_036["relative_error"]) < 1e-9  # the oracle is the field's own mean
+    assert at_036["met"]
