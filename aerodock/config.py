@@ -134,6 +134,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     "curriculum.min_depth_m": (0.05, 100),
     "curriculum.deep_depths_m": (0.05, 100),
     "curriculum.flights_per_stage": (1, 1000),
+    "curriculum.deep_flights_per_stage": (1, 1000),
     "curriculum.free_air_m": (0.01, 100),
     "curriculum.leader_drift_max_mps": (0, 100),
     "curriculum.drift_fraction": (0, 1),

@@ -43,6 +43,7 @@ class Stage:
     index: int
     depth_min_m: float
     depth_max_m: float
+    deep: bool = False  # beyond the paper's curriculum (``deep_depths_m``)
 
 
 def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
@@ -61,7 +62,7 @@ def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
         for depth in c.deep_depths_m:
             top = stages[-1].depth_min_m if stages else hi
             if depth < top - 1e-9:
-                stages.append(Stage(len(stages), float(depth), top))
+                stages.append(Stage(len(stages), float(depth), top, deep=True))
     return stages
 
 
@@ -215,12 +216,13 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
     paper_stages = len(curriculum_stages(cfg, deep=False))
     for stage in stages:
         t0 = time.perf_counter()
+        flights = int(c.deep_flights_per_stage if stage.deep else c.flights_per_stage)
         if progress:
-            progress(f"stage {stage.index}: flying {c.flights_per_stage} flights at "
+            progress(f"stage {stage.index}: flying {flights} flights at "
                      f"{stage.depth_min_m:.2f}-{stage.depth_max_m:.2f} m"
                      + (" with the stage model" if predictor is not None else ""))
         stage_logs = excitation_flights(
-            cfg, int(c.flights_per_stage), stage.depth_min_m, stage.depth_max_m,
+            cfg, flights, stage.depth_min_m, stage.depth_max_m,
             seed + 1000 * stage.index, predictor, name=f"stage{stage.index}",
         )
         save_flightlogs(out_dir / f"stage{stage.index}.npz", stage_logs)

@@ -16,8 +16,8 @@ def test_default_stages_follow_the_paper_then_go_deep(cfg):
     assert stages[-1].depth_min_m == 0.5
     deep = curriculum_stages(cfg)
     assert deep[:5] == stages
-    assert [(s.index, s.depth_min_m, s.depth_max_m) for s in deep[5:]] == [
-        (5, 0.3, 0.5), (6, 0.27, 0.3)]
+    assert [(s.index, s.depth_min_m, s.depth_max_m, s.deep) for s in deep[5:]] == [
+        (5, 0.3, 0.5, True), (6, 0.27, 0.3, True)]
 
 
 def test_deep_stages_fly_the_bar_above_the_follower(cfg):
@@ -46,7 +46,8 @@ def test_excitation_flights_sweep_through_the_wake(cfg):
 
 def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
     cfg = cfg.with_overrides({"curriculum": {"flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2],
-                                             "min_depth_m": 0.6, "deep_depths_m": [0.45]}})
+                                             "min_depth_m": 0.6, "deep_depths_m": [0.45],
+                                             "deep_flights_per_stage": 3}})
     summary = run_curriculum(cfg, tmp_path, seed=0, train_kwargs={"max_epochs": 5})
     assert [s["stage"] for s in summary["stages"]] == [0, 1, 2]
     assert summary["stages"][2]["depth_band_m"] == [0.45, 0.6]
@@ -63,4 +64,4 @@ def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
     pred = Predictor.load(tmp_path / "models" / "final")
     assert pred.predict(np.zeros((1, 9)) + [0, 0, 0.8, 0, 0, 0, 0, 0, 0],
                         np.eye(3)[None]).shape == (1, 3)
-    assert abs(summary["minutes"] - 6 * 12.5 / 60) < 0.01
+    assert abs(summary["minutes"] - 7 * 12.5 / 60) < 0.01  # 2 + 2 + 3 (deep) flights
