@@ -50,7 +50,7 @@ def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
                                              "deep_flights_per_stage": 3}})
     summary = run_curriculum(cfg, tmp_path, seed=0, train_kwargs={"max_epochs": 5})
     assert [s["stage"] for s in summary["stages"]] == [0, 1, 2]
-    assert summary["stages"][2]["depth_band_m"] == [0.45, 0.6]
+    assert np.allclose(summary["stages"][2]["depth_band_m"], [0.45, 0.6])
     # the paper's model: trained after the last paper stage, before the deep one
     assert summary["paper_model"].endswith("paper")
     paper = Predictor.load(tmp_path / "models" / "paper")
