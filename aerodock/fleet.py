@@ -59,8 +59,14 @@ def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> Attit
         return np.concatenate([np.broadcast_to(getattr(lead, name), (n,)),
                                np.broadcast_to(getattr(fol, name), (n,))])
 
+    torque = None
+    if lead.torque_ff_nm is not None or fol.torque_ff_nm is not None:
+        torque = np.zeros((2 * n, 3))
+        for rows, cmd in ((slice(None, n), lead), (slice(n, None), fol)):
+            if cmd.torque_ff_nm is not None:
+                torque[rows] = cmd.torque_ff_nm
     return AttitudeCommand(both("roll_rad"), both("pitch_rad"), both("yaw_rate_radps"),
-                           both("thrust_n"))
+                           both("thrust_n"), torque)
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ from aerodock.control.compensation import (
     OraclePredictor,
 )
 from aerodock.control.controller import PositionController, Reference
+from aerodock.control.torque_feedforward import hub_torque_nm
 from aerodock.downwash import BodyState, build_field
 from aerodock.faults import Fault, FaultRuntime, draw_faults
 from aerodock.flightlog import FlightLog
@@ -237,6 +238,9 @@ class MissionBatch:
         elif comp != Compensation.MODEL:
             predictor = None  # a model given alongside 'none' or 'observer' is not flown
         self.predictor = predictor
+        # Torque feed-forward from the learnt model (rigid bodies, with the model flown).
+        self.torque_ff = bool(cfg.control.torque_feedforward and comp == Compensation.MODEL
+                              and world.rigid)
         self.geom = geom = DockGeometry.from_config(cfg)
         world.gripper_params = replace(
             world.gripper_params, passive=world.gripper_params.passive and spec.passive_trigger,
@@ -518,6 +522,14 @@ class MissionBatch:
                 pitch_rad=np.where(hanging, 0.0, cmd.pitch_rad),
                 yaw_rate_radps=np.where(hanging, 0.0, cmd.yaw_rate_radps),
                 thrust_n=np.where(hanging, hang_thrust, cmd.thrust_n)))
+        if self.torque_ff:
+            # The wake's torque predicted by the model at the rotor hubs, cancelled by the
+            # autopilot (not while hanging from the bar).
+            mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+            tau = hub_torque_nm(self.predictor, _bodies(obs_l_f, mass * g, mass),
+                                _bodies(obs_f, mass * g, mass), world.fleet.params.rotor_offsets_m)
+            tau = np.where(hanging[:, None], 0.0, tau)
+            fout = replace(fout, command=replace(fout.command, torque_ff_nm=-tau))
         close = (t >= self.active_at_s) & active & _bar_will_be_inside(
             obs_f, obs_l_f, self.geom, gp, gp.latency_s + gp.close_time_s)
         self._measure(k, t, active, p_ref, ff, fout)

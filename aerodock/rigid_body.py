@@ -172,6 +172,7 @@ class RigidTargets:
     R_des: np.ndarray  # (n, 3, 3) desired attitude  # noqa: N815
     yaw_rate_radps: np.ndarray  # (n,)
     thrust_n: np.ndarray  # (n,) collective, clipped to [0, thrust_max_n]
+    torque_ff_nm: np.ndarray | None = None  # (n, 3) body torque added before the mixer
 
 
 def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
@@ -188,6 +189,7 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
         r_des,
         np.broadcast_to(np.asarray(cmd.yaw_rate_radps, dtype=float), (n,)),
         np.broadcast_to(np.clip(cmd.thrust_n, 0.0, params.thrust_max_n), (n,)),
+        None if cmd.torque_ff_nm is None else np.asarray(cmd.torque_ff_nm, dtype=float),
     )
 
 
@@ -197,6 +199,8 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
     rate_sp = rate_setpoint(state.R, targets.R_des, targets.yaw_rate_radps, params.gains)
     torque, integral = rate_control(rate_sp, gyro_radps, state.rate_integral, params.gains,
                                     params.inertia_kgm2, dt_s)
+    if targets.torque_ff_nm is not None:
+        torque = torque + targets.torque_ff_nm
     f_cmd = mix(targets.thrust_n, torque, params.mixer_inv, params.rotor_thrust_max_n)
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
     speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order

@@ -86,6 +86,9 @@ class AttitudeCommand:
     pitch_rad: np.ndarray
     yaw_rate_radps: np.ndarray
     thrust_n: np.ndarray
+    # (n, 3) body torque, N m, added to the rate loop's torque before the mixer (a feed-forward,
+    # e.g. minus the wake's predicted torque); None: none. Rigid-body vehicles only.
+    torque_ff_nm: np.ndarray | None = None
 
 
 def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | float = 0.0,

@@ -8,7 +8,9 @@
   last ``mission.terminal_s`` before arrival). A separate, named row wherever it is reported.
 - ``ours``: ``tuned`` plus fast disturbance rejection from the accelerometer
   (``control.rejection = "accelerometer"``, :mod:`aerodock.control.accel_observer`) on top of
-  the slow bias observer and the learnt feed-forward.
+  the slow bias observer and the learnt feed-forward. The wake-torque feed-forward
+  (``control.torque_feedforward``) is not part of it: measured, it lowers the tilt but costs
+  docking (``reproduce``'s targets table has it as a separate row).
 """
 
 from __future__ import annotations

@@ -288,6 +288,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
         "paper's controller + deep model": (paper_cfg, deep_predictor),
         "tuned + deep model": (cfg, deep_predictor),
         "ours + deep model": (ours_cfg, deep_predictor),
+        "ours + torque feed-forward + deep model": (
+            ours_cfg.with_overrides({"control": {"torque_feedforward": True}}), deep_predictor),
     }, size.target_trials, deep_predictor, seed + 5, say)
     results["targets"]["learnt_mean_paper_model"] = learnt_mean_check(cfg, predictor)
     timings["targets_s"] = time.perf_counter() - t0
