@@ -40,7 +40,7 @@ from aerodock.gripper import (
     step_gripper,
 )
 from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
-from aerodock.rng import TrialRNG
+from aerodock.rng import TrialRNG, standard_normal_t
 from aerodock.vehicle import (
     AttitudeCommand,
     VehicleParams,
@@ -298,12 +298,12 @@ class World:
         if not self._gyro_sd:
             return None
         n = self.n
-        draw = self.rng.standard_normal((n, 6))  # per trial: leader's then follower's gyro
-        noise = np.empty((2 * n, 3))
-        noise[:n] = draw[:, :3]
-        noise[n:] = draw[:, 3:]
+        draw = standard_normal_t(self.rng, n, 6)  # per trial: leader's then follower's gyro
+        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous copies
+        noise[:, :n] = draw[:3]
+        noise[:, n:] = draw[3:]
         noise *= self._gyro_sd
-        return noise
+        return noise.T
 
     def _lose_thrust(self, follower: Any, fol_R: np.ndarray, force: np.ndarray,  # noqa: N803
                      torque: np.ndarray) -> None:
