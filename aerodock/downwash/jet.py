@@ -222,11 +222,13 @@ class RoundJetField:
         along *= speed
         rel = axis * along
         lateral = self.bar_turb_lateral * speed
-        rel += R[:, :, 0].T * (lateral * noise[1])
-        rel += R[:, :, 1].T * (lateral * noise[2])
+        work = np.array(R[:, :, 0].T, dtype=float, order="C")  # a copy, even for n = 1
+        rel += np.multiply(work, lateral * noise[1], out=work)
+        np.copyto(work, R[:, :, 1].T)
+        rel += np.multiply(work, lateral * noise[2], out=work)
         rel -= np.asarray(bar_v_mps, dtype=float).T
         if bar_axis is not None:
-            ba = np.asarray(bar_axis, dtype=float).T
+            ba = np.ascontiguousarray(np.asarray(bar_axis, dtype=float).T)
             across = rel * ba
             dot = across[0] + across[1]
             dot += across[2]
@@ -245,10 +247,11 @@ class RoundJetField:
     def _leader_wake(self, leader: BodyState) -> tuple:
         """The parts of :meth:`_wake` that depend on the leader only; vectors component-major
         (3, n)."""
-        axis = np.array(leader.R[:, :, 2].T)  # body z (down when level): the wake's direction
+        # body z (down when level): the wake's direction
+        axis = np.array(leader.R[:, :, 2].T, dtype=float, order="C")
         thrust = np.maximum(leader.thrust_n, 0.0)
         w0 = 2.0 * np.sqrt(thrust / (2.0 * self.air_density_kgpm3 * self.disk_area_m2))
-        lv = np.asarray(leader.v, dtype=float).T
+        lv = np.ascontiguousarray(np.asarray(leader.v, dtype=float).T)
         prod = lv * axis
         along = prod[0] + prod[1]
         along += prod[2]
@@ -298,7 +301,8 @@ class RoundJetField:
         ``noise`` (3, n) the turbulence (None: the mean)."""
         lead = self._leader_wake(leader) if lead is None else lead
         axis, radial, speed, r, force_half_radius = self._wake(leader.p, p_m, lead)
-        prod = np.asarray(v_mps, dtype=float).T * axis
+        prod = np.array(np.asarray(v_mps, dtype=float).T, order="C")  # a copy, even for n = 1
+        prod *= axis
         w_rel = prod[0] + prod[1]
         w_rel += prod[2]
         w_rel *= speed > 0
@@ -312,6 +316,7 @@ class RoundJetField:
         planar *= x
         if noise is not None:
             R = leader.R  # noqa: N806
+            lat0, lat1 = np.ascontiguousarray(R[:, :, 0].T), np.ascontiguousarray(R[:, :, 1].T)
             lateral = np.abs(axial)
             lateral *= self.turb_lateral
             along = self.turb_vertical * noise[0]
@@ -319,8 +324,8 @@ class RoundJetField:
             along *= axial
             out = axis * along
             out += np.multiply(planar, unit_radial, out=prod)
-            out += np.multiply(R[:, :, 0].T, lateral * noise[1], out=prod)
-            out += np.multiply(R[:, :, 1].T, lateral * noise[2], out=prod)
+            out += np.multiply(lat0, lateral * noise[1], out=prod)
+            out += np.multiply(lat1, lateral * noise[2], out=prod)
             return out
         out = axis * axial
         out += np.multiply(planar, unit_radial, out=prod)
@@ -349,15 +354,19 @@ class RoundJetField:
         axis, _, w0_min, v_perp = self._leader_wake(leader) if lead is None else lead
         R = follower.R  # noqa: N806
         # Work arrays (3 components, k disks, n trials): every operation runs on rows of n.
+        k = offsets_body_m.shape[0]
+        n = axis.shape[1]
         ox, oy, oz = (offsets_body_m[:, i:i + 1] for i in range(3))  # (k, 1)
-        d = (follower.p - leader.p).T[:, None, :]
-        rel = R[:, :, 0].T[:, None, :] * ox  # disk centres from the leader
-        rel += R[:, :, 1].T[:, None, :] * oy
+        rt = np.ascontiguousarray(R.transpose(2, 1, 0))  # rt[j, i] = R[:, i, j], rows of n
+        d = np.ascontiguousarray((follower.p - leader.p).T)[:, None, :]
+        rel = np.multiply(rt[0][:, None, :], ox, out=np.empty((3, k, n)))  # disk centres
+        prod = np.multiply(rt[1][:, None, :], oy, out=np.empty((3, k, n)))
+        rel += prod
         if oz.any():
-            rel += R[:, :, 2].T[:, None, :] * oz
+            rel += np.multiply(rt[2][:, None, :], oz, out=prod)
         rel += d
         axis3 = axis[:, None, :]
-        prod = rel * axis3
+        np.multiply(rel, axis3, out=prod)
         depth = prod[0] + prod[1]
         depth += prod[2]
         s = np.maximum(depth, 0.0)
@@ -383,7 +392,6 @@ class RoundJetField:
         above = depth < 0.0
         if above.any():  # nothing above the rotors (as in _wake)
             pressure *= np.where(above, np.exp(-2.0 * (depth / 0.05) ** 2), 1.0)
-        k = offsets_body_m.shape[0]
         total = pressure[0].copy()
         for j in range(1, k):
             total += pressure[j]
@@ -393,7 +401,9 @@ class RoundJetField:
             share = pressure
         else:
             share = np.where(inside, pressure / np.where(inside, total, 1.0), 1.0 / k)
-        centre = offsets_body_m[0][:, None] * share[0]
+        cols = offsets_body_m[:, :, None]  # (k, 3, 1)
+        centre = np.multiply(cols[0], share[0], out=np.empty((3, n)))
+        work = np.empty((3, n))
         for j in range(1, k):
-            centre += offsets_body_m[j][:, None] * share[j]
+            centre += np.multiply(cols[j], share[j], out=work)
         return centre
