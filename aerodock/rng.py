@@ -16,6 +16,7 @@ import numpy as np
 # Draws per trial and refill. The normal and uniform buffers share each trial's generator,
 # so the refill size fixes which of the stream's numbers each gets: changing it changes them.
 _CHUNK = 4096
+_BLOCK = 16  # trials drawn per scratch block at a refill
 
 
 class TrialRNG:
@@ -50,16 +51,21 @@ class TrialRNG:
         if end > buf.shape[0]:
             left = buf.shape[0] - pos
             size = max(_CHUNK, per_trial)
-            fresh = np.empty((self.n, size))  # each trial's stream drawn straight into its row
-            if kind == "normal":
-                for g, row in zip(self._gens, fresh):
-                    g.standard_normal(size, out=row)
-            else:
-                for g, row in zip(self._gens, fresh):
-                    g.random(size, out=row)
             new = np.empty((left + size, self.n))
             new[:left] = buf[pos:]
-            new[left:] = fresh.T
+            # Each trial's stream is drawn straight into a row of a small scratch block, then
+            # the block is transposed into place (blocks of 16 trials stay in cache).
+            scratch = np.empty((min(_BLOCK, self.n), size))
+            for i in range(0, self.n, _BLOCK):
+                gens = self._gens[i:i + _BLOCK]
+                rows = scratch[:len(gens)]
+                if kind == "normal":
+                    for g, row in zip(gens, rows):
+                        g.standard_normal(size, out=row)
+                else:
+                    for g, row in zip(gens, rows):
+                        g.random(size, out=row)
+                new[left:, i:i + len(gens)] = rows.T
             self._buf[kind] = buf = new
             pos, end = 0, per_trial
         self._pos[kind] = end
