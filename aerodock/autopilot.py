@@ -68,11 +68,13 @@ def attitude_target(roll_rad: np.ndarray, pitch_rad: np.ndarray,
     return rpy_to_rotmat(np.stack([roll_rad, pitch_rad, yaw_setpoint_rad], axis=1))
 
 
-def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The loops' per-axis constants as (3, 1) columns, for component-major (3, n) work arrays
-    (cached per gains object): (-attitude_p / 2, rate limit, -rate limit, integral limit,
-    -integral limit, rate_p, rate_i, inertia)."""
-    key = (id(gains), np.asarray(inertia_kgm2, dtype=float).tobytes())
+def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
+                 n: int | None = None) -> tuple[np.ndarray, ...]:
+    """The loops' per-axis constants for component-major (3, n) work arrays, cached per gains
+    object: (-attitude_p / 2, rate limit, -rate limit, integral limit, -integral limit, rate_p,
+    rate_i, inertia), each a read-only (3, 1) column or, given ``n``, a (3, n) tile (the same
+    numbers in one flat loop: a broadcast runs numpy's slower general loop)."""
+    key = (id(gains), np.asarray(inertia_kgm2, dtype=float).tobytes(), n)
     hit = _GAIN_COLUMNS.get(key)
     if hit is not None and hit[0] is gains:
         return hit[1]
@@ -81,6 +83,8 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray) -> tuple[np.nd
 
     def col(v: np.ndarray) -> np.ndarray:
         out = np.array(np.broadcast_to(np.asarray(v, dtype=float), (3,)))[:, None]
+        if n is not None:
+            out = np.repeat(out, n, axis=1)
         out.flags.writeable = False
         return out
 
@@ -92,7 +96,8 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray) -> tuple[np.nd
     return cols
 
 
-_GAIN_COLUMNS: dict[tuple[int, bytes], tuple[AutopilotGains, tuple[np.ndarray, ...]]] = {}
+_GAIN_COLUMNS: dict[tuple[int, bytes, int | None],
+                    tuple[AutopilotGains, tuple[np.ndarray, ...]]] = {}
 
 
 def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803
@@ -146,18 +151,18 @@ def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np
 def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
                    cols: tuple[np.ndarray, ...], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`rate_control` on a component-major (3, n) setpoint with ``cols`` of
-    :func:`gain_columns`: (torque (3, n), new integral (n, 3), C-ordered)."""
+    :func:`gain_columns`: (torque (3, n), new integral (n, 3), C-ordered). ``gyro_radps`` is
+    (n, 3) or, transposed, a component-major (3, n) array's ``.T``."""
     err = rate_sp_radps - np.asarray(gyro_radps, dtype=float).T
-    new_int = np.empty((err.shape[1], 3))
-    new_t = np.multiply(err, dt_s, out=new_int.T)
+    new_t = err * dt_s
     new_t += np.asarray(integral, dtype=float).T
     np.maximum(new_t, cols[4], out=new_t)
     np.minimum(new_t, cols[3], out=new_t)
     accel = err
     accel *= cols[5]
-    accel += new_t * cols[6]
+    accel += np.multiply(new_t, cols[6], out=np.empty_like(new_t))
     accel *= cols[7]
-    return accel, new_int
+    return accel, np.ascontiguousarray(new_t.T)
 
 
 def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,

@@ -194,7 +194,7 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
 def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
                         gyro_radps: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3))."""
-    cols = gain_columns(params.gains, params.inertia_kgm2)
+    cols = gain_columns(params.gains, params.inertia_kgm2, state.R.shape[0])
     rate_sp = rate_setpoint_t(state.R, targets.R_des, targets.yaw_rate_radps, cols)
     torque, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s)
     f_cmd = mix(targets.thrust_n, torque.T, params.mixer_inv, params.rotor_thrust_max_n)
@@ -333,9 +333,9 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    inertia = gain_columns(params.gains, params.inertia_kgm2)[7]
+    inertia = gain_columns(params.gains, params.inertia_kgm2, n)[7]
     w_t = w.T
-    jx, jy, jz = w_t * inertia
+    jx, jy, jz = np.multiply(w_t, inertia, out=np.empty((3, n)))
     wx, wy, wz = w_t
     # torque -= w x J w (the components of np.cross, written out: no axis juggling per call).
     gyro = wy * jz
@@ -382,7 +382,10 @@ def step_with_autopilot(
     """One physics step of N vehicles flown by their autopilots: the autopilot reads the gyro
     (true rates plus ``gyro_noise_radps``), commands the rotors, then :func:`step_rigid_body`.
     Returns (state, acceleration (n, 3))."""
-    gyro = state.w if gyro_noise_radps is None else state.w + gyro_noise_radps
+    if gyro_noise_radps is None:
+        gyro = state.w
+    else:  # component-major (a (3, n) array's .T from the world: contiguous rows)
+        gyro = np.add(state.w.T, np.asarray(gyro_noise_radps).T, out=np.empty((3, state.n))).T
     speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s)
     p, v, rot, w, omega, thrust, accel = _step_arrays(state, speed_cmd, ext_force_n,
                                                       ext_torque_nm, params, dt_s)
