@@ -32,7 +32,6 @@ import numpy as np
 
 from aerodock.autopilot import (
     AutopilotGains,
-    attitude_target,
     gain_columns,
     mix,
     rate_control_t,
@@ -40,7 +39,7 @@ from aerodock.autopilot import (
 )
 from aerodock.config import Config
 from aerodock.geometry import rotmat_to_euler
-from aerodock.vehicle import AttitudeCommand
+from aerodock.vehicle import AttitudeCommand, rpy_to_rotmat
 
 
 @dataclass(frozen=True)
@@ -179,9 +178,11 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
     """Clip the command to the tilt and thrust limits; the attitude target at the current yaw
     setpoint (the yaw rate is flown as feed-forward and integrated by :func:`step_rigid_body`)."""
     tilt = params.tilt_max_rad
-    roll = np.broadcast_to(np.clip(cmd.roll_rad, -tilt, tilt), (n,))
-    pitch = np.broadcast_to(np.clip(cmd.pitch_rad, -tilt, tilt), (n,))
-    r_des = attitude_target(roll, pitch, state.yaw_setpoint)
+    rpy = np.empty((n, 3))  # attitude_target's stack, built in place (np.clip's values)
+    np.minimum(np.maximum(cmd.roll_rad, -tilt), tilt, out=rpy[:, 0])
+    np.minimum(np.maximum(cmd.pitch_rad, -tilt), tilt, out=rpy[:, 1])
+    rpy[:, 2] = state.yaw_setpoint
+    r_des = rpy_to_rotmat(rpy)
     # Stored transposed in memory: the autopilot multiplies by R_des^T at every physics step.
     r_des = np.ascontiguousarray(r_des.transpose(0, 2, 1)).transpose(0, 2, 1)
     return RigidTargets(

@@ -110,6 +110,9 @@ class World:
         self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
         imu = cfg.imu
         self._gyro_sd = imu.gyro_noise_radps if self.rigid else 0.0
+        # Motion capture's noise (position, velocity) and the attitude estimate's (rigid body).
+        self._mocap_sd = (cfg.mocap.pos_noise_m, cfg.mocap.vel_noise_mps,
+                          imu.attitude_noise_rad if self.rigid else 0.0)
         self._rotor_offsets = (self.fleet.params.rotor_offsets_m if self.rigid
                                else np.zeros((1, 3)))
         # Both vehicles as one batch of 2n (leaders first); ``leader``/``follower`` are its
@@ -211,19 +214,29 @@ class World:
         Positions and velocities from motion capture; the attitude is the flight computer's
         estimate (true attitude plus ``imu.attitude_noise_rad`` with the rigid-body model).
         """
-        cfg = self.cfg.mocap
         k = (self.step_index - self._latency_steps) % (self._latency_steps + 1)
         lp, lv, lr, fp, fv, fr = self._history[k]
-        n = self.n
-        att_sd = self.cfg.imu.attitude_noise_rad if self.rigid else 0.0
+        n, rng = self.n, self.rng
+        pos_sd, vel_sd, att_sd = self._mocap_sd
+        # Per trial the draws come as attitude (rigid body), position, velocity: one block.
+        per_trial = isinstance(rng, TrialRNG) and rng.n == n
 
         def noisy(p, v, rot):
             rpy = np.stack(rotmat_to_euler(rot), axis=1) if rot.ndim == 3 else rot.copy()
-            if att_sd > 0:
-                rpy += att_sd * self.rng.standard_normal((n, 3))
+            if per_trial:
+                draw = standard_normal_t(rng, n, 9 if att_sd > 0 else 6)
+                if att_sd > 0:
+                    rpy += att_sd * draw[:3].T
+                    draw = draw[3:]
+                noise_p, noise_v = draw[:3].T, draw[3:].T
+            else:
+                if att_sd > 0:
+                    rpy += att_sd * rng.standard_normal((n, 3))
+                noise_p = rng.standard_normal((n, 3))
+                noise_v = rng.standard_normal((n, 3))
             return Observation(
-                p=p + cfg.pos_noise_m * self.rng.standard_normal((n, 3)),
-                v=v + cfg.vel_noise_mps * self.rng.standard_normal((n, 3)),
+                p=np.add(p, pos_sd * noise_p, out=np.empty((n, 3))),
+                v=np.add(v, vel_sd * noise_v, out=np.empty((n, 3))),
                 rpy=rpy,
             )
 
@@ -392,14 +405,15 @@ class World:
         bar_force = push if bar_force is None else bar_force + push
         torque = None
         if self.rigid:
-            torque = np.zeros((2 * n, 3))
+            torque_t = np.zeros((3, 2 * n))  # component-major: the vehicles work on its rows
             # The cables pull at the anchor, below the leader's centre of mass (body +z).
             cable_body = np.matmul(self.cable_force_n[:, None, :], lead_R)[:, 0]
             d = self.platform.anchor_below_leader_m
-            torque[:n, 0] = -d * cable_body[:, 1]
-            torque[:n, 1] = d * cable_body[:, 0]
+            np.multiply(-d, cable_body[:, 1], out=torque_t[0, :n])
+            np.multiply(d, cable_body[:, 0], out=torque_t[1, :n])
             if wake_torque is not None:
-                torque[n:] = wake_torque
+                torque_t[:, n:] = wake_torque.T
+            torque = torque_t.T
             if self._rotor_loss is not None:
                 self._lose_thrust(both.rotor_speed[n:], both.thrust_gain[n:], fol_R,
                                   follower_force, torque[n:])
