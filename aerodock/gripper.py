@@ -223,6 +223,11 @@ def step_gripper(
             gate = np.where(done, np.where(inside, _CAPTURED, _MISSED), gate).astype(np.int8)
             slipped = slipped | (done & ~inside & inside_at_start)
             resolved = np.where(done, t_s, resolved)
+    if (gate is state.gate and reading is state.reading_n and servo_start is state.servo_start_s
+            and by_contact is state.triggered_by_contact
+            and inside_at_start is state.inside_at_start and slipped is state.slipped
+            and resolved is state.resolved_s):
+        return state  # nothing changed (states are never modified in place)
     return GripperState(gate, state.bias_true_n, state.bias_est_n, reading, servo_start,
                         by_contact, inside_at_start, slipped, resolved, state.close_time_s,
                         state.sensor_stuck_n)

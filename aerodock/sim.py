@@ -344,10 +344,9 @@ class World:
             return None
         n = self.n
         draw = standard_normal_t(self.rng, n, 6)  # per trial: leader's then follower's gyro
-        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous copies
-        noise[:, :n] = draw[:3]
-        noise[:, n:] = draw[3:]
-        noise *= self._gyro_sd
+        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
+        np.multiply(draw[:3], self._gyro_sd, out=noise[:, :n])
+        np.multiply(draw[3:], self._gyro_sd, out=noise[:, n:])
         return noise.T
 
     def _lose_thrust(self, rotor_speed: np.ndarray, thrust_gain: np.ndarray,
