@@ -68,6 +68,38 @@ def attitude_target(roll_rad: np.ndarray, pitch_rad: np.ndarray,
     return rpy_to_rotmat(np.stack([roll_rad, pitch_rad, yaw_setpoint_rad], axis=1))
 
 
+def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
+                 n: int | None = None) -> tuple[np.ndarray, ...]:
+    """The loops' per-axis constants for component-major (3, n) work arrays, cached per gains
+    object: (-attitude_p / 2, rate limit, -rate limit, integral limit, -integral limit, rate_p,
+    rate_i, inertia), each a read-only (3, 1) column or, given ``n``, a (3, n) tile (the same
+    numbers in one flat loop: a broadcast runs numpy's slower general loop)."""
+    key = (id(gains), np.asarray(inertia_kgm2, dtype=float).tobytes(), n)
+    hit = _GAIN_COLUMNS.get(key)
+    if hit is not None and hit[0] is gains:
+        return hit[1]
+    limit = gains.rate_max_radps
+    int_limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
+
+    def col(v: np.ndarray) -> np.ndarray:
+        out = np.array(np.broadcast_to(np.asarray(v, dtype=float), (3,)))[:, None]
+        if n is not None:
+            out = np.repeat(out, n, axis=1)
+        out.flags.writeable = False
+        return out
+
+    cols = tuple(col(v) for v in (-0.5 * gains.attitude_p, limit, -limit, int_limit, -int_limit,
+                                  gains.rate_p, gains.rate_i, inertia_kgm2))
+    if len(_GAIN_COLUMNS) > 64:
+        _GAIN_COLUMNS.clear()
+    _GAIN_COLUMNS[key] = (gains, cols)
+    return cols
+
+
+_GAIN_COLUMNS: dict[tuple[int, bytes, int | None],
+                    tuple[AutopilotGains, tuple[np.ndarray, ...]]] = {}
+
+
 def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803
                   gains: AutopilotGains) -> np.ndarray:
     """(n, 3) body-rate setpoint, rad/s: angle P on the geometric attitude error + yaw feed-forward.
@@ -78,19 +110,23 @@ def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray, 
         yaw_rate_radps: (n,) commanded yaw rate (feed-forward about body z).
         gains: loop gains.
     """
+    cols = gain_columns(gains, np.ones(3))
+    return np.ascontiguousarray(rate_setpoint_t(R, R_des, yaw_rate_radps, cols).T)
+
+
+def rate_setpoint_t(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803
+                    cols: tuple[np.ndarray, ...]) -> np.ndarray:
+    """:func:`rate_setpoint`, component-major (3, n), with ``cols`` of :func:`gain_columns`."""
     # M = R_des^T R (a stack of 3x3 products: each trial's numbers do not depend on the batch).
     m = np.matmul(R_des.transpose(0, 2, 1), R)
-    err = np.empty((R.shape[0], 3))
-    np.subtract(m[:, 2, 1], m[:, 1, 2], out=err[:, 0])
-    np.subtract(m[:, 0, 2], m[:, 2, 0], out=err[:, 1])
-    np.subtract(m[:, 1, 0], m[:, 0, 1], out=err[:, 2])
-    n = R.shape[0]
-    err *= per_axis(-0.5 * gains.attitude_p, n)
-    rate = err
-    rate[:, 2] += yaw_rate_radps
-    limit = gains.rate_max_radps
-    np.maximum(rate, per_axis(-limit, n), out=rate)  # np.clip's values, without its wrapper
-    return np.minimum(rate, per_axis(limit, n), out=rate)
+    rate = np.empty((3, R.shape[0]))
+    np.subtract(m[:, 2, 1], m[:, 1, 2], out=rate[0])
+    np.subtract(m[:, 0, 2], m[:, 2, 0], out=rate[1])
+    np.subtract(m[:, 1, 0], m[:, 0, 1], out=rate[2])
+    rate *= cols[0]
+    rate[2] += yaw_rate_radps
+    np.maximum(rate, cols[2], out=rate)  # np.clip's values, without its wrapper
+    return np.minimum(rate, cols[1], out=rate)
 
 
 def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
@@ -106,18 +142,27 @@ def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np
         inertia_kgm2: (3,) principal moments of inertia.
         dt_s: loop period.
     """
-    n = rate_sp_radps.shape[0]
-    err = rate_sp_radps - gyro_radps
-    limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
-    new_int = err * dt_s
-    new_int += integral
-    np.maximum(new_int, per_axis(-limit, n), out=new_int)
-    np.minimum(new_int, per_axis(limit, n), out=new_int)
+    cols = gain_columns(gains, inertia_kgm2)
+    torque, new_int = rate_control_t(np.asarray(rate_sp_radps, dtype=float).T, gyro_radps,
+                                     integral, cols, dt_s)
+    return np.ascontiguousarray(torque.T), new_int
+
+
+def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
+                   cols: tuple[np.ndarray, ...], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rate_control` on a component-major (3, n) setpoint with ``cols`` of
+    :func:`gain_columns`: (torque (3, n), new integral (n, 3), C-ordered). ``gyro_radps`` is
+    (n, 3) or, transposed, a component-major (3, n) array's ``.T``."""
+    err = rate_sp_radps - np.asarray(gyro_radps, dtype=float).T
+    new_t = err * dt_s
+    new_t += np.asarray(integral, dtype=float).T
+    np.maximum(new_t, cols[4], out=new_t)
+    np.minimum(new_t, cols[3], out=new_t)
     accel = err
-    accel *= per_axis(gains.rate_p, n)
-    accel += new_int * per_axis(gains.rate_i, n)
-    accel *= per_axis(inertia_kgm2, n)
-    return accel, new_int
+    accel *= cols[5]
+    accel += np.multiply(new_t, cols[6], out=np.empty_like(new_t))
+    accel *= cols[7]
+    return accel, np.ascontiguousarray(new_t.T)
 
 
 def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,

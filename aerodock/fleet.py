@@ -55,9 +55,12 @@ def _rows(cls: type, state: Any, sl: slice) -> Any:
 
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:
-    def both(name: str) -> np.ndarray:
-        return np.concatenate([np.broadcast_to(getattr(lead, name), (n,)),
-                               np.broadcast_to(getattr(fol, name), (n,))])
+    def both(name: str) -> np.ndarray:  # np.concatenate of the two, each broadcast to (n,)
+        a, b = np.asarray(getattr(lead, name)), np.asarray(getattr(fol, name))
+        out = np.empty(2 * n, dtype=np.result_type(a, b))
+        out[:n] = a
+        out[n:] = b
+        return out
 
     torque = None
     if lead.torque_ff_nm is not None or fol.torque_ff_nm is not None:

@@ -120,10 +120,12 @@ def calibrated_gripper(n: int, params: GripperParams, rng: np.random.Generator) 
 def bar_in_gripper(
     follower_p: np.ndarray, follower_R: np.ndarray, follower_v: np.ndarray,  # noqa: N803
     bar_p: np.ndarray, bar_v: np.ndarray, bar_yaw_rad: np.ndarray, params: GripperParams,
+    cos_sin: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Contact force magnitude (n,), inside-gate flag (n,) and the follower's up axis (n, 3).
 
-    The contact force pushes the bar along ``up`` and the follower along ``-up``.
+    The contact force pushes the bar along ``up`` and the follower along ``-up``. ``cos_sin``:
+    ``(cos(bar_yaw_rad), sin(bar_yaw_rad))`` if the caller has them already.
     """
     up = np.negative(follower_R[:, :, 2])
     arm = up * params.mount_height_m
@@ -132,7 +134,7 @@ def bar_in_gripper(
     height = dot_rows(rel, up)
     horizontal = rel - height[:, None] * up
     # The bar's axis is horizontal: (cos yaw, sin yaw, 0).
-    c, s = np.cos(bar_yaw_rad), np.sin(bar_yaw_rad)
+    c, s = (np.cos(bar_yaw_rad), np.sin(bar_yaw_rad)) if cos_sin is None else cos_sin
     h0, h1, h2 = horizontal[:, 0], horizontal[:, 1], horizontal[:, 2]
     along = h0 * c
     along += h1 * s
@@ -221,6 +223,11 @@ def step_gripper(
             gate = np.where(done, np.where(inside, _CAPTURED, _MISSED), gate).astype(np.int8)
             slipped = slipped | (done & ~inside & inside_at_start)
             resolved = np.where(done, t_s, resolved)
+    if (gate is state.gate and reading is state.reading_n and servo_start is state.servo_start_s
+            and by_contact is state.triggered_by_contact
+            and inside_at_start is state.inside_at_start and slipped is state.slipped
+            and resolved is state.resolved_s):
+        return state  # nothing changed (states are never modified in place)
     return GripperState(gate, state.bias_true_n, state.bias_est_n, reading, servo_start,
                         by_contact, inside_at_start, slipped, resolved, state.close_time_s,
                         state.sensor_stuck_n)

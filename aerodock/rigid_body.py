@@ -32,15 +32,14 @@ import numpy as np
 
 from aerodock.autopilot import (
     AutopilotGains,
-    attitude_target,
+    gain_columns,
     mix,
-    per_axis,
-    rate_control,
-    rate_setpoint,
+    rate_control_t,
+    rate_setpoint_t,
 )
 from aerodock.config import Config
 from aerodock.geometry import rotmat_to_euler
-from aerodock.vehicle import AttitudeCommand
+from aerodock.vehicle import AttitudeCommand, rpy_to_rotmat
 
 
 @dataclass(frozen=True)
@@ -180,9 +179,11 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
     """Clip the command to the tilt and thrust limits; the attitude target at the current yaw
     setpoint (the yaw rate is flown as feed-forward and integrated by :func:`step_rigid_body`)."""
     tilt = params.tilt_max_rad
-    roll = np.broadcast_to(np.clip(cmd.roll_rad, -tilt, tilt), (n,))
-    pitch = np.broadcast_to(np.clip(cmd.pitch_rad, -tilt, tilt), (n,))
-    r_des = attitude_target(roll, pitch, state.yaw_setpoint)
+    rpy = np.empty((n, 3))  # attitude_target's stack, built in place (np.clip's values)
+    np.minimum(np.maximum(cmd.roll_rad, -tilt), tilt, out=rpy[:, 0])
+    np.minimum(np.maximum(cmd.pitch_rad, -tilt), tilt, out=rpy[:, 1])
+    rpy[:, 2] = state.yaw_setpoint
+    r_des = rpy_to_rotmat(rpy)
     # Stored transposed in memory: the autopilot multiplies by R_des^T at every physics step.
     r_des = np.ascontiguousarray(r_des.transpose(0, 2, 1)).transpose(0, 2, 1)
     return RigidTargets(
@@ -196,12 +197,12 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
 def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
                         gyro_radps: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3))."""
-    rate_sp = rate_setpoint(state.R, targets.R_des, targets.yaw_rate_radps, params.gains)
-    torque, integral = rate_control(rate_sp, gyro_radps, state.rate_integral, params.gains,
-                                    params.inertia_kgm2, dt_s)
-    if targets.torque_ff_nm is not None:
-        torque = torque + targets.torque_ff_nm
-    f_cmd = mix(targets.thrust_n, torque, params.mixer_inv, params.rotor_thrust_max_n)
+    cols = gain_columns(params.gains, params.inertia_kgm2, state.R.shape[0])
+    rate_sp = rate_setpoint_t(state.R, targets.R_des, targets.yaw_rate_radps, cols)
+    torque, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s)
+    if targets.torque_ff_nm is not None:  # (n, 3) feed-forward; the loop's torque is (3, n)
+        torque = torque + targets.torque_ff_nm.T
+    f_cmd = mix(targets.thrust_n, torque.T, params.mixer_inv, params.rotor_thrust_max_n)
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
     speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
     return np.sqrt(speed, out=speed), integral
@@ -223,38 +224,64 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
         w_radps: (n, 3) body rates.
         params: vehicle constants.
     """
-    f = rotor_thrusts_n(rotor_speed, thrust_gain, params)
-    # Component-major (3, n) and (6, n) work arrays: every operation runs on contiguous rows of
-    # n (a (n, 1) x (3,) broadcast would call the inner loop once per vehicle).
+    force, torque = _body_wrench_t(np.ascontiguousarray(np.asarray(rotor_speed, dtype=float).T),
+                                   np.asarray(thrust_gain, dtype=float), v_body_mps, w_radps,
+                                   params)
+    return force.T, torque.T
+
+
+def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
+                   w_radps: np.ndarray, params: RigidBodyParams) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n): force and torque (3, n).
+
+    Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
+    broadcast would call the inner loop once per vehicle)."""
+    f = omega * omega  # rotor_thrusts_n, rotor-major
+    f *= params.thrust_coeff * thrust_gain
     tmap = params.rotor_torque_map[:, :, None]
-    torque = tmap[0] * f[:, 0]
-    torque += tmap[1] * f[:, 1]
-    torque += tmap[2] * f[:, 2]
-    torque += tmap[3] * f[:, 3]
-    force = np.zeros_like(torque)
-    thrust = np.add(f[:, 0], f[:, 1], out=force[2])
-    thrust += f[:, 2]
-    thrust += f[:, 3]
+    torque = tmap[0] * f[0]
+    torque += tmap[1] * f[1]
+    torque += tmap[2] * f[2]
+    torque += tmap[3] * f[3]
+    force = np.empty_like(torque)
+    thrust = np.add(f[0], f[1], out=force[2])
+    thrust += f[2]
+    thrust += f[3]
     np.negative(thrust, out=force[2])
     kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
     if kd or kz:
         g = params.rotor_drag_sums[:, :, None]
-        sums = g[0] * rotor_speed[:, 0]
-        sums += g[1] * rotor_speed[:, 1]
-        sums += g[2] * rotor_speed[:, 2]
-        sums += g[3] * rotor_speed[:, 3]
+        sums = g[0] * omega[0]
+        sums += g[1] * omega[1]
+        sums += g[2] * omega[2]
+        sums += g[3] * omega[3]
         s, sx, sy, sxx, syy, sxy = sums
         vx, vy, vz = v_body_mps.T
         wx, wy, wz = w_radps.T
         axial = s * vz + wx * sy - wy * sx  # sum omega_i (u_i)_z
-        force[0] -= kd * (s * vx - wz * sy)
-        force[1] -= kd * (s * vy + wz * sx)
+        np.subtract(0.0, kd * (s * vx - wz * sy), out=force[0])
+        np.subtract(0.0, kd * (s * vy + wz * sx), out=force[1])
         force[2] -= kz * axial
         torque[0] -= kz * (sy * vz + wx * syy - wy * sxy)
         torque[1] += kz * (sx * vz + wx * sxy - wy * sxx)
         torque[2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
-    return force.T, torque.T
+    else:
+        force[:2] = 0.0
     return force, torque
+
+
+def _motor_alpha(params: RigidBodyParams, dt_s: float) -> float:
+    """The motors' first-order step factor ``1 - exp(-dt / tau)`` (cached per params and dt)."""
+    key = (id(params), dt_s)
+    hit = _ALPHA.get(key)
+    if hit is None or hit[0] is not params:
+        if len(_ALPHA) > 64:
+            _ALPHA.clear()
+        hit = _ALPHA[key] = (params, 1.0 - np.exp(-dt_s / params.motor_tau_s))
+    return hit[1]
+
+
+_ALPHA: dict[tuple[int, float], tuple[RigidBodyParams, float]] = {}
 
 
 def step_rigid_body(
@@ -275,16 +302,30 @@ def step_rigid_body(
         params: vehicle constants.
         dt_s: physics step.
     """
+    p, v, rot, w, omega, thrust, accel = _step_arrays(state, rotor_speed_cmd, ext_force_n,
+                                                      ext_torque_nm, params, dt_s)
+    return RigidBodyState(p, v, rot, w, omega, state.rate_integral, state.yaw_setpoint,
+                          state.thrust_gain, thrust), accel
+
+
+def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
+                 ext_torque_nm: np.ndarray | None, params: RigidBodyParams,
+                 dt_s: float) -> tuple[np.ndarray, ...]:
+    """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel); vectors are
+    computed component-major (3, n) and stored C-ordered (n, 3) like the state's."""
     m = params.mass_kg
     rot = state.R
     omega = state.rotor_speed
     v = state.v
     w = state.w
+    n = v.shape[0]
+    omega_t = np.ascontiguousarray(omega.T)
     v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    force_body, torque = body_wrench(omega, state.thrust_gain, v_body, w, params)
+    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body, w, params)
     if ext_torque_nm is not None:
-        torque += ext_torque_nm
-    accel = np.matmul(rot, force_body[:, :, None])[:, :, 0]
+        torque += np.asarray(ext_torque_nm, dtype=float).T
+    accel = np.matmul(rot, force_body.T[:, :, None])[:, :, 0]
+    accel_t = accel.T
     if params.parasitic_drag_coeff:
         vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
         speed = vx * vx
@@ -292,46 +333,46 @@ def step_rigid_body(
         speed += vz * vz
         np.sqrt(speed, out=speed)
         speed *= params.parasitic_drag_coeff
-        accel -= speed[:, None] * v
+        accel_t -= v.T * speed
     accel += ext_force_n
     accel /= m
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    inertia = per_axis(params.inertia_kgm2, w.shape[0])
-    jw = w * inertia
-    wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
-    jx, jy, jz = jw[:, 0], jw[:, 1], jw[:, 2]
+    inertia = gain_columns(params.gains, params.inertia_kgm2, n)[7]
+    w_t = w.T
+    jx, jy, jz = np.multiply(w_t, inertia, out=np.empty((3, n)))
+    wx, wy, wz = w_t
     # torque -= w x J w (the components of np.cross, written out: no axis juggling per call).
     gyro = wy * jz
     gyro -= wz * jy
-    torque[:, 0] -= gyro
+    torque[0] -= gyro
     np.multiply(wz, jx, out=gyro)
     gyro -= wx * jz
-    torque[:, 1] -= gyro
+    torque[1] -= gyro
     np.multiply(wx, jy, out=gyro)
     gyro -= wy * jx
-    torque[:, 2] -= gyro
+    torque[2] -= gyro
     torque /= inertia  # the angular acceleration
     torque *= dt_s
-    w_new = np.add(w, torque, out=np.empty_like(w))
-    accel_dt = accel * dt_s
-    v_new = v + accel_dt
+    w_new = np.empty((n, 3))
+    w_new_t = np.add(w_t, torque, out=w_new.T)
+    v_new = accel * dt_s
+    v_new += v
     mean = v + v_new
     mean *= 0.5 * dt_s
-    p_new = state.p + mean
-    np.add(w, w_new, out=mean)
-    mean *= 0.5 * dt_s
-    rot_new = _rotate(rot, mean)
-    alpha = 1.0 - np.exp(-dt_s / params.motor_tau_s)
+    p_new = np.add(state.p, mean, out=mean)
+    phi = np.add(w_t, w_new_t, out=torque)
+    phi *= 0.5 * dt_s
+    rot_new = _rotate_t(rot, phi)
     omega_new = rotor_speed_cmd - omega
-    omega_new *= alpha
+    omega_new *= _motor_alpha(params, dt_s)
     omega_new += omega
-    f_new = rotor_thrusts_n(omega_new, state.thrust_gain, params)
-    thrust_new = f_new[:, 0] + f_new[:, 1]
-    thrust_new += f_new[:, 2]
-    thrust_new += f_new[:, 3]
-    return RigidBodyState(p_new, v_new, rot_new, w_new, omega_new, state.rate_integral,
-                          state.yaw_setpoint, state.thrust_gain, thrust_new), accel
+    f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
+    f_new *= params.thrust_coeff * state.thrust_gain
+    thrust_new = f_new[0] + f_new[1]
+    thrust_new += f_new[2]
+    thrust_new += f_new[3]
+    return p_new, v_new, rot_new, w_new, omega_new, thrust_new, accel
 
 
 def step_with_autopilot(
@@ -346,24 +387,32 @@ def step_with_autopilot(
     """One physics step of N vehicles flown by their autopilots: the autopilot reads the gyro
     (true rates plus ``gyro_noise_radps``), commands the rotors, then :func:`step_rigid_body`.
     Returns (state, acceleration (n, 3))."""
-    gyro = state.w if gyro_noise_radps is None else state.w + gyro_noise_radps
+    if gyro_noise_radps is None:
+        gyro = state.w
+    else:  # component-major (a (3, n) array's .T from the world: contiguous rows)
+        gyro = np.add(state.w.T, np.asarray(gyro_noise_radps).T, out=np.empty((3, state.n))).T
     speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s)
-    new, accel = step_rigid_body(state, speed_cmd, ext_force_n, ext_torque_nm, params, dt_s)
+    p, v, rot, w, omega, thrust, accel = _step_arrays(state, speed_cmd, ext_force_n,
+                                                      ext_torque_nm, params, dt_s)
     yaw_sp = targets.yaw_rate_radps * dt_s
-    yaw_sp += new.yaw_setpoint
+    yaw_sp += state.yaw_setpoint
     yaw_sp += np.pi
     yaw_sp %= 2 * np.pi
     yaw_sp -= np.pi
-    return RigidBodyState(new.p, new.v, new.R, new.w, new.rotor_speed, integral, yaw_sp,
-                          new.thrust_gain, new.thrust_n), accel
+    return RigidBodyState(p, v, rot, w, omega, integral, yaw_sp, state.thrust_gain,
+                          thrust), accel
 
 
 def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """``R exp([phi]x)`` for (n, 3, 3) ``R`` and (n, 3) body rotation vectors (Rodrigues)."""
-    x, y, z = phi[:, 0], phi[:, 1], phi[:, 2]
-    theta2 = x * x
-    theta2 += y * y
-    theta2 += z * z
+    return _rotate_t(rot, np.ascontiguousarray(np.asarray(phi, dtype=float).T))
+
+
+def _rotate_t(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """:func:`_rotate` with component-major rotation vectors ``phi`` (3, n)."""
+    sq = phi * phi
+    theta2 = sq[0] + sq[1]
+    theta2 += sq[2]
     theta = np.sqrt(theta2)
     small = theta2 < 1e-12
     if small.any():  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
@@ -373,23 +422,18 @@ def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     else:
         a = np.sin(theta)
         a /= theta
-        b = 1.0 - np.cos(theta)
+        b = np.cos(theta)
+        np.subtract(1.0, b, out=b)
         b /= theta * theta
     # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I, built component-major (3, 3, n)
     # so that every operation runs on a contiguous row of n.
-    n = phi.shape[0]
-    d = np.empty((3, 3, n))
+    n = phi.shape[1]
+    bp = np.multiply(phi, b, out=sq)
+    d = np.multiply(bp[:, None, :], phi, out=np.empty((3, 3, n)))  # b p_i p_j
     diag = b * theta2
     np.subtract(1.0, diag, out=diag)
-    for i, p_i in enumerate((x, y, z)):
-        bp = b * p_i
-        np.multiply(bp, x, out=d[i, 0])
-        np.multiply(bp, y, out=d[i, 1])
-        np.multiply(bp, z, out=d[i, 2])
-        d[i, i] += diag
-    ax = a * x
-    ay = a * y
-    az = a * z
+    d.reshape(9, n)[::4] += diag
+    ax, ay, az = np.multiply(phi, a, out=bp)
     d[0, 1] -= az
     d[1, 0] += az
     d[0, 2] += ay

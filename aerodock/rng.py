@@ -13,7 +13,10 @@ from typing import Any
 
 import numpy as np
 
+# Draws per trial and refill. The normal and uniform buffers share each trial's generator,
+# so the refill size fixes which of the stream's numbers each gets: changing it changes them.
 _CHUNK = 4096
+_BLOCK = 16  # trials drawn per scratch block at a refill
 
 
 class TrialRNG:
@@ -36,20 +39,37 @@ class TrialRNG:
             raise ValueError(f"trials must hold {self.n} indices, got shape {index.shape}")
         self._gens = [np.random.default_rng([self.seed, int(t)]) for t in index]
         self._shared = np.random.default_rng([self.seed, -1 & 0x7FFFFFFF])
-        self._buf = {"normal": np.empty((n, 0)), "uniform": np.empty((n, 0))}
+        # Pre-drawn numbers, draw-major (draws, n): row j holds every trial's j-th next draw, so
+        # a block of draws is a contiguous (k, n) slice (fast to compute with, no copy).
+        self._buf = {"normal": np.empty((0, n)), "uniform": np.empty((0, n))}
         self._pos = {"normal": 0, "uniform": 0}
 
     def _take(self, kind: str, per_trial: int) -> np.ndarray:
+        """(per_trial, n): every trial's next ``per_trial`` draws, one row per draw (a view)."""
         buf, pos = self._buf[kind], self._pos[kind]
-        if pos + per_trial > buf.shape[1]:
+        end = pos + per_trial
+        if end > buf.shape[0]:
+            left = buf.shape[0] - pos
             size = max(_CHUNK, per_trial)
-            draw = (lambda g: g.standard_normal(size)) if kind == "normal" else (
-                lambda g: g.random(size))
-            fresh = np.stack([draw(g) for g in self._gens]) if self.n else np.empty((0, size))
-            buf = np.concatenate([buf[:, pos:], fresh], axis=1)
-            pos = 0
-        self._buf[kind], self._pos[kind] = buf, pos + per_trial
-        return buf[:, pos:pos + per_trial]
+            new = np.empty((left + size, self.n))
+            new[:left] = buf[pos:]
+            # Each trial's stream is drawn straight into a row of a small scratch block, then
+            # the block is transposed into place (blocks of 16 trials stay in cache).
+            scratch = np.empty((min(_BLOCK, self.n), size))
+            for i in range(0, self.n, _BLOCK):
+                gens = self._gens[i:i + _BLOCK]
+                rows = scratch[:len(gens)]
+                if kind == "normal":
+                    for g, row in zip(gens, rows):
+                        g.standard_normal(size, out=row)
+                else:
+                    for g, row in zip(gens, rows):
+                        g.random(size, out=row)
+                new[left:, i:i + len(gens)] = rows.T
+            self._buf[kind] = buf = new
+            pos, end = 0, per_trial
+        self._pos[kind] = end
+        return buf[pos:end]
 
     def _batch(self, kind: str, size: Any) -> np.ndarray:
         shape = (size,) if isinstance(size, int | np.integer) else tuple(size or ())
@@ -57,12 +77,22 @@ class TrialRNG:
             # Not a per-trial draw: use a shared stream (still deterministic for a given seed).
             return (self._shared.standard_normal(shape) if kind == "normal"
                     else self._shared.random(shape))
-        per_trial = int(np.prod(shape[1:], dtype=int))
-        return self._take(kind, per_trial).reshape(shape)
+        per_trial = 1
+        for k in shape[1:]:
+            per_trial *= int(k)
+        block = self._take(kind, per_trial)
+        if per_trial == 1:
+            return block[0].reshape(shape)
+        return np.ascontiguousarray(block.T).reshape(shape)
 
     def standard_normal(self, size: Any = None) -> np.ndarray:
         """Standard normal draws; ``size[0] == n`` gives one row per trial."""
         return self._batch("normal", size)
+
+    def standard_normal_t(self, k: int) -> np.ndarray:
+        """(k, n) standard normal draws, draw-major: the numbers of ``standard_normal((n, k)).T``
+        (a read-only-by-convention view; the hot loop's component-major form)."""
+        return self._take("normal", k)
 
     def normal(self, loc: Any = 0.0, scale: Any = 1.0, size: Any = None) -> np.ndarray:
         """Normal draws (per-trial when ``size[0] == n``)."""
@@ -75,3 +105,11 @@ class TrialRNG:
     def uniform(self, low: Any = 0.0, high: Any = 1.0, size: Any = None) -> np.ndarray:
         """Uniform draws in [low, high) (per-trial when ``size[0] == n``)."""
         return low + (high - low) * self._batch("uniform", size)
+
+
+def standard_normal_t(rng: np.random.Generator | TrialRNG, n: int, k: int) -> np.ndarray:
+    """(k, n) standard normal draws for n trials, component-major: the numbers (and, for a plain
+    ``Generator``, the order of drawing) of ``rng.standard_normal((n, k)).T``."""
+    if isinstance(rng, TrialRNG) and rng.n == n:
+        return rng._take("normal", k)
+    return rng.standard_normal((n, k)).T

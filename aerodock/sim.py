@@ -32,6 +32,7 @@ from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
 from aerodock.fleet import Fleet, build_fleet, concat_states, split_state
 from aerodock.geometry import rotmat_to_euler
 from aerodock.gripper import (
+    _CAPTURED,
     GateState,
     GripperParams,
     GripperState,
@@ -40,7 +41,7 @@ from aerodock.gripper import (
     step_gripper,
 )
 from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
-from aerodock.rng import TrialRNG
+from aerodock.rng import TrialRNG, standard_normal_t
 from aerodock.vehicle import (
     AttitudeCommand,
     VehicleParams,
@@ -101,6 +102,7 @@ class World:
         self._mass = np.full(n, self.vehicle.mass_kg)
         # Constant arrays of the hot loop (never modified in place).
         self._mass_col = self._mass[:, None]
+        self._mass_rows = np.repeat(self._mass_col, 3, axis=1)  # (n, 3): a flat loop, same numbers
         self._bar_mass = np.full(n, self.platform.bar_mass_kg)
         self._no_close = np.zeros(n, dtype=bool)
         self._zero_n = np.zeros(n)
@@ -108,9 +110,16 @@ class World:
         self._gravity = np.array([0.0, 0.0, self.vehicle.gravity_mps2])
         imu = cfg.imu
         self._gyro_sd = imu.gyro_noise_radps if self.rigid else 0.0
+        # Motion capture's noise (position, velocity) and the attitude estimate's (rigid body).
+        self._mocap_sd = (cfg.mocap.pos_noise_m, cfg.mocap.vel_noise_mps,
+                          imu.attitude_noise_rad if self.rigid else 0.0)
         self._rotor_offsets = (self.fleet.params.rotor_offsets_m if self.rigid
                                else np.zeros((1, 3)))
-        self._both_state: tuple[Any, Any, Any] | None = None
+        # Both vehicles as one batch of 2n (leaders first); ``leader``/``follower`` are its
+        # halves, split off when first asked for (the hot loop works on the batch itself).
+        self._batch: Any = None
+        self._lead: Any = None
+        self._fol: Any = None
         self.t_s = 0.0
         self.step_index = 0
 
@@ -206,19 +215,29 @@ class World:
         Positions and velocities from motion capture; the attitude is the flight computer's
         estimate (true attitude plus ``imu.attitude_noise_rad`` with the rigid-body model).
         """
-        cfg = self.cfg.mocap
         k = (self.step_index - self._latency_steps) % (self._latency_steps + 1)
         lp, lv, lr, fp, fv, fr = self._history[k]
-        n = self.n
-        att_sd = self.cfg.imu.attitude_noise_rad if self.rigid else 0.0
+        n, rng = self.n, self.rng
+        pos_sd, vel_sd, att_sd = self._mocap_sd
+        # Per trial the draws come as attitude (rigid body), position, velocity: one block.
+        per_trial = isinstance(rng, TrialRNG) and rng.n == n
 
         def noisy(p, v, rot):
             rpy = np.stack(rotmat_to_euler(rot), axis=1) if rot.ndim == 3 else rot.copy()
-            if att_sd > 0:
-                rpy += att_sd * self.rng.standard_normal((n, 3))
+            if per_trial:
+                draw = standard_normal_t(rng, n, 9 if att_sd > 0 else 6)
+                if att_sd > 0:
+                    rpy += att_sd * draw[:3].T
+                    draw = draw[3:]
+                noise_p, noise_v = draw[:3].T, draw[3:].T
+            else:
+                if att_sd > 0:
+                    rpy += att_sd * rng.standard_normal((n, 3))
+                noise_p = rng.standard_normal((n, 3))
+                noise_v = rng.standard_normal((n, 3))
             return Observation(
-                p=p + cfg.pos_noise_m * self.rng.standard_normal((n, 3)),
-                v=v + cfg.vel_noise_mps * self.rng.standard_normal((n, 3)),
+                p=np.add(p, pos_sd * noise_p, out=np.empty((n, 3))),
+                v=np.add(v, vel_sd * noise_v, out=np.empty((n, 3))),
                 rpy=rpy,
             )
 
@@ -281,43 +300,70 @@ class World:
         lead = follower_cmd if self.leader_fixed else leader_cmd
         return self.fleet.targets(lead, follower_cmd, self._both(), self.n, self.dt_s)
 
+    @property
+    def leader(self) -> Any:
+        """The leaders' state (n trials): a view of the batch's first half."""
+        if self._lead is None:
+            self._split()
+        return self._lead
+
+    @leader.setter
+    def leader(self, value: Any) -> None:
+        if self._lead is None:
+            self._split()
+        self._lead, self._batch = value, None
+
+    @property
+    def follower(self) -> Any:
+        """The followers' state (n trials): a view of the batch's second half."""
+        if self._fol is None:
+            self._split()
+        return self._fol
+
+    @follower.setter
+    def follower(self, value: Any) -> None:
+        if self._fol is None:
+            self._split()
+        self._fol, self._batch = value, None
+
+    def _split(self) -> None:
+        if self._batch is not None:
+            self._lead, self._fol = split_state(self.fleet, self._batch, self.n)
+
     def _both(self) -> Any:
         """Leader and follower as one batch of 2n vehicles (rebuilt if either was replaced)."""
-        both = self._both_state
-        if both is None or both[0] is not self.leader or both[1] is not self.follower:
-            lead, fol = self.leader, self.follower
-            state = concat_states(self.fleet, lead, fol)
-            self._both_state = both = (lead, fol, state)
-        return both[2]
+        if self._batch is None:
+            self._batch = concat_states(self.fleet, self.leader, self.follower)
+        return self._batch
 
     def _publish(self, both: Any) -> None:
         """Make ``both`` the current vehicles: ``self.leader``/``self.follower`` are its halves."""
-        self.leader, self.follower = split_state(self.fleet, both, self.n)
-        self._both_state = (self.leader, self.follower, both)
+        self._batch, self._lead, self._fol = both, None, None
 
     def _snapshot(self) -> tuple[np.ndarray, ...]:
-        lead, fol = self.leader, self.follower
-        if self.rigid:  # the attitude as a rotation; angles are computed when observed
-            return lead.p, lead.v, lead.R, fol.p, fol.v, fol.R
-        return lead.p, lead.v, lead.rpy, fol.p, fol.v, fol.rpy
+        both, n = self._both(), self.n
+        p, v = both.p, both.v
+        att = both.R if self.rigid else both.rpy  # a rotation; angles are computed when observed
+        return p[:n], v[:n], att[:n], p[n:], v[n:], att[n:]
 
     def _draw_gyro_noise(self) -> np.ndarray | None:
         if not self._gyro_sd:
             return None
         n = self.n
-        draw = self.rng.standard_normal((n, 6))  # per trial: leader's then follower's gyro
-        noise = np.empty((2 * n, 3))
-        noise[:n] = draw[:, :3]
-        noise[n:] = draw[:, 3:]
-        noise *= self._gyro_sd
-        return noise
+        draw = standard_normal_t(self.rng, n, 6)  # per trial: leader's then follower's gyro
+        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
+        np.multiply(draw[:3], self._gyro_sd, out=noise[:, :n])
+        np.multiply(draw[3:], self._gyro_sd, out=noise[:, n:])
+        return noise.T
 
-    def _lose_thrust(self, follower: Any, fol_R: np.ndarray, force: np.ndarray,  # noqa: N803
+    def _lose_thrust(self, rotor_speed: np.ndarray, thrust_gain: np.ndarray,
+                     fol_R: np.ndarray, force: np.ndarray,  # noqa: N803
                      torque: np.ndarray) -> None:
-        """Add the thrust the faulty rotors do not give, as a force and torque (in place)."""
+        """Add the thrust the followers' faulty rotors (speeds (n, 4), thrust gains (n,)) do
+        not give, as a force and torque (in place)."""
         params = self.fleet.params
-        lost = follower.rotor_speed * follower.rotor_speed
-        lost *= (params.thrust_coeff * follower.thrust_gain)[:, None]
+        lost = rotor_speed * rotor_speed
+        lost *= (params.thrust_coeff * thrust_gain)[:, None]
         lost *= self._rotor_loss
         force += fol_R[:, :, 2] * lost.sum(axis=1)[:, None]  # less thrust along body -z
         for i in range(lost.shape[1]):
@@ -326,29 +372,32 @@ class World:
     def _step(self, targets: Any, close_command: np.ndarray | None) -> None:
         dt = self.dt_s
         n = self.n
-        both = self._both()
-        leader, follower = self.leader, self.follower
+        both = self._both()  # the halves are views of the batch's rows
         bar, gp, mass = self.bar, self.gripper_params, self._mass
-        rot = both.R
+        rot, pos, vel = both.R, both.p, both.v
         lead_R, fol_R = rot[:n], rot[n:]
+        lead_p, lead_v, fol_p, fol_v = pos[:n], vel[:n], pos[n:], vel[n:]
         thrust = both.thrust_n
-        captured = self.gripper.gate == GateState.CAPTURED.value
+        captured = self.gripper.gate == _CAPTURED
         any_captured = bool(captured.any())
-        lead_body = BodyState(leader.p, leader.v, lead_R, thrust[:n], mass)
-        fol_body = BodyState(follower.p, follower.v, fol_R, thrust[n:], mass)
+        lead_body = BodyState(lead_p, lead_v, lead_R, thrust[:n], mass)
+        fol_body = BodyState(fol_p, fol_v, fol_R, thrust[n:], mass)
         # 1. Forces: the wake on the follower's rotors, on the bar; contact; cables.
         if self.rigid:  # sampled where it acts: each rotor disk (force and torque)
             wake_force, wake_torque = follower_wrench(self.field, lead_body, fol_body,
                                                       self._rotor_offsets, dt)
         else:  # a point mass feels the force at its centre
-            wake_force = self.field.acceleration(lead_body, fol_body, dt) * self._mass_col
+            wake_force = self.field.acceleration(lead_body, fol_body, dt) * self._mass_rows
             wake_torque = None
-        self.last_downwash_mps2 = wake_force / self._mass_col
-        bar_axis = np.stack([np.cos(bar.yaw_rad), np.sin(bar.yaw_rad), self._zero_n], axis=1)
+        self.last_downwash_mps2 = wake_force / self._mass_rows
+        bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
+        cos_yaw = np.cos(bar.yaw_rad, out=bar_axis[0])
+        sin_yaw = np.sin(bar.yaw_rad, out=bar_axis[1])
+        bar_axis[2] = 0.0
         bar_force = bar_wake_force_n(self.field, lead_body, bar.p, bar.v,
-                                     self.platform.bar_area_m2, dt, bar_axis)
+                                     self.platform.bar_area_m2, dt, bar_axis.T)
         contact, inside, up = bar_in_gripper(
-            follower.p, fol_R, follower.v, bar.p, bar.v, bar.yaw_rad, gp,
+            fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad, gp, cos_sin=(cos_yaw, sin_yaw),
         )
         if any_captured:
             contact = np.where(captured, 0.0, contact)
@@ -362,16 +411,18 @@ class World:
         bar_force = push if bar_force is None else bar_force + push
         torque = None
         if self.rigid:
-            torque = np.zeros((2 * n, 3))
+            torque_t = np.zeros((3, 2 * n))  # component-major: the vehicles work on its rows
             # The cables pull at the anchor, below the leader's centre of mass (body +z).
             cable_body = np.matmul(self.cable_force_n[:, None, :], lead_R)[:, 0]
             d = self.platform.anchor_below_leader_m
-            torque[:n, 0] = -d * cable_body[:, 1]
-            torque[:n, 1] = d * cable_body[:, 0]
+            np.multiply(-d, cable_body[:, 1], out=torque_t[0, :n])
+            np.multiply(d, cable_body[:, 0], out=torque_t[1, :n])
             if wake_torque is not None:
-                torque[n:] = wake_torque
+                torque_t[:, n:] = wake_torque.T
+            torque = torque_t.T
             if self._rotor_loss is not None:
-                self._lose_thrust(follower, fol_R, follower_force, torque[n:])
+                self._lose_thrust(both.rotor_speed[n:], both.thrust_gain[n:], fol_R,
+                                  follower_force, torque[n:])
 
         # 2. Vehicles (autopilots inside); then the bar hangs from the leader's new anchor.
         new, accel = self.fleet.step(both, targets, ext, torque, dt, self._draw_gyro_noise())
@@ -383,14 +434,14 @@ class World:
         if any_captured:
             hang_mass = np.where(captured, self.platform.bar_mass_kg + mass,
                                  self.platform.bar_mass_kg)
-            fol_own = (fol_accel - self._gravity) * self._mass_col
+            fol_own = (fol_accel - self._gravity) * self._mass_rows
             bar_force = bar_force + np.where(captured[:, None], fol_own, 0.0)
         else:
             hang_mass = self._bar_mass
         anchor_offset = lead_R[:, :, 2] * self.platform.anchor_below_leader_m  # anchor_point()
         self.bar, self.cable_force_n = step_bar(
-            bar, leader.p + anchor_offset, leader.v, lead_accel, new.p[:n] + anchor_offset,
-            leader.rpy[:, 2] if not self.rigid else _yaw(lead_R), bar_force, hang_mass,
+            bar, lead_p + anchor_offset, lead_v, lead_accel, new.p[:n] + anchor_offset,
+            both.rpy[:n, 2] if not self.rigid else _yaw(lead_R), bar_force, hang_mass,
             self.platform, dt,
         )
         if any_captured:
@@ -400,7 +451,7 @@ class World:
             cap = captured[:, None]
             np.copyto(new.p[n:], p_hang, where=cap)
             np.copyto(new.v[n:], self.bar.v, where=cap)
-            np.copyto(fol_accel, (new.v[n:] - follower.v) / dt, where=cap)
+            np.copyto(fol_accel, (new.v[n:] - fol_v) / dt, where=cap)
         # The ground (z = 0, NED): a vehicle that reaches it stops there (and is flagged).
         below = new.p[:, 2] > 0.0
         if below.any():

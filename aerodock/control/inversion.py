@@ -58,14 +58,20 @@ def accel_to_attitude_thrust(
         raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
     accel = np.atleast_2d(np.asarray(accel_mps2, dtype=float))
     n = accel.shape[0]
-    yaw = np.broadcast_to(np.asarray(yaw_rad, dtype=float), (n,))
-    mass = np.broadcast_to(np.asarray(mass_kg, dtype=float), (n,))
-    thrust_max = np.broadcast_to(np.asarray(thrust_max_n, dtype=float), (n,))
+    yaw = _rows(yaw_rad, n)
+    mass = _rows(mass_kg, n)
+    thrust_max = _rows(thrust_max_n, n)
 
-    f = mass[:, None] * (np.array([0.0, 0.0, gravity_mps2]) - accel)  # (n, 3), R e3 T = f
-    f_z = f[:, 2]
-    f_h = f[:, 0:2]
-    h_norm = np.linalg.norm(f_h, axis=-1)
+    # f = m (g e3 - a), (n, 3), R e3 T = f; column by column (no (n, 1) broadcasts, same numbers)
+    f_x = np.subtract(0.0, accel[:, 0])
+    f_x *= mass
+    f_y = np.subtract(0.0, accel[:, 1])
+    f_y *= mass
+    f_z = np.subtract(gravity_mps2, accel[:, 2])
+    f_z *= mass
+    h_norm = f_x * f_x
+    h_norm += f_y * f_y
+    np.sqrt(h_norm, out=h_norm)
     can_lift = f_z > 0.0
     f_z_pos = np.where(can_lift, f_z, 0.0)
 
@@ -74,22 +80,40 @@ def accel_to_attitude_thrust(
     h_max = np.minimum(h_max, np.sqrt(np.maximum(thrust_max**2 - f_z_pos**2, 0.0)))
     f_z_sat = np.minimum(f_z_pos, thrust_max)
     scale = np.where(h_norm > h_max, h_max / np.where(h_norm > 0.0, h_norm, 1.0), 1.0)
-    f_h_sat = np.where(can_lift[:, None], f_h * scale[:, None], 0.0)
+    f_x *= scale
+    f_y *= scale
+    f_x_sat = np.where(can_lift, f_x, 0.0)
+    f_y_sat = np.where(can_lift, f_y, 0.0)
 
-    thrust = np.sqrt(np.sum(f_h_sat**2, axis=-1) + f_z_sat**2)
+    thrust = f_x_sat * f_x_sat
+    thrust += f_y_sat * f_y_sat
+    thrust += f_z_sat * f_z_sat
+    np.sqrt(thrust, out=thrust)
     safe = np.where(thrust > 0.0, thrust, 1.0)
-    z_body = np.concatenate([f_h_sat, f_z_sat[:, None]], axis=-1) / safe[:, None]
-    z_body[thrust <= 0.0] = [0.0, 0.0, 1.0]
+    z_x = f_x_sat / safe
+    z_y = f_y_sat / safe
+    zz = f_z_sat / safe
+    level = thrust <= 0.0
+    if level.any():
+        z_x[level] = 0.0
+        z_y[level] = 0.0
+        zz[level] = 1.0
 
     # In the yaw-aligned frame, R e3 = [cos(roll) sin(pitch), -sin(roll), cos(roll) cos(pitch)].
     # Rz(yaw)^T z_body, written out (no einsum: faster, and independent of the batch size).
     cy, sy = np.cos(yaw), np.sin(yaw)
-    zx = cy * z_body[:, 0] + sy * z_body[:, 1]
-    zy = -sy * z_body[:, 0] + cy * z_body[:, 1]
-    zz = z_body[:, 2]
+    zx = cy * z_x + sy * z_y
+    zy = -sy * z_x + cy * z_y
     roll = np.arctan2(-zy, np.hypot(zx, zz))
     pitch = np.arctan2(zx, zz)
     return roll, pitch, thrust
+
+
+def _rows(value: np.ndarray | float, n: int) -> np.ndarray:
+    """``value`` as floats, broadcast to (n,) unless it is a scalar or already (n,) (elementwise
+    arithmetic broadcasts a scalar with the same numbers, without np.broadcast_to's cost)."""
+    arr = np.asarray(value, dtype=float)
+    return arr if arr.ndim == 0 or arr.shape == (n,) else np.broadcast_to(arr, (n,))
 
 
 def attitude_thrust_to_accel(
@@ -113,12 +137,15 @@ def attitude_thrust_to_accel(
     Returns:
         Acceleration in NED, ``(n, 3)``.
     """
-    roll, pitch, yaw, thrust, mass = np.broadcast_arrays(
-        *(np.asarray(v, dtype=float) for v in (roll_rad, pitch_rad, yaw_rad, thrust_n, mass_kg))
-    )
+    roll, pitch, yaw, thrust, mass = (np.asarray(v, dtype=float) for v in (
+        roll_rad, pitch_rad, yaw_rad, thrust_n, mass_kg))
+    shape = np.broadcast_shapes(roll.shape, pitch.shape, yaw.shape, thrust.shape, mass.shape)
     # Third column of Rz(yaw) Ry(pitch) Rx(roll) (see aerodock.geometry.euler_to_rotmat).
     cr, sr, cp, sp = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
     cy, sy = np.cos(yaw), np.sin(yaw)
-    k = thrust / mass
-    return np.stack([-(cy * sp * cr + sy * sr) * k, -(sy * sp * cr - cy * sr) * k,
-                     gravity_mps2 - cp * cr * k], axis=-1)
+    k = np.broadcast_to(thrust / mass, shape)  # every product below has the full shape
+    out = np.empty(shape + (3,))
+    np.multiply(-(cy * sp * cr + sy * sr), k, out=out[..., 0])
+    np.multiply(-(sy * sp * cr - cy * sr), k, out=out[..., 1])
+    np.subtract(gravity_mps2, cp * cr * k, out=out[..., 2])
+    return out

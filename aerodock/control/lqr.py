@@ -117,8 +117,21 @@ def lqr_command(
     k = np.asarray(gain, dtype=float)
     if k.shape[-2:] != (N_INPUT, N_STATE) or k.ndim not in (2, 3):
         raise ValueError(f"gain must be (4, 7) or (n, 4, 7), got {k.shape}")
-    # Broadcast-and-sum (not BLAS): a trial's result does not depend on the batch size.
-    u = -(k * err[:, None, :]).sum(-1)
-    accel = u[:, 0:3] + np.broadcast_to(np.asarray(ref_accel_mps2, dtype=float), (n, 3))
-    yaw_rate = u[:, 3] + np.broadcast_to(np.asarray(ref_yaw_rate_radps, dtype=float), (n,))
+    # Broadcast-and-sum (not BLAS): a trial's result does not depend on the batch size. The sum
+    # over the 7 states written out in order from 0.0, as numpy's sum(-1) adds them.
+    if k.ndim == 2:  # one gain: input-major (4, n) rows, one contiguous row per state
+        err_t = np.ascontiguousarray(err.T)
+        u = np.add(0.0, k[:, 0:1] * err_t[0])
+        for j in range(1, N_STATE):
+            u += k[:, j:j + 1] * err_t[j]
+        u = u.T
+    else:
+        prod = k * err[:, None, :]
+        u = np.add(0.0, prod[:, :, 0])
+        for j in range(1, N_STATE):
+            u += prod[:, :, j]
+    np.negative(u, out=u)
+    # out= fixes the shapes as np.broadcast_to((n, 3)) and ((n,)) did, without its cost.
+    accel = np.add(u[:, 0:3], np.asarray(ref_accel_mps2, dtype=float), out=np.empty((n, 3)))
+    yaw_rate = np.add(u[:, 3], np.asarray(ref_yaw_rate_radps, dtype=float), out=np.empty(n))
     return accel, yaw_rate

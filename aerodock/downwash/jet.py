@@ -33,9 +33,10 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.downwash.base import BodyState
-from aerodock.geometry import dot_rows, norm_rows
+from aerodock.rng import standard_normal_t
 
 _LN2 = np.log(2.0)
+_SQRT2 = np.sqrt(2.0)
 # max over x of x * exp(-ln2 x^2): the planar profile's peak, used to normalise planar_ratio.
 _PLANAR_PEAK = np.sqrt(1.0 / (2.0 * _LN2)) * np.exp(-0.5)
 
@@ -95,8 +96,9 @@ class RoundJetField:
         self.bar_turb_lateral = bar_turb_lateral
         self.disk_area_m2 = n_rotors * np.pi * rotor_radius_m**2
         self.air_density_kgpm3 = air_density_kgpm3
-        self._noise = np.zeros((0, 3))
-        self._bar_noise = np.zeros((0, 3))
+        # Turbulence states, component-major (3, n) like the hot loop's work arrays.
+        self._noise = np.zeros((3, 0))
+        self._bar_noise = np.zeros((3, 0))
         self._rng = np.random.default_rng(0)
         self._ou: tuple[float, float, float] | None = None  # (dt, decay, innovation scale)
         self._last_dt: float | None = None
@@ -110,13 +112,17 @@ class RoundJetField:
         """Start ``n`` trials; turbulence (follower's, then bar's) starts from its stationary
         distribution, drawn from ``rng`` (per trial with a :class:`aerodock.rng.TrialRNG`)."""
         self._rng = rng
-        self._noise = rng.standard_normal((n, 3))
-        self._bar_noise = rng.standard_normal((n, 3))
+        self._noise = standard_normal_t(rng, n, 3)
+        self._bar_noise = standard_normal_t(rng, n, 3)
         self._lead_key = self._lead_wake = None
 
     def acceleration(self, leader: BodyState, follower: BodyState, dt: float) -> np.ndarray:
         """(n, 3) acceleration on the follower, m/s², NED; advances the turbulence by ``dt``."""
-        if self._noise.shape[0] != leader.n:
+        return np.ascontiguousarray(self._accel_step(leader, follower, dt).T)
+
+    def _accel_step(self, leader: BodyState, follower: BodyState, dt: float) -> np.ndarray:
+        """:meth:`acceleration`, component-major (3, n)."""
+        if self._noise.shape[1] != leader.n:
             self.reset(leader.n, self._rng)
         noise = self._noise = self._ou_step(self._noise, dt)
         self._last_dt = dt
@@ -145,29 +151,36 @@ class RoundJetField:
         axis (the paper's oscillatory behaviour near the wake's edge). Turbulence scales the
         whole wrench (uncorrelated per-disk turbulence is not modelled).
         """
-        accel = self.acceleration(leader, follower, dt)
-        force = accel * np.asarray(follower.mass_kg, dtype=float)[:, None]
+        # Component-major (3, n) work arrays: every operation runs on contiguous rows of n.
+        force = self._accel_step(leader, follower, dt)
+        force *= np.asarray(follower.mass_kg, dtype=float)
         offsets = np.asarray(rotor_offsets_body_m, dtype=float).reshape(-1, 3)
-        centre = self._pressure_centre_body(leader, follower, offsets, self._lead_wake)
+        c = self._pressure_centre_body(leader, follower, offsets, self._lead_wake)
         R = follower.R  # noqa: N806
+        f0, f1, f2 = force
         # R^T F, column by column (rounding independent of the batch size, like dot_rows)
-        force_body = (R[:, 0, :] * force[:, 0:1] + R[:, 1, :] * force[:, 1:2]
-                      + R[:, 2, :] * force[:, 2:3])
-        torque = np.empty_like(force_body)  # centre x force_body, written out (np.cross is slow)
-        torque[:, 0] = centre[:, 1] * force_body[:, 2] - centre[:, 2] * force_body[:, 1]
-        torque[:, 1] = centre[:, 2] * force_body[:, 0] - centre[:, 0] * force_body[:, 2]
-        torque[:, 2] = centre[:, 0] * force_body[:, 1] - centre[:, 1] * force_body[:, 0]
-        return force, torque
+        fb = R[:, 0, :].T * f0
+        fb += R[:, 1, :].T * f1
+        fb += R[:, 2, :].T * f2
+        torque = np.empty((f0.shape[0], 3))  # centre x force_body, written out
+        np.multiply(c[1], fb[2], out=torque[:, 0])
+        torque[:, 0] -= c[2] * fb[1]
+        np.multiply(c[2], fb[0], out=torque[:, 1])
+        torque[:, 1] -= c[0] * fb[2]
+        np.multiply(c[0], fb[1], out=torque[:, 2])
+        torque[:, 2] -= c[1] * fb[0]
+        return np.ascontiguousarray(force.T), torque
 
     # -- extras used by the simulator, the oracle and `field probe` ---------------------------
     def mean_acceleration(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """(n, 3) mean (turbulence-free) acceleration on the follower, m/s², NED."""
-        return self._accel(leader, follower.p, follower.v, follower.mass_kg, None)
+        return np.ascontiguousarray(
+            self._accel(leader, follower.p, follower.v, follower.mass_kg, None).T)
 
     def wind_mps(self, leader: BodyState, points_m: np.ndarray) -> np.ndarray:
         """(n, 3) mean wake air velocity at ``points_m`` (n, 3), NED (used for the bar's drag)."""
         axis, _, speed, _, _ = self._wake(leader.p, points_m, self._leader_wake(leader))
-        return axis * speed[:, None]
+        return np.ascontiguousarray((axis * speed).T)
 
     def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
                     bar_area_m2: float, dt: float | None = None,
@@ -195,53 +208,83 @@ class RoundJetField:
         """
         lead = self._lead_wake if leader is self._lead_key else self._leader_wake(leader)
         self._lead_key = self._lead_wake = None
-        axis, _, speed, _, _ = self._wake(leader.p, bar_p_m, lead)
-        n = axis.shape[0]
-        if self._bar_noise.shape[0] != n:
-            self._bar_noise = self._rng.standard_normal((n, 3))
+        axis, _, speed, _, _ = self._wake(leader.p, bar_p_m, lead)  # component-major (3, n)
+        n = axis.shape[1]
+        if self._bar_noise.shape[1] != n:
+            self._bar_noise = standard_normal_t(self._rng, n, 3)
         step = dt if dt is not None else self._last_dt
         if step is not None and step > 0:
             self._bar_noise = self._ou_step(self._bar_noise, step)
         noise = self._bar_noise
         R = leader.R  # noqa: N806
-        along = 1.0 + 0.5 * self.bar_turb_vertical * noise[:, 0]
-        rel = axis * (speed * along)[:, None]
+        along = 0.5 * self.bar_turb_vertical * noise[0]
+        along += 1.0
+        along *= speed
+        rel = axis * along
         lateral = self.bar_turb_lateral * speed
-        rel += (lateral * noise[:, 1])[:, None] * R[:, :, 0]
-        rel += (lateral * noise[:, 2])[:, None] * R[:, :, 1]
-        rel -= bar_v_mps
+        work = np.array(R[:, :, 0].T, dtype=float, order="C")  # a copy, even for n = 1
+        rel += np.multiply(work, lateral * noise[1], out=work)
+        np.copyto(work, R[:, :, 1].T)
+        rel += np.multiply(work, lateral * noise[2], out=work)
+        rel -= np.asarray(bar_v_mps, dtype=float).T
         if bar_axis is not None:
-            rel -= dot_rows(rel, bar_axis)[:, None] * bar_axis
+            ba = np.ascontiguousarray(np.asarray(bar_axis, dtype=float).T)
+            across = rel * ba
+            dot = across[0] + across[1]
+            dot += across[2]
+            rel -= np.multiply(dot, ba, out=across)
         drag = 0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2
-        return (drag * norm_rows(rel))[:, None] * rel
+        sq = rel * rel
+        norm = sq[0] + sq[1]
+        norm += sq[2]
+        np.sqrt(norm, out=norm)
+        norm *= drag
+        out = np.empty((n, 3))
+        np.multiply(norm, rel, out=out.T)
+        return out
 
     # -- internals -----------------------------------------------------------------------------
     def _leader_wake(self, leader: BodyState) -> tuple:
-        """The parts of :meth:`_wake` that depend on the leader only."""
-        axis = leader.R[:, :, 2]  # body z (down when level): the wake's direction
+        """The parts of :meth:`_wake` that depend on the leader only; vectors component-major
+        (3, n)."""
+        # body z (down when level): the wake's direction
+        axis = np.array(leader.R[:, :, 2].T, dtype=float, order="C")
         thrust = np.maximum(leader.thrust_n, 0.0)
         w0 = 2.0 * np.sqrt(thrust / (2.0 * self.air_density_kgpm3 * self.disk_area_m2))
-        lv = leader.v
-        v_perp = lv - dot_rows(lv, axis)[:, None] * axis
+        lv = np.ascontiguousarray(np.asarray(leader.v, dtype=float).T)
+        prod = lv * axis
+        along = prod[0] + prod[1]
+        along += prod[2]
+        v_perp = np.multiply(along, axis, out=prod)
+        np.subtract(lv, v_perp, out=v_perp)
         return axis, w0, np.maximum(w0, 1e-6), v_perp
 
     def _wake(self, leader_p_m: np.ndarray, points_m: np.ndarray, lead: tuple):
-        """Axis, radial vector, local wake speed, distance from the wake's centre and force
-        half-radius at ``points_m``, for leaders at ``leader_p_m`` with wake parts ``lead``."""
+        """Axis, radial vector (both component-major, (3, n)), local wake speed, distance from
+        the wake's centre and force half-radius at ``points_m`` (n, 3), for leaders at
+        ``leader_p_m`` with wake parts ``lead`` (:meth:`_leader_wake`)."""
         axis, w0, w0_min, v_perp = lead
-        rel = points_m - leader_p_m
-        depth = dot_rows(rel, axis)
+        rel = np.subtract(np.asarray(points_m, dtype=float).T,
+                          np.asarray(leader_p_m, dtype=float).T, out=np.empty(axis.shape))
+        prod = rel * axis
+        depth = prod[0] + prod[1]
+        depth += prod[2]
         s = np.maximum(depth, 0.0)
         lc = self.core_length_m
         centre_speed = w0 * lc
         centre_speed /= s + lc
         # Wake skew: convection time from the rotor to depth s, tau = int_0^s ds'/w_c(s').
-        tau = s**2 / (2.0 * lc)
+        tau = s * s
+        tau /= 2.0 * lc
         tau += s
         tau /= w0_min
-        radial = rel - depth[:, None] * axis
-        radial += v_perp * tau[:, None]
-        r = norm_rows(radial)
+        radial = rel
+        radial -= np.multiply(depth, axis, out=prod)
+        radial += np.multiply(v_perp, tau, out=prod)
+        np.multiply(radial, radial, out=prod)
+        r = prod[0] + prod[1]
+        r += prod[2]
+        np.sqrt(r, out=r)
         half_width = self.spread_rate * s
         half_width += self.half_width0_m
         g = r / half_width
@@ -251,47 +294,58 @@ class RoundJetField:
         below = depth < 0.0
         if below.any():  # nothing above the rotors
             speed *= np.where(below, np.exp(-((depth / 0.05) ** 2)), 1.0)
-        return axis, radial, speed, r, half_width / np.sqrt(2.0)
+        return axis, radial, speed, r, half_width / _SQRT2
 
     def _accel(self, leader, p_m, v_mps, mass_kg, noise, lead=None) -> np.ndarray:
+        """The acceleration on followers at ``p_m`` moving at ``v_mps``, component-major (3, n);
+        ``noise`` (3, n) the turbulence (None: the mean)."""
         lead = self._leader_wake(leader) if lead is None else lead
         axis, radial, speed, r, force_half_radius = self._wake(leader.p, p_m, lead)
-        w_rel = speed - dot_rows(v_mps, axis) * (speed > 0)
+        prod = np.array(np.asarray(v_mps, dtype=float).T, order="C")  # a copy, even for n = 1
+        prod *= axis
+        w_rel = prod[0] + prod[1]
+        w_rel += prod[2]
+        w_rel *= speed > 0
+        np.subtract(speed, w_rel, out=w_rel)
         k = self.ingest_coeff * self.air_density_kgpm3 * self.disk_area_m2 / mass_kg
         axial = k * w_rel
         axial *= np.abs(w_rel)
         x = r / force_half_radius
-        unit_radial = radial / np.maximum(r, 1e-9)[:, None]
+        unit_radial = np.divide(radial, np.maximum(r, 1e-9), out=radial)
         planar = (self.planar_ratio / _PLANAR_PEAK) * axial
         planar *= x
         if noise is not None:
             R = leader.R  # noqa: N806
-            lateral = self.turb_lateral * np.abs(axial)
-            out = (axial * (1.0 + self.turb_vertical * noise[:, 0]))[:, None] * axis
-            out += planar[:, None] * unit_radial
-            out += (lateral * noise[:, 1])[:, None] * R[:, :, 0]
-            out += (lateral * noise[:, 2])[:, None] * R[:, :, 1]
+            lat0, lat1 = np.ascontiguousarray(R[:, :, 0].T), np.ascontiguousarray(R[:, :, 1].T)
+            lateral = np.abs(axial)
+            lateral *= self.turb_lateral
+            along = self.turb_vertical * noise[0]
+            along += 1.0
+            along *= axial
+            out = axis * along
+            out += np.multiply(planar, unit_radial, out=prod)
+            out += np.multiply(lat0, lateral * noise[1], out=prod)
+            out += np.multiply(lat1, lateral * noise[2], out=prod)
             return out
-        out = axial[:, None] * axis
-        out += planar[:, None] * unit_radial
+        out = axis * axial
+        out += np.multiply(planar, unit_radial, out=prod)
         return out
 
     def _ou_step(self, state: np.ndarray, dt: float) -> np.ndarray:
-        """One Ornstein-Uhlenbeck step of a unit-variance state (correlation time
+        """One Ornstein-Uhlenbeck step of a unit-variance state (3, n) (correlation time
         ``turb_corr_time_s``), with fresh draws from the trial's random source."""
         ou = self._ou
         if ou is None or ou[0] != dt:
             decay = np.exp(-dt / self.turb_corr_time_s)
             ou = self._ou = (dt, decay, np.sqrt(1.0 - decay**2))
-        noise = self._rng.standard_normal(state.shape)
-        noise *= ou[2]
+        noise = standard_normal_t(self._rng, state.shape[1], state.shape[0]) * ou[2]
         noise += ou[1] * state
         return noise
 
     def _pressure_centre_body(self, leader: BodyState, follower: BodyState,
                               offsets_body_m: np.ndarray, lead: tuple | None) -> np.ndarray:
-        """(n, 3) body-frame centre of the rotor disks weighted by the wake's dynamic pressure
-        at each disk centre (equal weights where no disk is in the wake).
+        """(3, n) body-frame centre of the rotor disks (component-major) weighted by the wake's
+        dynamic pressure at each disk centre (equal weights where no disk is in the wake).
 
         The wake of :meth:`_wake` evaluated at the (n, k) disk centres at once; the factor
         ``w0^2`` common to a trial's disks cancels in the weights and is left out. Elementwise
@@ -299,32 +353,34 @@ class RoundJetField:
         """
         axis, _, w0_min, v_perp = self._leader_wake(leader) if lead is None else lead
         R = follower.R  # noqa: N806
-        ox, oy, oz = offsets_body_m[:, 0], offsets_body_m[:, 1], offsets_body_m[:, 2]
-        d = follower.p - leader.p
-        rel = []  # (n, k) per component: disk centres from the leader
-        for i in range(3):
-            c = R[:, i, 0:1] * ox
-            c += R[:, i, 1:2] * oy
-            if oz.any():
-                c += R[:, i, 2:3] * oz
-            c += d[:, i:i + 1]
-            rel.append(c)
-        depth = rel[0] * axis[:, 0:1]
-        depth += rel[1] * axis[:, 1:2]
-        depth += rel[2] * axis[:, 2:3]
+        # Work arrays (3 components, k disks, n trials): every operation runs on rows of n.
+        k = offsets_body_m.shape[0]
+        n = axis.shape[1]
+        ox, oy, oz = (offsets_body_m[:, i:i + 1] for i in range(3))  # (k, 1)
+        rt = np.ascontiguousarray(R.transpose(2, 1, 0))  # rt[j, i] = R[:, i, j], rows of n
+        d = np.ascontiguousarray((follower.p - leader.p).T)[:, None, :]
+        rel = np.multiply(rt[0][:, None, :], ox, out=np.empty((3, k, n)))  # disk centres
+        prod = np.multiply(rt[1][:, None, :], oy, out=np.empty((3, k, n)))
+        rel += prod
+        if oz.any():
+            rel += np.multiply(rt[2][:, None, :], oz, out=prod)
+        rel += d
+        axis3 = axis[:, None, :]
+        np.multiply(rel, axis3, out=prod)
+        depth = prod[0] + prod[1]
+        depth += prod[2]
         s = np.maximum(depth, 0.0)
         lc = self.core_length_m
         tau = s * s
         tau *= 0.5 / lc
         tau += s
-        tau /= w0_min[:, None]
-        r2 = np.zeros_like(depth)
-        for i in range(3):
-            radial = rel[i]
-            radial -= depth * axis[:, i:i + 1]
-            radial += v_perp[:, i:i + 1] * tau
-            radial *= radial
-            r2 += radial
+        tau /= w0_min
+        radial = rel
+        radial -= np.multiply(depth, axis3, out=prod)
+        radial += np.multiply(v_perp[:, None, :], tau, out=prod)
+        radial *= radial
+        r2 = radial[0] + radial[1]
+        r2 += radial[2]
         half_width = self.spread_rate * s
         half_width += self.half_width0_m
         r2 /= half_width * half_width
@@ -336,18 +392,18 @@ class RoundJetField:
         above = depth < 0.0
         if above.any():  # nothing above the rotors (as in _wake)
             pressure *= np.where(above, np.exp(-2.0 * (depth / 0.05) ** 2), 1.0)
-        k = offsets_body_m.shape[0]
-        total = pressure[:, 0].copy()
+        total = pressure[0].copy()
         for j in range(1, k):
-            total += pressure[:, j]
+            total += pressure[j]
         inside = total > 1e-300
         if inside.all():
-            pressure /= total[:, None]
+            pressure /= total
             share = pressure
         else:
-            share = np.where(inside[:, None], pressure / np.where(inside, total, 1.0)[:, None],
-                             1.0 / k)
-        centre = share[:, 0:1] * offsets_body_m[0]
+            share = np.where(inside, pressure / np.where(inside, total, 1.0), 1.0 / k)
+        cols = offsets_body_m[:, :, None]  # (k, 3, 1)
+        centre = np.multiply(cols[0], share[0], out=np.empty((3, n)))
+        work = np.empty((3, n))
         for j in range(1, k):
-            centre += share[:, j:j + 1] * offsets_body_m[j]
+            centre += np.multiply(cols[j], share[j], out=work)
         return centre
