@@ -17,14 +17,16 @@ FIELDS = ("MinimalField", "OutwardThrustAxisField", "NoWakeField")
 WITHOUT_MEAN = ("MinimalField", "NoWakeField")
 
 # The smallest honest curriculum: one stage (0.5-0.8 m below the leader) of three flights
-# (0.6 min, so the sample-efficiency study still trains at 0.5 min). Everything else is what
-# `reproduce --quick` and the other commands do by default.
+# (0.6 min, so the sample-efficiency study still trains at 0.5 min) and one deep stage (0.3-0.5 m)
+# of three. Everything else is what `reproduce --quick` and the other commands do by default.
 _CONFIG = """[downwash]
 field = "protocol_fields:{name}"
 [downwash.params]
 [curriculum]
 stage0_depth_m = [0.5, 0.8]
 flights_per_stage = 3
+deep_depths_m = [0.3]
+deep_flights_per_stage = 3
 """
 
 
