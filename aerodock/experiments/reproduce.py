@@ -60,8 +60,8 @@ class RunSize:
 
 
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
-                moving_trials=12, se_minutes=(0.5, 1, 2, 5),
-                se_seeds=(0, 1), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=8.0,
+                moving_trials=8, se_minutes=(0.5, 2),
+                se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=5.0,
                 cost_trials=8, cost_taus_s=(4.0, 0.25), cost_mixes=(0.0, 1.0), target_trials=4,
                 target_all_rows=False)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,

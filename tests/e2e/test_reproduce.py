@@ -14,7 +14,7 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     out = tmp_path / "run"
     proc = subprocess.run(
         [sys.executable, "-c", "from aerodock.cli import main; main()", "reproduce", "--quick",
-         "--out", str(out)], capture_output=True, text=True, timeout=900)
+         "--out", str(out)], capture_output=True, text=True, timeout=1800)
     assert proc.returncode == 0, proc.stderr
     assert "report.md" in proc.stdout
     res = json.loads((out / "results.json").read_text())
