@@ -25,8 +25,12 @@ $(STAMP): $(BIN)/python pyproject.toml
 demo: $(STAMP)
 	$(BIN)/aerodock reproduce --quick --out out/demo
 
+# Two xdist workers (the machines have 2 cores), one file at a time each (a file's fixtures are
+# built once), in collection order: tests/conftest.py puts the long `reproduce --quick` runs first.
+PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder
+
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(PYTEST_XDIST)
 
 lint: $(STAMP)
 	$(BIN)/ruff check aerodock tests bench

@@ -1,8 +1,21 @@
-"""Shared fixtures: the default config, and where the shared real data lives (if present)."""
+"""Shared fixtures: the default config, and where the shared real data lives (if present).
+
+Also how the suite shares two cores (``make test`` runs ``pytest -n 2 --dist loadfile``): one
+BLAS/OpenMP/torch thread per xdist worker, and the long ``reproduce --quick`` runs scheduled
+first so that the rest of the suite runs beside them instead of after them.
+"""
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
+
+# Two xdist workers on two cores: a second BLAS/OpenMP/torch thread per worker only
+# oversubscribes the cores. Set before NumPy (or torch) is imported; subprocesses inherit it.
+if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+    for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
 
 import numpy as np
 import pytest
@@ -10,6 +23,25 @@ import pytest
 from aerodock.config import load_config
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+# Under xdist (``--dist loadfile``: each file runs on one worker, so a module- or session-scoped
+# fixture is built once per file rather than once per worker) the files with the long
+# ``reproduce --quick`` runs go first: longest first keeps both cores busy to the end. Each run
+# is a subprocess, so while a worker waits for one the other worker goes through the rest.
+_FIRST = (
+    "tests/protocol/test_protocol_commands.py",  # three runs started as the module begins
+    "tests/e2e/test_reproduce.py",
+)
+
+
+def _first_rank(item) -> int:
+    path = item.nodeid.split("::", 1)[0]
+    return _FIRST.index(path) if path in _FIRST else len(_FIRST)
+
+
+def pytest_collection_modifyitems(config, items):
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        items.sort(key=_first_rank)  # stable: the order inside each file is kept
 
 
 @pytest.fixture(scope="session")
@@ -35,3 +67,51 @@ def shared_data():
         return path
 
     return get
+
+
+# The fuzz suite's case tally (``fuzz_helpers.TALLY``, printed by tests/fuzz/conftest.py) is
+# counted in the workers under xdist: pass it to the controller, which prints the sum.
+_WORKER_TALLIES: dict[str, int] = {}
+
+
+def pytest_sessionfinish(session):
+    helpers = sys.modules.get("fuzz_helpers")
+    if hasattr(session.config, "workeroutput") and helpers is not None and helpers.TALLY:
+        session.config.workeroutput["fuzz_tally"] = dict(helpers.TALLY)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    for family, n in getattr(node, "workeroutput", {}).get("fuzz_tally", {}).items():
+        _WORKER_TALLIES[family] = _WORKER_TALLIES.get(family, 0) + n
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _WORKER_TALLIES:
+        total = sum(_WORKER_TALLIES.values())
+        parts = ", ".join(f"{k} {v}" for k, v in sorted(_WORKER_TALLIES.items()))
+        terminalreporter.write_line(f"fuzz cases: {total} ({parts}); "
+                                    f"scale {os.environ.get('AERODOCK_FUZZ_SCALE', '1')}")
+
+
+def _untimed_pedantic(target, args=(), kwargs=None, setup=None, rounds=1, warmup_rounds=0,
+                     iterations=1):
+    """``benchmark.pedantic`` without the timing: the function is called as often as the
+    benchmark would call it (warm-up rounds, then rounds x iterations)."""
+    result = None
+    for _ in range(warmup_rounds + rounds):
+        a, k = (args, kwargs or {}) if setup is None else (setup() or (args, kwargs or {}))
+        for _ in range(iterations):
+            result = target(*a, **k)
+    return result
+
+
+@pytest.fixture
+def benchmark(benchmark):
+    """pytest-benchmark's fixture. Under xdist it turns itself off and then calls a benchmarked
+    function once; here it is called as often as when timed, so a test that checks the state
+    afterwards checks the same state. Nothing is timed then: the benchmarks assert nothing about
+    speed (``aerodock bench`` measures)."""
+    if benchmark.disabled:
+        benchmark.pedantic = _untimed_pedantic
+    return benchmark
