@@ -310,10 +310,9 @@ def targets_command(
         summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
         model = Path(summary["final_model"])
     predictor = Predictor.load(model)
-    with progress_bar():
-        res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
-                       "ours + model": (controller_config(cfg, "ours"), predictor)},
-                      trials, predictor, seed, say)
+    res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
+                   "ours + model": (controller_config(cfg, "ours"), predictor)},
+                  trials, predictor, seed, say)
     res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
     _write_json_atomic(out / "targets.json", res)
     if as_json:

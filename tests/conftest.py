@@ -69,8 +69,8 @@ def shared_data():
     return get
 
 
-# The fuzz suite's case tally (``fuzz_helpers.TALLY``, printed by tests/fuzz/conftest.py) is
-# counted in the workers under xdist: pass it to the controller, which prints the sum.
+# The fuzz suite's case tally (``fuzz_helpers.TALLY``): counted in this process, or under xdist
+# in the workers, which pass it to the controller; printed once, summed, at the end.
 _WORKER_TALLIES: dict[str, int] = {}
 
 
@@ -87,9 +87,13 @@ def pytest_testnodedown(node, error):
 
 
 def pytest_terminal_summary(terminalreporter):
-    if _WORKER_TALLIES:
-        total = sum(_WORKER_TALLIES.values())
-        parts = ", ".join(f"{k} {v}" for k, v in sorted(_WORKER_TALLIES.items()))
+    tally = dict(_WORKER_TALLIES)
+    helpers = sys.modules.get("fuzz_helpers")
+    for family, n in (helpers.TALLY.items() if helpers is not None else ()):
+        tally[family] = tally.get(family, 0) + n
+    if tally:
+        total = sum(tally.values())
+        parts = ", ".join(f"{k} {v}" for k, v in sorted(tally.items()))
         terminalreporter.write_line(f"fuzz cases: {total} ({parts}); "
                                     f"scale {os.environ.get('AERODOCK_FUZZ_SCALE', '1')}")
 

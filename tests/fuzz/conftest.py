@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
-from fuzz_helpers import TALLY
 
 
 @pytest.fixture(autouse=True)
@@ -44,11 +42,3 @@ def model_dir(fuzz_dir, flightlog_file) -> Path:
                    "--json"], family="setup")
     assert res.rc == 0, res.err
     return out
-
-
-def pytest_terminal_summary(terminalreporter):
-    if TALLY:
-        total = sum(TALLY.values())
-        parts = ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items()))
-        terminalreporter.write_line(f"fuzz cases: {total} ({parts}); "
-                                    f"scale {os.environ.get('AERODOCK_FUZZ_SCALE', '1')}")
