@@ -128,6 +128,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     "mission.backoff_s": (0.1, 600),
     "mission.backoff_distance_m": (0, 100),
     "mission.settle_s": (0, 600),
+    "mission.leader_ramp_s": (0, 600),
     "mission.status_delay_s": (0, 10),
     "curriculum.stage0_depth_m": (0.05, 100),
     "curriculum.stage_step_m": (0.01, 100),

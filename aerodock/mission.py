@@ -38,7 +38,7 @@ from aerodock.planning.minjerk import MinJerk, minjerk
 from aerodock.platform import anchor_point, platform_segments, rotor_strike
 from aerodock.recorder import FlightRecorder, vehicle_meta
 from aerodock.rng import TrialRNG
-from aerodock.settle import settle
+from aerodock.settle import CruiseStart, settle
 from aerodock.sim import Observation, World
 
 
@@ -266,17 +266,19 @@ class MissionBatch:
                                     else np.zeros(3))
         self.lead_v = lead_v = np.tile(lead_vel, (n, 1))
         zeros, zero_n = np.zeros((n, 3)), np.zeros(n)
-        # Settled start: both fly (the leader cruising if it moves) for settle_s before t = 0.
-        settle_s = m.settle_s
-        world.reset(leader_p0 - lead_vel * settle_s, start - lead_vel * settle_s)
-        if moving:
+        # Settled start: both fly for settle_s before t = 0 (observers converge); a moving
+        # leader then speeds up smoothly and cruises, the follower in formation below.
+        pre = CruiseStart(m.settle_s, m.leader_ramp_s if moving else 0.0)
+        shift0 = pre.profile(-pre.preroll_s)[0]
+        world.reset(leader_p0 + lead_vel * shift0, start + lead_vel * shift0)
+        if moving and pre.start_velocity(lead_vel).any():
             world.set_velocities(lead_v, lead_v)
         self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
         self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE,
                                                has_accelerometer=True)
-        settle(world, self.leader_ctl, self.follower_ctl, self._leader_ref,
-               lambda t: Reference(start + lead_vel * t, lead_v, zeros, zero_n, zero_n),
-               settle_s, self._predict)
+        settle(world, self.leader_ctl, self.follower_ctl,
+               pre.reference(leader_p0, lead_v), pre.reference(start, lead_v),
+               pre.preroll_s, self._predict)
         # Align, then rise (planner.rise_m > 0): the approach ends rise_m below the docking
         # point rise_s early, and the final rise is vertical. rise_m = 0: the paper's single
         # minimum-jerk approach to the docking point.

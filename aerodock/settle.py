@@ -10,6 +10,7 @@ station keeping (or formation flight with a cruising leader) before the mission 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,3 +55,60 @@ def settle(world: World, leader_ctl: PositionController, follower_ctl: PositionC
         accel = world.observed_accel() if follower_ctl.uses_accelerometer else None
         fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, follower_ref(t), None, ff, accel)
         world.advance(lout.command, fout.command)
+
+
+# A moving leader is already cruising this long when the mission clock starts.
+CRUISE_BEFORE_S = 1.0
+
+
+@dataclass(frozen=True)
+class CruiseStart:
+    """How a moving leader gets to its cruise velocity before t = 0, as a real one does.
+
+    It hovers first (``settle_s``: the observers converge on the bar's weight and thrust errors),
+    then speeds up along a minimum-jerk profile over ``ramp_s`` and cruises
+    :data:`CRUISE_BEFORE_S` before the mission clock starts. Starting the leader at full speed
+    with observers that know nothing (its drag unexplained) makes it overshoot its speed by half
+    and leaves the bar swinging several centimetres: a start no flight has. With ``ramp_s = 0``
+    (or a hovering leader) the pre-roll is ``settle_s`` at constant velocity.
+
+    ``shift_s(t)`` is the reference's displacement along the velocity in seconds of cruise:
+    ``p_ref(t) = p(0) + v shift_s(t)``, with ``shift_s(t) = t`` once cruising.
+    """
+
+    settle_s: float
+    ramp_s: float
+
+    @property
+    def preroll_s(self) -> float:
+        """Time flown before t = 0, s."""
+        extra = self.ramp_s + CRUISE_BEFORE_S if self.ramp_s > 0 else 0.0
+        return self.settle_s + extra
+
+    def profile(self, t_s: float) -> tuple[float, float, float]:
+        """(shift s, speed fraction, acceleration fraction 1/s) of the reference at ``t_s`` <= 0."""
+        if self.ramp_s <= 0:
+            return t_s, 1.0, 0.0
+        end = -CRUISE_BEFORE_S
+        if t_s >= end:
+            return t_s, 1.0, 0.0
+        u = max(0.0, (t_s - end + self.ramp_s) / self.ramp_s)
+        area = 2.5 * u**4 - 3.0 * u**5 + u**6  # integral of the minimum-jerk speed, 0.5 at u = 1
+        speed = 10 * u**3 - 15 * u**4 + 6 * u**5
+        accel = (30 * u**2 - 60 * u**3 + 30 * u**4) / self.ramp_s
+        return end - self.ramp_s * (0.5 - area), speed, accel
+
+    def reference(self, p0_m: np.ndarray, velocity_mps: np.ndarray) -> ReferenceFn:
+        """The pre-roll reference of a vehicle that is at ``p0_m`` (n, 3) at t = 0 and flies
+        ``velocity_mps`` (n, 3) from then on."""
+        zero_n = np.zeros(p0_m.shape[0])
+
+        def ref(t_s: float) -> Reference:
+            shift, speed, accel = self.profile(t_s)
+            return Reference(p0_m + velocity_mps * shift, velocity_mps * speed,
+                             velocity_mps * accel, zero_n, zero_n)
+        return ref
+
+    def start_velocity(self, velocity_mps: np.ndarray) -> np.ndarray:
+        """The velocity the vehicles have when the pre-roll begins."""
+        return velocity_mps * (1.0 if self.ramp_s <= 0 else 0.0)

@@ -221,3 +221,26 @@ def test_targets_measure_every_scenario_and_the_learnt_mean(cfg):
     assert at_036["depth_m"] == 0.36
     assert abs(at_036["relative_error"]) < 1e-9  # the oracle is the field's own mean
     assert at_036["met"]
+
+
+def test_a_moving_leader_starts_the_mission_cruising_with_the_bar_hanging_still(cfg):
+    """At t = 0 a leader that sped up smoothly flies the stated speed and its bar hangs straight
+    below; one switched on at full speed overshoots it by a third and leaves the bar swinging."""
+    from aerodock.mission import MissionBatch
+    from aerodock.platform import anchor_point
+
+    def start(ramp_s: float) -> tuple[np.ndarray, np.ndarray]:
+        c = cfg.with_overrides({"mission": {"leader_ramp_s": ramp_s}})
+        batch = MissionBatch(c, MissionSpec(trials=8, offset_m=0.36, leader_speed_mps=0.5,
+                                            seed=2))
+        w = batch.world
+        # along the travel (the wake's turbulence swings it sideways in hover too)
+        swing = w.bar.p[:, 0] - anchor_point(w.leader.p, w.leader.R, w.platform)[:, 0]
+        return w.leader.v[:, 0], np.abs(swing)
+
+    speed, swing = start(cfg.mission.leader_ramp_s)
+    assert np.all(np.abs(speed - 0.5) < 0.03)
+    assert np.all(swing < 0.01)
+    speed_abrupt, swing_abrupt = start(0.0)
+    assert np.mean(speed_abrupt) > 0.6
+    assert np.max(swing_abrupt) > 0.03
