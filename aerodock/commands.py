@@ -254,6 +254,9 @@ def reproduce(
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
     config: ConfigOpt = None,
     seed: SeedOpt = 0,
+    real_data: Annotated[bool, typer.Option(
+        help="Run the real-data study (step 5; it reads ../shared/data and does not depend on "
+             "--config).")] = True,
 ) -> None:
     """The paper's experiments end to end: results.json, report.md and figures/."""
     from aerodock.experiments.reproduce import run_reproduce
@@ -261,7 +264,7 @@ def reproduce(
     cfg = _config(config)
     shared = Path(__file__).resolve().parents[1].parent / "shared" / "data"
     here = Path.cwd().parent / "shared" / "data"
-    data = here if here.is_dir() else shared
+    data = (here if here.is_dir() else shared) if real_data else None
 
     def say(msg: str) -> None:
         err_console.print(msg)

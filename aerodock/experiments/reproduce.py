@@ -314,7 +314,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
 
         results["real_data"] = real_data_study(real_dir, fig_dir, quick=quick, seed=seed)
     else:
-        say("5/5 real-data study skipped (../shared/data/neural-swarm not found)")
+        why = "not asked for" if shared_data is None else "../shared/data/neural-swarm not found"
+        say(f"5/5 real-data study skipped ({why})")
         results["real_data"] = None
     timings["real_data_s"] = time.perf_counter() - t0
 
