@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 from pathlib import Path
 from typing import Any
 
@@ -126,7 +128,8 @@ def fig_moving(traces: dict[str, dict], fig_dir: Path, meet_s: float, hold_s: fl
         tr = traces[key]
         e = tr["follower_p"][:, :, 2] - tr["ref_p"][:, :, 2]
         e = np.where(tr["phase"] <= 1, e, np.nan)
-        with np.errstate(invalid="ignore"):
+        with warnings.catch_warnings():  # no trial approaching at late times: a gap, not news
+            warnings.simplefilter("ignore", RuntimeWarning)
             mean, sd = np.nanmean(e, 1), np.nanstd(e, 1)
         ax.plot(tr["t_s"], mean, color=colour, label=key.replace("_", " "))
         ax.fill_between(tr["t_s"], mean - sd, mean + sd, color=colour, alpha=0.25)
