@@ -273,3 +273,47 @@ def test_feedforward_uses_the_learnt_torque_when_there_is_one():
     np.testing.assert_allclose(learnt, want, atol=1e-12)
     np.testing.assert_allclose(feedforward_torque_nm(force_only, lead, fol, offsets),
                                hub_torque_nm(force_only, lead, fol, offsets), atol=0)
+
+
+# -- the command line ------------------------------------------------------------------------
+
+def test_cli_trains_evaluates_and_exports_a_wrench_model(tmp_path, sim_logs):
+    import json
+
+    import typer
+    from typer.testing import CliRunner
+
+    from aerodock.flightlog import save_flightlogs
+    from aerodock.learning.commands import evaluate_command, export_command, train_command
+
+    app = typer.Typer()
+    app.command("train")(train_command)
+    app.command("evaluate")(evaluate_command)
+    app.command("export")(export_command)
+    runner = CliRunner()
+    save_flightlogs(tmp_path / "train.npz", sim_logs[:6])
+    save_flightlogs(tmp_path / "test.npz", sim_logs[6:])
+    res = runner.invoke(app, ["train", "--model", "so2-wrench", "--data",
+                              str(tmp_path / "train.npz"), "--out", str(tmp_path / "w"),
+                              "--max-epochs", "3", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["kind"] == "so2-wrench"
+    assert out["val_rmse_torque_nm"] > 0 and out["val_true_torque_rms_nm"] > 0
+    res = runner.invoke(app, ["evaluate", "--model", str(tmp_path / "w"), "--data",
+                              str(tmp_path / "test.npz"), "--json"])
+    assert res.exit_code == 0, res.output
+    torque = json.loads(res.stdout)["torque"]["interaction"]
+    assert torque["model_vs_true"]["rmse_nm"]["overall"] > 0 and torque["true_rms_nm"] > 0
+    res = runner.invoke(app, ["export", "--model", str(tmp_path / "w"), "--out",
+                              str(tmp_path / "w.onnx"), "--json"])
+    if res.exit_code == 0:  # onnx installed
+        assert json.loads(res.stdout)["max_abs_diff_vs_numpy_torque_nm"] < 1e-5
+    # logs without torque observations: one line, naming the missing extra, nothing written
+    bare = [replace(log, extra={k: v for k, v in log.extra.items() if k != OBS_TORQUE_KEY})
+            for log in sim_logs[:2]]
+    save_flightlogs(tmp_path / "bare.npz", bare)
+    res = runner.invoke(app, ["train", "--model", "so2-wrench", "--data",
+                              str(tmp_path / "bare.npz"), "--out", str(tmp_path / "none")])
+    assert res.exit_code == 2 and not (tmp_path / "none").exists()
+    assert "follower_obs_torque_nm" in res.stderr and res.stderr.count("\n") == 1
