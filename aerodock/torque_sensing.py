@@ -69,7 +69,9 @@ def rotor_torque_nm(rotor_speed_radps: np.ndarray, v_body_mps: np.ndarray,
 
 
 class TorqueLog:
-    """Accumulates a batch of followers' torque terms, one physics step at a time.
+    """Collects a batch of followers' per-step states over a control period and turns them
+    into a :class:`TorqueReading` when read, all steps in one batch (a physics step only keeps
+    references to arrays the world made anyway: it never modifies a state in place).
 
     Args:
         params: the followers' rigid-body constants.
@@ -79,18 +81,17 @@ class TorqueLog:
 
     def __init__(self, params: RigidBodyParams, n: int, dt_s: float) -> None:
         self.params = params
+        self.n = n
         self.dt_s = dt_s
         self._inertia = np.asarray(params.inertia_kgm2, dtype=float)
-        self._sums = np.zeros((4, n, 3))  # rotor, gyroscopic, wake, gyro readings
-        self._count = 0
-        self._pending: np.ndarray | None = None  # (4, n, 3): the last step's terms
-        self._gyro_start: np.ndarray | None = None  # reading at the window's first step
-        self._gyro_last = np.zeros((n, 3))  # reading at the step after the window's last
+        # Per step: (true rates, gyro noise or None, rotor speeds, velocity, attitude, wake
+        # torque or None); the last one's reading closes the window, its terms open the next.
+        self._steps: list[tuple] = []
 
     def add_step(self, w_radps: np.ndarray, gyro_noise_radps: np.ndarray | None,
                  rotor_speed_radps: np.ndarray, v_mps: np.ndarray, rot: np.ndarray,
                  wake_torque_nm: np.ndarray | None) -> None:
-        """The terms of one physics step, from the followers' state before it.
+        """One physics step, from the followers' state before it (arrays kept, not copied).
 
         Args:
             w_radps: (n, 3) true body rates.
@@ -100,34 +101,33 @@ class TorqueLog:
             rot: (n, 3, 3) attitude, body to world.
             wake_torque_nm: (n, 3) the wake's torque this step, body FRD (None: zero).
         """
-        gyro = np.array(w_radps) if gyro_noise_radps is None else w_radps + gyro_noise_radps
-        if self._pending is not None:
-            self._sums += self._pending
-            self._count += 1
-        elif self._gyro_start is None:
-            self._gyro_start = gyro
-        v_body = np.einsum("nji,nj->ni", rot, v_mps)
-        terms = np.empty_like(self._sums)
-        terms[0] = rotor_torque_nm(rotor_speed_radps, v_body, gyro, self.params)
-        terms[1] = np.cross(gyro, gyro * self._inertia)
-        terms[2] = 0.0 if wake_torque_nm is None else wake_torque_nm
-        terms[3] = gyro
-        self._pending = terms
-        self._gyro_last = gyro
+        self._steps.append((w_radps, gyro_noise_radps, rotor_speed_radps, v_mps, rot,
+                            wake_torque_nm))
 
     def read(self) -> TorqueReading:
         """The window since the last read (zeros before two steps); starts the next window."""
-        count = max(self._count, 1)
-        mean = self._sums / count
-        if self._count and self._gyro_start is not None:
-            rate_change = (self._gyro_last - self._gyro_start) / (self._count * self.dt_s)
-            kinematic = rate_change * self._inertia + mean[1]
-        else:
-            kinematic = np.zeros_like(mean[1])
-        reading = TorqueReading(kinematic_nm=kinematic, rotor_nm=mean[0],
-                                body_rates_radps=mean[3], true_wake_nm=mean[2])
-        self._sums = np.zeros_like(self._sums)
-        self._count = 0
-        if self._pending is not None:
-            self._gyro_start = self._gyro_last
-        return reading
+        n, steps = self.n, self._steps
+        if len(steps) < 2:
+            zeros = np.zeros((n, 3))
+            return TorqueReading(zeros, zeros.copy(), zeros.copy(), zeros.copy())
+        count = len(steps) - 1
+        gyro = np.stack([w if noise is None else w + noise for w, noise, *_ in steps])
+        window = gyro[:-1].reshape(-1, 3)  # (count * n, 3): the window's steps in one batch
+        speed = np.concatenate([step[2] for step in steps[:-1]])
+        v = np.concatenate([step[3] for step in steps[:-1]])
+        rot = np.concatenate([step[4] for step in steps[:-1]])
+        v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
+        rotor = rotor_torque_nm(speed, v_body, window, self.params)
+        gyroscopic = np.cross(window, window * self._inertia)
+        wake = np.zeros((count, n, 3))
+        for k, step in enumerate(steps[:-1]):  # the steps of one period (5): not trials
+            if step[5] is not None:
+                wake[k] = step[5]
+        rate_change = (gyro[-1] - gyro[0]) / (count * self.dt_s)
+        self._steps = steps[-1:]
+        return TorqueReading(
+            kinematic_nm=rate_change * self._inertia + gyroscopic.reshape(count, n, 3).mean(0),
+            rotor_nm=rotor.reshape(count, n, 3).mean(0),
+            body_rates_radps=gyro[:-1].mean(0),
+            true_wake_nm=wake.mean(0),
+        )
