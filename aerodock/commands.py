@@ -226,8 +226,8 @@ def collect(
     from aerodock.learning.curriculum import run_curriculum
 
     cfg = _config(config)
-    if model is not None and model not in ("so2", "so2-ext", "mlp"):
-        fail(f"--model must be so2, so2-ext or mlp, got {model!r}")
+    if model is not None and model not in ("so2", "so2-ext", "so2-wrench", "mlp"):
+        fail(f"--model must be so2, so2-ext, so2-wrench or mlp, got {model!r}")
 
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")

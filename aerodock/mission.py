@@ -28,7 +28,7 @@ from aerodock.control.compensation import (
     OraclePredictor,
 )
 from aerodock.control.controller import PositionController, Reference
-from aerodock.control.torque_feedforward import hub_torque_nm
+from aerodock.control.torque_feedforward import feedforward_torque_nm
 from aerodock.downwash import BodyState, build_field
 from aerodock.faults import Fault, FaultRuntime, draw_faults
 from aerodock.flightlog import FlightLog
@@ -525,11 +525,12 @@ class MissionBatch:
                 yaw_rate_radps=np.where(hanging, 0.0, cmd.yaw_rate_radps),
                 thrust_n=np.where(hanging, hang_thrust, cmd.thrust_n)))
         if self.torque_ff:
-            # The wake's torque predicted by the model at the rotor hubs, cancelled by the
-            # autopilot (not while hanging from the bar).
+            # The wake's torque predicted by the model (learnt, or at the rotor hubs from the
+            # force), cancelled by the autopilot (not while hanging from the bar).
             mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
-            tau = hub_torque_nm(self.predictor, _bodies(obs_l_f, mass * g, mass),
-                                _bodies(obs_f, mass * g, mass), world.fleet.params.rotor_offsets_m)
+            tau = feedforward_torque_nm(self.predictor, _bodies(obs_l_f, mass * g, mass),
+                                        _bodies(obs_f, mass * g, mass),
+                                        world.fleet.params.rotor_offsets_m)
             tau = np.where(hanging[:, None], 0.0, tau)
             fout = replace(fout, command=replace(fout.command, torque_ff_nm=-tau))
         close = (t >= self.active_at_s) & active & _bar_will_be_inside(

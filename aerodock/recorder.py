@@ -1,4 +1,13 @@
-"""Recording simulated flights as FlightLogs, one row per control tick, batch-first."""
+"""Recording simulated flights as FlightLogs, one row per control tick, batch-first.
+
+Besides the FlightLog's fields, every log carries ``extra`` arrays: the simulator's truth
+(``true_field_mean_mps2``, ``bar_pos_m``, ...) and ``label_valid``. With rigid-body vehicles it
+also carries what a real follower logs about torques (:meth:`aerodock.sim.World.observed_torque`,
+one reading per control period, body FRD): ``follower_obs_torque_nm`` (``J dw/dt + w x J w``
+from the gyro), ``follower_rotor_torque_nm`` (what the rotors explain from their measured speeds),
+``follower_body_rates_radps`` (the gyro), and the truth ``true_wake_torque_nm`` (evaluation
+only). :mod:`aerodock.learning.labels` turns the first two into torque labels.
+"""
 
 from __future__ import annotations
 
@@ -13,7 +22,10 @@ from aerodock.geometry import rotmat_to_quat
 from aerodock.sim import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",
-         "phase", "bar", "valid")
+         "phase", "bar", "valid", "tau_obs", "tau_rotor", "rates", "tau_true")
+# Recorded rows -> FlightLog extras of the torque observations (rigid-body vehicles only).
+TORQUE_EXTRAS = {"tau_obs": "follower_obs_torque_nm", "tau_rotor": "follower_rotor_torque_nm",
+                 "rates": "follower_body_rates_radps", "tau_true": "true_wake_torque_nm"}
 
 
 class FlightRecorder:
@@ -46,11 +58,19 @@ class FlightRecorder:
         r["ff"].append(out.feedforward_mps2)
         r["phase"].append(np.array(phase, copy=True))
         r["bar"].append(world.bar.p.copy())
+        if world.rigid and len(r["t"]) == 1:
+            world.observed_torque()  # the first read starts the torque log's window
         world.contact_seen[:] = False
 
     def after_step(self, world: World) -> None:
         """Record the accelerometer over the control period just flown."""
         self.rows["aobs"].append(world.observed_accel())
+        if world.rigid:
+            torque = world.observed_torque()
+            self.rows["tau_obs"].append(torque.kinematic_nm)
+            self.rows["tau_rotor"].append(torque.rotor_nm)
+            self.rows["rates"].append(torque.body_rates_radps)
+            self.rows["tau_true"].append(torque.true_wake_nm)
         # Touching the bar or hanging on the cables: the residual is not downwash (a real
         # pipeline flags the same samples from the gripper's strain gauge).
         self.rows["valid"].append(~(world.contact_seen | world.captured))
@@ -59,6 +79,8 @@ class FlightRecorder:
         """One FlightLog per trial; ``meta(i)`` gives trial ``i``'s metadata."""
         arr = {k: np.asarray(v) for k, v in self.rows.items()}  # (T, n, ...)
         n = arr["lp"].shape[1]
+        torque = {name: arr[key] for key, name in TORQUE_EXTRAS.items()
+                  if len(self.rows[key]) == len(self.rows["t"]) and self.rows["t"]}
         return [
             FlightLog(
                 t_s=arr["t"], leader_pos_m=arr["lp"][:, i], leader_vel_mps=arr["lv"][:, i],
@@ -68,7 +90,8 @@ class FlightRecorder:
                 follower_obs_accel_mps2=arr["aobs"][:, i], meta=meta(i),
                 extra={"true_field_mean_mps2": arr["fmean"][:, i], "ref_pos_m": arr["ref"][:, i],
                        "feedforward_mps2": arr["ff"][:, i], "phase": arr["phase"][:, i],
-                       "bar_pos_m": arr["bar"][:, i], "label_valid": arr["valid"][:, i]},
+                       "bar_pos_m": arr["bar"][:, i], "label_valid": arr["valid"][:, i],
+                       **{name: a[:, i] for name, a in torque.items()}},
             )
             for i in range(n)
         ]

@@ -3,8 +3,10 @@
 Batch-first and fixed-step: one :meth:`World.step` advances N independent trials by one physics
 step (``1 / sim.physics_rate_hz``); controllers run outside, every ``physics/control`` steps, and
 see the world only through :meth:`World.observe` (motion capture with noise and latency) and
-:meth:`World.observed_accel` (the follower's IMU: bias, vibration, noise). All randomness comes
-from the ``numpy.random.Generator`` given to the constructor: same config and seed, same numbers.
+:meth:`World.observed_accel` (the follower's IMU: bias, vibration, noise). A flight log may also
+read :meth:`World.observed_torque` (the follower's gyro and rotor-speed torques, rigid-body model;
+see :mod:`aerodock.torque_sensing`). All randomness comes from the ``numpy.random.Generator``
+given to the constructor: same config and seed, same numbers.
 
 The physics pipeline of one step (the downwash is one stage of it, as in crazyflow):
 
@@ -42,6 +44,7 @@ from aerodock.gripper import (
 )
 from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
 from aerodock.rng import TrialRNG, standard_normal_t
+from aerodock.torque_sensing import TorqueLog, TorqueReading
 from aerodock.vehicle import (
     AttitudeCommand,
     VehicleParams,
@@ -163,6 +166,9 @@ class World:
         self.contact_seen = np.zeros(n, dtype=bool)
         self.ground_contact = np.zeros(n, dtype=bool)
         self._rotor_loss: np.ndarray | None = None
+        self._torque_log: TorqueLog | None = None  # kept once someone reads the torques
+        self._torque_reading: TorqueReading | None = None
+        self._steps_at_last_torque = 0
 
     def set_rotor_loss(self, loss: np.ndarray) -> None:
         """Injected fault: the follower's rotors lose these fractions (n, 4) of their thrust
@@ -271,6 +277,30 @@ class World:
         sd = np.sqrt(sd / samples)
         self._accel_reading = accel + sd[:, None] * self.rng.standard_normal((self.n, 3))
         return self._accel_reading.copy()
+
+    def observed_torque(self) -> TorqueReading:
+        """The follower's torque observations (body FRD) over the control period since the last
+        call: the kinematic torque ``J dw/dt + w x J w`` from its gyro, the torque its rotors
+        explain from their measured speeds, its mean gyro reading, and the simulator's true wake
+        torque over the same steps (see :mod:`aerodock.torque_sensing`).
+
+        The first call starts the log (and returns zeros): until then the world computes none
+        of it. Like :meth:`observed_accel`, a second call before the world has moved returns
+        the same reading. No random numbers are drawn (the gyro noise is the autopilot's).
+
+        Raises:
+            ValueError: point-mass vehicles (they have no rotors or body rates).
+        """
+        if not self.rigid:
+            raise ValueError("torque observations need vehicle.model = 'rigid-body'")
+        if self._torque_log is None:
+            self._torque_log = TorqueLog(self.fleet.params, self.n, self.dt_s)
+            self._steps_at_last_torque = self.step_index
+            self._torque_reading = self._torque_log.read()
+        elif self.step_index != self._steps_at_last_torque or self._torque_reading is None:
+            self._steps_at_last_torque = self.step_index
+            self._torque_reading = self._torque_log.read()
+        return self._torque_reading
 
     @property
     def captured(self) -> np.ndarray:
@@ -425,7 +455,11 @@ class World:
                                   follower_force, torque[n:])
 
         # 2. Vehicles (autopilots inside); then the bar hangs from the leader's new anchor.
-        new, accel = self.fleet.step(both, targets, ext, torque, dt, self._draw_gyro_noise())
+        gyro_noise = self._draw_gyro_noise()
+        if self._torque_log is not None:  # only when a flight log reads the torques
+            self._torque_log.add_step(both.w[n:], None if gyro_noise is None else gyro_noise[n:],
+                                      both.rotor_speed[n:], fol_v, fol_R, wake_torque)
+        new, accel = self.fleet.step(both, targets, ext, torque, dt, gyro_noise)
         if self.leader_fixed:  # on its stand: no motion, hover thrust
             new = self.fleet.hovering(new, both, slice(None, n))
             accel[:n] = 0.0

@@ -1,4 +1,9 @@
-"""The wake's torque on the follower, predicted from a learnt force model, for the autopilot.
+"""The wake's torque on the follower, predicted by a learnt model, for the autopilot.
+
+:func:`feedforward_torque_nm` is what the mission feeds the autopilot with
+``control.torque_feedforward = true``: the model's own torque prediction when it has one (a
+``so2-wrench`` model, learnt from torque labels: ``predict_torque_bodies``), otherwise the
+torque the force model implies at the rotor hubs (:func:`hub_torque_nm`, below).
 
 The wake acts on the rotor disks, not at the centre of mass: off the wake's axis the inner
 rotors are pushed down harder than the outer ones, and the difference pitches the vehicle
@@ -20,6 +25,19 @@ import numpy as np
 
 from aerodock.control.compensation import AccelPredictor
 from aerodock.downwash.base import BodyState
+
+
+def feedforward_torque_nm(predictor: AccelPredictor, leader: BodyState, follower: BodyState,
+                          rotor_offsets_body_m: np.ndarray) -> np.ndarray:
+    """(n, 3) predicted wake torque on the follower, body frame FRD, N m, for the autopilot.
+
+    The learnt torque (``predictor.predict_torque_bodies``) when the predictor has one
+    (``has_torque``: a ``so2-wrench`` model); otherwise the force model sampled at the rotor
+    hubs (:func:`hub_torque_nm`).
+    """
+    if getattr(predictor, "has_torque", False):
+        return predictor.predict_torque_bodies(leader, follower)
+    return hub_torque_nm(predictor, leader, follower, rotor_offsets_body_m)
 
 
 def hub_torque_nm(predictor: AccelPredictor, leader: BodyState, follower: BodyState,

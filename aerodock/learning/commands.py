@@ -23,7 +23,7 @@ from typing import Annotated, Any, NoReturn
 
 import typer
 
-TRAINABLE = ("so2", "so2-ext", "mlp", "zero")
+TRAINABLE = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
 
 DataOpt = Annotated[
     list[Path],
@@ -75,7 +75,8 @@ def train_command(
     data: DataOpt,
     out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
     model: Annotated[
-        str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, mlp (or zero).")
+        str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, so2-wrench (force "
+                                          "and torque; needs logs with torques), mlp (or zero).")
     ] = "so2",
     minutes: Annotated[
         float | None,
@@ -110,7 +111,7 @@ def train_command(
     except ImportError:
         _fail("training needs PyTorch: pip install 'aerodock[learn]'")
     try:
-        check_trainable(ds)
+        check_trainable(ds, kind=model)
     except ValueError as err:
         _fail(_one_line(err))
     from rich.console import Console
@@ -153,6 +154,9 @@ def train_command(
         "stopped": info.get("stopped"),
         "train_rmse_mps2": info.get("train_rmse_mps2"),
         "val_rmse_mps2": info.get("val_rmse_mps2"),
+        **{key: info[key] for key in ("train_rmse_torque_nm", "val_rmse_torque_nm",
+                                      "val_torque_vs_true_rmse_nm", "val_true_torque_rms_nm")
+           if key in info},
         "train_time_s": info.get("train_time_s"),
         "warnings": ds.meta.get("warnings", []),
     }
@@ -166,6 +170,13 @@ def train_command(
         f"{_fmt(result['train_time_s'], 1)} s, {result['epochs']} epochs ({result['stopped']}); "
         f"validation RMSE {_fmt(result['val_rmse_mps2'])} m/s² ({result['split']} split)"
     )
+    if "val_rmse_torque_nm" in result:
+        truth = ""
+        if "val_torque_vs_true_rmse_nm" in result:
+            truth = (f", {_fmt(result['val_torque_vs_true_rmse_nm'], 4)} N m against the true "
+                     f"wake torque (its RMS {_fmt(result['val_true_torque_rms_nm'], 4)} N m)")
+        typer.echo(f"torque: validation RMSE {_fmt(result['val_rmse_torque_nm'], 4)} N m "
+                   f"against the labels{truth}")
     typer.echo(f"wrote {path}")
 
 
@@ -183,6 +194,25 @@ def _metrics_table(title: str, region: dict[str, Any]) -> Any:
         table.add_row(f"RMSE {axis} [m/s²]", *[_fmt(m["rmse_mps2"][axis]) for _, m in cols])
     for axis in ("x", "y", "z", "overall"):
         table.add_row(f"R² {axis}", *[_fmt(m["r2"][axis]) for _, m in cols])
+    return table
+
+
+def _torque_table(title: str, region: dict[str, Any]) -> Any:
+    from rich.table import Table
+
+    table = Table(title=f"torque, {title} ({region['n']} samples)", title_justify="left")
+    cols = [("model", region["model"]), ("zero model", region["zero"])]
+    if region.get("true_torque"):
+        cols.append(("true torque", region["true_torque"]))
+        cols.append(("model vs true", region["model_vs_true"]))
+    table.add_column("metric")
+    for name, _ in cols:
+        table.add_column(name, justify="right")
+    for axis in ("x", "y", "z", "overall"):
+        table.add_row(f"RMSE {axis} [N m]", *[_fmt(m["rmse_nm"][axis], 4) for _, m in cols])
+    if region.get("true_rms_nm") is not None:
+        table.caption = (f"RMS of the true wake torque (one component): "
+                         f"{region['true_rms_nm']:.4f} N m")
     return table
 
 
@@ -219,6 +249,9 @@ def evaluate_command(
     console.print(_metrics_table("all samples", result["all"]))
     console.print(_metrics_table(f"interaction region: {result['interaction_region']}",
                                  result["interaction"]))
+    if "torque" in result:
+        console.print(_torque_table("all samples", result["torque"]["all"]))
+        console.print(_torque_table("interaction region", result["torque"]["interaction"]))
 
 
 def export_command(
@@ -227,7 +260,8 @@ def export_command(
     dtype: Annotated[str, typer.Option("--dtype", help="float32 or float64 graph.")] = "float32",
     as_json: JsonOpt = False,
 ) -> None:
-    """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output (n,3))."""
+    """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output f_ext_mps2 (n,3),
+    and tau_ext_nm (n,3) for so2-wrench)."""
     from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
 
@@ -248,7 +282,7 @@ def export_command(
     try:
         import onnx  # noqa: F401
 
-        from aerodock.learning.export import check_onnx, export_onnx
+        from aerodock.learning.export import export_onnx, onnx_differences
     except ImportError:
         _fail("ONNX export needs onnx: pip install 'aerodock[export]'")
     try:
@@ -258,14 +292,20 @@ def export_command(
     except (OSError, RuntimeError) as err:
         _fail(f"{out}: export failed ({_one_line(err)})")
     try:
-        max_diff: float | None = check_onnx(path, predictor)
+        diffs: dict[str, float] | None = onnx_differences(path, predictor)
     except ImportError:
-        max_diff = None
-    result = {"model_dir": str(model), "kind": predictor.kind, "onnx": str(path),
-              "max_abs_diff_vs_numpy_mps2": max_diff}
+        diffs = None
+    result: dict[str, Any] = {"model_dir": str(model), "kind": predictor.kind, "onnx": str(path),
+                              "max_abs_diff_vs_numpy_mps2": diffs and diffs["f_ext_mps2"]}
+    if diffs and "tau_ext_nm" in diffs:
+        result["max_abs_diff_vs_numpy_torque_nm"] = diffs["tau_ext_nm"]
     if as_json:
         _echo_json(result)
         return
-    check = ("not checked (onnxruntime not installed)" if max_diff is None
-             else f"max |onnxruntime - numpy| = {max_diff:.2e} m/s²")
+    if diffs is None:
+        check = "not checked (onnxruntime not installed)"
+    else:
+        check = f"max |onnxruntime - numpy| = {diffs['f_ext_mps2']:.2e} m/s²"
+        if "tau_ext_nm" in diffs:
+            check += f", {diffs['tau_ext_nm']:.2e} N m"
     typer.echo(f"wrote {path} ({check})")

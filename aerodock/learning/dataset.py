@@ -6,16 +6,23 @@ body to world), the de-biased labels ``y`` (n, 3, m/s², NED, see :mod:`aerodock
 the flight each sample comes from and its time. Simulated flights may also provide the true mean
 downwash acceleration (``extra["true_field_mean_mps2"]`` in the FlightLog) as ``y_true_mean``.
 
+Flights that log the follower's torques (:mod:`aerodock.learning.labels`) also give torque
+labels ``y_torque`` (n, 3), N m, rotated from the follower's body frame into the world frame
+(NED) with its logged attitude, so that they transform under the SO(2) symmetry as the force
+does; simulated ones give the true wake torque the same way as ``y_torque_true`` (evaluation
+only). Flights without them have NaN rows there.
+
 On disk (``.npz``, written atomically, read with ``allow_pickle=False``): keys ``format`` (the
 string ``"aerodock-dataset"``), ``version`` (1), ``x``, ``leader_R``, ``y``, ``flight_id``,
-``t_s``, optionally ``y_true_mean``, and ``meta`` (a JSON string).
+``t_s``, optionally ``y_true_mean``, ``y_torque`` and ``y_torque_true``, and ``meta`` (a JSON
+string).
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -25,12 +32,21 @@ from aerodock.fileio import READ_ERRORS, atomic_open, check_npz_header, one_line
 from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.geometry import quat_to_rotmat
-from aerodock.learning.labels import FREE_AIR_RADIUS_M, labels_from_logs, valid_mask
+from aerodock.learning.labels import (
+    FREE_AIR_RADIUS_M,
+    has_torque,
+    labels_from_logs,
+    torque_labels_from_logs,
+    valid_mask,
+)
 from aerodock.learning.modelfile import flight_vehicle_fields, vehicles_from_flights
 
 DATASET_FORMAT = "aerodock-dataset"
 DATASET_VERSION = 1
 TRUE_FIELD_KEY = "true_field_mean_mps2"
+TRUE_TORQUE_KEY = "true_wake_torque_nm"
+# Optional (n, 3) arrays of a Dataset (NaN rows for flights without them).
+OPTIONAL_ARRAYS = ("y_true_mean", "y_torque", "y_torque_true")
 INTERACTION_RADIUS_M = 0.2
 
 
@@ -51,8 +67,13 @@ class Dataset:
         y_true_mean: (n, 3) the simulator's true mean downwash acceleration (NaN rows for
             flights without it), or None when no flight has it.
         meta: JSON-serialisable metadata: ``flights`` (one dict per flight: name, source,
-            n_samples, duration_s, dt_s, bias_mps2, bias_source, n_free_air), ``minutes``,
-            ``sources``, ``labels`` (label options), ``warnings``.
+            n_samples, duration_s, dt_s, bias_mps2, bias_source, n_free_air, and with torque
+            labels torque_bias_nm), ``minutes``, ``sources``, ``labels`` (label options),
+            ``warnings``.
+        y_torque: (n, 3) torque labels, N m, world NED (NaN rows for flights without torque
+            extras), or None when no flight has them.
+        y_torque_true: (n, 3) the simulator's wake torque over the same periods, N m, world NED
+            (NaN rows where unknown), or None.
     """
 
     x: np.ndarray
@@ -62,6 +83,8 @@ class Dataset:
     t_s: np.ndarray
     y_true_mean: np.ndarray | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    y_torque: np.ndarray | None = None
+    y_torque_true: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.x)[0] if np.ndim(self.x) == 2 else -1
@@ -72,11 +95,13 @@ class Dataset:
             if arr.shape != shape:
                 raise DataError(f"dataset: {name} has shape {arr.shape}, expected {shape}")
             object.__setattr__(self, name, arr)
-        if self.y_true_mean is not None:
-            arr = np.asarray(self.y_true_mean, dtype=float)
+        for name in OPTIONAL_ARRAYS:
+            if getattr(self, name) is None:
+                continue
+            arr = np.asarray(getattr(self, name), dtype=float)
             if arr.shape != (n, 3):
-                raise DataError(f"dataset: y_true_mean has shape {arr.shape}, expected {(n, 3)}")
-            object.__setattr__(self, "y_true_mean", arr)
+                raise DataError(f"dataset: {name} has shape {arr.shape}, expected {(n, 3)}")
+            object.__setattr__(self, name, arr)
         meta = dict(self.meta)
         meta.setdefault("flights", [])
         if n and self.flight_id.min() < 0:
@@ -131,10 +156,26 @@ class Dataset:
             fmeta["n_samples_used"] = int(np.sum(fid == k))
         return Dataset(
             x=self.x[index], leader_R=self.leader_R[index], y=self.y[index],
-            flight_id=new_fid.reshape(-1), t_s=self.t_s[index],
-            y_true_mean=None if self.y_true_mean is None else self.y_true_mean[index],
-            meta=meta,
+            flight_id=new_fid.reshape(-1), t_s=self.t_s[index], meta=meta,
+            **{name: None if getattr(self, name) is None else getattr(self, name)[index]
+               for name in OPTIONAL_ARRAYS},
         )
+
+    def torque_labels(self) -> np.ndarray:
+        """The torque labels (n, 3), N m, world NED, every sample having one.
+
+        Raises:
+            DataError: no torque labels, or flights without them (one line naming one).
+        """
+        if self.y_torque is None:
+            raise DataError("dataset: no torque labels (the flight logs lack extra "
+                            "'follower_obs_torque_nm' and 'follower_rotor_torque_nm')")
+        missing = ~np.all(np.isfinite(self.y_torque), axis=1)
+        if missing.any():
+            name = self.flight_names[int(self.flight_id[np.argmax(missing)])]
+            raise DataError(f"dataset: flight {name} has no torque labels (its log lacks extra "
+                            "'follower_obs_torque_nm' or 'follower_rotor_torque_nm')")
+        return self.y_torque
 
     def summary(self) -> dict[str, Any]:
         """Short JSON-ready description (what model files record about their training data)."""
@@ -145,6 +186,7 @@ class Dataset:
             "flights": self.flight_names,
             "sources": self.meta.get("sources", []),
             "has_true_mean": self.y_true_mean is not None,
+            "has_torque": self.y_torque is not None,
             "vehicles": vehicles_from_flights(self.meta["flights"]),
         }
 
@@ -194,7 +236,15 @@ def build_dataset(
     labels, biases, notes = labels_from_logs(
         logs, free_air_radius_m=free_air_radius_m, lowpass_hz=lowpass_hz
     )
-    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "R", "y", "fid", "t", "ytm")}
+    torque_logs = [log for log in logs if has_torque(log)]
+    torque_labels, torque_biases, torque_notes = torque_labels_from_logs(
+        torque_logs, free_air_radius_m=free_air_radius_m, lowpass_hz=lowpass_hz
+    ) if torque_logs else ([], [], [])
+    notes = notes + [f"torque labels: {note}" for note in torque_notes]
+    torque_of = {id(log): (lab, bias) for log, lab, bias
+                 in zip(torque_logs, torque_labels, torque_biases, strict=True)}
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "R", "y", "fid", "t", "ytm",
+                                                          "tau", "tau_true")}
     flights: list[dict[str, Any]] = []
     any_true = any(TRUE_FIELD_KEY in log.extra for log in logs)
     for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True)):
@@ -217,6 +267,14 @@ def build_dataset(
                     f"expected {(log.n_samples, 3)}"
                 )
             parts["ytm"].append(true[keep])
+        torque_fields: dict[str, Any] = {}
+        if torque_logs:
+            tau, tau_true, torque_bias = _torque_parts(log, torque_of.get(id(log)))
+            parts["tau"].append(tau[keep])
+            parts["tau_true"].append(tau_true[keep])
+            if torque_bias is not None:
+                torque_fields = {"torque_bias_nm": [float(b) for b in torque_bias.bias],
+                                 "torque_bias_source": torque_bias.source}
         flights.append({
             "name": log.name,
             "source": _source(log),
@@ -226,6 +284,7 @@ def build_dataset(
             "bias_mps2": [float(b) for b in bias.bias_mps2],
             "bias_source": bias.source,
             "n_free_air": bias.n_free_air,
+            **torque_fields,
             **flight_vehicle_fields(log.meta),
         })
     if not sum(len(f) for f in parts["fid"]):
@@ -238,16 +297,41 @@ def build_dataset(
             "units": "m/s^2 NED",
             "free_air_radius_m": free_air_radius_m,
             "lowpass_hz": lowpass_hz,
+            **({"torque_definition": "obs_torque - rotor_torque - per-flight free-air median "
+                                     "bias, rotated to the world frame",
+                "torque_units": "N m NED"} if torque_logs else {}),
         },
         "warnings": notes,
     }
+    tau_true = np.concatenate(parts["tau_true"]) if torque_logs else None
     return Dataset(
         x=np.concatenate(parts["x"]), leader_R=np.concatenate(parts["R"]),
         y=np.concatenate(parts["y"]), flight_id=np.concatenate(parts["fid"]),
         t_s=np.concatenate(parts["t"]),
         y_true_mean=np.concatenate(parts["ytm"]) if any_true else None,
         meta=meta,
+        y_torque=np.concatenate(parts["tau"]) if torque_logs else None,
+        y_torque_true=tau_true if tau_true is not None and np.isfinite(tau_true).any() else None,
     )
+
+
+def _torque_parts(log: FlightLog, labelled: tuple[np.ndarray, Any] | None
+                  ) -> tuple[np.ndarray, np.ndarray, Any]:
+    """A flight's torque labels and true wake torque (T, 3), world NED (NaN where it has none),
+    and its torque bias (None without labels)."""
+    nan = np.full((log.n_samples, 3), np.nan)
+    rot = quat_to_rotmat(log.follower_quat)
+    true = log.extra.get(TRUE_TORQUE_KEY)
+    if true is not None:
+        true = np.asarray(true, dtype=float)
+        if true.shape != (log.n_samples, 3):
+            raise DataError(f"{log.name}: extra {TRUE_TORQUE_KEY!r} has shape {true.shape}, "
+                            f"expected {(log.n_samples, 3)}")
+        true = np.einsum("nij,nj->ni", rot, true)
+    if labelled is None:
+        return nan, nan if true is None else true, None
+    labels_body, bias = labelled
+    return (np.einsum("nij,nj->ni", rot, labels_body), nan if true is None else true, bias)
 
 
 def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
@@ -258,13 +342,16 @@ def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
     if len(datasets) == 1:
         return datasets[0]
     flights: list[dict] = []
-    fids, ytm = [], []
-    any_true = any(d.y_true_mean is not None for d in datasets)
+    fids = []
     for d in datasets:
         fids.append(d.flight_id + len(flights))
         flights.extend(dict(f) for f in d.meta["flights"])
-        if any_true:
-            ytm.append(d.y_true_mean if d.y_true_mean is not None else np.full((d.n, 3), np.nan))
+    optional = {}
+    for name in OPTIONAL_ARRAYS:
+        if any(getattr(d, name) is not None for d in datasets):
+            optional[name] = np.concatenate([
+                getattr(d, name) if getattr(d, name) is not None else np.full((d.n, 3), np.nan)
+                for d in datasets])
     meta = {
         "flights": flights,
         "sources": sorted({s for d in datasets for s in d.meta.get("sources", [])}),
@@ -277,8 +364,7 @@ def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
         y=np.concatenate([d.y for d in datasets]),
         flight_id=np.concatenate(fids),
         t_s=np.concatenate([d.t_s for d in datasets]),
-        y_true_mean=np.concatenate(ytm) if any_true else None,
-        meta=meta,
+        meta=meta, **optional,
     )
 
 
@@ -293,8 +379,9 @@ def save_dataset(path: str | Path, ds: Dataset) -> Path:
         "x": ds.x, "leader_R": ds.leader_R, "y": ds.y, "flight_id": ds.flight_id, "t_s": ds.t_s,
         "meta": np.array(json.dumps(ds.meta)),
     }
-    if ds.y_true_mean is not None:
-        arrays["y_true_mean"] = ds.y_true_mean
+    for name in OPTIONAL_ARRAYS:
+        if getattr(ds, name) is not None:
+            arrays[name] = getattr(ds, name)
     with atomic_open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return path
@@ -328,7 +415,7 @@ def load_dataset(path: str | Path) -> Dataset:
             if missing:
                 raise DataError(f"{path}: dataset lacks {', '.join(missing)}")
             arrays = {k: data[k] for k in ("x", "leader_R", "y", "flight_id", "t_s")}
-            ytm = data["y_true_mean"] if "y_true_mean" in keys else None
+            optional = {k: data[k] for k in OPTIONAL_ARRAYS if k in keys}
             meta = json.loads(str(data["meta"]))
     except FileNotFoundError:
         raise DataError(f"{path}: file not found") from None
@@ -337,11 +424,7 @@ def load_dataset(path: str | Path) -> Dataset:
     except (*READ_ERRORS, MemoryError) as err:
         raise DataError(f"{path}: corrupt or unreadable dataset file ({type(err).__name__}: "
                         f"{one_line(err)})") from None
-    if ytm is not None:
-        arrays_checked = {**arrays, "y_true_mean": ytm}
-    else:
-        arrays_checked = arrays
-    for name, arr in arrays_checked.items():
+    for name, arr in {**arrays, **optional}.items():
         if arr.dtype.kind not in ("iu" if name == "flight_id" else "fiu"):
             raise DataError(f"{path}: {name} has dtype {arr.dtype}, not numbers")
     for name in ("x", "leader_R", "y", "t_s"):
@@ -350,7 +433,7 @@ def load_dataset(path: str | Path) -> Dataset:
     if not isinstance(meta, dict):
         raise DataError(f"{path}: dataset metadata is not a JSON object")
     try:
-        ds = Dataset(**arrays, y_true_mean=ytm, meta=meta)
+        ds = Dataset(**arrays, **optional, meta=meta)
     except DataError as err:
         raise DataError(f"{path}: {str(err).removeprefix('dataset: ')}") from None
     except (TypeError, ValueError, AttributeError, KeyError, IndexError) as err:
@@ -428,11 +511,7 @@ def load_data_paths(
         except (FlightLogError, ValueError) as err:
             raise DataError(str(err)) from None
     ds = concat_datasets(datasets)
-    return Dataset(
-        x=ds.x, leader_R=ds.leader_R, y=ds.y, flight_id=ds.flight_id, t_s=ds.t_s,
-        y_true_mean=ds.y_true_mean,
-        meta={**ds.meta, "files": sources, "skipped_files": skipped},
-    )
+    return replace(ds, meta={**ds.meta, "files": sources, "skipped_files": skipped})
 
 
 def _flight_counts(ds: Dataset) -> tuple[np.ndarray, np.ndarray]:

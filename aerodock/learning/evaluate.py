@@ -14,6 +14,12 @@ With simulated data (``y_true_mean``), the *error floor* is the same metrics for
 true mean field used as the prediction: no model of the mean can beat it, because what remains is
 turbulence and sensor noise. ``model_vs_true_mean`` measures how well the model recovers the mean
 field itself.
+
+A model that predicts the torque (``so2-wrench``) on data with torque labels (``y_torque``) adds
+``torque``: the same regions with RMSE in N m (world NED), the zero model, and with simulated data
+``true_torque`` (the simulator's wake torque over the same periods used as the prediction: what
+remains is the labels' sensor noise, a floor below any model's, which cannot predict the
+turbulence), ``model_vs_true`` and ``true_rms_nm`` (the RMS of one component of the true torque).
 """
 
 from __future__ import annotations
@@ -35,14 +41,16 @@ class SupportsPredict(Protocol):
         ...
 
 
-def regression_metrics(pred: np.ndarray, y: np.ndarray) -> dict[str, Any]:
-    """RMSE and R² per axis and overall of predictions ``pred`` (n, 3) for labels ``y`` (n, 3)."""
+def regression_metrics(pred: np.ndarray, y: np.ndarray, unit: str = "mps2") -> dict[str, Any]:
+    """RMSE (key ``rmse_{unit}``) and R² per axis and overall of predictions ``pred`` (n, 3) for
+    labels ``y`` (n, 3)."""
     pred = np.asarray(pred, dtype=float)
     y = np.asarray(y, dtype=float)
     n = int(y.shape[0])
+    key = f"rmse_{unit}"
     if n == 0:
         none = {a: None for a in (*AXES, "overall")}
-        return {"n": 0, "rmse_mps2": dict(none), "r2": dict(none)}
+        return {"n": 0, key: dict(none), "r2": dict(none)}
     sse = np.sum((pred - y) ** 2, axis=0)
     sst = np.sum((y - y.mean(axis=0)) ** 2, axis=0)
     rmse = np.sqrt(sse / n)
@@ -52,7 +60,7 @@ def regression_metrics(pred: np.ndarray, y: np.ndarray) -> dict[str, Any]:
 
     return {
         "n": n,
-        "rmse_mps2": {**{a: float(v) for a, v in zip(AXES, rmse)},
+        key: {**{a: float(v) for a, v in zip(AXES, rmse)},
                       "overall": float(np.sqrt(sse.sum() / (3 * n)))},
         "r2": {**{a: r2(e, t) for a, e, t in zip(AXES, sse, sst)},
                "overall": r2(float(sse.sum()), float(sst.sum()))},
@@ -77,6 +85,26 @@ def _region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str, Any]:
     return out
 
 
+def _torque_region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str, Any]:
+    """Torque metrics (N m) over the samples of ``mask`` that have torque labels."""
+    mask = mask & np.all(np.isfinite(ds.y_torque), axis=1)
+    y = ds.y_torque[mask]
+    out: dict[str, Any] = {
+        "n": int(mask.sum()),
+        "model": regression_metrics(pred[mask], y, "nm"),
+        "zero": regression_metrics(np.zeros_like(y), y, "nm"),
+        "true_torque": None, "model_vs_true": None, "true_rms_nm": None,
+    }
+    if ds.y_torque_true is not None:
+        true = ds.y_torque_true[mask]
+        ok = np.all(np.isfinite(true), axis=1)
+        if ok.any():
+            out["true_torque"] = regression_metrics(true[ok], y[ok], "nm")
+            out["model_vs_true"] = regression_metrics(pred[mask][ok], true[ok], "nm")
+            out["true_rms_nm"] = float(np.sqrt(np.mean(true[ok] ** 2)))
+    return out
+
+
 def evaluate(
     predictor: SupportsPredict, ds: Dataset, *, lateral_radius_m: float = INTERACTION_RADIUS_M
 ) -> dict[str, Any]:
@@ -92,12 +120,14 @@ def evaluate(
         ``{"model": kind, "n_samples", "minutes", "interaction_region": description,
         "all": region, "interaction": region}``, where each region holds ``n``, ``model`` and
         ``zero`` metrics (see :func:`regression_metrics`), ``error_floor`` and
-        ``model_vs_true_mean`` (None without ``y_true_mean``).
+        ``model_vs_true_mean`` (None without ``y_true_mean``); and ``torque`` (``all`` and
+        ``interaction`` torque regions, see the module docstring) when the predictor has a
+        torque and the data torque labels.
     """
     pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
     if pred.shape != ds.y.shape:
         raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
-    return {
+    out = {
         "model": getattr(predictor, "kind", type(predictor).__name__),
         "n_samples": ds.n,
         "minutes": round(ds.minutes, 4),
@@ -106,3 +136,11 @@ def evaluate(
         "all": _region(pred, ds, np.ones(ds.n, dtype=bool)),
         "interaction": _region(pred, ds, ds.interaction_mask(lateral_radius_m)),
     }
+    if getattr(predictor, "has_torque", False) and ds.y_torque is not None:
+        torque = np.asarray(predictor.predict_torque(ds.x, ds.leader_R), dtype=float)
+        out["torque"] = {
+            "units": "N m, world NED",
+            "all": _torque_region(torque, ds, np.ones(ds.n, dtype=bool)),
+            "interaction": _torque_region(torque, ds, ds.interaction_mask(lateral_radius_m)),
+        }
+    return out

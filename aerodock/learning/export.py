@@ -7,7 +7,10 @@ of the invariant outputs back to the world. No PyTorch is imported: ``aerodock[e
 enough.
 
 Inputs ``x`` (n, 9: ``[dp, v_A, v_B]``, NED) and ``leader_R`` (n, 3, 3, leader body to world);
-output ``f_ext_mps2`` (n, 3, NED), with a dynamic batch axis ``n``. ONNX fixes the element type
+output ``f_ext_mps2`` (n, 3, NED), with a dynamic batch axis ``n``; a ``so2-wrench`` model has a
+second output, ``tau_ext_nm`` (n, 3: the wake's torque on the follower, N m, world NED; rotate it
+with the follower's attitude for the body frame), from its last three network outputs through the
+same frame. ONNX fixes the element type
 of a graph's inputs, so the export takes ``dtype``: ``"float32"`` (the default, what most
 runtimes want) or ``"float64"`` (the whole graph in double precision, equal to the NumPy runtime
 to rounding). :func:`check_onnx` feeds whichever type the file declares.
@@ -27,8 +30,10 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open
+from aerodock.learning.features import TORQUE_KINDS
 from aerodock.learning.modelfile import (
     MODEL_FORMAT,
+    TORQUE_UNITS,
     UNITS,
     ModelSpec,
     load_model_dir,
@@ -38,6 +43,7 @@ from aerodock.learning.modelfile import (
 ONNX_OPSET = 17
 INPUT_NAMES = ("x", "leader_R")
 OUTPUT_NAME = "f_ext_mps2"
+TORQUE_OUTPUT_NAME = "tau_ext_nm"
 DTYPES = ("float32", "float64")
 
 
@@ -148,9 +154,9 @@ def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
     sin_a = g.div(g.sub(g.mul(urx, ay), g.mul(ury, ax)), va_soft)
     z = g.stack([cos_b, sin_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2), cos_a, sin_a, az])
 
-    def out_ext(c: str) -> str:
+    def out_ext(c: str, first: int = 0) -> str:
         c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))
-        cr, ct, ca = (g.col(c3, 0, k) for k in range(3))
+        cr, ct, ca = (g.col(c3, 0, first + k) for k in range(3))
         # f = R (cr e_r + ct e_t + ca e3) with e_r = (urx, ury, 0), e_t = (-ury, urx, 0)
         return _rotate(g, [g.sub(g.mul(cr, urx), g.mul(ct, ury)),
                            g.add(g.mul(cr, ury), g.mul(ct, urx)), ca])
@@ -204,13 +210,18 @@ def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
         out = g.op("ConstantOfShape", shape, value=zero)
     else:
         z, to_world = _features(g, spec.kind, spec)
-        out = to_world(_mlp(g, z, spec, weights))
+        c = _mlp(g, z, spec, weights)
+        out = to_world(c)
+    outputs = [OUTPUT_NAME]
     g.nodes.append(helper.make_node("Identity", [out], [OUTPUT_NAME]))
+    if spec.kind in TORQUE_KINDS:  # the torque's components: the network's last three
+        g.nodes.append(helper.make_node("Identity", [to_world(c, 3)], [TORQUE_OUTPUT_NAME]))
+        outputs.append(TORQUE_OUTPUT_NAME)
     graph = helper.make_graph(
         g.nodes, f"aerodock_{spec.kind.replace('-', '_')}",
         [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
          helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])],
-        [helper.make_tensor_value_info(OUTPUT_NAME, g.elem, ["n", 3])],
+        [helper.make_tensor_value_info(name, g.elem, ["n", 3]) for name in outputs],
         initializer=g.inits,
     )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)],
@@ -235,7 +246,11 @@ def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
         "aerodock.input": "x (n, 9) = [dp = p_follower - p_leader, v_leader, v_follower] "
                           "(m, m/s, NED); leader_R (n, 3, 3) leader attitude, body to world",
         "aerodock.output": "f_ext_mps2 (n, 3): predicted downwash acceleration on the "
-                           "follower, m/s^2, NED",
+                           "follower, m/s^2, NED" + (
+                               f"; {TORQUE_OUTPUT_NAME} (n, 3): predicted wake torque on the "
+                               f"follower about its centre of mass, {TORQUE_UNITS}"
+                               if spec.kind in TORQUE_KINDS else ""),
+        **({"aerodock.torque_units": TORQUE_UNITS} if spec.kind in TORQUE_KINDS else {}),
         "aerodock.vehicles": json.dumps(normalise_vehicles(doc.get("vehicles"))),
         "aerodock.feature_version": str(spec.feature_version),
         "aerodock.eps_pos_m": repr(spec.eps_pos_m),
@@ -284,13 +299,32 @@ def check_onnx(
     n: int = 256,
     rng: np.random.Generator | None = None,
 ) -> float:
-    """Max absolute difference (m/s²) between an ONNX file (onnxruntime) and ``predictor``.
+    """Max absolute difference between an ONNX file (onnxruntime) and ``predictor`` over every
+    output: the force (m/s²) and, for a wrench model, the torque (N m); see
+    :func:`onnx_differences` for each.
+
+    Raises:
+        ImportError: onnxruntime is not installed.
+    """
+    return max(onnx_differences(path, predictor, n=n, rng=rng).values())
+
+
+def onnx_differences(
+    path: str | Path,
+    predictor: Any,
+    *,
+    n: int = 256,
+    rng: np.random.Generator | None = None,
+) -> dict[str, float]:
+    """Max absolute difference per output between an ONNX file and ``predictor``:
+    ``{"f_ext_mps2": m/s²}`` and, for a wrench model, ``"tau_ext_nm"`` (N m).
 
     Inputs are random scenes around and below the leader (tilted and yawed), given in the
     element type the file declares; the predictor sees the same (rounded) numbers.
 
     Raises:
         ImportError: onnxruntime is not installed.
+        ValueError: the file's outputs do not match the predictor's (a torque one or not).
     """
     import onnxruntime as ort
 
@@ -305,6 +339,15 @@ def check_onnx(
     sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
     dtype = np.float64 if sess.get_inputs()[0].type == "tensor(double)" else np.float32
     xs, rs = x.astype(dtype), rot.astype(dtype)
-    (got,) = sess.run(None, {"x": xs, "leader_R": rs})
-    want = predictor.predict(xs.astype(float), rs.astype(float))
-    return float(np.max(np.abs(got - want)))
+    names = [o.name for o in sess.get_outputs()]
+    has_torque = bool(getattr(predictor, "has_torque", False))
+    if (TORQUE_OUTPUT_NAME in names) != has_torque:
+        raise ValueError(f"{path}: outputs {names} do not match a {predictor.kind!r} model")
+    got = dict(zip(names, sess.run(None, {"x": xs, "leader_R": rs}), strict=True))
+    force, torque = (predictor.predict_wrench(xs.astype(float), rs.astype(float))
+                     if has_torque else (predictor.predict(xs.astype(float), rs.astype(float)),
+                                         None))
+    out = {OUTPUT_NAME: float(np.max(np.abs(got[OUTPUT_NAME] - force)))}
+    if torque is not None:
+        out[TORQUE_OUTPUT_NAME] = float(np.max(np.abs(got[TORQUE_OUTPUT_NAME] - torque)))
+    return out

@@ -51,6 +51,18 @@ leader)::
 with the same regularisation (``sin_B = (proj dp x proj v_B)_3 / (...)``, and likewise for
 ``v_A``). All of them are invariant under rotations about ``a3``.
 
+Wrench kind (``"so2-wrench"``): the same 10 features and frame ``(e_r, e_t, a3)``, and six outputs,
+the force's and the torque's components in that frame::
+
+    f   = s(rho) (f_r e_r' + f_t e_t') + f_a a3                (m/s², world NED)
+    tau = s(rho) (tau_r e_r' + tau_t e_t') + tau_a a3          (N m, world NED)
+
+(``e_r'``, ``e_t'`` the unit radial and tangential vectors). A torque is an axial vector, but the
+symmetry is a rotation about ``a3`` (no reflection), under which it turns like the force: rotating
+the scene about the leader's axis rotates both predictions. The wake's torque on a follower off
+the axis points along ``+e_t`` (it pushes the rotors nearer the axis down). Labels are measured in
+the follower's body frame and rotated to the world frame with its attitude before training.
+
 Kind ``"mlp"`` (the baseline) uses ``x`` itself, in the world frame, with an identity output map.
 
 The implementations below are written once, generically, and run on NumPy arrays (the runtime)
@@ -69,14 +81,20 @@ FEATURE_VERSION = 1
 EPS_POS_M = 1e-3
 EPS_VEL_MPS = 1e-2
 
-KINDS = ("so2", "so2-ext", "mlp", "zero")
-N_FEATURES = {"so2": 6, "so2-ext": 10, "mlp": 9, "zero": 0}
-N_OUTPUTS = {"so2": 2, "so2-ext": 3, "mlp": 3, "zero": 0}
+KINDS = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
+TORQUE_KINDS = ("so2-wrench",)
+"""Kinds that also predict the wake's torque (their outputs: force components, then torque's)."""
+N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "mlp": 9, "zero": 0}
+N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "mlp": 3, "zero": 0}
 FEATURE_NAMES: dict[str, tuple[str, ...]] = {
     "so2": (
         "cos_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps", "rho_vA_mps",
     ),
     "so2-ext": (
+        "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
+        "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
+    ),
+    "so2-wrench": (
         "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
         "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
     ),
@@ -89,6 +107,8 @@ FEATURE_NAMES: dict[str, tuple[str, ...]] = {
 OUTPUT_NAMES: dict[str, tuple[str, ...]] = {
     "so2": ("f_radial_mps2", "f_axial_mps2"),
     "so2-ext": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2"),
+    "so2-wrench": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2",
+                   "tau_radial_nm", "tau_tangential_nm", "tau_axial_nm"),
     "mlp": ("f_n_mps2", "f_e_mps2", "f_d_mps2"),
     "zero": (),
 }
@@ -101,6 +121,8 @@ SCALE_FLOOR: dict[str, tuple[float, ...]] = {
             _VEL_FLOOR_MPS),
     "so2-ext": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
                 _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
+    "so2-wrench": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
+                   _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
     "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
     "zero": (),
 }
@@ -127,7 +149,8 @@ def _feature_map_generic(
 ) -> tuple[Any, Any]:
     """Features ``z`` (n, F) and output map ``M`` (n, 3, K) for one array library.
 
-    The world-frame prediction is ``f = M @ c`` where ``c`` (n, K) are the network's outputs.
+    The world-frame prediction is ``f = M @ c`` where ``c`` (n, K) are the network's outputs
+    (for a wrench kind, ``M`` maps the force's K and the torque's K outputs alike).
     Only arithmetic, ``** 0.5``, slicing, ``sum`` and ``stack`` are used so that NumPy, torch and
     the ONNX exporter all see the same operations.
     """
@@ -150,7 +173,7 @@ def _feature_map_generic(
     if kind == "so2":
         z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
         out_map = stack([e_r, a3], -1)
-    elif kind == "so2-ext":
+    elif kind in ("so2-ext", "so2-wrench"):
         va_soft = (va2 + eps_vel_mps * eps_vel_mps) ** 0.5
         sin_b = (ur_x * by - ur_y * bx) / vb_soft
         cos_a = (ur_x * ax + ur_y * ay) / va_soft
@@ -206,7 +229,7 @@ def feature_map(
     """NumPy features and output map of a model kind.
 
     Args:
-        kind: ``"so2"``, ``"so2-ext"`` or ``"mlp"``.
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"`` or ``"mlp"``.
         x: (n, 9) ``[dp, v_A, v_B]``, world NED.
         leader_R: (n, 3, 3) leader attitude, body to world.
         eps_pos_m: radial regularisation (see the module docstring).
@@ -271,11 +294,21 @@ def invariant_components(
     x: np.ndarray,
     leader_R: np.ndarray,
     y: np.ndarray,
+    torque: np.ndarray | None = None,
 ) -> np.ndarray:
-    """World-frame forces ``y`` (n, 3) expressed in a kind's output components (n, K).
+    """World-frame forces ``y`` (n, 3) (and, for a wrench kind, torques ``torque`` (n, 3))
+    expressed in a kind's output components (n, K).
 
     Uses ``c = M^T y`` (exact for the orthonormal columns of ``M`` away from the leader's axis);
     used to standardise the network's outputs.
+
+    Raises:
+        ValueError: a wrench kind without torques.
     """
     _, out_map = feature_map(kind, x, leader_R)
-    return np.einsum("nik,ni->nk", out_map, np.asarray(y, dtype=float))
+    c = np.einsum("nik,ni->nk", out_map, np.asarray(y, dtype=float))
+    if kind not in TORQUE_KINDS:
+        return c
+    if torque is None:
+        raise ValueError(f"model kind {kind!r} needs torque labels")
+    return np.concatenate([c, np.einsum("nik,ni->nk", out_map, np.asarray(torque, float))], 1)

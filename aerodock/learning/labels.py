@@ -17,6 +17,13 @@ This module removes that bias per flight:
 A FlightLog may carry ``extra["label_valid"]`` (T,), truthy where a sample is a valid label (e.g.
 False after the follower has docked and hangs on the cables): invalid samples are excluded from
 the bias estimate and, in :mod:`aerodock.learning.dataset`, from the data set.
+
+Torque labels (for the ``so2-wrench`` model) come the same way from a log's torque extras
+(:mod:`aerodock.torque_sensing`; body FRD, N m): ``tau_ext = obs_torque - rotor_torque - bias``
+with ``obs_torque = extra["follower_obs_torque_nm"]`` (``J dw/dt + w x J w`` from the gyro) and
+``rotor_torque = extra["follower_rotor_torque_nm"]`` (what the rotors explain from their
+measured speeds), de-biased per flight from the same free-air samples by the same functions
+(:func:`debias`). A log without both extras has no torque labels.
 """
 
 from __future__ import annotations
@@ -30,6 +37,9 @@ from aerodock.flightlog import FlightLog
 
 FREE_AIR_RADIUS_M = 0.6
 VALID_KEY = "label_valid"
+OBS_TORQUE_KEY = "follower_obs_torque_nm"
+ROTOR_TORQUE_KEY = "follower_rotor_torque_nm"
+TORQUE_KEYS = (OBS_TORQUE_KEY, ROTOR_TORQUE_KEY)
 
 
 class LabelWarning(UserWarning):
@@ -41,15 +51,20 @@ class BiasEstimate:
     """Constant bias removed from one flight's labels.
 
     Attributes:
-        bias_mps2: (3,) bias, NED, m/s².
+        bias: (3,) bias in the labels' units and frame (force: m/s², NED; torque: N m, FRD).
         source: ``"own"`` (this flight's free-air samples), ``"pooled"`` (other flights'),
             ``"given"`` (passed in) or ``"none"`` (no free-air samples anywhere: 0).
         n_free_air: number of this flight's free-air samples.
     """
 
-    bias_mps2: np.ndarray
+    bias: np.ndarray
     source: str
     n_free_air: int
+
+    @property
+    def bias_mps2(self) -> np.ndarray:
+        """The bias of force labels, m/s², NED (the same array as :attr:`bias`)."""
+        return self.bias
 
 
 def valid_mask(log: FlightLog) -> np.ndarray:
@@ -88,6 +103,36 @@ def raw_labels(
         ValueError: a cut-off at or above the Nyquist frequency, or not positive.
     """
     diff = log.follower_obs_accel_mps2 - log.follower_cmd_accel_mps2
+    if lowpass_hz is None:
+        return diff
+    return lowpass(diff, log.t_s, lowpass_hz, order=lowpass_order, where=log.name)
+
+
+def has_torque(log: FlightLog) -> bool:
+    """True when ``log`` carries the torque extras torque labels are made from."""
+    return all(key in log.extra for key in TORQUE_KEYS)
+
+
+def raw_torque_labels(
+    log: FlightLog, *, lowpass_hz: float | None = None, lowpass_order: int = 2
+) -> np.ndarray:
+    """``obs_torque - rotor_torque`` (T, 3), N m, the follower's body frame (FRD), optionally
+    low-pass filtered as :func:`raw_labels`.
+
+    Raises:
+        ValueError: the log lacks a torque extra (one line naming it), or it has the wrong shape.
+    """
+    arrays = []
+    for key in TORQUE_KEYS:
+        if key not in log.extra:
+            raise ValueError(f"{log.name}: no torque labels: the log lacks extra {key!r} "
+                             "(rigid-body simulation or a log with gyro and rotor speeds)")
+        arr = np.asarray(log.extra[key], dtype=float)
+        if arr.shape != (log.n_samples, 3):
+            raise ValueError(f"{log.name}: extra {key!r} has shape {arr.shape}, expected "
+                             f"({log.n_samples}, 3)")
+        arrays.append(arr)
+    diff = arrays[0] - arrays[1]
     if lowpass_hz is None:
         return diff
     return lowpass(diff, log.t_s, lowpass_hz, order=lowpass_order, where=log.name)
@@ -180,9 +225,33 @@ def labels_from_logs(
         ``(labels, biases, warnings)``: one (T_i, 3) array and one :class:`BiasEstimate` per
         log, and human-readable warnings (also what :func:`build_dataset` records).
     """
-    raw = [raw_labels(log, lowpass_hz=lowpass_hz) for log in logs]
+    return debias(logs, [raw_labels(log, lowpass_hz=lowpass_hz) for log in logs],
+                  free_air_radius_m=free_air_radius_m)
+
+
+def torque_labels_from_logs(
+    logs: list[FlightLog],
+    *,
+    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    lowpass_hz: float | None = None,
+) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
+    """De-biased torque labels ``obs - rotor - bias`` (T_i, 3), N m, body FRD, of several
+    flights (as :func:`labels_from_logs`; biases pooled over these flights' free-air samples).
+
+    Raises:
+        ValueError: a log without the torque extras (see :func:`raw_torque_labels`).
+    """
+    return debias(logs, [raw_torque_labels(log, lowpass_hz=lowpass_hz) for log in logs],
+                  free_air_radius_m=free_air_radius_m)
+
+
+def debias(
+    logs: list[FlightLog], raw: list[np.ndarray], *, free_air_radius_m: float = FREE_AIR_RADIUS_M
+) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
+    """Raw labels (one (T_i, 3) array per log, any quantity) minus each flight's bias
+    (:func:`estimate_biases`): ``(labels, biases, warnings)``."""
     biases, notes = estimate_biases(logs, free_air_radius_m=free_air_radius_m, raw=raw)
-    return [r - b.bias_mps2 for r, b in zip(raw, biases, strict=True)], biases, notes
+    return [r - b.bias for r, b in zip(raw, biases, strict=True)], biases, notes
 
 
 def labels_from_log(
@@ -208,4 +277,4 @@ def labels_from_log(
     (bias,), notes = estimate_biases([log], free_air_radius_m=free_air_radius_m, raw=[raw])
     for note in notes:
         warnings.warn(note, LabelWarning, stacklevel=2)
-    return raw - bias.bias_mps2
+    return raw - bias.bias

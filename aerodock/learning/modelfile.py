@@ -5,7 +5,8 @@ Safe by construction: weights are read with ``np.load(allow_pickle=False)`` and 
 NumPy-only (the runtime uses it without PyTorch).
 
 ``model.json`` holds: ``format`` (``"aerodock-model"``), ``version``, ``kind`` (``so2``,
-``so2-ext``, ``mlp``, ``zero``), ``feature_version``, ``units`` (``"m/s^2 NED"``), the feature
+``so2-ext``, ``so2-wrench``, ``mlp``, ``zero``), ``feature_version``, ``units`` (``"m/s^2 NED"``,
+the force's; a ``so2-wrench`` model also has ``torque_units``, ``"N m NED"``), the feature
 regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``, ``activation``,
 ``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features, ``out_mean``/
 ``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names), ``training`` (data
@@ -55,6 +56,7 @@ from aerodock.learning.features import (
     N_FEATURES,
     N_OUTPUTS,
     OUTPUT_NAMES,
+    TORQUE_KINDS,
 )
 
 MODEL_FORMAT = "aerodock-model"
@@ -63,6 +65,7 @@ MODEL_JSON = "model.json"
 WEIGHTS_NPZ = "weights.npz"
 ACTIVATIONS = ("tanh", "silu")
 UNITS = "m/s^2 NED"
+TORQUE_UNITS = "N m NED"
 VEHICLE_KEYS = ("mass_kg", "rotor_radius_m", "n_rotors")
 # Relative difference of a vehicle parameter above which a model is flagged as trained on
 # other vehicles (the wake scales with the thrust, i.e. the mass, and the rotor disc area).
@@ -78,7 +81,7 @@ class ModelSpec:
     """Everything needed to rebuild a model's computation (besides the weights).
 
     Attributes:
-        kind: ``"so2"``, ``"so2-ext"``, ``"mlp"`` or ``"zero"``.
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"mlp"`` or ``"zero"``.
         layer_sizes: ``(F, hidden..., K)``; empty for ``"zero"``.
         activation: hidden-layer activation, ``"tanh"`` or ``"silu"``.
         in_mean: (F,) feature means.
@@ -172,7 +175,10 @@ def save_model_dir(
         "units": UNITS,
         "input": "x (n, 9) = [dp = p_follower - p_leader, v_leader, v_follower] (m, m/s, NED); "
                  "leader_R (n, 3, 3) leader attitude, body to world",
-        "output": "f_ext (n, 3): predicted downwash acceleration on the follower, m/s^2, NED",
+        "output": "f_ext (n, 3): predicted downwash acceleration on the follower, m/s^2, NED"
+                  + ("; tau_ext (n, 3): predicted wake torque on the follower about its centre "
+                     "of mass, N m, world NED" if spec.kind in TORQUE_KINDS else ""),
+        **({"torque_units": TORQUE_UNITS} if spec.kind in TORQUE_KINDS else {}),
         "vehicles": normalise_vehicles(vehicles),
         "features": {
             "names": list(FEATURE_NAMES[spec.kind]),
@@ -477,6 +483,9 @@ def load_model_dir(
         )
     if doc.get("units") != UNITS:
         raise ModelFileError(f"{jpath}: units {doc.get('units')!r}, expected {UNITS!r}")
+    if kind in TORQUE_KINDS and doc.get("torque_units") != TORQUE_UNITS:
+        raise ModelFileError(f"{jpath}: torque_units {doc.get('torque_units')!r}, expected "
+                             f"{TORQUE_UNITS!r}")
     if kind == "zero":
         return ModelSpec(kind="zero"), [], doc
     sizes = doc.get("layer_sizes")

@@ -13,6 +13,12 @@ the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A 
   well-defined sign, so the paper model has none.
 * :class:`SO2ExtModel` (``"so2-ext"``): 10 signed invariant features, ``c = (f_radial,
   f_tangential, f_axial)``, ``f = f_radial e_r + f_tangential e_t + f_axial a3``.
+* :class:`SO2WrenchModel` (``"so2-wrench"``): the features of ``"so2-ext"`` and six outputs,
+  ``c = (f_radial, f_tangential, f_axial, tau_radial, tau_tangential, tau_axial)``: the force as
+  ``"so2-ext"``'s, and the wake's torque on the follower (N m) through the same frame,
+  ``tau = tau_radial e_r + tau_tangential e_t + tau_axial a3`` (world NED). ``forward`` is the
+  force, as for every kind; :meth:`DownwashModel.wrench` gives both. Trained on standardised
+  outputs (:func:`standardised_wrench_loss`), so force and torque weigh alike.
 * :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame.
 * :class:`ZeroModel` (``"zero"``): always 0.
 
@@ -40,6 +46,7 @@ from aerodock.learning.features import (
     N_FEATURES,
     N_OUTPUTS,
     SCALE_FLOOR,
+    TORQUE_KINDS,
     check_kind,
     feature_map_torch,
 )
@@ -115,13 +122,34 @@ class DownwashModel(nn.Module):
             h = self.act(lin(h))
         return self.linears[-1](h) * self.out_std + self.out_mean
 
+    @property
+    def has_torque(self) -> bool:
+        """True for a kind that also predicts the wake's torque."""
+        return self.kind in TORQUE_KINDS
+
     def head(self, z: torch.Tensor, out_map: torch.Tensor) -> torch.Tensor:
-        """World-frame prediction (n, 3) from precomputed features and output map."""
-        return (out_map * self.components(z)[:, None, :]).sum(-1)
+        """World-frame force (n, 3) from precomputed features and output map."""
+        return self.wrench_head(z, out_map)[0]
+
+    def wrench_head(self, z: torch.Tensor, out_map: torch.Tensor
+                    ) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """World-frame force (n, 3), m/s², and torque (n, 3), N m (None for a force-only kind),
+        from precomputed features and output map."""
+        c = self.components(z)
+        k = out_map.shape[-1]
+        force = (out_map * c[:, None, :k]).sum(-1)
+        if not self.has_torque:
+            return force, None
+        return force, (out_map * c[:, None, k:]).sum(-1)
 
     def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
         """Predicted downwash acceleration (n, 3), m/s², NED."""
         return self.head(*self.features(x, leader_R))
+
+    def wrench(self, x: torch.Tensor, leader_R: torch.Tensor
+               ) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """Predicted force (n, 3), m/s², and torque (n, 3), N m, world NED (None without)."""
+        return self.wrench_head(*self.features(x, leader_R))
 
     @torch.no_grad()
     def set_normalisation(self, z: np.ndarray, c: np.ndarray) -> None:
@@ -174,6 +202,30 @@ class SO2ExtModel(DownwashModel):
     kind = "so2-ext"
 
 
+class SO2WrenchModel(DownwashModel):
+    """Wrench SO(2) model: ``"so2-ext"``'s features, predicts the force's and the torque's
+    ``(radial, tangential, axial)`` components."""
+
+    kind = "so2-wrench"
+
+    def output_scales(self) -> tuple[float, float]:
+        """(force, torque) label scales: the RMS of the standardisation's output scales of each
+        (m/s², N m), by which :func:`standardised_wrench_loss` divides the errors."""
+        std = self.out_std.detach().double()
+        return (float(torch.sqrt(torch.mean(std[:3] ** 2))),
+                float(torch.sqrt(torch.mean(std[3:] ** 2))))
+
+
+def standardised_wrench_loss(force: torch.Tensor, force_label: torch.Tensor,
+                             torque: torch.Tensor, torque_label: torch.Tensor,
+                             scales: tuple[float, float]) -> torch.Tensor:
+    """Mean of the force's and the torque's mean squared errors, each divided by the square of
+    its label scale (``scales`` = (m/s², N m)): force and torque weigh alike, whatever units."""
+    force_scale, torque_scale = scales
+    return 0.5 * (torch.mean((force - force_label) ** 2) / force_scale**2
+                  + torch.mean((torque - torque_label) ** 2) / torque_scale**2)
+
+
 class MLPModel(DownwashModel):
     """Baseline: plain MLP on ``x`` (world frame) predicting the world-frame force."""
 
@@ -184,6 +236,8 @@ class ZeroModel(nn.Module):
     """The zero model (no downwash compensation)."""
 
     kind = "zero"
+
+    has_torque = False
 
     def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
         """Zeros (n, 3)."""
@@ -199,7 +253,8 @@ class ZeroModel(nn.Module):
 
 
 MODEL_CLASSES: dict[str, type[nn.Module]] = {
-    "so2": SO2Model, "so2-ext": SO2ExtModel, "mlp": MLPModel, "zero": ZeroModel,
+    "so2": SO2Model, "so2-ext": SO2ExtModel, "so2-wrench": SO2WrenchModel, "mlp": MLPModel,
+    "zero": ZeroModel,
 }
 
 

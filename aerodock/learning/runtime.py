@@ -18,6 +18,11 @@ follower's :class:`~aerodock.downwash.base.BodyState`::
     predictor = Predictor.load("models/so2")          # or load_predictor(path_or_None)
     f_ext_hat_mps2 = predictor.predict_bodies(leader, follower)   # (n, 3), m/s^2, NED
     u[:, :3] -= f_ext_hat_mps2
+
+A ``so2-wrench`` model also predicts the wake's torque (:attr:`Predictor.has_torque`):
+:meth:`Predictor.predict_torque` in the world frame (N m, NED) and
+:meth:`Predictor.predict_torque_bodies` in the follower's body frame (N m, FRD), what the
+autopilot's torque feed-forward subtracts (:mod:`aerodock.control.torque_feedforward`).
 """
 
 from __future__ import annotations
@@ -29,7 +34,13 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash.base import BodyState
-from aerodock.learning.features import N_FEATURES, check_eps, check_inputs, feature_map
+from aerodock.learning.features import (
+    N_FEATURES,
+    TORQUE_KINDS,
+    check_eps,
+    check_inputs,
+    feature_map,
+)
 from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
 
 
@@ -62,9 +73,10 @@ class Predictor:
     ``predict_one`` reuses preallocated buffers: one Predictor per thread (loading is cheap).
 
     Attributes:
-        kind: ``"so2"``, ``"so2-ext"``, ``"mlp"`` or ``"zero"``.
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"mlp"`` or ``"zero"``.
         spec: the model's :class:`~aerodock.learning.modelfile.ModelSpec`.
         meta: the model's ``model.json`` document (training summary etc.).
+        has_torque: the model also predicts the wake's torque (``"so2-wrench"``).
     """
 
     def __init__(
@@ -76,6 +88,7 @@ class Predictor:
         """Build from a spec and ``[(W, b), ...]`` (torch ``Linear`` layout)."""
         self.spec = spec
         self.kind = spec.kind
+        self.has_torque = spec.kind in TORQUE_KINDS
         self.meta = dict(meta or {})
         if spec.kind == "zero":
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
@@ -136,6 +149,24 @@ class Predictor:
             x: (n, 9) ``[dp, v_A, v_B]`` (``dp = p_follower - p_leader``), NED, SI.
             leader_R: (n, 3, 3) leader attitude, body to world.
         """
+        return self.predict_wrench(x, leader_R)[0]
+
+    __call__ = predict
+
+    def predict_torque(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+        """Predicted wake torque on the follower about its centre of mass, (n, 3), N m, world
+        NED (inputs as :meth:`predict`).
+
+        Raises:
+            ValueError: the model predicts no torque (see :attr:`has_torque`).
+        """
+        if not self.has_torque:
+            raise ValueError(f"a {self.kind!r} model predicts no torque (train 'so2-wrench')")
+        return self.predict_wrench(x, leader_R)[1]
+
+    def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray | None]:
+        """(force (n, 3) m/s², torque (n, 3) N m or None without one), world NED."""
         x, leader_R = check_inputs(x, leader_R)
         if self.kind == "mlp":
             z, out_map = x, None
@@ -151,10 +182,12 @@ class Predictor:
             if i < len(self._layers_t) - 1:
                 _act_inplace(self._act, h)
         if out_map is None:
-            return h
-        return np.einsum("nik,nk->ni", out_map, h)
-
-    __call__ = predict
+            return h, None
+        if not self.has_torque:
+            return np.einsum("nik,nk->ni", out_map, h), None
+        k = out_map.shape[-1]
+        return (np.einsum("nik,nk->ni", out_map, h[:, :k]),
+                np.einsum("nik,nk->ni", out_map, h[:, k:]))
 
     # -- one sample --------------------------------------------------------------------------
     def _mlp_one(self, feats: tuple[float, ...] | list[float]) -> list[float]:
@@ -209,7 +242,7 @@ class Predictor:
             cos_b, (urx * vby - ury * vbx) / vb_soft, math.sqrt(rho2), math.sqrt(vb2), pz, vbz,
             math.sqrt(va2), (urx * vax + ury * vay) / va_soft, (urx * vay - ury * vax) / va_soft,
             vaz,
-        ))
+        ))[:3]
         # tangential unit vector e_t = a2 urx - a1 ury
         etx, ety, etz = r01 * urx - r00 * ury, r11 * urx - r10 * ury, r21 * urx - r20 * ury
         return np.array([
@@ -225,6 +258,18 @@ class Predictor:
         if x.shape[0] == 1:
             return self.predict_one(x[0], rot[0])[None, :]
         return self.predict(x, rot)
+
+    def predict_torque_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
+        """Predicted wake torque (n, 3), N m, in the follower's body frame (FRD, about its
+        centre of mass), from the two vehicles' batched states.
+
+        Raises:
+            ValueError: the model predicts no torque (see :attr:`has_torque`).
+        """
+        x, rot = bodies_to_inputs(leader, follower)
+        torque = self.predict_torque(x, rot)
+        follower_rot = np.reshape(np.asarray(follower.R, dtype=float), (x.shape[0], 3, 3))
+        return np.einsum("nji,nj->ni", follower_rot, torque)  # R^T tau
 
 
 class ZeroPredictor(Predictor):

@@ -14,6 +14,11 @@ than the wake's ~0.1 s turbulence correlation) are held out instead; ``info["spl
 which. Features are computed once; the loop then only runs the small MLP, so a 30 000-sample data
 set (5 minutes at 100 Hz) trains in well under a minute on two CPU cores.
 
+A ``so2-wrench`` model (:mod:`aerodock.learning.models`) learns the force and the torque labels
+(``Dataset.y_torque``) together, on their standardised errors
+(:func:`~aerodock.learning.models.standardised_wrench_loss`); its record adds the held-out torque
+RMSE and, with simulated data, the RMSE against the true wake torque and that torque's RMS.
+
 Randomness: ``seed`` fixes the split, the initial weights (``torch.manual_seed`` under a forked
 RNG, so the caller's global torch RNG is untouched) and the mini-batch order (a NumPy Generator).
 """
@@ -33,9 +38,14 @@ import torch
 from torch import nn
 
 from aerodock.learning.dataset import Dataset, flight_split_ids, time_block_split_mask
-from aerodock.learning.features import check_kind, feature_map, invariant_components
+from aerodock.learning.features import TORQUE_KINDS, check_kind, feature_map, invariant_components
 from aerodock.learning.modelfile import save_model_dir
-from aerodock.learning.models import DEFAULT_ACTIVATION, DEFAULT_HIDDEN, build_model
+from aerodock.learning.models import (
+    DEFAULT_ACTIVATION,
+    DEFAULT_HIDDEN,
+    build_model,
+    standardised_wrench_loss,
+)
 from aerodock.learning.runtime import Predictor, ZeroPredictor
 
 ProgressFn = Callable[[int, int, float, float | None], None]
@@ -50,7 +60,8 @@ class TrainedModel:
         kind: model kind.
         model: the torch module (eval mode).
         info: JSON-ready training summary (also written to ``model.json``).
-        history: per-epoch ``train_loss`` and ``val_loss`` (MSE, m²/s⁴).
+        history: per-epoch ``train_loss`` and ``val_loss`` (MSE, m²/s⁴; for a wrench model the
+            standardised loss, dimensionless).
     """
 
     kind: str
@@ -85,15 +96,19 @@ class TrainedModel:
 MAX_ABS_INPUT = 1e6
 
 
-def check_trainable(ds: Dataset, min_samples: int = 20) -> None:
-    """Refuse data no model can be trained on: too few samples, non-finite or absurd values.
+def check_trainable(ds: Dataset, min_samples: int = 20, kind: str | None = None) -> None:
+    """Refuse data no model can be trained on: too few samples, non-finite or absurd values,
+    or (for a wrench ``kind``) samples without torque labels.
 
     Raises:
         ValueError: one line saying what is wrong with the data.
     """
     if ds.n < min_samples:
         raise ValueError(f"too few samples to train on ({ds.n} < {min_samples})")
-    for name, arr in (("inputs x", ds.x), ("labels y", ds.y), ("leader_R", ds.leader_R)):
+    arrays = [("inputs x", ds.x), ("labels y", ds.y), ("leader_R", ds.leader_R)]
+    if kind in TORQUE_KINDS:
+        arrays.append(("torque labels", ds.torque_labels()))
+    for name, arr in arrays:
         arr = np.asarray(arr, dtype=float)
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"degenerate data: {name} contain NaN or infinite values")
@@ -137,11 +152,55 @@ def validation_split(
 
 def _features_tensors(
     kind: str, ds: Dataset, idx: np.ndarray
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None]:
+    """Features, output map, force labels and (wrench kinds) torque labels of samples ``idx``."""
     z, out_map = feature_map(kind, ds.x[idx], ds.leader_R[idx])
+    torque = (torch.as_tensor(ds.torque_labels()[idx], dtype=torch.float32)
+              if kind in TORQUE_KINDS else None)
     return (torch.as_tensor(z, dtype=torch.float32),
             torch.as_tensor(np.ascontiguousarray(out_map), dtype=torch.float32),
-            torch.as_tensor(ds.y[idx], dtype=torch.float32))
+            torch.as_tensor(ds.y[idx], dtype=torch.float32), torque)
+
+
+LossFn = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None], torch.Tensor]
+
+
+def _loss_fn(model: nn.Module) -> LossFn:
+    """``loss(z, out_map, y, torque)``: the force's MSE (m²/s⁴), or for a wrench model the
+    standardised loss of force and torque."""
+    if not getattr(model, "has_torque", False):
+        return lambda z, m, y, tau: torch.mean((model.head(z, m) - y) ** 2)
+    scales = model.output_scales()
+
+    def wrench_loss(z, m, y, tau):
+        force, torque = model.wrench_head(z, m)
+        return standardised_wrench_loss(force, y, torque, tau, scales)
+
+    return wrench_loss
+
+
+@torch.no_grad()
+def _fit_record(model: nn.Module, ds: Dataset, idx: np.ndarray, part: str,
+                tensors: tuple) -> dict[str, float | None]:
+    """``{part}_rmse_mps2`` of the force and, for a wrench model, ``{part}_rmse_torque_nm`` and
+    (where the data hold the true wake torque) ``{part}_torque_vs_true_rmse_nm`` and
+    ``{part}_true_torque_rms_nm`` (RMS of one component, over samples ``idx``)."""
+    if not len(idx):
+        return {f"{part}_rmse_mps2": None}
+    z, out_map, y, tau = tensors
+    force, torque = model.wrench_head(z, out_map)
+    out: dict[str, float | None] = {
+        f"{part}_rmse_mps2": math.sqrt(float(torch.mean((force - y) ** 2)))}
+    if torque is None:
+        return out
+    out[f"{part}_rmse_torque_nm"] = math.sqrt(float(torch.mean((torque - tau) ** 2)))
+    true = None if ds.y_torque_true is None else ds.y_torque_true[idx]
+    if true is not None and np.isfinite(true).all(axis=1).any():
+        ok = np.isfinite(true).all(axis=1)
+        pred = torque.double().numpy()[ok]
+        out[f"{part}_torque_vs_true_rmse_nm"] = float(np.sqrt(np.mean((pred - true[ok]) ** 2)))
+        out[f"{part}_true_torque_rms_nm"] = float(np.sqrt(np.mean(true[ok] ** 2)))
+    return out
 
 
 def train_model(
@@ -165,7 +224,8 @@ def train_model(
     """Train a downwash model on ``train``.
 
     Args:
-        kind: ``"so2"``, ``"so2-ext"``, ``"mlp"`` or ``"zero"`` (nothing to train).
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"`` (needs torque labels), ``"mlp"`` or
+            ``"zero"`` (nothing to train).
         train: the data (a validation part is split off it).
         val_fraction: fraction held out for validation and early stopping; 0 trains for
             ``max_epochs`` without validation.
@@ -197,14 +257,16 @@ def train_model(
         raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
     if max_epochs < 1 or patience < 1 or batch_size < 1:
         raise ValueError("max_epochs, patience and batch_size must be positive")
-    check_trainable(train)
+    check_trainable(train, kind=kind)
+    wrench = kind in TORQUE_KINDS
     info: dict[str, Any] = {
         "kind": kind, "seed": seed, "data": train.summary(), "spectral_norm": spectral_norm,
         "hyperparameters": {
             "hidden": list(hidden), "activation": activation, "lr": lr,
             "batch_size": batch_size, "weight_decay": weight_decay, "max_epochs": max_epochs,
             "patience": patience, "val_fraction": val_fraction, "optimizer": "Adam",
-            "loss": "MSE (m^2/s^4, world NED)",
+            "loss": ("standardised MSE: mean of force and torque MSE, each over its label "
+                     "scale squared" if wrench else "MSE (m^2/s^4, world NED)"),
         },
     }
     if kind == "zero":
@@ -223,14 +285,16 @@ def train_model(
             torch.manual_seed(seed)
             model = build_model(kind, hidden=hidden, activation=activation,
                                 spectral_norm=spectral_norm)
-        z_tr, m_tr, y_tr = _features_tensors(kind, train, tr_idx)
+        z_tr, m_tr, y_tr, tau_tr = tr_tensors = _features_tensors(kind, train, tr_idx)
         model.set_normalisation(
             z_tr.double().numpy(),
-            invariant_components(kind, train.x[tr_idx], train.leader_R[tr_idx], train.y[tr_idx]),
+            invariant_components(kind, train.x[tr_idx], train.leader_R[tr_idx], train.y[tr_idx],
+                                 None if tau_tr is None else tau_tr.double().numpy()),
         )
+        loss_fn = _loss_fn(model)
         has_val = len(va_idx) > 0
         if has_val:
-            z_va, m_va, y_va = _features_tensors(kind, train, va_idx)
+            z_va, m_va, y_va, tau_va = va_tensors = _features_tensors(kind, train, va_idx)
         opt = torch.optim.Adam(model.parameters(), lr=lr, weight_decay=weight_decay)
         sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
             opt, factor=0.5, patience=max(3, patience // 3)
@@ -245,8 +309,7 @@ def train_model(
             total = 0.0
             for start in range(0, n_tr, batch_size):
                 b = perm[start:start + batch_size]
-                pred = model.head(z_tr[b], m_tr[b])
-                loss = torch.mean((pred - y_tr[b]) ** 2)
+                loss = loss_fn(z_tr[b], m_tr[b], y_tr[b], None if tau_tr is None else tau_tr[b])
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
                 opt.step()
@@ -256,7 +319,7 @@ def train_model(
             val_loss = None
             if has_val:
                 with torch.no_grad():
-                    val_loss = float(torch.mean((model.head(z_va, m_va) - y_va) ** 2))
+                    val_loss = float(loss_fn(z_va, m_va, y_va, tau_va))
                 sched.step(val_loss)
             history["train_loss"].append(train_loss)
             if val_loss is not None:
@@ -279,8 +342,13 @@ def train_model(
             best_epoch = len(history["train_loss"])
         model.eval()
         with torch.no_grad():
-            train_mse = float(torch.mean((model.head(z_tr, m_tr) - y_tr) ** 2))
-            val_mse = float(torch.mean((model.head(z_va, m_va) - y_va) ** 2)) if has_val else None
+            train_mse = float(loss_fn(z_tr, m_tr, y_tr, tau_tr))
+            val_mse = float(loss_fn(z_va, m_va, y_va, tau_va)) if has_val else None
+        fit = _fit_record(model, train, tr_idx, "train", tr_tensors)
+        if has_val:
+            fit.update(_fit_record(model, train, va_idx, "val", va_tensors))
+        else:
+            fit["val_rmse_mps2"] = None
     finally:
         if num_threads:
             torch.set_num_threads(old_threads)
@@ -296,8 +364,7 @@ def train_model(
         "stopped": stopped,
         "train_loss": train_mse,
         "val_loss": val_mse,
-        "train_rmse_mps2": math.sqrt(train_mse),
-        "val_rmse_mps2": None if val_mse is None else math.sqrt(val_mse),
+        **fit,
         "train_time_s": round(time.perf_counter() - t_start, 3),
         "torch_version": torch.__version__,
     })
