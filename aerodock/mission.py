@@ -265,7 +265,7 @@ class MissionBatch:
         self.lead_vel = lead_vel = (np.array([spec.leader_speed_mps, 0.0, 0.0]) if moving
                                     else np.zeros(3))
         self.lead_v = lead_v = np.tile(lead_vel, (n, 1))
-        zeros, zero_n = np.zeros((n, 3)), np.zeros(n)
+        zeros = np.zeros((n, 3))
         # Settled start: both fly for settle_s before t = 0 (observers converge); a moving
         # leader then speeds up smoothly and cruises, the follower in formation below.
         pre = CruiseStart(m.settle_s, m.leader_ramp_s if moving else 0.0)
