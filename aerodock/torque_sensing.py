@@ -91,7 +91,8 @@ class TorqueLog:
     def add_step(self, w_radps: np.ndarray, gyro_noise_radps: np.ndarray | None,
                  rotor_speed_radps: np.ndarray, v_mps: np.ndarray, rot: np.ndarray,
                  wake_torque_nm: np.ndarray | None) -> None:
-        """One physics step, from the followers' state before it (arrays kept, not copied).
+        """One physics step, from the followers' state before it (the state's arrays are kept,
+        not copied: the world makes new ones every step; the field's torque is copied).
 
         Args:
             w_radps: (n, 3) true body rates.
@@ -101,8 +102,8 @@ class TorqueLog:
             rot: (n, 3, 3) attitude, body to world.
             wake_torque_nm: (n, 3) the wake's torque this step, body FRD (None: zero).
         """
-        self._steps.append((w_radps, gyro_noise_radps, rotor_speed_radps, v_mps, rot,
-                            wake_torque_nm))
+        wake = None if wake_torque_nm is None else np.array(wake_torque_nm)  # a plug-in's buffer?
+        self._steps.append((w_radps, gyro_noise_radps, rotor_speed_radps, v_mps, rot, wake))
 
     def read(self) -> TorqueReading:
         """The window since the last read (zeros before two steps); starts the next window."""
