@@ -147,7 +147,8 @@ _CHOICES = {"gripper.trigger": {"passive", "active", "both"},
             "vehicle.model": {"rigid-body", "point-mass"},
             "control.rejection": {"bias-observer", "accelerometer"},
             "control.accel_observer_axes": {"down", "all"},
-            "curriculum.model": {"so2", "so2-ext", "so2-wrench", "mlp"}}
+            "curriculum.model": {"so2", "so2-ext", "so2-wrench", "mlp"},
+            "curriculum.label_basis": {"command", "thrust"}}
 _LENGTHS = {
     "control.q_diag": 7, "control.r_diag": 4,
     "control.terminal_q_diag": 7, "control.terminal_r_diag": 4, "curriculum.stage0_depth_m": 2,

@@ -311,7 +311,8 @@ class MissionBatch:
         self.hist = np.full((self.steps, n, 5), np.nan)
         keys = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
         self.trace: dict[str, list] = {k: [] for k in keys} if record != "summary" else {}
-        self.recorder = FlightRecorder() if record == "full" else None
+        self.recorder = (FlightRecorder(cfg.curriculum.label_basis, cfg.vehicle.mass_kg)
+                         if record == "full" else None)
         self.k = 0
         self.finished = False
         world.observed_accel()  # start the accelerometer's averaging window
@@ -629,7 +630,8 @@ class MissionBatch:
             mass = cfg.vehicle.mass_kg
             result.logs = self.recorder.flightlogs(lambda i: {
                 "name": f"dock-seed{spec.seed}-trial{int(self.trials[i]):04d}",
-                "source": "aerodock-sim", "frame": "NED", "label_basis": "command",
+                "source": "aerodock-sim", "frame": "NED",
+                "label_basis": self.recorder.label_basis,
                 "leader_mass_kg": mass, "follower_mass_kg": mass,
                 **vehicle_meta(cfg),
                 "compensation": Compensation(spec.compensation).value,

@@ -7,6 +7,16 @@ one reading per control period, body FRD): ``follower_obs_torque_nm`` (``J dw/dt
 from the gyro), ``follower_rotor_torque_nm`` (what the rotors explain from their measured speeds),
 ``follower_body_rates_radps`` (the gyro), and the truth ``true_wake_torque_nm`` (evaluation
 only). :mod:`aerodock.learning.labels` turns the first two into torque labels.
+
+``follower_cmd_accel_mps2`` is what the follower's own actuation explains, on one of the two
+bases real logs have (``meta["label_basis"]``, ``curriculum.label_basis``): ``"command"``, the
+acceleration ``u_1:3`` the controller sent to the inversion map (the paper's labels ``a_obs - u``),
+or ``"thrust"``, ``g e3 - R e3 T / m`` with the measured attitude ``R`` and the commanded
+collective ``T`` (what a log without the outer loop's command gives). On a rigid body they
+differ by the attitude loop's tracking error: the wake's torque tilts the follower off its
+commanded attitude, and ``a_obs - u`` counts the thrust that tilt redirects as wake force;
+``a_obs - (g e3 - R e3 T / m)`` is the force on the body alone, the right partner of a torque
+feed-forward that removes the tilt.
 """
 
 from __future__ import annotations
@@ -19,6 +29,7 @@ import numpy as np
 from aerodock.control.controller import ControlOutput
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import rotmat_to_quat
+from aerodock.ingest.common import thrust_accel
 from aerodock.sim import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",
@@ -26,6 +37,7 @@ _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean"
 # Recorded rows -> FlightLog extras of the torque observations (rigid-body vehicles only).
 TORQUE_EXTRAS = {"tau_obs": "follower_obs_torque_nm", "tau_rotor": "follower_rotor_torque_nm",
                  "rates": "follower_body_rates_radps", "tau_true": "true_wake_torque_nm"}
+LABEL_BASES = ("command", "thrust")
 
 
 class FlightRecorder:
@@ -35,9 +47,17 @@ class FlightRecorder:
     Call :meth:`before_step` after the controllers ran and before ``world.advance``, and
     :meth:`after_step` right after it (the observed acceleration covers the control period that
     the logged command was applied over, so ``a_obs - u`` is the residual of that period).
+
+    Args:
+        label_basis: ``"command"`` or ``"thrust"`` (see the module docstring).
+        mass_kg: the follower's mass (for the ``"thrust"`` basis).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, label_basis: str = "command", mass_kg: float = 1.0) -> None:
+        if label_basis not in LABEL_BASES:
+            raise ValueError(f"label_basis must be one of {'|'.join(LABEL_BASES)}, "
+                             f"got {label_basis!r}")
+        self.label_basis, self.mass_kg = label_basis, float(mass_kg)
         self.rows: dict[str, list] = {k: [] for k in _KEYS}
 
     def before_step(self, t_s: float, world: World, obs_l: Observation, obs_f: Observation,
@@ -51,7 +71,8 @@ class FlightRecorder:
         r["fp"].append(obs_f.p)
         r["fv"].append(obs_f.v)
         r["fq"].append(rotmat_to_quat(obs_f.R))
-        r["u"].append(out.applied_accel_mps2)
+        r["u"].append(out.applied_accel_mps2 if self.label_basis == "command"
+                      else thrust_accel(obs_f.R, out.command.thrust_n, self.mass_kg))
         r["thrust"].append(out.command.thrust_n)
         r["fmean"].append(world.true_mean_field_mps2())
         r["ref"].append(np.array(ref_p, copy=True))

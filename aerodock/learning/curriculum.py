@@ -160,7 +160,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
                                                  t0)))
         t0 += duration
         prev = target
-    recorder = FlightRecorder()
+    recorder = FlightRecorder(cfg.curriculum.label_basis, mass)
     world.observed_accel()
     steps = int(round(FLIGHT_S / world.dt_control_s))
     seg = 0
@@ -181,7 +181,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         recorder.after_step(world)
     return recorder.flightlogs(lambda i: {
         "name": f"{name}-{first_trial + i:03d}", "source": "aerodock-sim", "frame": "NED",
-        "label_basis": "command", "leader_mass_kg": mass, "follower_mass_kg": mass,
+        "label_basis": recorder.label_basis, "leader_mass_kg": mass, "follower_mass_kg": mass,
         **vehicle_meta(cfg),
         "depth_band_m": [depth_min_m, depth_max_m], "leader_speed_mps": float(speed[i]),
         "cable_length_m": cfg.platform.cable_length_m,

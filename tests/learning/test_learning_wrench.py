@@ -19,6 +19,7 @@ from aerodock.learning.dataset import DataError, build_dataset, load_dataset, sa
 from aerodock.learning.features import N_FEATURES, feature_map
 from aerodock.learning.labels import (
     OBS_TORQUE_KEY,
+    labels_from_logs,
     raw_torque_labels,
     torque_labels_from_logs,
 )
@@ -96,6 +97,41 @@ def test_torque_labels_need_the_torque_extras(sim_logs):
     mixed = build_dataset([bare, sim_logs[1]])
     with pytest.raises(DataError, match=f"flight {bare.name} has no torque labels"):
         train_model("so2-wrench", mixed, max_epochs=1)
+
+
+def _radial_means(logs) -> tuple[float, float]:
+    """Mean radial (outward) component of the force labels and of the true mean wake force over
+    the samples 5-25 cm off the wake's axis, below the leader, m/s²."""
+    labels, _, _ = labels_from_logs(logs)
+    lab_r, true_r = [], []
+    for log, lab in zip(logs, labels, strict=True):
+        dp = log.follower_pos_m - log.leader_pos_m
+        r = np.hypot(dp[:, 0], dp[:, 1])
+        near = log.extra["label_valid"].astype(bool) & (r > 0.05) & (r < 0.25) & (dp[:, 2] > 0)
+        e_r = dp[:, :2] / np.maximum(r, 1e-9)[:, None]
+        lab_r.append(np.einsum("ni,ni->n", lab[:, :2], e_r)[near])
+        true_r.append(np.einsum("ni,ni->n", log.extra["true_field_mean_mps2"][:, :2], e_r)[near])
+    return float(np.mean(np.concatenate(lab_r))), float(np.mean(np.concatenate(true_r)))
+
+
+def test_thrust_basis_labels_are_the_force_on_the_body():
+    """Off the axis the wake pushes the follower outwards, and its torque tilts it inwards. The
+    paper's labels (``a_obs - u``) count the thrust that tilt redirects as wake force and read the
+    outward push as an inward one; along the measured thrust axis the labels find the push."""
+    from aerodock.learning.curriculum import excitation_flights
+
+    base = load_config(None)
+    means = {}
+    for basis in ("command", "thrust"):
+        cfg = base.with_overrides({"curriculum": {"label_basis": basis}}, source="test")
+        logs = excitation_flights(cfg, 4, 0.3, 0.5, seed=11)
+        assert {log.meta["label_basis"] for log in logs} == {basis}
+        means[basis] = _radial_means(logs)
+    label_cmd, true_r = means["command"]
+    label_thrust, true_again = means["thrust"]
+    assert true_r > 0.2 and true_again > 0.2  # the flights cross the wake's outward push
+    assert abs(label_thrust - true_again) < 0.25 * true_again
+    assert label_cmd < 0.5 * true_r  # the torque-induced tilt hides most of it
 
 
 def test_recorder_torque_extras_have_the_right_shapes(sim_logs):
