@@ -9,8 +9,14 @@
 - ``ours``: ``tuned`` plus fast disturbance rejection from the accelerometer
   (``control.rejection = "accelerometer"``, :mod:`aerodock.control.accel_observer`) on top of
   the slow bias observer and the learnt feed-forward. The wake-torque feed-forward
-  (``control.torque_feedforward``) is not part of it: measured, it lowers the tilt but costs
-  docking (``reproduce``'s targets table has it as a separate row).
+  (``control.torque_feedforward``) is not part of it by default: it belongs with a model whose
+  force labels exclude the tilt the wake's torque causes (``curriculum.label_basis = "thrust"``,
+  a ``so2-wrench`` model; ``reproduce``'s targets table has that pairing as its own row). With
+  the paper's labels the force model already counts that tilt, and cancelling the torque as
+  well costs docking.
+
+The paper's profile never flies the accelerometer observer or the torque feed-forward, whatever
+the configuration says: the paper has neither.
 """
 
 from __future__ import annotations
@@ -40,4 +46,5 @@ def controller_config(cfg: Config, profile: str) -> Config:
         "q_diag": list(PAPER_Q_DIAG), "r_diag": list(PAPER_R_DIAG),
         "terminal_q_diag": list(PAPER_Q_DIAG), "terminal_r_diag": list(PAPER_R_DIAG),
         "observer_bias_tau_s": PAPER_OBSERVER_TAU_S,
+        "rejection": "bias-observer", "torque_feedforward": False,
     }}, source=f"{cfg.source} + paper's controller")

@@ -116,7 +116,8 @@ def targets_markdown(r: dict[str, Any]) -> list[str]:
               f"(target: within {t['mean_rel_target']:.0%} at 0.36 m):", "",
               "| model | where | depth | field | learnt | error |", "|---|---|---|---|---|---|"]
     for label, key in (("deep curriculum", "learnt_mean"),
-                       ("paper's curriculum", "learnt_mean_paper_model")):
+                       ("paper's curriculum", "learnt_mean_paper_model"),
+                       ("learnt wrench (thrust basis)", "learnt_mean_wrench_model")):
         for m in t.get(key, []):
             rel = m["relative_error"]
             lines.append(f"| {label} | {m['where']} | {m['depth_m']:.3f} m | "

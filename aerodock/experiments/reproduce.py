@@ -71,6 +71,9 @@ FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200,
                target_trials=100, target_all_rows=True)
 
 
+WRENCH_ROW = "ours + learnt wrench (thrust-basis so2-wrench, torque feed-forward)"
+
+
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
     """Mean |vertical error| (follower vs its reference) in [t0, t1) over approaching trials."""
     t = trace["t_s"]
@@ -293,11 +296,28 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
         "ours + torque feed-forward + deep model": (
             ours_cfg.with_overrides({"control": {"torque_feedforward": True}}), deep_predictor),
     }
-    if not size.target_all_rows:
+    wrench_predictor = None
+    if size.target_all_rows:
+        # The learnt wrench: so2-wrench on thrust-basis labels (the force on the body alone),
+        # its learnt torque fed to the autopilot; a curriculum of its own, flown the same way.
+        say("    learnt wrench: the deep curriculum again, so2-wrench on thrust-basis labels")
+        wrench_cfg = cfg.with_overrides({"curriculum": {"label_basis": "thrust"}})
+        wrench_curriculum = run_curriculum(wrench_cfg, out_dir / "data-wrench", seed=seed,
+                                           model_kind="so2-wrench",
+                                           progress=lambda m: say("    " + m),
+                                           train_kwargs=epochs)
+        results["learning"]["wrench_curriculum"] = wrench_curriculum
+        wrench_predictor = Predictor.load(Path(wrench_curriculum["final_model"]))
+        rows[WRENCH_ROW] = (ours_cfg.with_overrides({"control": {"torque_feedforward": True}}),
+                            wrench_predictor)
+    else:
         rows = {k: v for k, v in rows.items() if k in ("paper's controller + paper's model",
                                                        "ours + deep model")}
     results["targets"] = targets(rows, size.target_trials, deep_predictor, seed + 5, say)
     results["targets"]["learnt_mean_paper_model"] = learnt_mean_check(cfg, predictor)
+    if wrench_predictor is not None:
+        results["targets"]["learnt_mean_wrench_model"] = learnt_mean_check(cfg,
+                                                                            wrench_predictor)
     timings["targets_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     say("    what each lever costs: observer time constant and terminal gains")

@@ -130,3 +130,16 @@ def test_down_only_and_hold():
     assert 0.0 < held < 1.0  # frozen where it was when contact began
     with pytest.raises(ValueError):
         AccelObserver(1, 0.01, 0.05, 0.0, M, G, axes="sideways")
+
+
+def test_the_papers_profile_ignores_our_additions(cfg):
+    """A configuration with our observer and the torque feed-forward switched on still flies the
+    paper's controller as the paper does: neither is part of it."""
+    ours = cfg.with_overrides({"control": {"rejection": "accelerometer",
+                                           "torque_feedforward": True}})
+    paper = controller_config(ours, "paper")
+    assert paper.control.rejection == "bias-observer"
+    assert paper.control.torque_feedforward is False
+    assert controller_config(ours, "ours").control.torque_feedforward is True
+    assert not PositionController(paper, 2, use_observer=True, has_accelerometer=True
+                                  ).uses_accelerometer
