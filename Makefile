@@ -27,7 +27,7 @@ demo: $(STAMP)
 
 # Two xdist workers (the machines have 2 cores), one file at a time each (a file's fixtures are
 # built once), in collection order: tests/conftest.py puts the long `reproduce --quick` runs first.
-PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder
+PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder --durations=15
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q $(PYTEST_XDIST)
