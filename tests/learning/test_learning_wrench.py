@@ -353,3 +353,29 @@ def test_cli_trains_evaluates_and_exports_a_wrench_model(tmp_path, sim_logs):
                               str(tmp_path / "bare.npz"), "--out", str(tmp_path / "none")])
     assert res.exit_code == 2 and not (tmp_path / "none").exists()
     assert "follower_obs_torque_nm" in res.stderr and res.stderr.count("\n") == 1
+
+
+def test_saved_docking_logs_follow_the_label_basis():
+    """``dock --save-logs`` writes the basis the configuration asks for: the thrust along the
+    logged (measured) attitude, which real logs without a command log give too. The basis changes
+    what is logged, never the flight."""
+    from aerodock.control.compensation import Compensation
+    from aerodock.geometry import quat_to_rotmat
+    from aerodock.ingest.common import thrust_accel
+    from aerodock.mission import MissionSpec, run_campaign
+
+    base = load_config(None)
+    spec = MissionSpec(trials=2, compensation=Compensation.OBSERVER, seed=4)
+    logs = {basis: run_campaign(base.with_overrides({"curriculum": {"label_basis": basis}},
+                                                    source="test"), spec, record="full").logs
+            for basis in ("command", "thrust")}
+    for cmd_log, log in zip(logs["command"], logs["thrust"], strict=True):
+        assert (cmd_log.meta["label_basis"], log.meta["label_basis"]) == ("command", "thrust")
+        np.testing.assert_array_equal(cmd_log.follower_obs_accel_mps2,
+                                      log.follower_obs_accel_mps2)  # the same flight
+        want = thrust_accel(quat_to_rotmat(log.follower_quat), log.follower_thrust_n,
+                            log.meta["follower_mass_kg"])
+        np.testing.assert_allclose(log.follower_cmd_accel_mps2, want, atol=1e-9)
+        # the two bases differ by the attitude loop's tracking error (lag, disturbances)
+        gap = np.abs(want[:, :2] - cmd_log.follower_cmd_accel_mps2[:, :2])
+        assert 0.01 < np.median(gap) < 1.0
