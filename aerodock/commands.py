@@ -100,9 +100,9 @@ def dock(
         check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
     from aerodock.faults import load_faults
-    from aerodock.learning.modelfile import model_vehicle_warnings
+    from aerodock.learning.modelfile import model_warnings
 
-    for note in model_vehicle_warnings(predictor, cfg):
+    for note in model_warnings(predictor, cfg):
         typer.echo(f"warning: {note}", err=True)
     injected = tuple(load_faults(faults)) if faults is not None else ()
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
@@ -313,6 +313,10 @@ def targets_command(
         summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
         model = Path(summary["final_model"])
     predictor = Predictor.load(model)
+    from aerodock.learning.modelfile import model_warnings
+
+    for note in model_warnings(predictor, cfg):
+        typer.echo(f"warning: {note}", err=True)
     res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
                    "ours + model": (controller_config(cfg, "ours"), predictor)},
                   trials, predictor, seed, say)

@@ -187,6 +187,8 @@ class Dataset:
             "sources": self.meta.get("sources", []),
             "has_true_mean": self.y_true_mean is not None,
             "has_torque": self.y_torque is not None,
+            "label_bases": sorted({str(f["label_basis"]) for f in self.meta["flights"]
+                                   if f.get("label_basis")}),
             "vehicles": vehicles_from_flights(self.meta["flights"]),
         }
 
@@ -284,6 +286,7 @@ def build_dataset(
             "bias_mps2": [float(b) for b in bias.bias_mps2],
             "bias_source": bias.source,
             "n_free_air": bias.n_free_air,
+            "label_basis": log.meta.get("label_basis"),
             **torque_fields,
             **flight_vehicle_fields(log.meta),
         })

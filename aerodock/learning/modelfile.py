@@ -425,6 +425,34 @@ def model_vehicle_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
     return vehicle_mismatches(doc.get("vehicles"), configured_vehicles(cfg))
 
 
+def model_pairing_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
+    """Warnings for flying a model with ``cfg``'s torque feed-forward when its force labels were
+    made on the paper's command basis (``a_obs - u_1:3``): such a model already counts the tilt
+    the wake's torque causes as force, and cancelling the torque as well holds the follower off
+    the wake's axis (README, *Label basis*). Models that do not record their labels' basis pass.
+    """
+    doc = getattr(predictor_or_doc, "meta", predictor_or_doc)
+    control = getattr(cfg, "control", None)
+    if not isinstance(doc, Mapping) or not getattr(control, "torque_feedforward", False):
+        return []
+    data = doc.get("training", {}).get("data", {}) if isinstance(doc.get("training"),
+                                                                   Mapping) else {}
+    bases = data.get("label_bases") if isinstance(data, Mapping) else None
+    if isinstance(bases, list) and "command" in bases:
+        return ["the model's force labels are on the command basis (a_obs - u_1:3, which counts "
+                "the tilt the wake's torque causes); with control.torque_feedforward that torque "
+                "is compensated twice: train on curriculum.label_basis = \"thrust\" flights"]
+    return []
+
+
+def model_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
+    """Every warning for flying a model on ``cfg``: other vehicles
+    (:func:`model_vehicle_warnings`) and a torque feed-forward its labels do not suit
+    (:func:`model_pairing_warnings`). ``dock``, ``targets`` and the ROS node print these."""
+    return model_vehicle_warnings(predictor_or_doc, cfg) + model_pairing_warnings(
+        predictor_or_doc, cfg)
+
+
 def _floats(doc: dict, key: str, n: int, where: Path) -> np.ndarray:
     try:
         arr = np.asarray(doc[key], dtype=float)

@@ -58,7 +58,7 @@ def node_command(
     from aerodock.config import ConfigError, load_config
     from aerodock.ingest.errors import IngestError
     from aerodock.ingest.rosbag import load_mapping
-    from aerodock.learning.modelfile import ModelFileError, model_vehicle_warnings
+    from aerodock.learning.modelfile import ModelFileError, model_warnings
     from aerodock.learning.runtime import Predictor
     from aerodock.node.core import STATE_TYPES
 
@@ -87,7 +87,7 @@ def node_command(
         _fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
     from aerodock.node.ros import NodeSettings, run_node
 
-    notes = model_vehicle_warnings(predictor, cfg)
+    notes = model_warnings(predictor, cfg)
     for note in notes:
         typer.echo(f"warning: {note}", err=True)
     settings = NodeSettings(

@@ -379,3 +379,23 @@ def test_saved_docking_logs_follow_the_label_basis():
         # the two bases differ by the attitude loop's tracking error (lag, disturbances)
         gap = np.abs(want[:, :2] - cmd_log.follower_cmd_accel_mps2[:, :2])
         assert 0.01 < np.median(gap) < 1.0
+
+
+def test_a_torque_feedforward_on_command_basis_labels_is_warned_about(sim_ds, trained_wrench,
+                                                                       tmp_path):
+    """The model file records its labels' basis; flying command-basis labels with the torque
+    feed-forward draws a warning (README: Label basis), the thrust basis or no feed-forward none."""
+    from aerodock.learning.modelfile import model_warnings
+
+    assert sim_ds.summary()["label_bases"] == ["command"]
+    trained_wrench.save(tmp_path / "model")
+    pred = Predictor.load(tmp_path / "model")
+    assert pred.meta["training"]["data"]["label_bases"] == ["command"]
+    cfg = load_config(None)
+    with_ff = cfg.with_overrides({"control": {"torque_feedforward": True}}, source="test")
+    assert model_warnings(pred, cfg) == []
+    (note,) = model_warnings(pred, with_ff)
+    assert "command basis" in note and "label_basis" in note and "\n" not in note
+    thrust_doc = {**pred.meta, "training": {**pred.meta["training"], "data": {
+        **pred.meta["training"]["data"], "label_bases": ["thrust"]}}}
+    assert model_warnings(thrust_doc, with_ff) == []
