@@ -96,6 +96,7 @@ class CampaignResult:
     nan_state: np.ndarray  # a non-finite state or metric (a numerical failure)
     fault_hit: np.ndarray  # an injected fault struck the trial (every trial when none is set)
     ground_contact: np.ndarray
+    post_dock_sink_m: np.ndarray  # the leader's altitude loss when a docked trial ends (nan: not)
     min_clearance_m: np.ndarray
     capture_time_s: np.ndarray
     err_down_m: np.ndarray  # mean |vertical tracking error| over the terminal window
@@ -130,6 +131,8 @@ class CampaignResult:
             "safe_aborts": int((self.aborted & ~self.clearance_violation & ~self.rotor_strike
                                 & ~self.ground_contact & ~self.nan_state).sum()),
             "ground_contacts": int(self.ground_contact.sum()),
+            "post_dock_sink_median_m": _nan_stat(np.nanmedian, self.post_dock_sink_m),
+            "post_dock_sink_max_m": _nan_stat(np.nanmax, self.post_dock_sink_m),
             "min_clearance_m": float(np.min(self.min_clearance_m)),
             "terminal_err_down_median_m": float(np.median(self.err_down_m)),
             "terminal_err_down_mean_m": float(np.mean(self.err_down_m)),
@@ -141,6 +144,12 @@ class CampaignResult:
             "terminal_tilt_rms_deg_median": float(np.median(self.tilt_rms_deg)),
             "terminal_saturated_frac_mean": float(np.mean(self.saturated_frac)),
         }
+
+
+def _nan_stat(stat: Callable[[np.ndarray], Any], values: np.ndarray) -> float | None:
+    """``stat`` over the finite values, or None when there are none (JSON-ready)."""
+    finite = values[np.isfinite(values)]
+    return float(stat(finite)) if finite.size else None
 
 
 def wilson_interval(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
@@ -302,8 +311,12 @@ class MissionBatch:
         self.abort_reason = np.zeros(n, dtype=np.int8)
         self.phase_t = np.zeros(n)  # when the current phase began
         self.capture_t = np.full(n, np.nan)
+        # Outcomes are each trial's own: collisions count until its mission ends (DONE), however
+        # long the batch goes on flying its other trials.
         self.min_clear = np.full(n, np.inf)
         self.strikes = np.zeros(n, dtype=bool)
+        self.ground_hit = np.zeros(n, dtype=bool)
+        self.post_dock_sink = np.full(n, np.nan)
         self.nan_seen = np.zeros(n, dtype=bool)
         # Terminal window: the 0.5 s before the approach ends (arrival, or the gate closing).
         self.approach_end = np.full(n, self.arrival_s)
@@ -434,6 +447,12 @@ class MissionBatch:
                & (t - self.phase_t >= m.backoff_s))
         )
         phase = np.where(finished, Phase.DONE, phase).astype(np.int8)
+        # How far the pair has sunk when the post-dock window ends (the leader carries the
+        # follower; it flies level, so its altitude is its start's).
+        docked_end = finished & world.captured
+        if np.any(docked_end):
+            self.post_dock_sink = np.where(
+                docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2], self.post_dock_sink)
         backing = (phase == Phase.MISSED) | (phase == Phase.ABORT)
         if np.any(backing):
             pb, vb, ab = plan.sample(t)
@@ -561,10 +580,13 @@ class MissionBatch:
         hist[k, :, 4] = fout.saturated
         ended = (~active | (world.gripper.gate != GateState.OPEN)) & (self.approach_end > t)
         self.approach_end = np.where(ended, t, self.approach_end)
+        live = self.phase != Phase.DONE  # this trial's mission is still on
+        self.ground_hit |= world.ground_contact & live
         arm = world.follower.p - world.follower.R[:, :, 2] * gp.mount_height_m
         clear_m = self.cfg.mission.clearance_m
         was_clear = self.min_clear >= clear_m
-        self.min_clear = np.minimum(self.min_clear, np.linalg.norm(arm - world.leader.p, axis=1))
+        self.min_clear = np.where(live, np.minimum(
+            self.min_clear, np.linalg.norm(arm - world.leader.p, axis=1)), self.min_clear)
         self.clearance_violated_now = was_clear & (self.min_clear < clear_m)
         self.nan_seen |= ~(np.isfinite(world.follower.p).all(axis=1)
                            & np.isfinite(world.leader.p).all(axis=1)
@@ -573,10 +595,10 @@ class MissionBatch:
             seg_a, seg_b = platform_segments(
                 anchor_point(world.leader.p, world.leader.R, world.platform),
                 self.obs_l.yaw_rad, world.bar, world.platform)
-            self.strikes |= rotor_strike(world.follower.p, world.follower.R,
-                                         world.fleet.params.rotor_offsets_m,
-                                         self.cfg.vehicle.rotor_radius_m, seg_a, seg_b,
-                                         gp.bar_radius_m)
+            self.strikes |= live & rotor_strike(world.follower.p, world.follower.R,
+                                                world.fleet.params.rotor_offsets_m,
+                                                self.cfg.vehicle.rotor_radius_m, seg_a, seg_b,
+                                                gp.bar_radius_m)
         if self.record != "summary":
             tr = self.trace
             tr["t_s"].append(t)
@@ -593,7 +615,9 @@ class MissionBatch:
         """Per-trial outcomes and terminal-window metrics of the flights so far."""
         world, n, spec, cfg, m = self.world, self.n, self.spec, self.cfg, self.cfg.mission
         gate = world.gripper.gate
-        collision = self.strikes | world.ground_contact
+        # Contacts of the period flown last (the world records them as it steps).
+        ground = self.ground_hit | (world.ground_contact & (self.phase != Phase.DONE))
+        collision = self.strikes | ground
         dt_c = self.dt_s
         t_grid = np.arange(self.steps)[:, None] * dt_c
         in_win = (t_grid >= self.approach_end - 0.5) & (t_grid < self.approach_end)
@@ -612,7 +636,8 @@ class MissionBatch:
             nan_state=self.nan_seen.copy(),
             fault_hit=(np.any([d.hit for d in draws], axis=0) if draws
                        else np.ones(n, dtype=bool)),
-            ground_contact=world.ground_contact.copy(),
+            ground_contact=ground,
+            post_dock_sink_m=self.post_dock_sink.copy(),
             min_clearance_m=self.min_clear,
             capture_time_s=self.capture_t,
             err_down_m=win[..., 0].sum(0) / cnt,

@@ -27,3 +27,25 @@ def test_same_seed_same_numbers_different_seed_different(cfg):
     c = run_campaign(cfg, MissionSpec(trials=3, seed=6), record="trace")
     assert np.array_equal(a.trace["follower_p"], b.trace["follower_p"])
     assert not np.array_equal(a.trace["follower_p"][:50], c.trace["follower_p"][:50])
+
+
+def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(cfg):
+    """A trial that ended (docked and hung for post_dock_s, or backed off) is still simulated
+    while its batch flies the others; what happens to it then is not its outcome. Without a model
+    the hanging pair sinks (the follower does not answer the wake on it) and hits the ground
+    later: flown alone or in a batch, each trial's outcome is the same."""
+    from aerodock.control.profiles import controller_config
+
+    ours = controller_config(cfg, "ours")
+    n = 6
+    batch = run_campaign(ours, MissionSpec(trials=n, compensation="observer", seed=1))
+    assert batch.success.sum() >= 4  # our controller docks without the model ...
+    sink = batch.summary()["post_dock_sink_median_m"]
+    assert sink is not None and sink > 0.5  # ... but the pair it leaves hanging sinks
+    for i in range(n):
+        one = run_campaign(ours, MissionSpec(trials=1, compensation="observer", seed=1,
+                                             first_trial=i))
+        for name in ("success", "rotor_strike", "ground_contact", "clearance_violation"):
+            assert getattr(one, name)[0] == getattr(batch, name)[i], (i, name)
+        assert np.array_equal(one.post_dock_sink_m, batch.post_dock_sink_m[i:i + 1],
+                              equal_nan=True)
