@@ -61,6 +61,8 @@ def controllers_markdown(r: dict[str, Any]) -> list[str]:
     row("terminal tilt RMS, median", "-",
         lambda c, k: f"{c['hover_docking'][k]['terminal_tilt_rms_deg_median']:.1f} deg")
     row("rotor strikes (hover)", "-", lambda c, k: str(c["hover_docking"][k]["rotor_strikes"]))
+    row("leader's sink when the post-dock window ends (hover, median)", "the leader dips",
+        lambda c, k: _metres(c["hover_docking"][k].get("post_dock_sink_median_m")))
     row("leader moving 0.25 m/s", "very limited", lambda c, k: _rate(c["moving_leader"][k]))
     row("cable study (leader on a stand)", "6/6 with vs 0/6 without",
         lambda c, k: _offsets_docked(c["cable_study"], k))
@@ -125,6 +127,10 @@ def targets_markdown(r: dict[str, Any]) -> list[str]:
                          f"m/s² | {'-' if rel is None else f'{rel:+.1%}'} |")
     lines.append("")
     return lines
+
+
+def _metres(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f} m"
 
 
 def _cost_row(lever: str, p: dict[str, Any]) -> str:
