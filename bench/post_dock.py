@@ -1,28 +1,28 @@
-"""When do a campaign's collisions happen: before or after each trial's own end?
+"""What happens to a campaign's trials after their own missions end, and how far the docked
+pairs sink.
 
     .venv/bin/python bench/post_dock.py --controller ours --compensation observer --seed 1
     .venv/bin/python bench/post_dock.py --controller ours --compensation model --model DIR
 
 A campaign flies until its last trial is done; a trial that finished earlier (phase DONE: docked
-and hung on the cables for ``mission.post_dock_s``, or backed off) goes on being simulated, and a
-rotor strike or ground contact then still counts against it. This prints, for one campaign: the
-docked count as ``dock`` reports it, the trials captured, the collisions before and after each
-trial's own end, and how far the leader has sunk below its altitude when a docked trial ends
-(the pair it carries). The seeds are ``reproduce``'s: hover at ``seed + 1``, the moving leader at
-``seed + 2``.
+and hung on the cables for ``mission.post_dock_s``, or backed off) goes on being simulated.
+Collisions then do not count against it (a trial's outcome is its own), but they show what the
+flight would have come to: without a model the hanging follower does not answer the wake on it,
+the pair sinks, and it hits the ground soon after. This prints the docked count, the trials
+captured, the collisions (rotor strikes, ground contacts) before and after each trial's own end,
+and how far the leader has sunk below its altitude when a docked trial ends. The seeds are
+``reproduce``'s: hover at ``seed + 1``, the moving leader at ``seed + 2``.
 """
 
 from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from aerodock.config import load_config
 from aerodock.control.profiles import controller_config
 from aerodock.gripper import GateState
 from aerodock.learning.runtime import Predictor
-from aerodock.mission import MissionBatch, MissionSpec, Phase
+from aerodock.mission import MissionBatch, MissionSpec
 
 
 def main() -> None:
@@ -42,33 +42,23 @@ def main() -> None:
                                           leader_speed_mps=args.leader_speed,
                                           compensation=args.compensation, seed=args.seed),
                          predictor)
-    ended = np.zeros(n, dtype=bool)
-    hit_by_end = np.zeros(n, dtype=bool)
-    sink_m = np.full(n, np.nan)
     while not batch.finished:
         batch.fly()
-        hit = batch.strikes | batch.world.ground_contact
-        now = (batch.phase == Phase.DONE) & ~ended
-        hit_by_end = np.where(now, hit, hit_by_end)
-        sink_m = np.where(now & batch.world.captured,
-                          batch.world.leader.p[:, 2] - batch.leader_p0[:, 2], sink_m)
-        ended |= now
     res = batch.result()
-    hit = res.rotor_strike | res.ground_contact
-    own = np.where(ended, hit_by_end, hit)
     captured = batch.world.gripper.gate == GateState.CAPTURED
+    later = batch.world.ground_contact & ~res.ground_contact  # the world keeps counting
     print(f"{args.controller} controller, compensation {args.compensation}, leader "
           f"{args.leader_speed:g} m/s, {n} trials; the campaign flew {batch.k} of "
           f"{batch.steps} control periods")
-    print(f"  docked as reported: {int(res.success.sum())}; captured: {int(captured.sum())}; "
-          f"captured with no collision by the trial's own end: {int((captured & ~own).sum())}")
-    print(f"  collisions (rotor strike or ground) before the trial's own end: {int(own.sum())}, "
-          f"after it: {int((hit & ~own).sum())} (strikes {int(res.rotor_strike.sum())}, ground "
-          f"contacts {int(res.ground_contact.sum())} in all)")
-    if np.isfinite(sink_m).any():
-        print(f"  the leader's sink when a docked trial ends: median {np.nanmedian(sink_m):.2f} m, "
-              f"max {np.nanmax(sink_m):.2f} m (down positive)")
-
+    print(f"  docked: {int(res.success.sum())} (captured: {int(captured.sum())}); collisions "
+          f"before the trials' own end: {int(res.rotor_strike.sum())} rotor strikes, "
+          f"{int(res.ground_contact.sum())} ground contacts; ground contacts after it (not "
+          f"counted): {int(later.sum())}")
+    sink = res.summary()
+    if sink["post_dock_sink_median_m"] is not None:
+        print(f"  the leader's sink when a docked trial ends: median "
+              f"{sink['post_dock_sink_median_m']:.2f} m, max {sink['post_dock_sink_max_m']:.2f} m "
+              "(down positive)")
 
 if __name__ == "__main__":
     main()
