@@ -141,6 +141,10 @@ def dock(
     table.add_row("rotor strikes / ground contacts",
                   f"{summary['rotor_strikes']} / {summary['ground_contacts']}")
     table.add_row("terminal tilt RMS, median", f"{summary['terminal_tilt_rms_deg_median']:.1f} deg")
+    sink = summary["post_dock_sink_median_m"]
+    if sink is not None:
+        table.add_row("leader's sink after docking",
+                      f"{sink:.2f} m median, {summary['post_dock_sink_max_m']:.2f} m max")
     Console().print(table)
     if save_logs is not None:
         typer.echo(f"wrote {summary['logs']}")
