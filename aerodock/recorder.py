@@ -53,11 +53,13 @@ class FlightRecorder:
         mass_kg: the follower's mass (for the ``"thrust"`` basis).
     """
 
-    def __init__(self, label_basis: str = "command", mass_kg: float = 1.0) -> None:
+    def __init__(self, label_basis: str = "command", mass_kg: float | None = None) -> None:
         if label_basis not in LABEL_BASES:
             raise ValueError(f"label_basis must be one of {'|'.join(LABEL_BASES)}, "
                              f"got {label_basis!r}")
-        self.label_basis, self.mass_kg = label_basis, float(mass_kg)
+        if label_basis == "thrust" and not (mass_kg is not None and mass_kg > 0):
+            raise ValueError("the thrust basis needs the follower's mass (mass_kg > 0)")
+        self.label_basis, self.mass_kg = label_basis, mass_kg
         self.rows: dict[str, list] = {k: [] for k in _KEYS}
 
     def before_step(self, t_s: float, world: World, obs_l: Observation, obs_f: Observation,
