@@ -56,8 +56,8 @@ class GripperParams:
     contact_damping_nspm: float
     latency_s: float
     close_time_s: float
-    passive: bool
-    active: bool
+    passive: bool | np.ndarray  # armed triggers: for every trial, or (n,) per trial
+    active: bool | np.ndarray
     bar_radius_m: float
     bar_half_length_m: float
 
@@ -198,12 +198,12 @@ def step_gripper(
         stuck = ~np.isnan(state.sensor_stuck_n)
         if stuck.any():  # injected fault: a dead (0) or stuck strain gauge
             reading = np.where(stuck, state.sensor_stuck_n, reading)
-        if params.passive:
-            sensed = untriggered & (reading > params.contact_threshold_n)
+        if np.any(params.passive):
+            sensed = untriggered & (reading > params.contact_threshold_n) & params.passive
             fire = sensed
             by_contact = by_contact | sensed
-    if params.active:
-        by_command = untriggered & close_command
+    if np.any(params.active):
+        by_command = untriggered & close_command & params.active
         fire = by_command if fire is None else fire | by_command
     # Unchanged arrays are passed on as they are (states are never modified in place).
     servo_start = state.servo_start_s

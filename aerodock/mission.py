@@ -15,7 +15,7 @@ summary statistics, optional traces for figures and optional FlightLogs.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from enum import IntEnum
 from typing import Any
 
@@ -77,8 +77,8 @@ class MissionSpec:
     start_azimuths_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
     leader_dropout_s: tuple[float, float] | None = None  # (start, duration): leader state lost
     faults: tuple[Fault, ...] = ()  # injected faults (aerodock.faults), drawn per trial
-    passive_trigger: bool = True
-    active_trigger: bool = True
+    passive_trigger: bool | tuple[bool, ...] = True  # armed in every trial, or one flag per trial
+    active_trigger: bool | tuple[bool, ...] = True
 
 
 @dataclass
@@ -109,6 +109,25 @@ class CampaignResult:
     arrival_s: float
     trace: dict[str, np.ndarray] = field(default_factory=dict)
     logs: list[FlightLog] = field(default_factory=list)
+
+    def take(self, index: np.ndarray) -> CampaignResult:
+        """The campaign of the trials at batch positions ``index`` alone: outcomes, metrics,
+        traces (their trial axis) and logs; per-trial trigger flags of the spec likewise."""
+        index = np.asarray(index)
+        n = self.success.size
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray) and value.ndim and value.shape[0] == n:
+                value = value[index]
+            out[f.name] = value
+        out["trace"] = {k: (v[:, index] if v.ndim >= 2 else v) for k, v in self.trace.items()}
+        out["logs"] = [self.logs[i] for i in index] if self.logs else []
+        flags = {k: tuple(bool(b) for b in np.asarray(getattr(self.spec, k))[index])
+                 for k in ("passive_trigger", "active_trigger")
+                 if np.ndim(getattr(self.spec, k))}
+        out["spec"] = replace(self.spec, trials=int(index.size), **flags)
+        return CampaignResult(**out)
 
     def summary(self) -> dict[str, Any]:
         """Success rate with a Wilson 95 % interval and error statistics (JSON-ready)."""
@@ -173,6 +192,17 @@ def _merge_plans(old: MinJerk, new: MinJerk, mask: np.ndarray) -> MinJerk:
     return replace(old, **out)
 
 
+def _armed(configured: bool, wanted: bool | tuple[bool, ...], n: int) -> bool | np.ndarray:
+    """A trigger's arming: the configuration's and the campaign's, for all trials or per trial."""
+    if np.ndim(wanted) == 0:
+        return bool(configured and wanted)
+    flags = np.asarray(wanted, dtype=bool)
+    if flags.shape != (n,):
+        raise ValueError(f"per-trial trigger flags must number {n} (one per trial), "
+                         f"got {flags.size}")
+    return flags & bool(configured)
+
+
 def _bodies(obs: Observation, thrust_n: float, mass_kg: float) -> BodyState:
     n = obs.p.shape[0]
     return BodyState(obs.p, obs.v, obs.R, np.full(n, thrust_n), np.full(n, mass_kg))
@@ -184,6 +214,7 @@ def run_campaign(
     predictor: AccelPredictor | None = None,
     record: str = "summary",
     progress: Callable[[float], None] | None = None,
+    trials: np.ndarray | None = None,
 ) -> CampaignResult:
     """Fly ``spec.trials`` docking missions at once.
 
@@ -194,8 +225,12 @@ def run_campaign(
         record: ``"summary"`` (outcomes only), ``"trace"`` (+ positions for figures) or
             ``"full"`` (+ one FlightLog per trial).
         progress: called with the fraction of the mission time done.
+        trials: explicit trial ids (``spec.trials`` of them; default ``first_trial + i``): a
+            trial flies the same with the same id in any batch, and its outcome is its own, so
+            one batch can fly, e.g., the same trials armed and disarmed
+            (:meth:`CampaignResult.take` splits it).
     """
-    batch = MissionBatch(cfg, spec, predictor, record)
+    batch = MissionBatch(cfg, spec, predictor, record, trials)
     while not batch.finished:
         batch.fly()
         if progress is not None and batch.k % 20 == 1:
@@ -238,6 +273,8 @@ class MissionBatch:
         n = spec.trials
         self.trials = (spec.first_trial + np.arange(n) if trials is None
                        else np.asarray(trials, dtype=np.int64).copy())
+        if self.trials.shape != (n,):
+            raise ValueError(f"{n} trials asked for, {self.trials.size} trial ids given")
         rng = TrialRNG(spec.seed, n, trials=self.trials)
         self.cfg, self.spec, self.n, self.comp, self.record = cfg, spec, n, comp, record
         m = cfg.mission
@@ -252,8 +289,9 @@ class MissionBatch:
                               and world.rigid)
         self.geom = geom = DockGeometry.from_config(cfg)
         world.gripper_params = replace(
-            world.gripper_params, passive=world.gripper_params.passive and spec.passive_trigger,
-            active=world.gripper_params.active and spec.active_trigger)
+            world.gripper_params,
+            passive=_armed(world.gripper_params.passive, spec.passive_trigger, n),
+            active=_armed(world.gripper_params.active, spec.active_trigger, n))
         self.world = world
         moving = spec.leader_speed_mps != 0.0 and not spec.leader_fixed
         self.arrival_s = cfg.planner.horizon_moving_s if moving else cfg.planner.horizon_hover_s

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from aerodock.mission import MissionSpec, run_campaign
 
@@ -49,3 +50,26 @@ def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(cfg):
             assert getattr(one, name)[0] == getattr(batch, name)[i], (i, name)
         assert np.array_equal(one.post_dock_sink_m, batch.post_dock_sink_m[i:i + 1],
                               equal_nan=True)
+
+
+def test_armed_and_disarmed_trials_fly_as_in_their_own_campaigns(cfg):
+    """Per-trial trigger flags: one batch flies the same trials armed and disarmed (as reproduce's
+    moving-leader study does), and each half's outcomes equal its own campaign's."""
+    n = 3
+    common = dict(offset_m=0.36, leader_speed_mps=0.25, compensation="observer", seed=7)
+    armed = run_campaign(cfg, MissionSpec(trials=n, **common), record="trace")
+    disarmed = run_campaign(cfg, MissionSpec(trials=n, passive_trigger=False,
+                                             active_trigger=False, **common), record="trace")
+    flags = (True,) * n + (False,) * n
+    both = run_campaign(cfg, MissionSpec(trials=2 * n, passive_trigger=flags,
+                                         active_trigger=flags, **common), record="trace",
+                        trials=np.r_[0:n, 0:n])
+    for alone, half in ((armed, both.take(np.arange(n))),
+                        (disarmed, both.take(np.arange(n, 2 * n)))):
+        assert half.summary() == alone.summary()
+        steps = min(len(alone.trace["t_s"]), len(half.trace["t_s"]))
+        for key in ("follower_p", "bar_p", "gate"):
+            assert np.array_equal(half.trace[key][:steps], alone.trace[key][:steps]), key
+    assert armed.success.any() and not disarmed.success.any()  # arming matters
+    with pytest.raises(ValueError, match="one per trial"):
+        run_campaign(cfg, MissionSpec(trials=2, passive_trigger=(True,)))
