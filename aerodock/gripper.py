@@ -27,6 +27,11 @@ from aerodock.config import Config
 from aerodock.geometry import dot_rows
 
 
+def _armed_any(flag: bool | np.ndarray) -> bool:
+    """Whether a trigger is armed in any trial (a plain bool costs no array call in the loop)."""
+    return flag if isinstance(flag, bool) else bool(flag.any())
+
+
 class GateState(IntEnum):
     """Per-trial gate state."""
 
@@ -198,11 +203,11 @@ def step_gripper(
         stuck = ~np.isnan(state.sensor_stuck_n)
         if stuck.any():  # injected fault: a dead (0) or stuck strain gauge
             reading = np.where(stuck, state.sensor_stuck_n, reading)
-        if np.any(params.passive):
+        if _armed_any(params.passive):
             sensed = untriggered & (reading > params.contact_threshold_n) & params.passive
             fire = sensed
             by_contact = by_contact | sensed
-    if np.any(params.active):
+    if _armed_any(params.active):
         by_command = untriggered & close_command & params.active
         fire = by_command if fire is None else fire | by_command
     # Unchanged arrays are passed on as they are (states are never modified in place).
