@@ -289,13 +289,13 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     timings.update({f"ours_{k}": v for k, v in times.items()})
     t0 = time.perf_counter()
     say("    targets beyond the paper: d_p 0.36 and 0.27 m, leader at 0.25 and 0.5 m/s")
+    ours_tff_cfg = ours_cfg.with_overrides({"control": {"torque_feedforward": True}})
     rows = {
         "paper's controller + paper's model": (paper_cfg, predictor),
         "paper's controller + deep model": (paper_cfg, deep_predictor),
         "tuned + deep model": (cfg, deep_predictor),
         "ours + deep model": (ours_cfg, deep_predictor),
-        "ours + torque feed-forward + deep model": (
-            ours_cfg.with_overrides({"control": {"torque_feedforward": True}}), deep_predictor),
+        "ours + torque feed-forward + deep model": (ours_tff_cfg, deep_predictor),
     }
     wrench_predictor = None
     if size.target_all_rows:
@@ -309,8 +309,7 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
                                            train_kwargs=epochs)
         results["learning"]["wrench_curriculum"] = wrench_curriculum
         wrench_predictor = Predictor.load(Path(wrench_curriculum["final_model"]))
-        rows[WRENCH_ROW] = (ours_cfg.with_overrides({"control": {"torque_feedforward": True}}),
-                            wrench_predictor)
+        rows[WRENCH_ROW] = (ours_tff_cfg, wrench_predictor)
     else:
         rows = {k: v for k, v in rows.items() if k in ("paper's controller + paper's model",
                                                        "ours + deep model")}
