@@ -18,7 +18,7 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``vehicle_step``: the vehicles' own step alone (``Fleet.step`` on 2n vehicles: for rigid
   bodies the autopilot, rotor wrench and attitude step), per model and batch of 1, 256 and 1024.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
-  (:func:`aerodock.mission.run_campaign`, oracle compensation, summary only).
+  (:func:`aerodock.mission.batch.run_campaign`, oracle compensation, summary only).
 - ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
   for the NumPy runtime, ONNX Runtime and PyTorch (reference), all on one thread.
 - ``training``: wall time to train the SO(2)-equivariant model on 5 minutes of data.
@@ -127,7 +127,7 @@ class SimLoop:
     def __init__(self, cfg: Any, n: int, seed: int = 0):
         from aerodock.control.controller import PositionController, Reference
         from aerodock.rng import TrialRNG
-        from aerodock.sim import World, hover_command
+        from aerodock.world import World, hover_command
 
         self.n = n
         self.cfg = cfg
@@ -208,8 +208,8 @@ def bench_vehicle_step(cfg: Any, batches: tuple[int, ...] = (1, 256, 1024), quic
     """Vehicle-steps per second of the vehicles' own step (``Fleet.step``: for rigid bodies the
     autopilot, rotor wrench and attitude step) on 2n vehicles, without the rest of the world:
     per model and batch, wall and per CPU-second."""
-    from aerodock.fleet import build_fleet
-    from aerodock.vehicle import AttitudeCommand
+    from aerodock.world.vehicles.fleet import build_fleet
+    from aerodock.world.vehicles.point_mass import AttitudeCommand
 
     out: dict[str, Any] = {}
     repeats = 3 if quick else 5
@@ -641,13 +641,18 @@ def _peer_steps(quick: bool) -> int:
 def peer_aerodock(cfg: Any, n: int, steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
     """aerodock's side: ``n`` quadrotors, the vehicle step at 500 Hz and the LQR position
     controller at 100 Hz (no observer, true state), flying ``ref``; the command is clipped once
-    per control period and held, as :meth:`aerodock.sim.World.advance` does.
+    per control period and held, as :meth:`aerodock.world.world.World.advance` does.
 
     Returns the final position error of the first vehicle (m: a check that it tracked) and the
     time spent in the vehicle step alone (s).
     """
     from aerodock.control.controller import PositionController, Reference
-    from aerodock.vehicle import VehicleParams, command_targets, hover_state, step_vehicle_targets
+    from aerodock.world.vehicles.point_mass import (
+        VehicleParams,
+        command_targets,
+        hover_state,
+        step_vehicle_targets,
+    )
 
     params = VehicleParams.from_config(cfg)
     dt = 1.0 / PEER_PHYSICS_HZ

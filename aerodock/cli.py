@@ -89,7 +89,7 @@ def field_probe(
     --bar, of the force in N on the docking bar there)."""
     from aerodock.downwash import build_field
     from aerodock.downwash.probe import probe_bar, probe_bodies, probe_field
-    from aerodock.limits import MAX_PROBE_SAMPLES
+    from aerodock.mission.limits import MAX_PROBE_SAMPLES
 
     check_number("--separation", separation, -100.0, 100.0)
     check_number("--radial", radial, -100.0, 100.0)

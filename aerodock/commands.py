@@ -78,8 +78,8 @@ def dock(
     """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
     from aerodock.control.profiles import controller_config
     from aerodock.flightlog import save_flightlogs
-    from aerodock.limits import check_campaign_size
     from aerodock.mission import MissionSpec, run_campaign
+    from aerodock.mission.limits import check_campaign_size
 
     check_number("--offset", offset, 0.0, 100.0)
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
@@ -99,8 +99,8 @@ def dock(
 
         check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
-    from aerodock.faults import load_faults
     from aerodock.learning.modelfile import model_warnings
+    from aerodock.mission.faults import load_faults
 
     for note in model_warnings(predictor, cfg):
         typer.echo(f"warning: {note}", err=True)
@@ -165,7 +165,7 @@ def faults_command(
     """Fly one docking campaign per injected fault (and one without): docks, safe aborts,
     clearance violations, collisions and NaN among the trials each fault struck."""
     from aerodock.experiments.faults import fault_campaign, rows_markdown
-    from aerodock.faults import load_faults
+    from aerodock.mission.faults import load_faults
 
     cfg = _config(config)
     if not 1 <= trials <= 4096:
@@ -299,7 +299,7 @@ def targets_command(
     from aerodock.experiments.reproduce import _write_json_atomic
     from aerodock.experiments.targets import targets
     from aerodock.learning.runtime import Predictor
-    from aerodock.limits import check_campaign_size
+    from aerodock.mission.limits import check_campaign_size
 
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")

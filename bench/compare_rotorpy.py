@@ -9,8 +9,8 @@ with 500 Hz physics.
   ``SE3Control`` at every step (as RotorPy's own ``simulate`` loop runs it). When its batched
   simulator is importable (``BatchedMultirotor``; needs PyTorch, ``torchdiffeq`` and ``roma``),
   also a batch of ``--batch`` vehicles on the CPU (fixed-step RK4, one torch thread).
-- aerodock: ``aerodock.vehicle.step_vehicle`` at 500 Hz with the LQR ``PositionController`` at
-  100 Hz, for a batch of 1 and a batch of ``--batch``.
+- aerodock: ``aerodock.world.vehicles.point_mass.step_vehicle`` at 500 Hz with the LQR
+  ``PositionController`` at 100 Hz, for a batch of 1 and a batch of ``--batch``.
 
 The models differ (RotorPy integrates rigid-body attitude and rotor dynamics with an adaptive
 integrator; aerodock's vehicle is a point mass behind first-order attitude and thrust lags, as the

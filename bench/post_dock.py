@@ -20,9 +20,9 @@ import argparse
 
 from aerodock.config import load_config
 from aerodock.control.profiles import controller_config
-from aerodock.gripper import GateState
 from aerodock.learning.runtime import Predictor
 from aerodock.mission import MissionBatch, MissionSpec
+from aerodock.world.gripper import GateState
 
 
 def main() -> None:

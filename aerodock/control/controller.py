@@ -20,7 +20,7 @@ from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
-from aerodock.vehicle import AttitudeCommand, VehicleParams, rpy_to_rotmat
+from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams, rpy_to_rotmat
 
 REJECTIONS = ("bias-observer", "accelerometer")
 
@@ -112,7 +112,7 @@ class PositionController:
             terminal: (n,) bool, trials using the terminal gains.
             feedforward_mps2: (n, 3) predicted external acceleration to cancel.
             accel_mps2: (n, 3) the accelerometer's mean reading over the period just flown
-                (world NED, :meth:`aerodock.sim.World.observed_accel`); needed when
+                (world NED, :meth:`aerodock.world.world.World.observed_accel`); needed when
                 :attr:`uses_accelerometer`.
             hold_accel_observer: (n,) bool, trials whose accelerometer estimate is held (in
                 contact with the bar).

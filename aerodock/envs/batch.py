@@ -1,8 +1,8 @@
 """The docking mission one control period at a time, for N trials at once (the environments' core).
 
-:class:`DockingBatch` flies the mission of :func:`aerodock.mission.run_campaign` through the same
-stepper (:class:`aerodock.mission.MissionBatch`: same world, settled start, controllers, planner,
-triggers, faults, aborts and random draws), split at the one point where a learning agent
+:class:`DockingBatch` flies the mission of :func:`aerodock.mission.batch.run_campaign` through the
+same stepper (:class:`aerodock.mission.batch.MissionBatch`: same world, settled start, controllers,
+planner, triggers, faults, aborts and random draws), split at the one point where a learning agent
 acts: ``observe`` after the mission has decided the phase and the follower's
 reference for this period, ``act(residual)`` to fly the period with a residual acceleration added
 to the reference feed-forward of the LQR follower controller. With a zero residual a trial's
@@ -22,10 +22,10 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
-from aerodock.gripper import GateState
 from aerodock.mission import MissionBatch, MissionSpec, Phase
 from aerodock.planning.docking import docking_point_m
-from aerodock.sim import World
+from aerodock.world import World
+from aerodock.world.gripper import GateState
 
 OBS_DIM = 24
 """Length of one trial's observation vector (see :data:`OBS_LAYOUT`)."""
@@ -84,7 +84,7 @@ class StepOutcome:
 
 class DockingBatch:
     """N docking trials flown one control period per :meth:`act`: the mission's own stepper
-    (:class:`aerodock.mission.MissionBatch`) with the agent's residual and a reward.
+    (:class:`aerodock.mission.batch.MissionBatch`) with the agent's residual and a reward.
 
     Args:
         cfg: configuration.

@@ -1,10 +1,10 @@
 """``DockingEnv``: one docking trial as a Gymnasium environment (id ``aerodock/Docking-v0``).
 
-The follower flies the mission of :func:`aerodock.mission.run_campaign` (minimum-jerk approach to
-the predicted docking point, terminal phase, triggers, aborts, its LQR controller with the chosen
-compensation); the leader flies its own controller. The agent adds a **residual acceleration** to
-the LQR follower controller's reference feed-forward while the follower approaches; after the
-gate resolves or the mission aborts the episode ends.
+The follower flies the mission of :func:`aerodock.mission.batch.run_campaign` (minimum-jerk
+approach to the predicted docking point, terminal phase, triggers, aborts, its LQR controller with
+the chosen compensation); the leader flies its own controller. The agent adds a **residual
+acceleration** to the LQR follower controller's reference feed-forward while the follower
+approaches; after the gate resolves or the mission aborts the episode ends.
 
 - Observation: ``Box(24,)`` float32, NED, from motion capture (noise and latency included):
   :data:`aerodock.envs.batch.OBS_LAYOUT` lists each block with its unit (m, m/s, m/s², s).

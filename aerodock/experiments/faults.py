@@ -12,8 +12,8 @@ from typing import Any
 
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
-from aerodock.faults import Fault
 from aerodock.mission import MissionSpec, run_campaign
+from aerodock.mission.faults import Fault
 
 
 def fault_campaign(cfg: Config, faults: list[Fault], trials: int, seed: int,

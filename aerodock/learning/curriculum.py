@@ -25,11 +25,11 @@ from aerodock.control.compensation import AccelPredictor
 from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
 from aerodock.flightlog import FlightLog, save_flightlogs
+from aerodock.mission.recorder import FlightRecorder, vehicle_meta
+from aerodock.mission.settle import settle
 from aerodock.planning.minjerk import minjerk
-from aerodock.recorder import FlightRecorder, vehicle_meta
 from aerodock.rng import TrialRNG
-from aerodock.settle import settle
-from aerodock.sim import World
+from aerodock.world import World
 
 # (duration_s, waypoint index moved to); waypoint 0 is the start. Rest-to-rest segments.
 _SEGMENTS = ((1.0, 0), (3.0, 1), (1.5, 2), (1.5, 2), (1.5, 3), (1.0, 3), (2.0, 4), (1.0, 4))

@@ -19,9 +19,9 @@ False after the follower has docked and hangs on the cables): invalid samples ar
 the bias estimate and, in :mod:`aerodock.learning.dataset`, from the data set.
 
 Torque labels (for the ``so2-wrench`` model) come the same way from a log's torque extras
-(:mod:`aerodock.torque_sensing`; body FRD, N m): ``tau_ext = obs_torque - rotor_torque - bias``
-with ``obs_torque = extra["follower_obs_torque_nm"]`` (``J dw/dt + w x J w`` from the gyro) and
-``rotor_torque = extra["follower_rotor_torque_nm"]`` (what the rotors explain from their
+(:mod:`aerodock.world.torque_sensing`; body FRD, N m): ``tau_ext = obs_torque - rotor_torque -
+bias`` with ``obs_torque = extra["follower_obs_torque_nm"]`` (``J dw/dt + w x J w`` from the gyro)
+and ``rotor_torque = extra["follower_rotor_torque_nm"]`` (what the rotors explain from their
 measured speeds), de-biased per flight from the same free-air samples by the same functions
 (:func:`debias`). A log without both extras has no torque labels.
 """

@@ -1,7 +1,7 @@
 """Running a sweep: one docking campaign per cell, on local processes or on Ray.
 
-Every cell is :func:`aerodock.mission.run_campaign` with its own seed, so a cell's numbers do not
-depend on where or in which order it runs: the local and the Ray backends give the same table
+Every cell is :func:`aerodock.mission.batch.run_campaign` with its own seed, so a cell's numbers do
+not depend on where or in which order it runs: the local and the Ray backends give the same table
 (tested). The table is tidy: one row per trial, the cell's settings in columns beside the trial's
 outcome (:data:`OUTCOME_COLUMNS`).
 """

@@ -1,7 +1,7 @@
 """The rigid-body vehicle against RotorPy: the same vehicle, the same rotor commands, open loop.
 
-Issue 10 asks that aerodock's rigid-body quadrotor (:mod:`aerodock.rigid_body`) and an
-independent simulator, flying the same vehicle under the same rotor-speed commands, stay within
+Issue 10 asks that aerodock's rigid-body quadrotor (:mod:`aerodock.world.vehicles.rigid_body`) and
+an independent simulator, flying the same vehicle under the same rotor-speed commands, stay within
 1 cm and 1 deg of each other over 5 s. The peer is RotorPy's ``Multirotor``
 (``rotorpy.vehicles.multirotor``, its own ``solve_ivp`` integrator; install it with
 ``pip install --no-deps rotorpy``): nothing of RotorPy is copied here, it is called.
@@ -33,7 +33,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.rigid_body import (
+from aerodock.world.vehicles.point_mass import AttitudeCommand
+from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     RigidBodyState,
     hover_rigid_state,
@@ -41,7 +42,6 @@ from aerodock.rigid_body import (
     rotor_speed_command,
     step_rigid_body,
 )
-from aerodock.vehicle import AttitudeCommand
 
 PEER_DURATION_S = 5.0
 PEER_PHYSICS_HZ = 500.0
@@ -166,8 +166,8 @@ def record_rotor_commands(params: RigidBodyParams, duration_s: float = PEER_DURA
 
 def fly_aerodock(params: RigidBodyParams, rotor_speed_cmd: np.ndarray,
                  physics_hz: float = PEER_PHYSICS_HZ) -> PeerRun:
-    """aerodock's :func:`~aerodock.rigid_body.step_rigid_body` flying ``rotor_speed_cmd`` (k, 4)
-    open loop from :func:`start_state`."""
+    """aerodock's :func:`~aerodock.world.vehicles.rigid_body.step_rigid_body` flying
+    ``rotor_speed_cmd`` (k, 4) open loop from :func:`start_state`."""
     dt = 1.0 / physics_hz
     state = start_state(params)
     zero = np.zeros((1, 3))

@@ -24,9 +24,9 @@ import numpy as np
 from aerodock.fileio import atomic_open
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
-from aerodock.gripper import GateState
 from aerodock.mission import Phase
 from aerodock.plots import _plt
+from aerodock.world.gripper import GateState
 
 GATE_COLOURS = {GateState.OPEN: "tab:green", GateState.CLOSING: "tab:orange",
                 GateState.CAPTURED: "tab:blue", GateState.MISSED: "tab:red"}

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from aerodock import bench
 from aerodock.rng import TrialRNG
-from aerodock.sim import World, hover_command
+from aerodock.world import World, hover_command
 
 
 @pytest.fixture(scope="module")

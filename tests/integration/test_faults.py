@@ -7,8 +7,8 @@ import pytest
 
 from aerodock.control.compensation import Compensation
 from aerodock.experiments.faults import fault_campaign
-from aerodock.faults import Fault, FaultFileError, load_faults, parse_faults
 from aerodock.mission import AbortReason, MissionSpec, run_campaign
+from aerodock.mission.faults import Fault, FaultFileError, load_faults, parse_faults
 
 
 def test_example_fault_file_loads():

@@ -11,8 +11,8 @@ from aerodock.control.controller import PositionController, Reference
 from aerodock.mission import AbortReason, MissionSpec, Phase, run_campaign
 from aerodock.planning.minjerk import minjerk
 from aerodock.rng import TrialRNG
-from aerodock.sim import World
-from aerodock.vehicle import AttitudeCommand
+from aerodock.world import World
+from aerodock.world.vehicles.point_mass import AttitudeCommand
 
 
 def test_tracks_minimum_jerk_without_downwash(cfg):
@@ -133,8 +133,8 @@ def test_predictor_is_flown_only_with_model_compensation(cfg):
 def test_a_disarmed_gate_never_closes(cfg):
     """An abort disarms the gate (World.disarm_gate): with the bar pressing on the arm and the
     active trigger commanding, the disarmed trial's gate stays open; the armed one captures."""
-    from aerodock.gripper import GateState
-    from aerodock.sim import hover_command
+    from aerodock.world import hover_command
+    from aerodock.world.gripper import GateState
 
     n = 2
     world = World(cfg, n, TrialRNG(12, n), leader_fixed=True)
@@ -156,7 +156,7 @@ def test_settled_start_converges_the_observers_without_truth(cfg):
     """Before t = 0 both vehicles fly settle_s with observers reset from motion capture only:
     the leader's bias estimate has found the bar's weight it carries."""
     from aerodock.control.controller import PositionController
-    from aerodock.settle import settle
+    from aerodock.mission.settle import settle
 
     n = 6
     world = World(cfg, n, TrialRNG(11, n))
@@ -227,7 +227,7 @@ def test_a_moving_leader_starts_the_mission_cruising_with_the_bar_hanging_still(
     """At t = 0 a leader that sped up smoothly flies the stated speed and its bar hangs straight
     below; one switched on at full speed overshoots it by a third and leaves the bar swinging."""
     from aerodock.mission import MissionBatch
-    from aerodock.platform import anchor_point
+    from aerodock.world.platform import anchor_point
 
     def start(ramp_s: float) -> tuple[np.ndarray, np.ndarray]:
         c = cfg.with_overrides({"mission": {"leader_ramp_s": ramp_s}})

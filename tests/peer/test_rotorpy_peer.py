@@ -41,7 +41,7 @@ def test_body_wrench_equals_rotorpy_on_random_states(cfg):
     RotorPy's ``compute_body_wrench`` in its frame, state by state."""
     from rotorpy.vehicles.multirotor import Multirotor
 
-    from aerodock.rigid_body import body_wrench
+    from aerodock.world.vehicles.rigid_body import body_wrench
 
     params = peer.rigid_params(cfg)
     quad = peer.rotorpy_quad_params(params)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.gripper import (
+from aerodock.world.gripper import (
     GateState,
     GripperParams,
     bar_in_gripper,

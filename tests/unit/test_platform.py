@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.platform import BarState, PlatformParams, step_bar
+from aerodock.world.platform import BarState, PlatformParams, step_bar
 
 
 def _swing(params, bar, seconds, dt=0.001, force=None):

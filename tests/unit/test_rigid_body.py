@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from aerodock.autopilot import mix
-from aerodock.rigid_body import (
+from aerodock.world.vehicles.autopilot import mix
+from aerodock.world.vehicles.point_mass import AttitudeCommand
+from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     hover_rigid_state,
     rigid_targets,
     step_rigid_body,
     step_with_autopilot,
 )
-from aerodock.vehicle import AttitudeCommand
 
 DT = 0.002
 

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from aerodock.rigid_body import RigidBodyParams, body_wrench
+from aerodock.world.vehicles.rigid_body import RigidBodyParams, body_wrench
 
 
 def _per_rotor(omega, v_body, w, params):

@@ -51,8 +51,8 @@ def test_the_autopilot_adds_the_feedforward_torque(cfg):
     """A roll feed-forward torque on the follower rolls it (right side down, FRD) before the rate
     loop's integrator catches up; the leader's rows are untouched."""
     from aerodock.rng import TrialRNG
-    from aerodock.sim import World
-    from aerodock.vehicle import AttitudeCommand
+    from aerodock.world import World
+    from aerodock.world.vehicles.point_mass import AttitudeCommand
 
     world = World(cfg, 2, TrialRNG(0, 2))
     world.reset(np.tile([0.0, 0.0, -2.5], (2, 1)), np.tile([3.0, 0.0, -2.5], (2, 1)))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from aerodock.rng import TrialRNG
-from aerodock.sim import World, hover_command
+from aerodock.world import World, hover_command
 
 
 def _world(cfg, n: int = 3, seed: int = 4) -> World:

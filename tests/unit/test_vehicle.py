@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.vehicle import AttitudeCommand, VehicleParams, hover_state, step_vehicle
+from aerodock.world.vehicles.point_mass import (
+    AttitudeCommand,
+    VehicleParams,
+    hover_state,
+    step_vehicle,
+)
 
 
 def _run(params, state, cmd, seconds, dt=0.002):

@@ -2,11 +2,12 @@
 
 Besides the FlightLog's fields, every log carries ``extra`` arrays: the simulator's truth
 (``true_field_mean_mps2``, ``bar_pos_m``, ...) and ``label_valid``. With rigid-body vehicles it
-also carries what a real follower logs about torques (:meth:`aerodock.sim.World.observed_torque`,
-one reading per control period, body FRD): ``follower_obs_torque_nm`` (``J dw/dt + w x J w``
-from the gyro), ``follower_rotor_torque_nm`` (what the rotors explain from their measured speeds),
-``follower_body_rates_radps`` (the gyro), and the truth ``true_wake_torque_nm`` (evaluation
-only). :mod:`aerodock.learning.labels` turns the first two into torque labels.
+also carries what a real follower logs about torques
+(:meth:`aerodock.world.world.World.observed_torque`, one reading per control period, body FRD):
+``follower_obs_torque_nm`` (``J dw/dt + w x J w`` from the gyro), ``follower_rotor_torque_nm``
+(what the rotors explain from their measured speeds), ``follower_body_rates_radps`` (the gyro), and
+the truth ``true_wake_torque_nm`` (evaluation only). :mod:`aerodock.learning.labels` turns the
+first two into torque labels.
 
 ``follower_cmd_accel_mps2`` is what the follower's own actuation explains, on one of the two
 bases real logs have (``meta["label_basis"]``, ``curriculum.label_basis``): ``"command"``, the
@@ -30,7 +31,7 @@ from aerodock.control.controller import ControlOutput
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import rotmat_to_quat
 from aerodock.ingest.common import thrust_accel
-from aerodock.sim import Observation, World
+from aerodock.world import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",
          "phase", "bar", "valid", "tau_obs", "tau_rotor", "rates", "tau_true")

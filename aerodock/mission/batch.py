@@ -30,16 +30,16 @@ from aerodock.control.compensation import (
 from aerodock.control.controller import PositionController, Reference
 from aerodock.control.torque_feedforward import feedforward_torque_nm
 from aerodock.downwash import BodyState, build_field
-from aerodock.faults import Fault, FaultRuntime, draw_faults
 from aerodock.flightlog import FlightLog
-from aerodock.gripper import GateState
+from aerodock.mission.faults import Fault, FaultRuntime, draw_faults
+from aerodock.mission.recorder import FlightRecorder, vehicle_meta
+from aerodock.mission.settle import CruiseStart, settle
 from aerodock.planning.docking import DockGeometry, docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
-from aerodock.platform import anchor_point, platform_segments, rotor_strike
-from aerodock.recorder import FlightRecorder, vehicle_meta
 from aerodock.rng import TrialRNG
-from aerodock.settle import CruiseStart, settle
-from aerodock.sim import Observation, World
+from aerodock.world import Observation, World
+from aerodock.world.gripper import GateState
+from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
 
 
 class Phase(IntEnum):
@@ -76,7 +76,7 @@ class MissionSpec:
     first_trial: int = 0  # trial i draws from stream (seed, first_trial + i)
     start_azimuths_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
     leader_dropout_s: tuple[float, float] | None = None  # (start, duration): leader state lost
-    faults: tuple[Fault, ...] = ()  # injected faults (aerodock.faults), drawn per trial
+    faults: tuple[Fault, ...] = ()  # injected faults (aerodock.mission.faults), drawn per trial
     passive_trigger: bool | tuple[bool, ...] = True  # armed in every trial, or one flag per trial
     active_trigger: bool | tuple[bool, ...] = True
 

@@ -31,7 +31,7 @@ def campaign_duration_s(cfg: Config) -> float:
     """Upper bound on the flight time of one docking trial, s (settled start, approach, hold,
     window, back-off)."""
     p, m = cfg.planner, cfg.mission
-    from aerodock.settle import CRUISE_BEFORE_S  # (settle imports the simulator)
+    from aerodock.mission.settle import CRUISE_BEFORE_S  # (settle imports the simulator)
 
     preroll_s = m.settle_s + m.leader_ramp_s + CRUISE_BEFORE_S  # a moving leader's, the longest
     return (preroll_s + max(p.horizon_hover_s, p.horizon_moving_s + p.hold_s) + m.dock_window_s

@@ -9,9 +9,9 @@ explain it between them (rigid-body model only)::
   gyro noise: the readings the autopilot flies on);
 * the *rotor* torque its own rotors explain, from the measured rotor speeds (ESC telemetry):
   thrust moments and yaw reaction of :attr:`RigidBodyParams.rotor_torque_map` and the rotor
-  drag's moments (:func:`aerodock.rigid_body.body_wrench`), with the vehicle's *nominal* thrust
-  coefficient (it cannot know its thrust gain error) and its velocity (the state estimate; the
-  true one here, the drag moments being small).
+  drag's moments (:func:`aerodock.world.vehicles.rigid_body.body_wrench`), with the vehicle's
+  *nominal* thrust coefficient (it cannot know its thrust gain error) and its velocity (the state
+  estimate; the true one here, the drag moments being small).
 
 Their difference is ``tau_ext`` (the wake's torque, plus any injected rotor fault), which
 :mod:`aerodock.learning.labels` turns into torque labels. Over a control period of physics
@@ -23,7 +23,7 @@ a period's reading covers the steps from one physics step before the period to o
 its end (a 2 ms shift at 500 Hz, far below the wake's 50-100 ms turbulence correlation).
 
 The log costs nothing unless someone asks for it: the world keeps one only after the first
-:meth:`aerodock.sim.World.observed_torque` call (the flight recorder's), and draws no random
+:meth:`aerodock.world.world.World.observed_torque` call (the flight recorder's), and draws no random
 numbers of its own (it reads the gyro noise the autopilot already drew).
 """
 
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.rigid_body import RigidBodyParams, body_wrench
+from aerodock.world.vehicles.rigid_body import RigidBodyParams, body_wrench
 
 
 @dataclass(frozen=True)

@@ -17,10 +17,10 @@ cable, contact) arrive as a world force and a body torque about the centre of ma
 off-centre loads (the wake on each rotor disk, the cable anchor below the leader) tilt the
 vehicle.
 
-The autopilot (:mod:`aerodock.autopilot`) runs inside the step at the physics rate, on the gyro's
-noisy rates: it is part of the vehicle, as on the aircraft. Integration: angular velocity and
-velocity by explicit Euler on the current derivatives, position and attitude on the mean of old
-and new rates (trapezoid; attitude by the exact Rodrigues exponential, so ``R`` stays
+The autopilot (:mod:`aerodock.world.vehicles.autopilot`) runs inside the step at the physics rate,
+on the gyro's noisy rates: it is part of the vehicle, as on the aircraft. Integration: angular
+velocity and velocity by explicit Euler on the current derivatives, position and attitude on the
+mean of old and new rates (trapezoid; attitude by the exact Rodrigues exponential, so ``R`` stays
 orthonormal), motor speeds by the exact first-order step.
 """
 
@@ -30,16 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.autopilot import (
+from aerodock.config import Config
+from aerodock.geometry import rotmat_to_euler
+from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
     gain_columns,
     mix,
     rate_control_t,
     rate_setpoint_t,
 )
-from aerodock.config import Config
-from aerodock.geometry import rotmat_to_euler
-from aerodock.vehicle import AttitudeCommand, rpy_to_rotmat
+from aerodock.world.vehicles.point_mass import AttitudeCommand, rpy_to_rotmat
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.control.controller import PositionController, Reference
-from aerodock.sim import Observation, World
+from aerodock.world import Observation, World
 
 # Prior sd of an unknown disturbance acceleration at switch-on (thrust errors of a few %, the
 # bar's weight on the leader): an uninformative guess, m/s².

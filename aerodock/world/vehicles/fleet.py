@@ -3,12 +3,12 @@
 The world steps the leaders and the followers of N trials as one batch of 2N vehicles (leaders
 first). A :class:`Fleet` hides which model flies them:
 
-- ``rigid-body`` (default, :mod:`aerodock.rigid_body`): attitude and body rates with inertia,
-  four rotors with motor lag and saturation, rotor drag, the onboard autopilot on a noisy gyro;
-  external loads are a force and a torque, so off-centre forces tilt the vehicle.
-- ``point-mass`` (:mod:`aerodock.vehicle`): a point mass behind first-order attitude and thrust
-  lags, as the paper's controller models the vehicle. Several times cheaper, and the idealised
-  world of earlier releases: torques are ignored.
+- ``rigid-body`` (default, :mod:`aerodock.world.vehicles.rigid_body`): attitude and body rates with
+  inertia, four rotors with motor lag and saturation, rotor drag, the onboard autopilot on a noisy
+  gyro; external loads are a force and a torque, so off-centre forces tilt the vehicle.
+- ``point-mass`` (:mod:`aerodock.world.vehicles.point_mass`): a point mass behind first-order
+  attitude and thrust lags, as the paper's controller models the vehicle. Several times cheaper,
+  and the idealised world of earlier releases: torques are ignored.
 
 Every state exposes ``p``, ``v``, ``R``, ``rpy``, ``thrust_n`` and ``thrust_gain`` (batch-first).
 """
@@ -22,14 +22,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.rigid_body import (
-    RigidBodyParams,
-    RigidBodyState,
-    hover_rigid_state,
-    rigid_targets,
-    step_with_autopilot,
-)
-from aerodock.vehicle import (
+from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
     CommandTargets,
     VehicleParams,
@@ -37,6 +30,13 @@ from aerodock.vehicle import (
     command_targets,
     hover_state,
     step_vehicle_targets,
+)
+from aerodock.world.vehicles.rigid_body import (
+    RigidBodyParams,
+    RigidBodyState,
+    hover_rigid_state,
+    rigid_targets,
+    step_with_autopilot,
 )
 
 
@@ -74,7 +74,7 @@ def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> Attit
 
 @dataclass(frozen=True)
 class PointMassFleet:
-    """Point-mass vehicles (:func:`aerodock.vehicle.step_vehicle_targets`)."""
+    """Point-mass vehicles (:func:`aerodock.world.vehicles.point_mass.step_vehicle_targets`)."""
 
     params: VehicleParams
     state_type: type = VehicleState
@@ -110,7 +110,7 @@ class PointMassFleet:
 
 @dataclass(frozen=True)
 class RigidBodyFleet:
-    """Rigid-body vehicles with their autopilots (:mod:`aerodock.rigid_body`)."""
+    """Rigid-body vehicles with their autopilots (:mod:`aerodock.world.vehicles.rigid_body`)."""
 
     params: RigidBodyParams
     state_type: type = RigidBodyState

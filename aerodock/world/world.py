@@ -5,7 +5,7 @@ step (``1 / sim.physics_rate_hz``); controllers run outside, every ``physics/con
 see the world only through :meth:`World.observe` (motion capture with noise and latency) and
 :meth:`World.observed_accel` (the follower's IMU: bias, vibration, noise). A flight log may also
 read :meth:`World.observed_torque` (the follower's gyro and rotor-speed torques, rigid-body model;
-see :mod:`aerodock.torque_sensing`). All randomness comes from the ``numpy.random.Generator``
+see :mod:`aerodock.world.torque_sensing`). All randomness comes from the ``numpy.random.Generator``
 given to the constructor: same config and seed, same numbers.
 
 The physics pipeline of one step (the downwash is one stage of it, as in crazyflow):
@@ -13,10 +13,12 @@ The physics pipeline of one step (the downwash is one stage of it, as in crazyfl
 1. forces and torques: the wake's wrench on the follower's rotor disks
    (:func:`aerodock.downwash.wrench.follower_wrench`), its drag on the bar, gripper contact, the
    cables' pull at the leader's anchor, an injected rotor fault;
-2. vehicles: :class:`aerodock.fleet.Fleet` (rigid bodies under their autopilots on a noisy gyro,
+2. vehicles: :class:`aerodock.world.vehicles.fleet.Fleet` (rigid bodies under their autopilots on a
+noisy gyro,
    or point masses; the leader fixed on a stand if configured);
-3. bar: :func:`aerodock.platform.step_bar` (with a captured follower hanging from it);
-4. the ground (z = 0), then the gripper: :func:`aerodock.gripper.step_gripper` (sensor at its own
+3. bar: :func:`aerodock.world.platform.step_bar` (with a captured follower hanging from it);
+4. the ground (z = 0), then the gripper: :func:`aerodock.world.gripper.step_gripper` (sensor at its
+own
    rate, latencies, gate).
 """
 
@@ -31,9 +33,9 @@ from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
 from aerodock.downwash.mean import mean_acceleration_fn
 from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
-from aerodock.fleet import Fleet, build_fleet, concat_states, split_state
 from aerodock.geometry import rotmat_to_euler
-from aerodock.gripper import (
+from aerodock.rng import TrialRNG, standard_normal_t
+from aerodock.world.gripper import (
     _CAPTURED,
     GateState,
     GripperParams,
@@ -42,10 +44,10 @@ from aerodock.gripper import (
     calibrated_gripper,
     step_gripper,
 )
-from aerodock.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
-from aerodock.rng import TrialRNG, standard_normal_t
-from aerodock.torque_sensing import TorqueLog, TorqueReading
-from aerodock.vehicle import (
+from aerodock.world.platform import BarState, PlatformParams, anchor_point, hanging_bar, step_bar
+from aerodock.world.torque_sensing import TorqueLog, TorqueReading
+from aerodock.world.vehicles.fleet import Fleet, build_fleet, concat_states, split_state
+from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
     VehicleParams,
     VehicleState,
@@ -282,7 +284,7 @@ class World:
         """The follower's torque observations (body FRD) over the control period since the last
         call: the kinematic torque ``J dw/dt + w x J w`` from its gyro, the torque its rotors
         explain from their measured speeds, its mean gyro reading, and the simulator's true wake
-        torque over the same steps (see :mod:`aerodock.torque_sensing`).
+        torque over the same steps (see :mod:`aerodock.world.torque_sensing`).
 
         The first call starts the log (and returns zeros): until then the world computes none
         of it. Like :meth:`observed_accel`, a second call before the world has moved returns
