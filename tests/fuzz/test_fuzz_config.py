@@ -16,10 +16,11 @@ from fuzz_helpers import (
     toml_value,
 )
 
-from aerodock.config import Config, ConfigError, _defaults, load_config
+from aerodock.config import Config, ConfigError, load_config
+from aerodock.config.loader import _defaults
 from aerodock.downwash import build_field
 
-DEFAULTS_TEXT = resources.files("aerodock").joinpath("defaults.toml").read_text()
+DEFAULTS_TEXT = resources.files("aerodock.config").joinpath("defaults.toml").read_text()
 PLUGINS = ["aerodock.downwash.template:UniformColumnField", "aerodock.downwash.jet:RoundJetField",
            ".jet:X", "numpy:zeros", "os:system", "aerodock.downwash.jet", "a b:c", "json:loads"]
 

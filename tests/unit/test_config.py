@@ -118,23 +118,38 @@ def test_with_overrides_validates(cfg):
                       .platform.cable_length_m, 1.0)
 
 
-def test_ranges_name_real_keys_and_hold_the_defaults():
-    """Every range names a key of defaults.toml, and every default satisfies its rule (keys
-    without an entry get the fallback: finite, 0 to 1e6)."""
-    from aerodock.config import _DEFAULT_RANGE, _RANGES, _defaults
+def test_every_key_has_exactly_one_rule_and_its_default_satisfies_it():
+    """defaults.toml (the values) and the schema (types and rules) name exactly the same keys,
+    and every default satisfies its key's rule."""
+    from aerodock.config.loader import _defaults
+    from aerodock.config.schema import RULES
 
-    defaults = _defaults()
     flat = {}
-    for section, table in defaults.items():
-        for key, value in table.items():
-            if isinstance(value, dict):
-                flat.update({f"{section}.{key}.{k}": v for k, v in value.items()})
-            elif isinstance(value, int | float | list) and not isinstance(value, bool):
-                flat[f"{section}.{key}"] = value
-    assert set(_RANGES) <= set(flat)
+    for section, values in _defaults().items():
+        for key, value in values.items():
+            if section == "downwash" and key == "params":
+                flat.update({f"downwash.params.{k}": v for k, v in value.items()})
+            flat[f"{section}.{key}"] = value
+    assert set(flat) == set(RULES)
     for key, value in flat.items():
-        low, high = _RANGES.get(key, _DEFAULT_RANGE)
-        assert all(low <= v <= high for v in (value if isinstance(value, list) else [value])), key
+        rule = RULES[key]
+        if rule.kind == "choice":
+            assert value in rule.choices, key
+        elif rule.kind in ("number", "integer", "numbers", "number_list"):
+            items = value if isinstance(value, list) else [value]
+            assert all(rule.low <= v <= rule.high for v in items), key
+            assert rule.kind != "integer" or isinstance(value, int), key
+            assert rule.kind != "numbers" or len(value) == rule.length, key
+
+
+def test_sections_are_typed_and_misspelt_keys_fail(cfg):
+    """A section is a frozen dataclass of its keys: a misspelt key is an AttributeError."""
+    from aerodock.config.schema import VehicleSection
+
+    assert isinstance(cfg.vehicle, VehicleSection)
+    assert cfg.vehicle.mass_kg == 0.7
+    with pytest.raises(AttributeError):
+        cfg.vehicle.mass_kilograms  # noqa: B018
 
 
 def test_plugin_without_params_gets_none_of_the_jets(tmp_path):

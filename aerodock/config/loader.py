@@ -1,8 +1,8 @@
-"""Configuration: typed defaults from ``defaults.toml``, overridden by a user TOML file.
+"""Loading and checking a configuration: the defaults, a user file's overrides, the rules.
 
 Every constant of the simulated world, the controllers and the mission lives in
-``aerodock/defaults.toml``. A user file overrides any subset of keys; a value must have the type of
-its default and satisfy the key's range rule. Errors name the key and the file in one line::
+``aerodock/config/defaults.toml``. A user file overrides any subset of keys; a value must have the
+type of its default and satisfy the key's rule. Errors name the key and the file in one line::
 
     cfg = load_config("my.toml")
     cfg.vehicle.mass_kg          # 0.7
@@ -18,144 +18,30 @@ import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from aerodock.config.schema import (
+    RULES,
+    SECTIONS,
+    AutopilotSection,
+    ControlSection,
+    CurriculumSection,
+    DownwashSection,
+    GripperSection,
+    ImuSection,
+    MissionSection,
+    MocapSection,
+    PlannerSection,
+    PlatformSection,
+    SimSection,
+    VehicleSection,
+)
 from aerodock.fileio import read_toml
 
 DEFAULTS_NAME = "defaults.toml"
-
-# Every numeric key's range, (low, high), both inclusive. Values must be finite; the bounds keep
-# them physical (a 1e-300 m rotor has no disk area: NaN forces), keep the arithmetic finite, and
-# keep a run's memory and time bounded (durations <= 10 min of flight, rates <= 20 kHz). Keys of
-# the default downwash field are listed under "downwash.params.".
-_RANGES: dict[str, tuple[float, float]] = {
-    "vehicle.mass_kg": (0.001, 100),
-    "vehicle.diagonal_m": (0.01, 10),
-    "vehicle.rotor_radius_m": (0.001, 5),
-    "vehicle.n_rotors": (1, 16),
-    "vehicle.drag_coeff_kgps": (0, 100),
-    "vehicle.tau_attitude_s": (1e-06, 10),
-    "vehicle.tau_thrust_s": (1e-06, 10),
-    "vehicle.tilt_max_deg": (1, 89),
-    # Hover needs 1 g; 10 % more is the least that leaves any authority to manoeuvre.
-    "vehicle.thrust_max_g": (1.1, 10),
-    "vehicle.thrust_gain_sd": (0, 0.5),
-    "vehicle.accel_noise_mps2": (0, 100),
-    "vehicle.inertia_kgm2": (1e-07, 1000),
-    "vehicle.rotor_thrust_coeff": (1e-10, 0.01),
-    "vehicle.rotor_torque_ratio_m": (0, 1),
-    "vehicle.motor_tau_s": (0.0001, 10),
-    "vehicle.rotor_drag_coeff": (0, 1),
-    "vehicle.rotor_drag_z_coeff": (0, 1),
-    "vehicle.parasitic_drag_coeff": (0, 100),
-    "autopilot.attitude_p": (0, 1000),
-    "autopilot.rate_p": (0, 10000),
-    "autopilot.rate_i": (0, 100000),
-    "autopilot.rate_integral_max_radps2": (0, 10000),
-    "autopilot.rate_max_dps": (1, 3600),
-    "imu.gyro_noise_radps": (0, 10),
-    "imu.accel_vibration_mps2": (0, 1000),
-    "imu.accel_bias_sd_mps2": (0, 100),
-    "imu.attitude_noise_rad": (0, 1),
-    "mocap.pos_noise_m": (0, 10),
-    "mocap.vel_noise_mps": (0, 100),
-    "mocap.latency_s": (0, 10),
-    "sim.physics_rate_hz": (1, 20000),
-    "sim.control_rate_hz": (1, 20000),
-    "sim.gravity_mps2": (0.1, 100),
-    "sim.air_density_kgpm3": (0.01, 100),
-    "downwash.params.core_length_m": (0.001, 100),
-    "downwash.params.half_width0_m": (0.001, 100),
-    "downwash.params.spread_rate": (0, 10),
-    "downwash.params.ingest_coeff": (0, 10),
-    "downwash.params.planar_ratio": (0, 10),
-    "downwash.params.turb_vertical": (0, 10),
-    "downwash.params.turb_lateral": (0, 10),
-    "downwash.params.turb_corr_time_s": (0.001, 100),
-    "downwash.params.bar_drag_coeff": (0, 100),
-    "platform.cable_length_m": (0.01, 100),
-    "platform.cable_spacing_m": (0.01, 10),
-    "platform.bar_length_m": (0.01, 10),
-    "platform.bar_diameter_m": (0.0005, 1),
-    "platform.bar_mass_kg": (0.001, 100),
-    "platform.anchor_below_leader_m": (0, 10),
-    "platform.yaw_damping": (0, 1000),
-    "platform.swing_damping": (0, 1000),
-    "gripper.aperture_m": (0.001, 10),
-    "gripper.gate_height_m": (0.001, 10),
-    "gripper.mount_height_m": (0, 10),
-    "gripper.sensor_rate_hz": (1, 20000),
-    "gripper.sensor_noise_n": (0, 1000),
-    "gripper.sensor_bias_sd_n": (0, 1000),
-    "gripper.calibration_samples": (1, 100000),
-    "gripper.contact_threshold_n": (0.0001, 10000),
-    "gripper.contact_stiffness_npm": (1, 1e7),
-    "gripper.contact_damping_nspm": (0, 1e5),
-    "gripper.latency_s": (0, 10),
-    "gripper.close_time_s": (0.001, 10),
-    "control.q_diag": (0, 1e6),
-    "control.terminal_q_diag": (0, 1e6),
-    "control.r_diag": (1e-06, 1e6),
-    "control.terminal_r_diag": (1e-06, 1e6),
-    "control.observer_bias_tau_s": (0.01, 1e4),
-    "control.observer_pos_noise_m": (0, 10),
-    "control.observer_vel_noise_mps": (0, 100),
-    "control.accel_observer_tau_s": (0.001, 100),
-    "control.yaw_rate_max_radps": (0.01, 100),
-    "planner.horizon_hover_s": (0.1, 600),
-    "planner.horizon_moving_s": (0.1, 600),
-    "planner.hold_s": (0, 600),
-    "planner.replan_threshold_m": (0.0001, 100),
-    "planner.rise_m": (0, 10),
-    "planner.rise_s": (0.05, 60),
-    "mission.offset_m": (0.01, 100),
-    "mission.start_radius_m": (0.01, 100),
-    "mission.start_below_m": (0, 100),
-    "mission.start_jitter_m": (0, 10),
-    "mission.dock_window_s": (0.01, 600),
-    "mission.leader_lost_s": (0.01, 600),
-    "mission.abort_tracking_m": (0.001, 100),
-    "mission.clearance_m": (0, 10),
-    "mission.post_dock_thrust_fraction": (0, 1),
-    "mission.leader_speed_mps": (0, 100),
-    "mission.leader_altitude_m": (0.1, 1e4),
-    "mission.insertion_m": (0, 1),
-    "mission.terminal_s": (0, 600),
-    "mission.active_trigger_delay_s": (0, 600),
-    "mission.post_dock_s": (0, 600),
-    "mission.backoff_s": (0.1, 600),
-    "mission.backoff_distance_m": (0, 100),
-    "mission.settle_s": (0, 600),
-    "mission.leader_ramp_s": (0, 600),
-    "mission.status_delay_s": (0, 10),
-    "curriculum.stage0_depth_m": (0.05, 100),
-    "curriculum.stage_step_m": (0.01, 100),
-    "curriculum.min_depth_m": (0.05, 100),
-    "curriculum.deep_depths_m": (0.05, 100),
-    "curriculum.flights_per_stage": (1, 1000),
-    "curriculum.deep_flights_per_stage": (1, 1000),
-    "curriculum.free_air_m": (0.01, 100),
-    "curriculum.leader_drift_max_mps": (0, 100),
-    "curriculum.drift_fraction": (0, 1),
-}
-# A numeric key without an entry above (e.g. one added to defaults.toml later): non-negative, as
-# every key used to be, and bounded so that products and squares stay finite.
-_DEFAULT_RANGE = (0.0, 1e6)
-_CHOICES = {"gripper.trigger": {"passive", "active", "both"},
-            "vehicle.model": {"rigid-body", "point-mass"},
-            "control.rejection": {"bias-observer", "accelerometer"},
-            "control.accel_observer_axes": {"down", "all"},
-            "curriculum.model": {"so2", "so2-ext", "so2-wrench", "mlp"},
-            "curriculum.label_basis": {"command", "thrust"}}
-_LENGTHS = {
-    "control.q_diag": 7, "control.r_diag": 4,
-    "control.terminal_q_diag": 7, "control.terminal_r_diag": 4, "curriculum.stage0_depth_m": 2,
-    "vehicle.inertia_kgm2": 3, "autopilot.attitude_p": 3, "autopilot.rate_p": 3,
-    "autopilot.rate_i": 3, "autopilot.rate_max_dps": 3,
-}
-_LISTS = {"curriculum.deep_depths_m": 10}  # lists of any length up to this
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
 _FIELD_PATH = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*")
 
@@ -164,45 +50,76 @@ class ConfigError(ValueError):
     """A configuration value is invalid; the message names the key and the file."""
 
 
-class Section(Mapping[str, Any]):
-    """Read-only attribute view of one TOML table."""
-
-    def __init__(self, name: str, values: dict[str, Any]):
-        self._name = name
-        self._values = values
-
-    def __getattr__(self, key: str) -> Any:
-        try:
-            value = self._values[key]
-        except KeyError:
-            raise AttributeError(f"config section [{self._name}] has no key {key!r}") from None
-        return Section(f"{self._name}.{key}", value) if isinstance(value, dict) else value
-
-    def __getitem__(self, key: str) -> Any:
-        return self._values[key]
-
-    def __iter__(self):
-        return iter(self._values)
-
-    def __len__(self) -> int:
-        return len(self._values)
-
-    def __repr__(self) -> str:
-        return f"Section({self._name}, {self._values!r})"
-
-
 @dataclass(frozen=True)
 class Config:
-    """Validated configuration; sections are attributes (``cfg.vehicle.mass_kg``)."""
+    """Validated configuration: one typed, read-only section per TOML table
+    (``cfg.vehicle.mass_kg``; see :mod:`aerodock.config.schema`)."""
 
     data: dict[str, Any]
     source: str = "defaults"
 
-    def __getattr__(self, key: str) -> Section:
-        data = object.__getattribute__(self, "data")
-        if key in data:
-            return Section(key, data[key])
-        raise AttributeError(f"config has no section [{key}]")
+    def _section(self, name: str) -> Any:
+        return SECTIONS[name](**self.data[name])
+
+    @cached_property
+    def vehicle(self) -> VehicleSection:
+        """``[vehicle]``."""
+        return self._section("vehicle")
+
+    @cached_property
+    def autopilot(self) -> AutopilotSection:
+        """``[autopilot]``."""
+        return self._section("autopilot")
+
+    @cached_property
+    def imu(self) -> ImuSection:
+        """``[imu]``."""
+        return self._section("imu")
+
+    @cached_property
+    def mocap(self) -> MocapSection:
+        """``[mocap]``."""
+        return self._section("mocap")
+
+    @cached_property
+    def sim(self) -> SimSection:
+        """``[sim]``."""
+        return self._section("sim")
+
+    @cached_property
+    def downwash(self) -> DownwashSection:
+        """``[downwash]``."""
+        return self._section("downwash")
+
+    @cached_property
+    def platform(self) -> PlatformSection:
+        """``[platform]``."""
+        return self._section("platform")
+
+    @cached_property
+    def gripper(self) -> GripperSection:
+        """``[gripper]``."""
+        return self._section("gripper")
+
+    @cached_property
+    def control(self) -> ControlSection:
+        """``[control]``."""
+        return self._section("control")
+
+    @cached_property
+    def planner(self) -> PlannerSection:
+        """``[planner]``."""
+        return self._section("planner")
+
+    @cached_property
+    def mission(self) -> MissionSection:
+        """``[mission]``."""
+        return self._section("mission")
+
+    @cached_property
+    def curriculum(self) -> CurriculumSection:
+        """``[curriculum]``."""
+        return self._section("curriculum")
 
     def to_dict(self) -> dict[str, Any]:
         """A deep copy of the values, e.g. for recording in results.json."""
@@ -217,7 +134,7 @@ class Config:
 
 
 def _defaults() -> dict[str, Any]:
-    text = resources.files("aerodock").joinpath(DEFAULTS_NAME).read_text()
+    text = resources.files("aerodock.config").joinpath(DEFAULTS_NAME).read_text()
     return tomllib.loads(text)
 
 
@@ -291,7 +208,10 @@ def _check_number(value: Any, dotted: str, source: str,
                   rule: tuple[float, float] | None = None) -> None:
     if not math.isfinite(value):
         raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
-    low, high = rule or _RANGES.get(dotted, _DEFAULT_RANGE)
+    if rule is None:
+        found = RULES[dotted]
+        rule = (found.low, found.high)
+    low, high = rule
     if not low <= value <= high:
         raise ConfigError(f"{source}: '{dotted}' must be {_range_text(low, high)}, got {value!r}")
 
@@ -310,8 +230,8 @@ def _check_plugin_params(params: Mapping[str, Any], source: str, prefix: str) ->
 
 
 def _validate(data: dict[str, Any], source: str) -> None:
-    for section, table in data.items():
-        for key, value in table.items():
+    for section, values in data.items():
+        for key, value in values.items():
             dotted = f"{section}.{key}"
             if dotted == "downwash.params":
                 if data["downwash"]["field"] == _DEFAULT_FIELD:
@@ -320,27 +240,27 @@ def _validate(data: dict[str, Any], source: str) -> None:
                 else:
                     _check_plugin_params(value, source, f"{dotted}.")
                 continue
-            if dotted in _CHOICES and value not in _CHOICES[dotted]:
-                choices = "|".join(sorted(_CHOICES[dotted]))
+            rule = RULES[dotted]
+            bounds = (rule.low, rule.high)
+            if rule.kind == "choice" and value not in rule.choices:
+                choices = "|".join(sorted(rule.choices))
                 raise ConfigError(f"{source}: '{dotted}' must be one of {choices}, got {value!r}")
-            if dotted in _LENGTHS:
-                low, high = _RANGES[dotted]
-                if len(value) != _LENGTHS[dotted] or not all(_is_number(v) for v in value):
-                    raise ConfigError(f"{source}: '{dotted}' must be {_LENGTHS[dotted]} numbers "
-                                      f"{_range_text(low, high)}, got {value!r}")
+            if rule.kind == "numbers":
+                if len(value) != rule.length or not all(_is_number(v) for v in value):
+                    raise ConfigError(f"{source}: '{dotted}' must be {rule.length} numbers "
+                                      f"{_range_text(*bounds)}, got {value!r}")
                 for i, item in enumerate(value):
-                    _check_number(item, f"{dotted}[{i}]", source, (low, high))
-            elif dotted in _LISTS:
-                low, high = _RANGES[dotted]
-                if (not isinstance(value, list) or len(value) > _LISTS[dotted]
+                    _check_number(item, f"{dotted}[{i}]", source, bounds)
+            elif rule.kind == "number_list":
+                if (not isinstance(value, list) or len(value) > rule.length
                         or not all(_is_number(v) for v in value)):
                     raise ConfigError(f"{source}: '{dotted}' must be a list of up to "
-                                      f"{_LISTS[dotted]} numbers {_range_text(low, high)}, "
+                                      f"{rule.length} numbers {_range_text(*bounds)}, "
                                       f"got {value!r}")
                 for i, item in enumerate(value):
-                    _check_number(item, f"{dotted}[{i}]", source, (low, high))
+                    _check_number(item, f"{dotted}[{i}]", source, bounds)
             elif _is_number(value):
-                _check_number(value, dotted, source)
+                _check_number(value, dotted, source, bounds)
     _check_consistency(data, source)
     # Fail now, not mid-run, on an unknown or broken plug-in.
     resolve_factory(data["downwash"]["field"], source)
