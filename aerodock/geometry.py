@@ -11,21 +11,37 @@ import numpy as np
 E3 = np.array([0.0, 0.0, 1.0])
 
 
+def rpy_to_rotmat(rpy: np.ndarray) -> np.ndarray:
+    """(n, 3) ZYX roll, pitch, yaw to (n, 3, 3) rotations (the hot path: one ``cos`` and one
+    ``sin`` call for all three angles)."""
+    c = np.cos(rpy)
+    s = np.sin(rpy)
+    return _rotmat_zyx(c[:, 0], s[:, 0], c[:, 1], s[:, 1], c[:, 2], s[:, 2])
+
+
 def euler_to_rotmat(roll_rad: np.ndarray, pitch_rad: np.ndarray, yaw_rad: np.ndarray) -> np.ndarray:
     """ZYX Euler angles (any matching shapes ``S``) to rotation matrices ``S + (3, 3)``."""
-    cr, sr = np.cos(roll_rad), np.sin(roll_rad)
-    cp, sp = np.cos(pitch_rad), np.sin(pitch_rad)
-    cy, sy = np.cos(yaw_rad), np.sin(yaw_rad)
-    rot = np.empty(np.shape(roll_rad) + (3, 3))
-    rot[..., 0, 0] = cy * cp
-    rot[..., 0, 1] = cy * sp * sr - sy * cr
-    rot[..., 0, 2] = cy * sp * cr + sy * sr
-    rot[..., 1, 0] = sy * cp
-    rot[..., 1, 1] = sy * sp * sr + cy * cr
-    rot[..., 1, 2] = sy * sp * cr - cy * sr
-    rot[..., 2, 0] = -sp
-    rot[..., 2, 1] = cp * sr
-    rot[..., 2, 2] = cp * cr
+    return _rotmat_zyx(np.cos(roll_rad), np.sin(roll_rad), np.cos(pitch_rad), np.sin(pitch_rad),
+                       np.cos(yaw_rad), np.sin(yaw_rad))
+
+
+def _rotmat_zyx(cr: np.ndarray, sr: np.ndarray, cp: np.ndarray, sp: np.ndarray, cy: np.ndarray,
+                sy: np.ndarray) -> np.ndarray:
+    """The one place a rotation is built from Euler angles: ``Rz(yaw) Ry(pitch) Rx(roll)`` from
+    the angles' cosines and sines, the nine entries written in place."""
+    rot = np.empty(np.broadcast_shapes(np.shape(cr), np.shape(cp), np.shape(cy)) + (3, 3))
+    mul = np.multiply
+    cysp = cy * sp
+    sysp = sy * sp
+    mul(cy, cp, out=rot[..., 0, 0])
+    np.subtract(cysp * sr, sy * cr, out=rot[..., 0, 1])
+    np.add(cysp * cr, sy * sr, out=rot[..., 0, 2])
+    mul(sy, cp, out=rot[..., 1, 0])
+    np.add(sysp * sr, cy * cr, out=rot[..., 1, 1])
+    np.subtract(sysp * cr, cy * sr, out=rot[..., 1, 2])
+    np.negative(sp, out=rot[..., 2, 0])
+    mul(cp, sr, out=rot[..., 2, 1])
+    mul(cp, cr, out=rot[..., 2, 2])
     return rot
 
 

@@ -20,7 +20,8 @@ from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
-from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams, rpy_to_rotmat
+from aerodock.geometry import rpy_to_rotmat
+from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams
 
 REJECTIONS = ("bias-observer", "accelerometer")
 

@@ -8,7 +8,7 @@ import pytest
 from aerodock.control.accel_observer import AccelObserver, filtered_noise_sd
 from aerodock.control.controller import PositionController, Reference
 from aerodock.control.profiles import controller_config
-from aerodock.world.vehicles.point_mass import rpy_to_rotmat
+from aerodock.geometry import rpy_to_rotmat
 
 G = 9.81
 M = 0.7

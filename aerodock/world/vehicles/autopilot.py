@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.world.vehicles.point_mass import rpy_to_rotmat
+from aerodock.geometry import rpy_to_rotmat
 
 
 @dataclass(frozen=True)

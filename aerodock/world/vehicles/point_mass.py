@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.geometry import rpy_to_rotmat
 
 
 @dataclass(frozen=True)
@@ -104,32 +105,6 @@ def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | fl
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), rpy=rpy,
         thrust_cmd_state_n=np.full(n, params.hover_thrust_n) / gain, thrust_gain=gain,
     )
-
-
-def rpy_to_rotmat(rpy: np.ndarray) -> np.ndarray:
-    """(n, 3) roll, pitch, yaw to (n, 3, 3) rotations: :func:`~aerodock.geometry.euler_to_rotmat`.
-
-    The same numbers bit for bit (same products in the same order), with one ``cos`` and one
-    ``sin`` call for all three angles and no temporaries for the nine entries: the hot path.
-    """
-    c = np.cos(rpy)
-    s = np.sin(rpy)
-    cr, cp, cy = c[:, 0], c[:, 1], c[:, 2]
-    sr, sp, sy = s[:, 0], s[:, 1], s[:, 2]
-    rot = np.empty((rpy.shape[0], 3, 3))
-    mul = np.multiply
-    cysp = cy * sp
-    sysp = sy * sp
-    mul(cy, cp, out=rot[:, 0, 0])
-    np.subtract(cysp * sr, sy * cr, out=rot[:, 0, 1])
-    np.add(cysp * cr, sy * sr, out=rot[:, 0, 2])
-    mul(sy, cp, out=rot[:, 1, 0])
-    np.add(sysp * sr, cy * cr, out=rot[:, 1, 1])
-    np.subtract(sysp * cr, cy * sr, out=rot[:, 1, 2])
-    np.negative(sp, out=rot[:, 2, 0])
-    mul(cp, sr, out=rot[:, 2, 1])
-    mul(cp, cr, out=rot[:, 2, 2])
-    return rot
 
 
 def thrust_axis(rpy: np.ndarray) -> np.ndarray:

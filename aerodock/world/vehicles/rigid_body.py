@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.geometry import rotmat_to_euler
+from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
     gain_columns,
@@ -39,7 +39,7 @@ from aerodock.world.vehicles.autopilot import (
     rate_control_t,
     rate_setpoint_t,
 )
-from aerodock.world.vehicles.point_mass import AttitudeCommand, rpy_to_rotmat
+from aerodock.world.vehicles.point_mass import AttitudeCommand
 
 
 @dataclass(frozen=True)
