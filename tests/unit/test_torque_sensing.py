@@ -62,7 +62,7 @@ def test_reading_torques_changes_nothing_else(cfg):
     for name in ("p", "v", "R", "w", "rotor_speed"):
         np.testing.assert_array_equal(getattr(plain.follower, name),
                                       getattr(logged.follower, name))
-    assert plain._torque_log is None  # nobody asked: nothing computed
+    assert plain.state.torque_log is None  # nobody asked: nothing computed
 
 
 def test_point_mass_worlds_have_no_torque_observations(cfg):

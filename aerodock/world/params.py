@@ -1,0 +1,93 @@
+"""The world's constants, bound once from the configuration into typed structs."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.world.gripper import GripperParams
+from aerodock.world.platform import PlatformParams
+from aerodock.world.vehicles.fleet import Fleet, build_fleet
+from aerodock.world.vehicles.point_mass import VehicleParams
+
+
+@dataclass(frozen=True)
+class ImuParams:
+    """What the follower's IMU adds to the truth (``[imu]``; the rigid-body vehicle's)."""
+
+    gyro_noise_radps: float  # sd per physics sample (both vehicles' autopilots)
+    accel_vibration_mps2: float  # motor vibration per sample at hover rotor speed (~ speed^2)
+    accel_bias_sd_mps2: float  # residual bias after calibration, per trial and axis
+    attitude_noise_rad: float  # sd of the attitude estimate the controllers see
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> ImuParams:
+        """Bind ``[imu]`` of ``cfg``."""
+        imu = cfg.imu
+        return cls(imu.gyro_noise_radps, imu.accel_vibration_mps2, imu.accel_bias_sd_mps2,
+                   imu.attitude_noise_rad)
+
+
+@dataclass(frozen=True)
+class MocapParams:
+    """Motion capture (``[mocap]``): noise on what the controllers see, and its latency."""
+
+    pos_noise_m: float
+    vel_noise_mps: float
+    latency_s: float
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> MocapParams:
+        """Bind ``[mocap]`` of ``cfg``."""
+        m = cfg.mocap
+        return cls(m.pos_noise_m, m.vel_noise_mps, m.latency_s)
+
+
+@dataclass(frozen=True)
+class WorldParams:
+    """Every constant the world step and its sensors read (nothing reads the config later).
+
+    Attributes:
+        vehicle: the quadrotors' common constants (mass, gravity, limits, accelerometer noise).
+        fleet: the vehicle model flying both vehicles (rigid bodies or point masses).
+        platform: the bar and its cables.
+        gripper: the follower's gripper (and which triggers are armed).
+        imu, mocap: the sensors.
+        dt_s: physics step, s; ``substeps`` of them make one control period ``dt_control_s``.
+        latency_steps: motion capture's latency in physics steps.
+    """
+
+    vehicle: VehicleParams
+    fleet: Fleet
+    platform: PlatformParams
+    gripper: GripperParams
+    imu: ImuParams
+    mocap: MocapParams
+    dt_s: float
+    substeps: int
+    dt_control_s: float
+    latency_steps: int
+
+    @classmethod
+    def from_config(cls, cfg: Config) -> WorldParams:
+        """Bind every world constant of ``cfg``."""
+        dt_s = 1.0 / cfg.sim.physics_rate_hz
+        substeps = int(round(cfg.sim.physics_rate_hz / cfg.sim.control_rate_hz))
+        return cls(
+            vehicle=VehicleParams.from_config(cfg), fleet=build_fleet(cfg),
+            platform=PlatformParams.from_config(cfg), gripper=GripperParams.from_config(cfg),
+            imu=ImuParams.from_config(cfg), mocap=MocapParams.from_config(cfg), dt_s=dt_s,
+            substeps=substeps, dt_control_s=substeps * dt_s,
+            latency_steps=int(round(cfg.mocap.latency_s / dt_s)),
+        )
+
+    @property
+    def rigid(self) -> bool:
+        """Rigid-body vehicles (attitude, rotors, torques) rather than point masses."""
+        return self.fleet.has_torque
+
+    def with_triggers(self, passive: bool | np.ndarray, active: bool | np.ndarray) -> WorldParams:
+        """The same world with these triggers armed (for every trial, or (n,) per trial)."""
+        return replace(self, gripper=replace(self.gripper, passive=passive, active=active))

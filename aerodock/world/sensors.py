@@ -1,0 +1,122 @@
+"""What the controllers and the logs see of the world: motion capture, the follower's
+accelerometer, its torque observations. Each reads the batch state; none changes the physics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
+from aerodock.rng import TrialRNG, standard_normal_t
+from aerodock.world.params import WorldParams
+from aerodock.world.state import WorldState
+from aerodock.world.torque_sensing import TorqueLog, TorqueReading
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What motion capture gives a controller: batch-first position, velocity and attitude."""
+
+    p: np.ndarray  # (n, 3) m
+    v: np.ndarray  # (n, 3) m/s
+    rpy: np.ndarray  # (n, 3) rad: roll, pitch, yaw
+
+    @property
+    def yaw_rad(self) -> np.ndarray:
+        """(n,) yaw."""
+        return self.rpy[:, 2]
+
+    @property
+    def R(self) -> np.ndarray:  # noqa: N802
+        """(n, 3, 3) body-to-world rotation."""
+        return rpy_to_rotmat(self.rpy)
+
+
+def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation, Observation]:
+    """(leader, follower) as motion capture reports them: ``latency_steps`` late, with noise on
+    position and velocity; the attitude is the flight computer's estimate (the true attitude plus
+    ``imu.attitude_noise_rad`` with rigid bodies). Random draws, per trial: attitude (rigid
+    body), position, velocity; the leader's, then the follower's."""
+    latency = params.latency_steps
+    lp, lv, lr, fp, fv, fr = state.history[(state.step_index - latency) % (latency + 1)]
+    n, rng = state.n, state.rng
+    pos_sd, vel_sd = params.mocap.pos_noise_m, params.mocap.vel_noise_mps
+    att_sd = params.imu.attitude_noise_rad if params.rigid else 0.0
+    per_trial = isinstance(rng, TrialRNG) and rng.n == n
+
+    def noisy(p: np.ndarray, v: np.ndarray, rot: np.ndarray) -> Observation:
+        rpy = np.stack(rotmat_to_euler(rot), axis=1) if rot.ndim == 3 else rot.copy()
+        if per_trial:
+            draw = standard_normal_t(rng, n, 9 if att_sd > 0 else 6)
+            if att_sd > 0:
+                rpy += att_sd * draw[:3].T
+                draw = draw[3:]
+            noise_p, noise_v = draw[:3].T, draw[3:].T
+        else:
+            if att_sd > 0:
+                rpy += att_sd * rng.standard_normal((n, 3))
+            noise_p = rng.standard_normal((n, 3))
+            noise_v = rng.standard_normal((n, 3))
+        return Observation(
+            p=np.add(p, pos_sd * noise_p, out=np.empty((n, 3))),
+            v=np.add(v, vel_sd * noise_v, out=np.empty((n, 3))),
+            rpy=rpy,
+        )
+
+    return noisy(lp, lv, lr), noisy(fp, fv, fr)
+
+
+def accelerometer(state: WorldState, params: WorldParams) -> np.ndarray:
+    """(n, 3) the follower's accelerometer, world NED, averaged since the last read.
+
+    The mean kinematic acceleration over the window plus what the IMU adds: white noise
+    (``vehicle.accel_noise_mps2`` per physics sample) and, with rigid bodies, motor vibration
+    (``imu.accel_vibration_mps2`` per sample at hover rotor speed, growing with the square of
+    the rotor speed) and the residual bias (constant in the body frame), both averaged over the
+    window's samples as the flight computer's filter does. A second read before the world has
+    moved returns the same reading (the controller and the recorder read one accelerometer).
+    """
+    window = state.accel_window
+    if window.reading is not None and state.step_index == window.step_index:
+        return window.reading.copy()
+    fol, n = state.follower, state.n
+    dt = max(state.t_s - window.t_s, 1e-9)
+    samples = max(state.step_index - window.step_index, 1)
+    accel = (fol.v - window.v_mps) / dt
+    window.v_mps = fol.v.copy()
+    window.t_s = state.t_s
+    window.step_index = state.step_index
+    sd = np.full(n, params.vehicle.accel_noise_mps2 ** 2)
+    if params.rigid:
+        load = fol.thrust_n / params.vehicle.hover_thrust_n
+        sd = sd + (params.imu.accel_vibration_mps2 * load) ** 2
+        accel = accel + np.matmul(fol.R, state.accel_bias_body_mps2[:, :, None])[:, :, 0]
+    sd = np.sqrt(sd / samples)
+    window.reading = accel + sd[:, None] * state.rng.standard_normal((n, 3))
+    return window.reading.copy()
+
+
+def torque_observations(state: WorldState, params: WorldParams) -> TorqueReading:
+    """The follower's torque observations (body FRD) over the control period since the last
+    read: the kinematic torque ``J dw/dt + w x J w`` from its gyro, the torque its rotors explain
+    from their measured speeds, its mean gyro reading, and the true wake torque over the same
+    steps (see :mod:`aerodock.world.torque_sensing`).
+
+    The first read starts the log (and returns zeros): until then the world computes none of
+    it. A second read before the world has moved returns the same reading. No random numbers
+    are drawn (the gyro noise is the autopilot's).
+
+    Raises:
+        ValueError: point-mass vehicles (they have no rotors or body rates).
+    """
+    if not params.rigid:
+        raise ValueError("torque observations need vehicle.model = 'rigid-body'")
+    if state.torque_log is None:
+        state.torque_log = TorqueLog(params.fleet.params, state.n, params.dt_s)
+        state.steps_at_last_torque = state.step_index
+        state.torque_reading = state.torque_log.read()
+    elif state.step_index != state.steps_at_last_torque or state.torque_reading is None:
+        state.steps_at_last_torque = state.step_index
+        state.torque_reading = state.torque_log.read()
+    return state.torque_reading

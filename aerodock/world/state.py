@@ -1,0 +1,188 @@
+"""The world's batch state (what a physics step reads and writes) and one step's frame.
+
+Both vehicles are one batch of 2n rows, leaders first: every vehicle operation is row-wise, so the
+numbers are those of two separate calls at half the per-call overhead. ``leader`` and ``follower``
+are views of that batch's halves, split off when first asked for; replacing either rebuilds the
+batch from the two halves. States are never modified in place by the step: it makes new arrays,
+so a reference kept by a log or the motion-capture buffer keeps its values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from aerodock.downwash import BodyState, DownwashField
+from aerodock.rng import TrialRNG
+from aerodock.world.gripper import GripperState
+from aerodock.world.platform import BarState
+from aerodock.world.torque_sensing import TorqueLog, TorqueReading
+from aerodock.world.vehicles.fleet import Fleet, concat_states, split_state
+
+
+@dataclass(frozen=True)
+class BatchConstants:
+    """Arrays of the hot loop that depend only on the batch size (never modified in place)."""
+
+    mass_kg: np.ndarray  # (n,)
+    mass_rows: np.ndarray  # (n, 3): the mass repeated per component (a flat loop, same numbers)
+    bar_mass_kg: np.ndarray  # (n,)
+    no_close: np.ndarray  # (n,) bool, all False: no active trigger command
+    gravity_mps2: np.ndarray  # (3,) g e3
+    rotor_offsets_m: np.ndarray  # (4, 3) the follower's rotor disks, body FRD ((1, 3) zeros for
+    # a point mass, which feels the wake at its centre)
+
+
+@dataclass
+class AccelWindow:
+    """The follower's accelerometer: it averages over the time since it was last read."""
+
+    v_mps: np.ndarray  # (n, 3) velocity at the last read
+    t_s: float
+    step_index: int
+    reading: np.ndarray | None = None  # the last reading (a second read of one step returns it)
+
+
+@dataclass
+class WorldState:
+    """N trials' world: vehicles, bar, cables, gripper, clock, and what the sensors keep.
+
+    Attributes:
+        n: number of trials.
+        fleet: the vehicle model (to split and join the 2n batch).
+        rng: the world's only source of randomness.
+        field: the downwash field (it keeps its own turbulence state).
+        leader_fixed: the leader is held on a rigid stand at hover thrust.
+        bar: the hanging bars.
+        cable_force_n: (n, 3) the cables' pull on the leader, from the last step.
+        gripper: the followers' grippers.
+        t_s, step_index: the clock (``t_s = step_index * dt_s``).
+        leader_accel, follower_accel: (n, 3) last step's accelerations.
+        last_downwash_mps2: (n, 3) last step's wake force on the follower per unit mass.
+        contact_seen: (n,) any bar contact since the recorder last cleared it.
+        ground_contact: (n,) a vehicle reached the ground (z = 0) at some step.
+        rotor_loss: (n, 4) injected thrust loss of the follower's rotors (None: healthy).
+        accel_bias_body_mps2: (n, 3) the accelerometer's residual bias, body frame.
+        history: ring buffer of the last ``latency_steps + 1`` true states (motion capture).
+        accel_window: the accelerometer's averaging window.
+        torque_log: kept once someone reads the torques (None until then).
+    """
+
+    n: int
+    fleet: Fleet
+    rng: np.random.Generator | TrialRNG
+    field: DownwashField
+    leader_fixed: bool
+    constants: BatchConstants
+    bar: BarState
+    cable_force_n: np.ndarray
+    gripper: GripperState
+    accel_bias_body_mps2: np.ndarray
+    accel_window: AccelWindow
+    history: list[tuple[np.ndarray, ...]] = field(default_factory=list)
+    t_s: float = 0.0
+    step_index: int = 0
+    leader_accel: np.ndarray | None = None
+    follower_accel: np.ndarray | None = None
+    last_downwash_mps2: np.ndarray | None = None
+    contact_seen: np.ndarray | None = None
+    ground_contact: np.ndarray | None = None
+    rotor_loss: np.ndarray | None = None
+    torque_log: TorqueLog | None = None
+    torque_reading: TorqueReading | None = None
+    steps_at_last_torque: int = 0
+    # The 2n batch and its halves (see the module docstring).
+    _both: Any = None
+    _lead: Any = None
+    _fol: Any = None
+
+    @property
+    def both(self) -> Any:
+        """Leaders and followers as one batch of 2n vehicles (rebuilt if either was replaced)."""
+        if self._both is None:
+            self._both = concat_states(self.fleet, self._lead, self._fol)
+        return self._both
+
+    @both.setter
+    def both(self, value: Any) -> None:
+        self._both, self._lead, self._fol = value, None, None
+
+    @property
+    def leader(self) -> Any:
+        """The leaders (n trials): a view of the batch's first half."""
+        if self._lead is None:
+            self._split()
+        return self._lead
+
+    @leader.setter
+    def leader(self, value: Any) -> None:
+        if self._lead is None:
+            self._split()
+        self._lead, self._both = value, None
+
+    @property
+    def follower(self) -> Any:
+        """The followers (n trials): a view of the batch's second half."""
+        if self._fol is None:
+            self._split()
+        return self._fol
+
+    @follower.setter
+    def follower(self, value: Any) -> None:
+        if self._fol is None:
+            self._split()
+        self._fol, self._both = value, None
+
+    def _split(self) -> None:
+        if self._both is not None:
+            self._lead, self._fol = split_state(self.fleet, self._both, self.n)
+
+
+@dataclass
+class StepFrame:
+    """One physics step's inputs, shared quantities and accumulators.
+
+    The terms of the step read the state through it and add into its accumulators in the order
+    the step names them (the order of additions is part of the numbers: see
+    :mod:`aerodock.world.step`).
+
+    Attributes:
+        targets: both vehicles' autopilot targets, held over the control period.
+        close_command: (n,) the active trigger's command this step.
+        both: the 2n vehicles at the start of the step; ``rot``/``pos``/``vel`` its arrays.
+        lead, fol: the two halves as the downwash field sees them.
+        captured, any_captured: followers hanging from the bar.
+        bar_axis_t: (3, n) the bars' axes, ``(cos yaw, sin yaw, 0)``, component-major.
+        force_n: (2n, 3) external forces on the vehicles, world NED, N (accumulator).
+        torque_t: (3, 2n) external torques, body FRD, N m, component-major (accumulator; None
+            for point masses).
+        bar_force_n: (n, 3) forces on the hanging mass besides gravity and the cables
+            (accumulator).
+        wake_torque_nm: (n, 3) the wake's torque on the followers (None: none).
+        contact_n, inside: (n,) the gripper's contact force and bar-inside-the-gate flag.
+        gyro_noise_radps: (2n, 3) this step's gyro noise (None: a noiseless gyro).
+        new, accel: the vehicles after the step and their accelerations (2n, 3).
+    """
+
+    targets: Any
+    close_command: np.ndarray
+    both: Any
+    rot: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    lead: BodyState
+    fol: BodyState
+    captured: np.ndarray
+    any_captured: bool
+    bar_axis_t: np.ndarray
+    force_n: np.ndarray
+    torque_t: np.ndarray | None
+    bar_force_n: np.ndarray
+    wake_torque_nm: np.ndarray | None = None
+    contact_n: np.ndarray | None = None
+    inside: np.ndarray | None = None
+    gyro_noise_radps: np.ndarray | None = None
+    new: Any = None
+    accel: np.ndarray | None = None

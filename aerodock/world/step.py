@@ -1,0 +1,84 @@
+"""One physics step of the world: an ordered, named tuple of terms (:mod:`aerodock.world.terms`).
+
+The order is part of the numbers. Forces come first (each term adds into the step's
+accumulators, so the order of additions is the order below), then the vehicles move under them,
+then the constraints that act on the result (the bar and a hanging follower, the ground), then
+``commit`` makes the new state current and advances the clock, and the sensors sample the end of
+the step. Random numbers are drawn in this order too: the field's turbulence (follower, then bar),
+the gyros, the strain gauge. A new effect is one function in :mod:`aerodock.world.terms` and one
+``Term`` here (or in a tuple of one's own, passed to :class:`aerodock.world.World`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from aerodock.downwash import BodyState
+from aerodock.world import terms
+from aerodock.world.gripper import _CAPTURED
+from aerodock.world.params import WorldParams
+from aerodock.world.state import StepFrame, WorldState
+
+
+class Term(NamedTuple):
+    """One named physics term of the step."""
+
+    name: str
+    apply: Callable[[WorldState, StepFrame, WorldParams], None]
+
+
+WORLD_STEP: tuple[Term, ...] = (
+    # forces on the vehicles and the bar
+    Term("wake on the follower", terms.wake_on_follower),
+    Term("wake on the bar", terms.wake_on_bar),
+    Term("gripper contact", terms.gripper_contact),
+    Term("cable on the leader", terms.cable_on_leader),
+    Term("rotor faults", terms.rotor_faults),
+    # motion, then the constraints on it
+    Term("vehicles", terms.vehicles),
+    Term("hanging pair", terms.hanging_pair),
+    Term("ground", terms.ground),
+    Term("commit", terms.commit),
+    # sensing at the end of the step
+    Term("gripper", terms.gripper),
+    Term("motion capture", terms.motion_capture),
+)
+"""The world's step, in order."""
+
+
+def begin_step(state: WorldState, params: WorldParams, targets: Any,
+               close_command: np.ndarray | None) -> StepFrame:
+    """The step's frame: the vehicles as the terms see them, zeroed accumulators."""
+    n = state.n
+    both = state.both
+    rot, pos, vel = both.R, both.p, both.v
+    thrust = both.thrust_n
+    mass = state.constants.mass_kg
+    captured = state.gripper.gate == _CAPTURED
+    bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
+    np.cos(state.bar.yaw_rad, out=bar_axis[0])
+    np.sin(state.bar.yaw_rad, out=bar_axis[1])
+    bar_axis[2] = 0.0
+    return StepFrame(
+        targets=targets,
+        close_command=state.constants.no_close if close_command is None else close_command,
+        both=both, rot=rot, pos=pos, vel=vel,
+        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass),
+        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass),
+        captured=captured, any_captured=bool(captured.any()),
+        bar_axis_t=bar_axis,
+        force_n=np.zeros((2 * n, 3)),
+        torque_t=np.zeros((3, 2 * n)) if params.rigid else None,
+        bar_force_n=np.zeros((n, 3)),
+    )
+
+
+def step_world(state: WorldState, params: WorldParams, step: tuple[Term, ...], targets: Any,
+               close_command: np.ndarray | None) -> None:
+    """Advance every trial of ``state`` by one physics step of ``step``'s terms, in order."""
+    frame = begin_step(state, params, targets, close_command)
+    for term in step:
+        term.apply(state, frame, params)

@@ -1,0 +1,203 @@
+"""The physics terms of one world step: each a plain function ``term(state, frame, params)``.
+
+A term reads the batch state (:class:`~aerodock.world.state.WorldState`) and the step's frame
+(:class:`~aerodock.world.state.StepFrame`), adds what it contributes into the frame's
+accumulators (forces, torques, the force on the hanging mass) or advances a part of the state, and
+returns nothing. Terms never copy the batch; they write in place into arrays the frame made for
+this step. :mod:`aerodock.world.step` names them in the order they run; a new effect (an IMU
+chain, turbulence per rotor disk, ground effect) is one more function here and one more name
+there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
+from aerodock.rng import standard_normal_t
+from aerodock.world.gripper import bar_in_gripper, step_gripper
+from aerodock.world.params import WorldParams
+from aerodock.world.platform import step_bar
+from aerodock.world.state import StepFrame, WorldState
+
+
+# -- forces ----------------------------------------------------------------------------------
+def wake_on_follower(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The leader's wake on the follower: sampled at each rotor disk of a rigid body (a force and
+    a torque), at the centre of a point mass (a force). Random draws: the field's turbulence."""
+    n = state.n
+    mass_rows = state.constants.mass_rows
+    if params.rigid:
+        force, torque = follower_wrench(state.field, frame.lead, frame.fol,
+                                        state.constants.rotor_offsets_m, params.dt_s)
+    else:
+        force = state.field.acceleration(frame.lead, frame.fol, params.dt_s) * mass_rows
+        torque = None
+    state.last_downwash_mps2 = force / mass_rows
+    frame.force_n[n:] += force
+    frame.wake_torque_nm = torque
+    if torque is not None:
+        frame.torque_t[:, n:] += torque.T
+
+
+def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The wake's drag on the hanging bar (fields without a bar force give none). Random draws:
+    the bar's turbulence, if the field has it."""
+    bar = state.bar
+    force = bar_wake_force_n(state.field, frame.lead, bar.p, bar.v, params.platform.bar_area_m2,
+                             params.dt_s, frame.bar_axis_t.T)
+    if force is not None:
+        frame.bar_force_n += force
+
+
+def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The bar against the gripper's contact arm: a spring-damper pushing the bar up the
+    follower's axis and the follower down it (none once the bar is captured)."""
+    n = state.n
+    fol_p, fol_v, fol_R = frame.pos[n:], frame.vel[n:], frame.rot[n:]  # noqa: N806
+    bar = state.bar
+    contact, inside, up = bar_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
+                                         params.gripper,
+                                         cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
+    if frame.any_captured:
+        contact = np.where(frame.captured, 0.0, contact)
+    push = up * contact[:, None]
+    state.contact_seen |= contact > 0  # the recorder flags the labels of a period with contact
+    frame.force_n[n:] -= push
+    frame.bar_force_n += push
+    frame.contact_n, frame.inside = contact, inside
+
+
+def cable_on_leader(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The cables pull the leader at their anchor, below its centre of mass (last step's
+    tension: the bar moves after the vehicles)."""
+    n = state.n
+    frame.force_n[:n] += state.cable_force_n
+    if frame.torque_t is not None:
+        cable_body = np.matmul(state.cable_force_n[:, None, :], frame.rot[:n])[:, 0]
+        d = params.platform.anchor_below_leader_m
+        frame.torque_t[0, :n] -= d * cable_body[:, 1]
+        frame.torque_t[1, :n] += d * cable_body[:, 0]
+
+
+def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """An injected loss of the follower's rotor thrust (rigid bodies): the thrust its faulty
+    rotors do not give, as a force and a torque; the autopilot is not told."""
+    if state.rotor_loss is None:
+        return
+    n, fleet = state.n, params.fleet.params
+    both = frame.both
+    lost = both.rotor_speed[n:] * both.rotor_speed[n:]
+    lost *= (fleet.thrust_coeff * both.thrust_gain[n:])[:, None]
+    lost *= state.rotor_loss
+    frame.force_n[n:] += frame.rot[n:, :, 2] * lost.sum(axis=1)[:, None]  # less thrust, -z_b
+    torque = frame.torque_t.T[n:]
+    for i in range(lost.shape[1]):
+        torque -= lost[:, i:i + 1] * fleet.rotor_torque_map[i]
+
+
+# -- motion ----------------------------------------------------------------------------------
+def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """Both vehicles under the forces and torques so far: autopilots on their gyros, rotors,
+    rigid bodies (or point masses); a leader on its stand stays put at hover thrust. Random
+    draws: the gyros' noise (per trial, the leader's then the follower's)."""
+    n = state.n
+    both = frame.both
+    gyro_sd = params.imu.gyro_noise_radps if params.rigid else 0.0
+    if gyro_sd:
+        draw = standard_normal_t(state.rng, n, 6)
+        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
+        np.multiply(draw[:3], gyro_sd, out=noise[:, :n])
+        np.multiply(draw[3:], gyro_sd, out=noise[:, n:])
+        frame.gyro_noise_radps = noise.T
+    if state.torque_log is not None:  # only when a flight log reads the torques
+        noise = frame.gyro_noise_radps
+        state.torque_log.add_step(both.w[n:], None if noise is None else noise[n:],
+                                  both.rotor_speed[n:], frame.vel[n:], frame.rot[n:],
+                                  frame.wake_torque_nm)
+    torque = None if frame.torque_t is None else frame.torque_t.T
+    new, accel = params.fleet.step(both, frame.targets, frame.force_n, torque, params.dt_s,
+                                   frame.gyro_noise_radps)
+    if state.leader_fixed:  # on its stand: no motion, hover thrust
+        new = params.fleet.hovering(new, both, slice(None, n))
+        accel[:n] = 0.0
+    frame.new, frame.accel = new, accel
+
+
+def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The bar on its cables below the leader's new anchor, with a captured follower hanging
+    from it: the follower's own forces go to the hanging mass, and it is carried with the bar."""
+    n, dt = state.n, params.dt_s
+    new, platform, consts = frame.new, params.platform, state.constants
+    lead_R = frame.rot[:n]  # noqa: N806
+    lead_accel, fol_accel = frame.accel[:n], frame.accel[n:]
+    captured = frame.captured
+    if frame.any_captured:
+        hang_mass = np.where(captured, platform.bar_mass_kg + consts.mass_kg,
+                             platform.bar_mass_kg)
+        fol_own = (fol_accel - consts.gravity_mps2) * consts.mass_rows
+        frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
+    else:
+        hang_mass = consts.bar_mass_kg
+    anchor_offset = lead_R[:, :, 2] * platform.anchor_below_leader_m  # anchor_point()
+    lead_yaw = frame.both.rpy[:n, 2] if not params.rigid else _yaw(lead_R)
+    state.bar, state.cable_force_n = step_bar(
+        state.bar, frame.pos[:n] + anchor_offset, frame.vel[:n], lead_accel,
+        new.p[:n] + anchor_offset, lead_yaw, frame.bar_force_n, hang_mass, platform, dt,
+    )
+    if frame.any_captured:
+        gp = params.gripper
+        up_new = -new.R[n:, :, 2]
+        p_hang = state.bar.p - up_new * (gp.mount_height_m + gp.bar_radius_m)
+        cap = captured[:, None]
+        np.copyto(new.p[n:], p_hang, where=cap)
+        np.copyto(new.v[n:], state.bar.v, where=cap)
+        np.copyto(fol_accel, (new.v[n:] - frame.vel[n:]) / dt, where=cap)
+
+
+def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
+    new, n = frame.new, state.n
+    below = new.p[:, 2] > 0.0
+    if below.any():
+        new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
+        new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
+        state.ground_contact |= below[n:] | below[:n]
+
+
+def commit(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The new vehicles become the state and the clock advances: terms after this one see the
+    time at the end of the step."""
+    n = state.n
+    state.both = frame.new
+    state.leader_accel, state.follower_accel = frame.accel[:n], frame.accel[n:]
+    state.step_index += 1
+    state.t_s = state.step_index * params.dt_s
+
+
+# -- sensing ---------------------------------------------------------------------------------
+def gripper(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The gripper at the step's end time: the strain gauge sampled at its own rate, the triggers,
+    the servo's latency and travel, the gate. Random draws: the strain gauge's noise."""
+    gp, t, dt = params.gripper, state.t_s, params.dt_s
+    sample = int(t * gp.sensor_rate_hz + 1e-9) != int((t - dt) * gp.sensor_rate_hz + 1e-9)
+    state.gripper = step_gripper(state.gripper, t, frame.contact_n, frame.inside, sample,
+                                 frame.close_command, gp, state.rng)
+
+
+def motion_capture(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """Keep the step's true state for motion capture, which reports it ``latency_steps`` late."""
+    state.history[state.step_index % (params.latency_steps + 1)] = snapshot(state, params)
+
+
+def snapshot(state: WorldState, params: WorldParams) -> tuple[np.ndarray, ...]:
+    """(leader p, v, attitude, follower p, v, attitude) now: the rotation of a rigid body (angles
+    are computed when observed), the Euler angles of a point mass."""
+    both, n = state.both, state.n
+    att = both.R if params.rigid else both.rpy
+    return both.p[:n], both.v[:n], att[:n], both.p[n:], both.v[n:], att[n:]
+
+
+def _yaw(rot: np.ndarray) -> np.ndarray:
+    """(n,) yaw of (n, 3, 3) rotations (ZYX)."""
+    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
