@@ -113,8 +113,8 @@ class DockingBatch:
         self.model_predictor = predictor if comp == Compensation.MODEL else None
         self.residual_max_mps2 = float(residual_max_mps2)
         self.weights = weights or RewardWeights()
-        probe = MissionBatch.timing(cfg, self.spec)
-        self.arrival_s, self.dt_s, self.max_steps = probe
+        timing = MissionBatch.timing_of(cfg, self.spec)
+        self.arrival_s, self.dt_s, self.max_steps = timing.arrival_s, timing.dt_s, timing.steps
 
     # -- episode start -------------------------------------------------------------------------
     def reset(self, first_trial: int, trials: np.ndarray | None = None) -> None:
@@ -154,16 +154,17 @@ class DockingBatch:
     def observation(self) -> np.ndarray:
         """(n, OBS_DIM) float32 observation (see :data:`OBS_LAYOUT`), clipped to its bounds."""
         mb = self.mission
-        p_ref, v_ref, a_ref = mb.ref
-        obs_f, obs_l_f = mb.obs_f, mb.obs_l_f
+        d = mb.decision
+        p_ref, v_ref, a_ref = d.ref
+        obs_f, obs_l_f = d.follower_obs, d.leader_at_follower
         n = self.n
         ctl = mb.follower_ctl
         bias = ctl.observer.bias_mps2 if ctl.observer is not None else np.zeros((n, 3))
-        ff = mb.ff if mb.ff is not None else np.zeros((n, 3))
+        ff = d.feedforward_mps2 if d.feedforward_mps2 is not None else np.zeros((n, 3))
         dock_now = docking_point_m(obs_l_f.p, obs_l_f.v, mb.geom)
         cols = [obs_f.p - p_ref, obs_f.v - v_ref, obs_f.p - dock_now, obs_f.v - obs_l_f.v,
                 a_ref, bias, ff, np.full((n, 1), mb.t_s - mb.arrival_s),
-                (mb.phase == Phase.TERMINAL)[:, None].astype(float),
+                (d.phase == Phase.TERMINAL)[:, None].astype(float),
                 (mb.world.gripper.gate == GateState.CLOSING)[:, None].astype(float)]
         out = np.concatenate(cols, axis=1).astype(np.float32)
         return np.clip(out, OBS_LOW, OBS_HIGH)
@@ -175,19 +176,21 @@ class DockingBatch:
         mb, n = self.mission, self.n
         action = np.clip(np.asarray(action, dtype=float).reshape(n, 3), -1.0, 1.0)
         active = mb.active
-        mb.fly(action * self.residual_max_mps2)
-        if mb.finished:  # nothing more is decided: every trial is done
-            mb.just_docked = mb.just_missed = mb.just_aborted = np.zeros(n, dtype=bool)
+        flown = mb.fly(action * self.residual_max_mps2)
+        none = np.zeros(n, dtype=bool)
+        d = flown.decision  # None: nothing more is decided, every trial is done
+        docked, missed, aborted = (none, none, none) if d is None else (d.docked, d.missed,
+                                                                        d.aborted)
         w, dt = self.weights, self.dt_s
         live = ~self.resolved
-        reward = np.where(active, -w.tracking_per_ms * mb.track_err_m * dt
+        reward = np.where(active, -w.tracking_per_ms * flown.track_err_m * dt
                           - w.action_per_s * np.sum(action**2, axis=1) * dt, 0.0)
-        reward += w.dock * mb.just_docked - w.miss * mb.just_missed
-        reward -= w.abort * mb.just_aborted + w.clearance * mb.clearance_violated_now
-        violated = mb.clearance_violated_now
+        reward += w.dock * docked - w.miss * missed
+        reward -= w.abort * aborted + w.clearance * flown.clearance_violated
         out = StepOutcome(reward=np.where(live, reward, 0.0),
-                          docked=mb.just_docked & live, missed=mb.just_missed & live,
-                          aborted=mb.just_aborted & live, clearance_violated=violated & live)
+                          docked=docked & live, missed=missed & live,
+                          aborted=aborted & live,
+                          clearance_violated=flown.clearance_violated & live)
         self.resolved |= ~mb.active
         return out
 

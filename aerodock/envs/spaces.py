@@ -45,15 +45,15 @@ def make_batch(n: int, config: Config | str | Path | None = None, offset_m: floa
 def step_info(batch: DockingBatch, outcome: Any = None) -> dict[str, np.ndarray]:
     """Per-trial info arrays (fresh arrays on every call)."""
     none = np.zeros(batch.n, dtype=bool)
-    mb = batch.mission
+    status = batch.mission.status()
     return {
         "t_s": np.full(batch.n, batch.t_s),
         "trial": batch.trials.copy(),
-        "phase": mb.phase.astype(np.int64),
+        "phase": status.phase.astype(np.int64),
         "docked": none.copy() if outcome is None else outcome.docked.copy(),
         "missed": none.copy() if outcome is None else outcome.missed.copy(),
         "aborted": none.copy() if outcome is None else outcome.aborted.copy(),
-        "abort_reason": mb.abort_reason.astype(np.int64),
-        "min_clearance_m": mb.min_clear.copy(),
-        "clearance_violation": mb.min_clear < mb.cfg.mission.clearance_m,
+        "abort_reason": status.abort_reason.astype(np.int64),
+        "min_clearance_m": status.min_clearance_m,
+        "clearance_violation": status.clearance_violation,
     }

@@ -25,7 +25,8 @@ from aerodock.control.compensation import AccelPredictor
 from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
 from aerodock.flightlog import FlightLog, save_flightlogs
-from aerodock.mission.recorder import FlightRecorder, vehicle_meta
+from aerodock.mission.params import vehicle_meta
+from aerodock.mission.recorder import FlightRecorder
 from aerodock.mission.settle import settle
 from aerodock.planning.minjerk import minjerk
 from aerodock.rng import TrialRNG

@@ -1,14 +1,8 @@
 """The docking mission: N trials flown as one batch, phase by phase, and their outcomes."""
 
-from aerodock.mission.batch import (
-    AbortReason,
-    CampaignResult,
-    MissionBatch,
-    MissionSpec,
-    Phase,
-    run_campaign,
-    wilson_interval,
-)
+from aerodock.mission.batch import Decision, Flown, MissionBatch, Status, run_campaign
+from aerodock.mission.outcome import CampaignResult, wilson_interval
+from aerodock.mission.spec import AbortReason, MissionSpec, Phase
 
-__all__ = ["AbortReason", "CampaignResult", "MissionBatch", "MissionSpec", "Phase",
-           "run_campaign", "wilson_interval"]
+__all__ = ["AbortReason", "CampaignResult", "Decision", "Flown", "MissionBatch", "MissionSpec",
+           "Phase", "Status", "run_campaign", "wilson_interval"]

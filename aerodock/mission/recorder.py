@@ -119,11 +119,3 @@ class FlightRecorder:
             )
             for i in range(n)
         ]
-
-
-def vehicle_meta(cfg: Any) -> dict[str, Any]:
-    """FlightLog metadata of both simulated vehicles (model files record what they learnt on)."""
-    v = cfg.vehicle
-    return {"leader_rotor_radius_m": v.rotor_radius_m, "follower_rotor_radius_m": v.rotor_radius_m,
-            "leader_n_rotors": int(v.n_rotors), "follower_n_rotors": int(v.n_rotors),
-            "vehicle_model": v.model}

@@ -1,0 +1,48 @@
+"""Aborts: a trial still approaching gives up (and its gate is disarmed) on a timeout, a lost
+leader, tracking that brings its top towards the leader, or a gate that never finished closing."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from aerodock.mission.params import MissionParams
+from aerodock.mission.spec import AbortReason, Phase
+from aerodock.world.gripper import GateState, GripperState
+
+# A gate still closing this many servo travel times after it was commanded is jammed.
+GATE_STUCK_TRAVELS = 4.0
+
+
+def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np.ndarray,
+                  active: np.ndarray, err_m: np.ndarray, last_fresh_leader_t_s: np.ndarray,
+                  gripper: GripperState, world_t_s: float,
+                  close_time_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(abort now (n,), the reason of each (n,) int8, 0 where none): of the trials approaching.
+
+    Args:
+        params: the mission's constants.
+        t_s, timeout_s: mission time now and when an approach times out.
+        phase, active: the phases, and which trials are still approaching.
+        err_m: (n, 3) the follower's measured position minus its reference.
+        last_fresh_leader_t_s: (n,) when each follower last had a fresh leader state.
+        gripper: the gates (the software knows when it commanded one).
+        world_t_s, close_time_s: the world's time and the servo's nominal travel time.
+    """
+    m = params.mission
+    up_err = -err_m[:, 2]
+    unsafe = (phase == Phase.TERMINAL) & (
+        (up_err > m.abort_tracking_m / 2)
+        | ((np.linalg.norm(err_m, axis=1) > m.abort_tracking_m) & (up_err > 0))
+    )
+    leader_lost = (t_s - last_fresh_leader_t_s) > m.leader_lost_s
+    timeout = t_s >= timeout_s
+    gate = gripper.gate
+    gate_stuck = (gate == GateState.CLOSING) & (
+        world_t_s - gripper.servo_start_s > GATE_STUCK_TRAVELS * close_time_s)
+    abort_now = active & (((gate == GateState.OPEN) & (unsafe | leader_lost | timeout))
+                          | gate_stuck)
+    reason = np.where(gate_stuck, AbortReason.GATE_FAULT,
+                      np.where(leader_lost, AbortReason.LEADER_LOST,
+                               np.where(timeout, AbortReason.TIMEOUT,
+                                        AbortReason.UNSAFE_TRACKING)))
+    return abort_now, reason

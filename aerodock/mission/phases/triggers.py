@@ -1,0 +1,41 @@
+"""The active trigger: the software closes the gate when it predicts the bar well inside it at
+the moment the gate will have closed (the known latencies compensated)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from aerodock.planning.docking import DockGeometry
+from aerodock.world import Observation
+from aerodock.world.gripper import GripperParams
+
+# Margins of the prediction, as fractions of the gate: laterally within this much of the half
+# aperture, vertically below this much of the gate's height.
+LATERAL_MARGIN = 0.6
+HEIGHT_MARGIN = 0.7
+
+
+def active_close_command(follower: Observation, leader: Observation, geom: DockGeometry,
+                         gp: GripperParams, t_s: float, active_at_s: float,
+                         active: np.ndarray) -> np.ndarray:
+    """(n,) bool: command the gate to close now (trials approaching, from ``active_at_s``)."""
+    return (t_s >= active_at_s) & active & bar_will_be_inside(
+        follower, leader, geom, gp, gp.latency_s + gp.close_time_s)
+
+
+def bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeometry,
+                       gp: GripperParams, lead_time_s: float) -> np.ndarray:
+    """Will the (predicted) bar sit well inside the gate ``lead_time_s`` from now?
+
+    The follower cannot see the bar; it predicts it from the leader's state (hanging straight
+    down) and extrapolates both vehicles by ``lead_time_s`` (software latency + servo travel).
+    Margins keep it away from the gate's edges.
+    """
+    rel_v = leader.v - follower.v
+    bar = leader.p + np.array([0.0, 0.0, geom.anchor_below_leader_m + geom.cable_length_m])
+    arm = follower.p - follower.R[:, :, 2] * gp.mount_height_m
+    rel = bar - arm + rel_v * lead_time_s
+    height = -rel[:, 2]
+    lateral = np.linalg.norm(rel[:, :2], axis=1)
+    return (lateral < LATERAL_MARGIN * gp.aperture_m / 2) & (height > -gp.bar_radius_m) & (
+        height < HEIGHT_MARGIN * gp.gate_height_m)
