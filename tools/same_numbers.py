@@ -8,17 +8,21 @@ A restructuring that "changes no number" is checked with this script, not by eye
 
 ``capture`` runs ``aerodock reproduce --quick --seed 0`` (its ``results.json``) and four docking
 campaigns that between them cross every path of the world and the mission (the paper's
-controller, ours with a learnt model, the oracle under a moving leader with faults, the
-point-mass vehicle on a stand), each printed with ``dock --json``. ``compare`` says, file by
-file, whether the bytes are identical; the exit status is 0 only when all are.
+controller, ours with the model ``reproduce`` trained, the oracle under a moving leader with
+faults, the point-mass vehicle on a stand), each printed with ``dock --json``. ``compare`` says,
+file by file, whether the bytes are identical; the exit status is 0 only when all are.
 
-Without ``--quick-only`` the campaigns fly the model that ``reproduce --quick`` trained.
+``results.json`` records how long each stage took (wall-clock seconds) and where it wrote its
+files: the reproduction always runs in the same folder (``RUN_DIR``), and the comparison blanks
+the wall-clock fields (``WALL_CLOCK_KEYS``, and everything under ``timings_s``) and that folder's
+name in both files before comparing the bytes of the rest.
 """
 
 from __future__ import annotations
 
 import argparse
-import filecmp
+import json
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -40,6 +44,8 @@ CAMPAIGNS: dict[str, list[str]] = {
 }
 
 _POINT_MASS_TOML = '[vehicle]\nmodel = "point-mass"\n'
+RUN_DIR = Path(tempfile.gettempdir()) / "aerodock-same-numbers" / "reproduce"
+WALL_CLOCK_KEYS = frozenset({"fly_s", "train_s", "wall_s", "train_time_s"})
 
 
 def _aerodock() -> str:
@@ -50,10 +56,12 @@ def _aerodock() -> str:
 def capture(out: Path) -> None:
     """Run the reproduction and the campaigns; write their outputs below ``out``."""
     out.mkdir(parents=True, exist_ok=True)
-    run_dir = out / "reproduce"
-    subprocess.run([_aerodock(), "reproduce", "--quick", "--seed", "0", "--out", str(run_dir)],
+    shutil.rmtree(RUN_DIR, ignore_errors=True)
+    subprocess.run([_aerodock(), "reproduce", "--quick", "--seed", "0", "--out", str(RUN_DIR)],
                    check=True, stdout=subprocess.DEVNULL)
-    model = run_dir / "data" / "models" / "final"
+    (out / "reproduce").mkdir(exist_ok=True)
+    shutil.copy(RUN_DIR / "results.json", out / "reproduce" / "results.json")
+    model = RUN_DIR / "data" / "models" / "final"
     with tempfile.TemporaryDirectory() as tmp:
         pointmass = Path(tmp) / "pointmass.toml"
         pointmass.write_text(_POINT_MASS_TOML)
@@ -71,6 +79,28 @@ def _files(root: Path) -> list[Path]:
     return names
 
 
+def _blank(node: object, folders: tuple[str, ...], key: str = "") -> object:
+    if key == "timings_s" or key in WALL_CLOCK_KEYS:
+        return None
+    if isinstance(node, dict):
+        return {k: _blank(v, folders, k) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_blank(v, folders) for v in node]
+    if isinstance(node, str):
+        for folder in folders:
+            node = node.replace(folder, "<run>")
+    return node
+
+
+def _masked(path: Path) -> bytes:
+    """The file's bytes; for results.json, re-serialised with the wall-clock fields blanked."""
+    data = path.read_bytes()
+    if path.name != "results.json":
+        return data
+    folders = (str(RUN_DIR), str(path.parent))  # where the run wrote (older captures: in place)
+    return json.dumps(_blank(json.loads(data), folders), indent=2).encode()
+
+
 def compare(a: Path, b: Path) -> bool:
     """Print, per file, whether ``a`` and ``b`` hold the same bytes; True when all do."""
     same = True
@@ -80,7 +110,7 @@ def compare(a: Path, b: Path) -> bool:
             print(f"MISSING  {rel}")
             same = False
             continue
-        ok = filecmp.cmp(fa, fb, shallow=False)
+        ok = _masked(fa) == _masked(fb)
         same &= ok
         print(f"{'same' if ok else 'DIFFERS':8} {rel}")
     return same
