@@ -53,7 +53,7 @@ def capture(out: Path) -> None:
     run_dir = out / "reproduce"
     subprocess.run([_aerodock(), "reproduce", "--quick", "--seed", "0", "--out", str(run_dir)],
                    check=True, stdout=subprocess.DEVNULL)
-    model = run_dir / "models" / "final"
+    model = run_dir / "data" / "models" / "final"
     with tempfile.TemporaryDirectory() as tmp:
         pointmass = Path(tmp) / "pointmass.toml"
         pointmass.write_text(_POINT_MASS_TOML)
