@@ -39,7 +39,7 @@ from aerodock.learning.labels import (
     torque_labels_from_logs,
     valid_mask,
 )
-from aerodock.learning.modelfile import flight_vehicle_fields, vehicles_from_flights
+from aerodock.learning.training_vehicles import flight_vehicle_fields, vehicles_from_flights
 
 DATASET_FORMAT = "aerodock-dataset"
 DATASET_VERSION = 1

@@ -385,7 +385,7 @@ def test_a_torque_feedforward_on_command_basis_labels_is_warned_about(sim_ds, tr
                                                                        tmp_path):
     """The model file records its labels' basis; flying command-basis labels with the torque
     feed-forward draws a warning (README: Label basis), the thrust basis or no feed-forward none."""
-    from aerodock.learning.modelfile import model_warnings
+    from aerodock.learning.compatibility import model_warnings
 
     assert sim_ds.summary()["label_bases"] == ["command"]
     trained_wrench.save(tmp_path / "model")
