@@ -15,7 +15,8 @@ from aerodock.config import load_config
 from aerodock.control.torque_feedforward import feedforward_torque_nm, hub_torque_nm
 from aerodock.downwash.base import BodyState
 from aerodock.geometry import euler_to_rotmat, rot_z
-from aerodock.learning.dataset import DataError, build_dataset, load_dataset, save_dataset
+from aerodock.learning.datafiles import load_dataset, save_dataset
+from aerodock.learning.dataset import DataError, build_dataset
 from aerodock.learning.features import N_FEATURES, feature_map
 from aerodock.learning.labels import (
     OBS_TORQUE_KEY,
