@@ -28,6 +28,7 @@ from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
 from aerodock.learning.labels import (
     FREE_AIR_RADIUS_M,
+    BiasEstimate,
     has_torque,
     labels_from_logs,
     torque_labels_from_logs,
@@ -208,6 +209,25 @@ def _source(log: FlightLog) -> str:
     return str(log.meta.get("source", "unknown"))
 
 
+@dataclass(frozen=True, eq=False)
+class _FlightSamples:
+    """One flight's valid samples, as the arrays a Dataset joins, and its ``meta["flights"]`` entry.
+
+    The optional arrays are None when no flight of the data set has them (then no flight's
+    arrays are joined); a flight without them among flights with them has NaN rows.
+    """
+
+    x: np.ndarray
+    leader_R: np.ndarray
+    y: np.ndarray
+    flight_id: np.ndarray
+    t_s: np.ndarray
+    meta: dict[str, Any]
+    y_true_mean: np.ndarray | None
+    y_torque: np.ndarray | None
+    y_torque_true: np.ndarray | None
+
+
 def build_dataset(
     logs: Sequence[FlightLog],
     *,
@@ -237,55 +257,16 @@ def build_dataset(
     notes = notes + [f"torque labels: {note}" for note in torque_notes]
     torque_of = {id(log): (lab, bias) for log, lab, bias
                  in zip(torque_logs, torque_labels, torque_biases, strict=True)}
-    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "R", "y", "fid", "t", "ytm",
-                                                          "tau", "tau_true")}
-    flights: list[dict[str, Any]] = []
     any_true = any(TRUE_FIELD_KEY in log.extra for log in logs)
-    for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True)):
-        keep = valid_mask(log)
-        dp = log.follower_pos_m - log.leader_pos_m
-        x = np.concatenate([dp, log.leader_vel_mps, log.follower_vel_mps], axis=1)
-        parts["x"].append(x[keep])
-        parts["R"].append(quat_to_rotmat(log.leader_quat)[keep])
-        parts["y"].append(lab[keep])
-        parts["fid"].append(np.full(int(keep.sum()), i, dtype=np.int64))
-        parts["t"].append(log.t_s[keep])
-        if any_true:
-            true = log.extra.get(TRUE_FIELD_KEY)
-            if true is None:
-                true = np.full((log.n_samples, 3), np.nan)
-            true = np.asarray(true, dtype=float)
-            if true.shape != (log.n_samples, 3):
-                raise DataError(
-                    f"{log.name}: extra {TRUE_FIELD_KEY!r} has shape {true.shape}, "
-                    f"expected {(log.n_samples, 3)}"
-                )
-            parts["ytm"].append(true[keep])
-        torque_fields: dict[str, Any] = {}
-        if torque_logs:
-            tau, tau_true, torque_bias = _torque_parts(log, torque_of.get(id(log)))
-            parts["tau"].append(tau[keep])
-            parts["tau_true"].append(tau_true[keep])
-            if torque_bias is not None:
-                torque_fields = {"torque_bias_nm": [float(b) for b in torque_bias.bias],
-                                 "torque_bias_source": torque_bias.source}
-        flights.append({
-            "name": log.name,
-            "source": _source(log),
-            "n_samples": int(keep.sum()),
-            "duration_s": round(log.duration_s, 6),
-            "dt_s": _dt(log.t_s),
-            "bias_mps2": [float(b) for b in bias.bias_mps2],
-            "bias_source": bias.source,
-            "n_free_air": bias.n_free_air,
-            "label_basis": log.meta.get("label_basis"),
-            **torque_fields,
-            **flight_vehicle_fields(log.meta),
-        })
-    if not sum(len(f) for f in parts["fid"]):
+    flights = [
+        _flight_samples(i, log, lab, bias, with_true=any_true, with_torque=bool(torque_logs),
+                        torque=torque_of.get(id(log)))
+        for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True))
+    ]
+    if not sum(len(f.flight_id) for f in flights):
         raise DataError("dataset: no valid samples in the given flights")
     meta = {
-        "flights": flights,
+        "flights": [f.meta for f in flights],
         "sources": sorted({_source(log) for log in logs}),
         "labels": {
             "definition": "a_obs - u_1:3 - per-flight free-air median bias",
@@ -298,20 +279,82 @@ def build_dataset(
         },
         "warnings": notes,
     }
-    tau_true = np.concatenate(parts["tau_true"]) if torque_logs else None
+    return _join_flights(flights, meta)
+
+
+def _flight_samples(i: int, log: FlightLog, labels: np.ndarray, bias: BiasEstimate, *,
+                    with_true: bool, with_torque: bool,
+                    torque: tuple[np.ndarray, BiasEstimate] | None) -> _FlightSamples:
+    """Flight ``i``'s valid samples: inputs, attitudes, labels and, if ``with_true`` or
+    ``with_torque``, the true field and the torque arrays (NaN rows where it has none)."""
+    keep = valid_mask(log)
+    dp = log.follower_pos_m - log.leader_pos_m
+    x = np.concatenate([dp, log.leader_vel_mps, log.follower_vel_mps], axis=1)
+    y_true_mean = None
+    if with_true:
+        true = log.extra.get(TRUE_FIELD_KEY)
+        if true is None:
+            true = np.full((log.n_samples, 3), np.nan)
+        true = np.asarray(true, dtype=float)
+        if true.shape != (log.n_samples, 3):
+            raise DataError(
+                f"{log.name}: extra {TRUE_FIELD_KEY!r} has shape {true.shape}, "
+                f"expected {(log.n_samples, 3)}"
+            )
+        y_true_mean = true[keep]
+    y_torque = y_torque_true = None
+    torque_fields: dict[str, Any] = {}
+    if with_torque:
+        tau, tau_true, torque_bias = _torque_parts(log, torque)
+        y_torque, y_torque_true = tau[keep], tau_true[keep]
+        if torque_bias is not None:
+            torque_fields = {"torque_bias_nm": [float(b) for b in torque_bias.bias],
+                             "torque_bias_source": torque_bias.source}
+    meta = {
+        "name": log.name,
+        "source": _source(log),
+        "n_samples": int(keep.sum()),
+        "duration_s": round(log.duration_s, 6),
+        "dt_s": _dt(log.t_s),
+        "bias_mps2": [float(b) for b in bias.bias_mps2],
+        "bias_source": bias.source,
+        "n_free_air": bias.n_free_air,
+        "label_basis": log.meta.get("label_basis"),
+        **torque_fields,
+        **flight_vehicle_fields(log.meta),
+    }
+    return _FlightSamples(
+        x=x[keep], leader_R=quat_to_rotmat(log.leader_quat)[keep], y=labels[keep],
+        flight_id=np.full(int(keep.sum()), i, dtype=np.int64), t_s=log.t_s[keep], meta=meta,
+        y_true_mean=y_true_mean, y_torque=y_torque, y_torque_true=y_torque_true,
+    )
+
+
+def _join_flights(flights: list[_FlightSamples], meta: dict[str, Any]) -> Dataset:
+    """The flights' samples as one Dataset; a true torque that is NaN throughout is dropped."""
+    first = flights[0]
+
+    def joined(name: str) -> np.ndarray | None:
+        if getattr(first, name) is None:
+            return None
+        return np.concatenate([getattr(f, name) for f in flights])
+
+    tau_true = joined("y_torque_true")
     return Dataset(
-        x=np.concatenate(parts["x"]), leader_R=np.concatenate(parts["R"]),
-        y=np.concatenate(parts["y"]), flight_id=np.concatenate(parts["fid"]),
-        t_s=np.concatenate(parts["t"]),
-        y_true_mean=np.concatenate(parts["ytm"]) if any_true else None,
+        x=np.concatenate([f.x for f in flights]),
+        leader_R=np.concatenate([f.leader_R for f in flights]),
+        y=np.concatenate([f.y for f in flights]),
+        flight_id=np.concatenate([f.flight_id for f in flights]),
+        t_s=np.concatenate([f.t_s for f in flights]),
+        y_true_mean=joined("y_true_mean"),
         meta=meta,
-        y_torque=np.concatenate(parts["tau"]) if torque_logs else None,
+        y_torque=joined("y_torque"),
         y_torque_true=tau_true if tau_true is not None and np.isfinite(tau_true).any() else None,
     )
 
 
-def _torque_parts(log: FlightLog, labelled: tuple[np.ndarray, Any] | None
-                  ) -> tuple[np.ndarray, np.ndarray, Any]:
+def _torque_parts(log: FlightLog, labelled: tuple[np.ndarray, BiasEstimate] | None
+                  ) -> tuple[np.ndarray, np.ndarray, BiasEstimate | None]:
     """A flight's torque labels and true wake torque (T, 3), world NED (NaN where it has none),
     and its torque bias (None without labels)."""
     nan = np.full((log.n_samples, 3), np.nan)
