@@ -69,11 +69,18 @@ from typing import Any
 import numpy as np
 
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import E3, euler_to_rotmat, quat_to_rotmat, rotmat_to_quat
+from aerodock.geometry import (
+    E3,
+    GRAVITY_MPS2,
+    euler_to_rotmat,
+    quat_to_rotmat,
+    rotmat_to_quat,
+    specific_force_to_accel,
+    thrust_accel,
+)
 from aerodock.ingest.common import (
     ENU_TO_NED,
     FLIP_YZ,
-    GRAVITY_MPS2,
     IDENTITY,
     bracket_gap_s,
     check_finite,
@@ -90,8 +97,6 @@ from aerodock.ingest.common import (
     resample_hold,
     resample_linear,
     resample_quat,
-    specific_force_to_accel,
-    thrust_accel,
 )
 from aerodock.ingest.errors import IngestError, ingest_warning
 

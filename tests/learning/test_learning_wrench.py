@@ -361,8 +361,7 @@ def test_saved_docking_logs_follow_the_label_basis():
     logged (measured) attitude, which real logs without a command log give too. The basis changes
     what is logged, never the flight."""
     from aerodock.control.compensation import Compensation
-    from aerodock.geometry import quat_to_rotmat
-    from aerodock.ingest.common import thrust_accel
+    from aerodock.geometry import quat_to_rotmat, thrust_accel
     from aerodock.mission import MissionSpec, run_campaign
 
     base = load_config(None)
