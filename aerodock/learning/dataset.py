@@ -335,6 +335,7 @@ def _join_flights(flights: list[_FlightSamples], meta: dict[str, Any]) -> Datase
     first = flights[0]
 
     def joined(name: str) -> np.ndarray | None:
+        """The flights' optional array ``name`` joined, or None if they do not have it."""
         if getattr(first, name) is None:
             return None
         return np.concatenate([getattr(f, name) for f in flights])
