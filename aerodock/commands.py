@@ -99,7 +99,7 @@ def dock(
 
         check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
-    from aerodock.learning.modelfile import model_warnings
+    from aerodock.learning.compatibility import model_warnings
     from aerodock.mission.faults import load_faults
 
     for note in model_warnings(predictor, cfg):
@@ -317,7 +317,7 @@ def targets_command(
         summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
         model = Path(summary["final_model"])
     predictor = Predictor.load(model)
-    from aerodock.learning.modelfile import model_warnings
+    from aerodock.learning.compatibility import model_warnings
 
     for note in model_warnings(predictor, cfg):
         typer.echo(f"warning: {note}", err=True)

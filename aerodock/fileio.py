@@ -1,7 +1,9 @@
-"""Files: atomic writes, strict JSON and guarded ``.npz`` reading.
+"""Files: atomic writes of files and directories, strict JSON and guarded ``.npz`` reading.
 
 * :func:`atomic_open` -- a failure (or an interrupt) never leaves a half-written file behind, and
   the new file gets the permissions an ordinary ``open`` would give it (the umask applies).
+* :func:`write_dir_atomic` -- a directory of files replaced as a whole (a model directory): a
+  kill at any moment leaves either the complete old directory or the complete new one.
 * :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused.
 * :func:`check_npz_header` -- the ``format``/``version`` keys of an aerodock ``.npz`` file and
   the sizes its members declare, checked before any array is read.
@@ -9,9 +11,11 @@
 
 from __future__ import annotations
 
+import ctypes
 import json
 import math
 import os
+import shutil
 import stat
 import struct
 import tempfile
@@ -19,7 +23,7 @@ import tokenize
 import tomllib
 import zipfile
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
@@ -46,6 +50,7 @@ def one_line(err: BaseException | str) -> str:
 
 
 def _umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -130,6 +135,91 @@ def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+# --------------------------------------------------------------------------------------------
+# Writing a directory as a whole
+# --------------------------------------------------------------------------------------------
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two existing paths in one atomic step (Linux ``renameat2``); False if unsupported."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    errno = ctypes.get_errno()
+    if errno in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: file system or kernel cannot
+        return False
+    raise OSError(errno, f"cannot exchange {a} and {b}: {os.strerror(errno)}")
+
+
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
+    """Make ``path`` a directory holding exactly ``files`` (name -> bytes), all at once.
+
+    The files are written and synced in a sibling temporary directory that then swaps names
+    with ``path`` atomically (``renameat2`` with ``RENAME_EXCHANGE`` on Linux), or is renamed to
+    it if ``path`` does not exist. Where the atomic exchange is unsupported, the old directory
+    is renamed aside first and restored if the second rename fails. On any error the temporary
+    directory is removed and ``path`` is left as it was.
+
+    The order matters: the files are synced before the swap and the parent directory after it,
+    so that a crash never makes the new name point at files that are not on disk yet.
+
+    Raises:
+        OSError: the files cannot be written.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())
+        for name, blob in files.items():
+            with open(tmp / name, "wb") as fh:
+                fh.write(blob)
+                fh.flush()
+                os.fsync(fh.fileno())
+        _fsync_dir(tmp)
+        if not path.exists():
+            os.rename(tmp, path)
+        elif _exchange(tmp, path):
+            shutil.rmtree(tmp)  # now holds the old directory
+        else:
+            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".old"))
+            os.rmdir(aside)
+            os.rename(path, aside)
+            try:
+                os.rename(tmp, path)
+            except BaseException:
+                os.rename(aside, path)
+                raise
+            shutil.rmtree(aside, ignore_errors=True)
+        _fsync_dir(path.parent)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return path
 
 
 def json_default(obj: Any) -> Any:

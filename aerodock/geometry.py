@@ -1,7 +1,8 @@
-"""Rotations and SO(2) helpers, batch-first. The one place rotations are built.
+"""Rotations, SO(2) helpers and thrust/gravity kinematics, batch-first. Rotations are built here.
 
 Conventions: world frame NED (z down); ``R`` maps body to world; Euler angles are ZYX
 (yaw, pitch, roll) applied as ``R = Rz(yaw) Ry(pitch) Rx(roll)``; quaternions are ``[w, x, y, z]``.
+The log readers and the simulator's recorder share :func:`thrust_accel` and :data:`GRAVITY_MPS2`.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 E3 = np.array([0.0, 0.0, 1.0])
+# Standard gravity, as ``sim.gravity_mps2`` in aerodock/defaults.toml and the Crazyflie firmware.
+GRAVITY_MPS2 = 9.81
 
 
 def rpy_to_rotmat(rpy: np.ndarray) -> np.ndarray:
@@ -132,3 +135,23 @@ def norm_rows(a: np.ndarray) -> np.ndarray:
 def wrap_angle(angle_rad: np.ndarray) -> np.ndarray:
     """Wrap angles to ``[-pi, pi)``."""
     return (np.asarray(angle_rad) + np.pi) % (2 * np.pi) - np.pi
+
+
+def thrust_accel(rot: np.ndarray, thrust_n: np.ndarray, mass_kg: float) -> np.ndarray:
+    """Acceleration explained by collective thrust, NED: ``g e3 - R e3 T / m`` (thrust along -z_b).
+
+    Args:
+        rot: Body (FRD) to world (NED) rotations, ``(T, 3, 3)``.
+        thrust_n: Collective thrust, N, ``(T,)`` (positive: upwards in the body).
+        mass_kg: Vehicle mass.
+    """
+    body_z_world = rot[:, :, 2]
+    return GRAVITY_MPS2 * E3 - body_z_world * (np.asarray(thrust_n)[:, None] / mass_kg)
+
+
+def specific_force_to_accel(rot: np.ndarray, specific_force_body: np.ndarray) -> np.ndarray:
+    """Kinematic acceleration NED from an accelerometer's specific force in body FRD.
+
+    An accelerometer at rest reads ``-g`` along body z (FRD), so ``a = R f + g e3``.
+    """
+    return np.einsum("tij,tj->ti", rot, specific_force_body) + GRAVITY_MPS2 * E3

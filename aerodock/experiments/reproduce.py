@@ -191,7 +191,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     runs (a progress bar)."""
     from aerodock.experiments.report import write_report
     from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
-    from aerodock.learning.dataset import build_dataset, save_dataset
+    from aerodock.learning.datafiles import save_dataset
+    from aerodock.learning.dataset import build_dataset
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import Predictor
     from aerodock.learning.sample_efficiency import sample_efficiency

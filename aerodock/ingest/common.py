@@ -12,11 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from aerodock.geometry import E3
+from aerodock.geometry import GRAVITY_MPS2
 from aerodock.ingest.errors import IngestError
-
-# Standard gravity, as ``sim.gravity_mps2`` in aerodock/defaults.toml and the Crazyflie firmware.
-GRAVITY_MPS2 = 9.81
 
 # World ENU (REP-103) -> NED: north = y_enu, east = x_enu, down = -z_enu.
 ENU_TO_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -296,26 +293,6 @@ def convert_rotations(world: np.ndarray, rot: np.ndarray, body: np.ndarray) -> n
     coordinates, so ``v_ned = world R_src v_src_body = (world R_src body^T) v_frd``.
     """
     return world @ np.asarray(rot, dtype=float) @ body.T
-
-
-def thrust_accel(rot: np.ndarray, thrust_n: np.ndarray, mass_kg: float) -> np.ndarray:
-    """Acceleration explained by collective thrust, NED: ``g e3 - R e3 T / m`` (thrust along -z_b).
-
-    Args:
-        rot: Body (FRD) to world (NED) rotations, ``(T, 3, 3)``.
-        thrust_n: Collective thrust, N, ``(T,)`` (positive: upwards in the body).
-        mass_kg: Vehicle mass.
-    """
-    body_z_world = rot[:, :, 2]
-    return GRAVITY_MPS2 * E3 - body_z_world * (np.asarray(thrust_n)[:, None] / mass_kg)
-
-
-def specific_force_to_accel(rot: np.ndarray, specific_force_body: np.ndarray) -> np.ndarray:
-    """Kinematic acceleration NED from an accelerometer's specific force in body FRD.
-
-    An accelerometer at rest reads ``-g`` along body z (FRD), so ``a = R f + g e3``.
-    """
-    return np.einsum("tij,tj->ti", rot, specific_force_body) + GRAVITY_MPS2 * E3
 
 
 def differentiate(t_s: np.ndarray, values: np.ndarray) -> np.ndarray:

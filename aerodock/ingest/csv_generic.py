@@ -42,11 +42,10 @@ import numpy as np
 
 from aerodock.fileio import atomic_open, json_default
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import E3, quat_to_rotmat, rotmat_to_quat
+from aerodock.geometry import E3, GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
     ENU_TO_NED,
     FLIP_YZ,
-    GRAVITY_MPS2,
     check_finite,
     check_kinematics,
     check_mass,

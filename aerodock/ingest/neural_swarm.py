@@ -32,10 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import E3, quat_to_rotmat, rotmat_to_quat
+from aerodock.geometry import E3, GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat, thrust_accel
 from aerodock.ingest.common import (
     FLIP_YZ,
-    GRAVITY_MPS2,
     TIME_UNITS,
     bracket_gap_s,
     check_finite,
@@ -53,7 +52,6 @@ from aerodock.ingest.common import (
     read_csv_table,
     resample_linear,
     resample_quat,
-    thrust_accel,
 )
 from aerodock.ingest.errors import IngestError, ingest_warning
 

@@ -50,9 +50,14 @@ from typing import Any
 import numpy as np
 
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import E3, quat_to_rotmat, rotmat_to_quat
-from aerodock.ingest.common import (
+from aerodock.geometry import (
+    E3,
     GRAVITY_MPS2,
+    quat_to_rotmat,
+    rotmat_to_quat,
+    specific_force_to_accel,
+)
+from aerodock.ingest.common import (
     bracket_gap_s,
     check_finite,
     check_hover_thrust,
@@ -66,7 +71,6 @@ from aerodock.ingest.common import (
     resample_hold,
     resample_linear,
     resample_quat,
-    specific_force_to_accel,
 )
 from aerodock.ingest.errors import IngestError, ingest_warning
 

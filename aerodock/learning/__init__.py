@@ -1,14 +1,15 @@
 """Learning the leader's downwash: labels, datasets, features, models, training and runtime.
 
-The modules split along one line: everything the *deployed* path needs (``labels``, ``dataset``,
-``features``, ``modelfile``, ``runtime``, ``evaluate``) is NumPy-only, so a controller can load a
-trained model without PyTorch; ``models``, ``train``, ``export`` and ``sample_efficiency`` import
-PyTorch. This package's ``__init__`` imports nothing, on purpose: importing
-``aerodock.learning.runtime`` must not pull in torch.
+The modules split along one line: ``labels``, ``dataset``, ``datafiles``, ``splits``,
+``features``, ``modelfile``, ``training_vehicles``, ``compatibility``, ``runtime`` and
+``evaluate`` are NumPy-only (everything the *deployed* path needs is among them), so a controller
+can load a trained model without PyTorch; ``models``, ``train``, ``export`` and
+``sample_efficiency`` import PyTorch. This package's ``__init__`` imports nothing, on purpose:
+importing ``aerodock.learning.runtime`` must not pull in torch.
 
 Typical use::
 
-    from aerodock.learning.dataset import load_data_paths
+    from aerodock.learning.datafiles import load_data_paths
     from aerodock.learning.train import train_model
     from aerodock.learning.runtime import Predictor
 

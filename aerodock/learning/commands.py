@@ -57,7 +57,8 @@ def _echo_json(obj: Any) -> None:
 
 
 def _load_data(paths: list[Path]) -> Any:
-    from aerodock.learning.dataset import DataError, load_data_paths
+    from aerodock.learning.datafiles import load_data_paths
+    from aerodock.learning.dataset import DataError
 
     try:
         return load_data_paths(paths)
@@ -103,7 +104,7 @@ def train_command(
     ds = _load_data(data)
     available = ds.minutes
     if minutes is not None:
-        from aerodock.learning.dataset import take_minutes
+        from aerodock.learning.splits import take_minutes
 
         ds = take_minutes(ds, minutes, np.random.default_rng(seed))
     try:

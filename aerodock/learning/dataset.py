@@ -12,37 +12,30 @@ labels ``y_torque`` (n, 3), N m, rotated from the follower's body frame into the
 does; simulated ones give the true wake torque the same way as ``y_torque_true`` (evaluation
 only). Flights without them have NaN rows there.
 
-On disk (``.npz``, written atomically, read with ``allow_pickle=False``): keys ``format`` (the
-string ``"aerodock-dataset"``), ``version`` (1), ``x``, ``leader_R``, ``y``, ``flight_id``,
-``t_s``, optionally ``y_true_mean``, ``y_torque`` and ``y_torque_true``, and ``meta`` (a JSON
-string).
+Data set files are read and written by :mod:`aerodock.learning.datafiles`; train/validation
+splits and subsets are made by :mod:`aerodock.learning.splits`.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import READ_ERRORS, atomic_open, check_npz_header, one_line
-from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
-from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
+from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
 from aerodock.learning.labels import (
     FREE_AIR_RADIUS_M,
+    BiasEstimate,
     has_torque,
     labels_from_logs,
     torque_labels_from_logs,
     valid_mask,
 )
-from aerodock.learning.modelfile import flight_vehicle_fields, vehicles_from_flights
+from aerodock.learning.training_vehicles import flight_vehicle_fields, vehicles_from_flights
 
-DATASET_FORMAT = "aerodock-dataset"
-DATASET_VERSION = 1
 TRUE_FIELD_KEY = "true_field_mean_mps2"
 TRUE_TORQUE_KEY = "true_wake_torque_nm"
 # Optional (n, 3) arrays of a Dataset (NaN rows for flights without them).
@@ -216,6 +209,25 @@ def _source(log: FlightLog) -> str:
     return str(log.meta.get("source", "unknown"))
 
 
+@dataclass(frozen=True, eq=False)
+class _FlightSamples:
+    """One flight's valid samples, as the arrays a Dataset joins, and its ``meta["flights"]`` entry.
+
+    The optional arrays are None when no flight of the data set has them (then no flight's
+    arrays are joined); a flight without them among flights with them has NaN rows.
+    """
+
+    x: np.ndarray
+    leader_R: np.ndarray
+    y: np.ndarray
+    flight_id: np.ndarray
+    t_s: np.ndarray
+    meta: dict[str, Any]
+    y_true_mean: np.ndarray | None
+    y_torque: np.ndarray | None
+    y_torque_true: np.ndarray | None
+
+
 def build_dataset(
     logs: Sequence[FlightLog],
     *,
@@ -245,55 +257,16 @@ def build_dataset(
     notes = notes + [f"torque labels: {note}" for note in torque_notes]
     torque_of = {id(log): (lab, bias) for log, lab, bias
                  in zip(torque_logs, torque_labels, torque_biases, strict=True)}
-    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "R", "y", "fid", "t", "ytm",
-                                                          "tau", "tau_true")}
-    flights: list[dict[str, Any]] = []
     any_true = any(TRUE_FIELD_KEY in log.extra for log in logs)
-    for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True)):
-        keep = valid_mask(log)
-        dp = log.follower_pos_m - log.leader_pos_m
-        x = np.concatenate([dp, log.leader_vel_mps, log.follower_vel_mps], axis=1)
-        parts["x"].append(x[keep])
-        parts["R"].append(quat_to_rotmat(log.leader_quat)[keep])
-        parts["y"].append(lab[keep])
-        parts["fid"].append(np.full(int(keep.sum()), i, dtype=np.int64))
-        parts["t"].append(log.t_s[keep])
-        if any_true:
-            true = log.extra.get(TRUE_FIELD_KEY)
-            if true is None:
-                true = np.full((log.n_samples, 3), np.nan)
-            true = np.asarray(true, dtype=float)
-            if true.shape != (log.n_samples, 3):
-                raise DataError(
-                    f"{log.name}: extra {TRUE_FIELD_KEY!r} has shape {true.shape}, "
-                    f"expected {(log.n_samples, 3)}"
-                )
-            parts["ytm"].append(true[keep])
-        torque_fields: dict[str, Any] = {}
-        if torque_logs:
-            tau, tau_true, torque_bias = _torque_parts(log, torque_of.get(id(log)))
-            parts["tau"].append(tau[keep])
-            parts["tau_true"].append(tau_true[keep])
-            if torque_bias is not None:
-                torque_fields = {"torque_bias_nm": [float(b) for b in torque_bias.bias],
-                                 "torque_bias_source": torque_bias.source}
-        flights.append({
-            "name": log.name,
-            "source": _source(log),
-            "n_samples": int(keep.sum()),
-            "duration_s": round(log.duration_s, 6),
-            "dt_s": _dt(log.t_s),
-            "bias_mps2": [float(b) for b in bias.bias_mps2],
-            "bias_source": bias.source,
-            "n_free_air": bias.n_free_air,
-            "label_basis": log.meta.get("label_basis"),
-            **torque_fields,
-            **flight_vehicle_fields(log.meta),
-        })
-    if not sum(len(f) for f in parts["fid"]):
+    flights = [
+        _flight_samples(i, log, lab, bias, with_true=any_true, with_torque=bool(torque_logs),
+                        torque=torque_of.get(id(log)))
+        for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True))
+    ]
+    if not sum(len(f.flight_id) for f in flights):
         raise DataError("dataset: no valid samples in the given flights")
     meta = {
-        "flights": flights,
+        "flights": [f.meta for f in flights],
         "sources": sorted({_source(log) for log in logs}),
         "labels": {
             "definition": "a_obs - u_1:3 - per-flight free-air median bias",
@@ -306,20 +279,83 @@ def build_dataset(
         },
         "warnings": notes,
     }
-    tau_true = np.concatenate(parts["tau_true"]) if torque_logs else None
+    return _join_flights(flights, meta)
+
+
+def _flight_samples(i: int, log: FlightLog, labels: np.ndarray, bias: BiasEstimate, *,
+                    with_true: bool, with_torque: bool,
+                    torque: tuple[np.ndarray, BiasEstimate] | None) -> _FlightSamples:
+    """Flight ``i``'s valid samples: inputs, attitudes, labels and, if ``with_true`` or
+    ``with_torque``, the true field and the torque arrays (NaN rows where it has none)."""
+    keep = valid_mask(log)
+    dp = log.follower_pos_m - log.leader_pos_m
+    x = np.concatenate([dp, log.leader_vel_mps, log.follower_vel_mps], axis=1)
+    y_true_mean = None
+    if with_true:
+        true = log.extra.get(TRUE_FIELD_KEY)
+        if true is None:
+            true = np.full((log.n_samples, 3), np.nan)
+        true = np.asarray(true, dtype=float)
+        if true.shape != (log.n_samples, 3):
+            raise DataError(
+                f"{log.name}: extra {TRUE_FIELD_KEY!r} has shape {true.shape}, "
+                f"expected {(log.n_samples, 3)}"
+            )
+        y_true_mean = true[keep]
+    y_torque = y_torque_true = None
+    torque_fields: dict[str, Any] = {}
+    if with_torque:
+        tau, tau_true, torque_bias = _torque_parts(log, torque)
+        y_torque, y_torque_true = tau[keep], tau_true[keep]
+        if torque_bias is not None:
+            torque_fields = {"torque_bias_nm": [float(b) for b in torque_bias.bias],
+                             "torque_bias_source": torque_bias.source}
+    meta = {
+        "name": log.name,
+        "source": _source(log),
+        "n_samples": int(keep.sum()),
+        "duration_s": round(log.duration_s, 6),
+        "dt_s": _dt(log.t_s),
+        "bias_mps2": [float(b) for b in bias.bias_mps2],
+        "bias_source": bias.source,
+        "n_free_air": bias.n_free_air,
+        "label_basis": log.meta.get("label_basis"),
+        **torque_fields,
+        **flight_vehicle_fields(log.meta),
+    }
+    return _FlightSamples(
+        x=x[keep], leader_R=quat_to_rotmat(log.leader_quat)[keep], y=labels[keep],
+        flight_id=np.full(int(keep.sum()), i, dtype=np.int64), t_s=log.t_s[keep], meta=meta,
+        y_true_mean=y_true_mean, y_torque=y_torque, y_torque_true=y_torque_true,
+    )
+
+
+def _join_flights(flights: list[_FlightSamples], meta: dict[str, Any]) -> Dataset:
+    """The flights' samples as one Dataset; a true torque that is NaN throughout is dropped."""
+    first = flights[0]
+
+    def joined(name: str) -> np.ndarray | None:
+        """The flights' optional array ``name`` joined, or None if they do not have it."""
+        if getattr(first, name) is None:
+            return None
+        return np.concatenate([getattr(f, name) for f in flights])
+
+    tau_true = joined("y_torque_true")
     return Dataset(
-        x=np.concatenate(parts["x"]), leader_R=np.concatenate(parts["R"]),
-        y=np.concatenate(parts["y"]), flight_id=np.concatenate(parts["fid"]),
-        t_s=np.concatenate(parts["t"]),
-        y_true_mean=np.concatenate(parts["ytm"]) if any_true else None,
+        x=np.concatenate([f.x for f in flights]),
+        leader_R=np.concatenate([f.leader_R for f in flights]),
+        y=np.concatenate([f.y for f in flights]),
+        flight_id=np.concatenate([f.flight_id for f in flights]),
+        t_s=np.concatenate([f.t_s for f in flights]),
+        y_true_mean=joined("y_true_mean"),
         meta=meta,
-        y_torque=np.concatenate(parts["tau"]) if torque_logs else None,
+        y_torque=joined("y_torque"),
         y_torque_true=tau_true if tau_true is not None and np.isfinite(tau_true).any() else None,
     )
 
 
-def _torque_parts(log: FlightLog, labelled: tuple[np.ndarray, Any] | None
-                  ) -> tuple[np.ndarray, np.ndarray, Any]:
+def _torque_parts(log: FlightLog, labelled: tuple[np.ndarray, BiasEstimate] | None
+                  ) -> tuple[np.ndarray, np.ndarray, BiasEstimate | None]:
     """A flight's torque labels and true wake torque (T, 3), world NED (NaN where it has none),
     and its torque bias (None without labels)."""
     nan = np.full((log.n_samples, 3), np.nan)
@@ -369,296 +405,3 @@ def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
         t_s=np.concatenate([d.t_s for d in datasets]),
         meta=meta, **optional,
     )
-
-
-def save_dataset(path: str | Path, ds: Dataset) -> Path:
-    """Write ``ds`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact."""
-    path = Path(path)
-    if path.suffix != ".npz":
-        path = path.with_name(path.name + ".npz")
-    arrays: dict[str, np.ndarray] = {
-        "format": np.array(DATASET_FORMAT),
-        "version": np.array(DATASET_VERSION),
-        "x": ds.x, "leader_R": ds.leader_R, "y": ds.y, "flight_id": ds.flight_id, "t_s": ds.t_s,
-        "meta": np.array(json.dumps(ds.meta)),
-    }
-    for name in OPTIONAL_ARRAYS:
-        if getattr(ds, name) is not None:
-            arrays[name] = getattr(ds, name)
-    with atomic_open(path, "wb") as fh:
-        np.savez_compressed(fh, **arrays)
-    return path
-
-
-def _npz_format(path: Path) -> str | None:
-    """The ``format`` string of an npz file, or None (raises DataError if unreadable)."""
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            return str(data["format"]) if "format" in data.files else None
-    except FileNotFoundError:
-        raise DataError(f"{path}: file not found") from None
-    except (*READ_ERRORS, MemoryError) as err:
-        raise DataError(f"{path}: not a readable .npz file ({type(err).__name__}: "
-                        f"{one_line(err)})") from None
-
-
-def load_dataset(path: str | Path) -> Dataset:
-    """Read a dataset file written by :func:`save_dataset`.
-
-    Raises:
-        DataError: missing, corrupt, not a dataset, newer version, or inconsistent contents.
-    """
-    path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            keys = check_npz_header(data, path, DATASET_FORMAT, DATASET_VERSION, "dataset",
-                                    DataError)
-            missing = [k for k in ("x", "leader_R", "y", "flight_id", "t_s", "meta")
-                       if k not in keys]
-            if missing:
-                raise DataError(f"{path}: dataset lacks {', '.join(missing)}")
-            arrays = {k: data[k] for k in ("x", "leader_R", "y", "flight_id", "t_s")}
-            optional = {k: data[k] for k in OPTIONAL_ARRAYS if k in keys}
-            meta = json.loads(str(data["meta"]))
-    except FileNotFoundError:
-        raise DataError(f"{path}: file not found") from None
-    except DataError:
-        raise
-    except (*READ_ERRORS, MemoryError) as err:
-        raise DataError(f"{path}: corrupt or unreadable dataset file ({type(err).__name__}: "
-                        f"{one_line(err)})") from None
-    for name, arr in {**arrays, **optional}.items():
-        if arr.dtype.kind not in ("iu" if name == "flight_id" else "fiu"):
-            raise DataError(f"{path}: {name} has dtype {arr.dtype}, not numbers")
-    for name in ("x", "leader_R", "y", "t_s"):
-        if not np.all(np.isfinite(arrays[name])):
-            raise DataError(f"{path}: {name} contains NaN or infinite values")
-    if not isinstance(meta, dict):
-        raise DataError(f"{path}: dataset metadata is not a JSON object")
-    try:
-        ds = Dataset(**arrays, **optional, meta=meta)
-    except DataError as err:
-        raise DataError(f"{path}: {str(err).removeprefix('dataset: ')}") from None
-    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as err:
-        raise DataError(f"{path}: inconsistent dataset contents or metadata "
-                        f"({type(err).__name__}: {one_line(err)})") from None
-    return ds
-
-
-def load_data_paths(
-    paths: Sequence[str | Path],
-    *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
-    lowpass_hz: float | None = None,
-) -> Dataset:
-    """One Dataset from FlightLog files, dataset files and folders of them.
-
-    Each path is a FlightLog file (``format == "aerodock-flightlog"``), a dataset file
-    (``"aerodock-dataset"``), or a folder, searched recursively for ``*.npz`` files of either
-    kind (hidden files are skipped, and so are other ``.npz`` files such as a model's
-    ``weights.npz``: they are listed in ``meta["skipped_files"]``). A file given twice is read
-    once. All FlightLogs are labelled together (so flights without free-air samples can borrow
-    the others' bias), then joined with the loaded datasets.
-
-    Raises:
-        DataError: a missing path, a folder without FlightLog or dataset files, an unreadable
-            file, or a file given explicitly that is neither kind (one line, naming the file).
-    """
-    if not paths:
-        raise DataError("no data paths given")
-    logs: list[FlightLog] = []
-    datasets: list[Dataset] = []
-    sources: list[str] = []
-    skipped: list[str] = []
-    seen: dict[Path, bool] = {}  # resolved path -> is an aerodock FlightLog/dataset file
-    for raw in paths:
-        path = Path(raw)
-        if path.is_dir():
-            files = sorted(
-                p for p in path.rglob("*.npz")
-                if not any(part.startswith(".") for part in p.relative_to(path).parts)
-            )
-        elif path.exists():
-            files = [path]
-        else:
-            raise DataError(f"{path}: no such file or folder")
-        n_used = 0
-        for file in files:
-            key = file.resolve()
-            if key in seen:
-                n_used += seen[key]
-                continue
-            fmt = _npz_format(file)
-            seen[key] = fmt in (FLIGHTLOG_FORMAT, DATASET_FORMAT)
-            if not seen[key] and path.is_dir():
-                skipped.append(str(file))
-                continue
-            n_used += 1
-            if fmt == FLIGHTLOG_FORMAT:
-                try:
-                    logs.extend(load_flightlogs(file))
-                except FlightLogError as err:
-                    raise DataError(str(err)) from None
-            elif fmt == DATASET_FORMAT:
-                datasets.append(load_dataset(file))
-            else:
-                raise DataError(f"{file}: not an aerodock FlightLog or dataset file")
-            sources.append(str(file))
-        if path.is_dir() and not n_used:
-            raise DataError(f"{path}: folder holds no FlightLog or dataset .npz files")
-    if logs:
-        try:
-            datasets.insert(0, build_dataset(
-                logs, free_air_radius_m=free_air_radius_m, lowpass_hz=lowpass_hz
-            ))
-        except (FlightLogError, ValueError) as err:
-            raise DataError(str(err)) from None
-    ds = concat_datasets(datasets)
-    return replace(ds, meta={**ds.meta, "files": sources, "skipped_files": skipped})
-
-
-def _flight_counts(ds: Dataset) -> tuple[np.ndarray, np.ndarray]:
-    ids, counts = np.unique(ds.flight_id, return_counts=True)
-    return ids, counts
-
-
-def flight_split_ids(
-    ds: Dataset, val_fraction: float, rng: np.random.Generator, *, tries: int = 64
-) -> np.ndarray | None:
-    """Flight ids for a validation set holding about ``val_fraction`` of the samples.
-
-    Random flight orders are filled greedily and the subset closest to the target is kept.
-    Returns None when there are fewer than two flights (no flight split is possible).
-    """
-    ids, counts = _flight_counts(ds)
-    if len(ids) < 2:
-        return None
-    target = val_fraction * counts.sum()
-    best: np.ndarray | None = None
-    best_err = np.inf
-    for _ in range(tries):
-        order = rng.permutation(len(ids))
-        chosen, total = [], 0
-        for k in order:
-            if total + counts[k] <= 1.25 * target or not chosen:
-                chosen.append(k)
-                total += counts[k]
-            if total >= target:
-                break
-        if len(chosen) == len(ids):
-            chosen = chosen[:-1]
-            total = counts[chosen].sum()
-        err = abs(total - target)
-        if err < best_err:
-            best, best_err = ids[np.array(chosen)], err
-    return best
-
-
-def split_by_flight(
-    ds: Dataset, val_fraction: float = 0.2, rng: np.random.Generator | None = None
-) -> tuple[Dataset, Dataset]:
-    """Split into (train, held-out) by whole flights, about ``val_fraction`` of samples held out.
-
-    No flight appears in both parts; each part has at least one flight.
-
-    Raises:
-        DataError: fewer than two flights.
-    """
-    rng = np.random.default_rng(0) if rng is None else rng
-    if not 0.0 < val_fraction < 1.0:
-        raise ValueError(f"val_fraction must be in (0, 1), got {val_fraction}")
-    val_ids = flight_split_ids(ds, val_fraction, rng)
-    if val_ids is None:
-        raise DataError("dataset: splitting by flight needs at least two flights")
-    in_val = np.isin(ds.flight_id, val_ids)
-    return ds.subset(~in_val), ds.subset(in_val)
-
-
-def time_block_split_mask(
-    ds: Dataset, val_fraction: float, rng: np.random.Generator, *, block_s: float = 5.0
-) -> np.ndarray:
-    """Boolean (n,) validation mask of whole contiguous time blocks (within each flight).
-
-    Blocks of ``block_s`` seconds (shortened so that there are at least 10 blocks) are shuffled and
-    taken until ``val_fraction`` of the samples is reached; blocks far longer than the wake's
-    turbulence correlation time keep train and validation samples nearly independent.
-    """
-    span = sum(
-        float(np.ptp(ds.t_s[ds.flight_id == k])) for k in np.unique(ds.flight_id)
-    )
-    block_s = max(min(block_s, span / 10.0), 1e-9)
-    blocks = np.zeros(ds.n, dtype=np.int64)
-    n_blocks = 0
-    for k in np.unique(ds.flight_id):
-        sel = ds.flight_id == k
-        t = ds.t_s[sel]
-        b = np.floor((t - t.min()) / block_s).astype(np.int64)
-        _, b = np.unique(b, return_inverse=True)
-        blocks[sel] = b.reshape(-1) + n_blocks
-        n_blocks += int(b.max()) + 1
-    counts = np.bincount(blocks, minlength=n_blocks)
-    target = val_fraction * ds.n
-    chosen, total = [], 0
-    for k in rng.permutation(n_blocks):
-        if total >= target or len(chosen) == n_blocks - 1:
-            break
-        chosen.append(k)
-        total += counts[k]
-    return np.isin(blocks, chosen)
-
-
-def take_minutes(
-    ds: Dataset, minutes: float, rng: np.random.Generator, *, mode: str = "flights"
-) -> Dataset:
-    """A subset holding ``minutes`` of flight time, as whole flights or contiguous chunks.
-
-    Args:
-        ds: the data.
-        minutes: requested flight time; all of ``ds`` if it holds no more than that.
-        rng: random generator (which flights, where the chunks start).
-        mode: ``"flights"`` (default): whole flights in random order, the last one cut to a
-            contiguous chunk at a random offset to hit the requested time. ``"stratified"``:
-            one contiguous chunk from every flight, each the same fraction of its flight (keeps
-            the mix of separations of the full data, e.g. every curriculum stage).
-
-    Raises:
-        ValueError: ``minutes`` not positive, or unknown mode.
-    """
-    if not minutes > 0:
-        raise ValueError(f"minutes must be positive, got {minutes}")
-    if mode not in ("flights", "stratified"):
-        raise ValueError(f"unknown mode {mode!r} (expected 'flights' or 'stratified')")
-    if minutes >= ds.minutes:
-        return ds
-    ids = np.unique(ds.flight_id)
-    dt = np.array([float(ds.meta["flights"][k].get("dt_s", 0.0)) for k in ids])
-    index_of = {k: np.flatnonzero(ds.flight_id == k) for k in ids}
-    chosen: list[np.ndarray] = []
-
-    def chunk(k: int, n_take: int) -> np.ndarray:
-        idx = index_of[k]
-        idx = idx[np.argsort(ds.t_s[idx], kind="stable")]
-        n_take = max(1, min(n_take, len(idx)))
-        start = int(rng.integers(0, len(idx) - n_take + 1))
-        return idx[start:start + n_take]
-
-    if mode == "stratified":
-        frac = minutes / ds.minutes
-        for k in ids:
-            chosen.append(chunk(k, int(round(frac * len(index_of[k])))))
-    else:
-        remaining_s = minutes * 60.0
-        for j in rng.permutation(len(ids)):
-            k = ids[j]
-            flight_s = len(index_of[k]) * dt[j]
-            if flight_s <= remaining_s:
-                chosen.append(index_of[k])
-                remaining_s -= flight_s
-            else:
-                n_take = int(round(remaining_s / dt[j])) if dt[j] > 0 else len(index_of[k])
-                if n_take > 0:
-                    chosen.append(chunk(k, n_take))
-                remaining_s = 0.0
-            if remaining_s <= 0.0:
-                break
-    return ds.subset(np.sort(np.concatenate(chosen)))

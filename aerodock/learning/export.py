@@ -37,8 +37,8 @@ from aerodock.learning.modelfile import (
     UNITS,
     ModelSpec,
     load_model_dir,
-    normalise_vehicles,
 )
+from aerodock.learning.training_vehicles import normalise_vehicles
 
 ONNX_OPSET = 17
 INPUT_NAMES = ("x", "leader_R")

@@ -17,36 +17,30 @@ layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)
 computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_std + out_mean``.
 
 ``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius and
-rotor count of the flights it was trained on (``None`` where the logs did not say), so that a
-model flown on other vehicles can be flagged (:func:`vehicle_mismatches`).
+rotor count of the flights it was trained on (``None`` where the logs did not say; see
+:mod:`aerodock.learning.training_vehicles`), so that a model flown on other vehicles can be
+flagged (:mod:`aerodock.learning.compatibility`).
 
-The directory is written as a whole: both files go into a fresh sibling directory, which then
-takes the old one's place by an atomic exchange of the two names (``renameat2`` with
-``RENAME_EXCHANGE`` on Linux; elsewhere two renames, undone on failure). A kill at any moment
-leaves either the complete old model or the complete new one, never a mix, and a failed save
-leaves no temporary directory behind. The SHA-256 of ``weights.npz`` in ``model.json`` is
+The directory is written as a whole (:func:`aerodock.fileio.write_dir_atomic`): a kill at any
+moment leaves either the complete old model or the complete new one, never a mix, and a failed
+save leaves no temporary directory behind. The SHA-256 of ``weights.npz`` in ``model.json`` is
 required on load: it detects a weights file that does not belong to it.
 """
 
 from __future__ import annotations
 
-import ctypes
 import datetime as _dt
 import hashlib
 import io
 import json
-import math
-import os
-import shutil
-import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import READ_ERRORS, check_npz_sizes
+from aerodock.fileio import READ_ERRORS, check_npz_sizes, write_dir_atomic
 from aerodock.learning.features import (
     EPS_POS_M,
     EPS_VEL_MPS,
@@ -58,6 +52,7 @@ from aerodock.learning.features import (
     OUTPUT_NAMES,
     TORQUE_KINDS,
 )
+from aerodock.learning.training_vehicles import normalise_vehicles
 
 MODEL_FORMAT = "aerodock-model"
 MODEL_VERSION = 1
@@ -66,10 +61,6 @@ WEIGHTS_NPZ = "weights.npz"
 ACTIVATIONS = ("tanh", "silu")
 UNITS = "m/s^2 NED"
 TORQUE_UNITS = "N m NED"
-VEHICLE_KEYS = ("mass_kg", "rotor_radius_m", "n_rotors")
-# Relative difference of a vehicle parameter above which a model is flagged as trained on
-# other vehicles (the wake scales with the thrust, i.e. the mass, and the rotor disc area).
-VEHICLE_TOLERANCE = 0.1
 
 
 class ModelFileError(ValueError):
@@ -143,7 +134,8 @@ def save_model_dir(
         spec: the model's spec.
         weights: ``[(W0, b0), (W1, b1), ...]`` in torch's ``Linear`` layout.
         training: JSON-ready training summary recorded in ``model.json``.
-        vehicles: ``{"leader": {...}, "follower": {...}}`` with :data:`VEHICLE_KEYS`; default:
+        vehicles: ``{"leader": {...}, "follower": {...}}`` with
+            :data:`~aerodock.learning.training_vehicles.VEHICLE_KEYS`; default:
             ``training["data"]["vehicles"]`` (what the training data's flights said).
 
     Raises:
@@ -215,242 +207,6 @@ def save_model_dir(
     files[MODEL_JSON] = (json.dumps(doc, indent=2) + "\n").encode()
     write_dir_atomic(path, files)
     return path
-
-
-# --------------------------------------------------------------------------------------------
-# Writing a directory as a whole
-# --------------------------------------------------------------------------------------------
-
-_RENAME_EXCHANGE = 2
-_AT_FDCWD = -100
-
-
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap two existing paths in one atomic step (Linux ``renameat2``); False if unsupported."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        renameat2 = libc.renameat2
-    except (OSError, AttributeError):
-        return False
-    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                          ctypes.c_uint]
-    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
-        return True
-    errno = ctypes.get_errno()
-    if errno in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: file system or kernel cannot
-        return False
-    raise OSError(errno, f"cannot exchange {a} and {b}: {os.strerror(errno)}")
-
-
-def _fsync_dir(path: Path) -> None:
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
-    """Make ``path`` a directory holding exactly ``files`` (name -> bytes), all at once.
-
-    The files are written and synced in a sibling temporary directory that then swaps names
-    with ``path`` atomically (or is renamed to it if ``path`` does not exist). Where the atomic
-    exchange is unsupported, the old directory is renamed aside first and restored if the
-    second rename fails. On any error the temporary directory is removed and ``path`` is left
-    as it was.
-
-    Raises:
-        OSError: the files cannot be written.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
-    try:
-        os.chmod(tmp, 0o777 & ~_umask())
-        for name, blob in files.items():
-            with open(tmp / name, "wb") as fh:
-                fh.write(blob)
-                fh.flush()
-                os.fsync(fh.fileno())
-        _fsync_dir(tmp)
-        if not path.exists():
-            os.rename(tmp, path)
-        elif _exchange(tmp, path):
-            shutil.rmtree(tmp)  # now holds the old model
-        else:
-            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".old"))
-            os.rmdir(aside)
-            os.rename(path, aside)
-            try:
-                os.rename(tmp, path)
-            except BaseException:
-                os.rename(aside, path)
-                raise
-            shutil.rmtree(aside, ignore_errors=True)
-        _fsync_dir(path.parent)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return path
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-# --------------------------------------------------------------------------------------------
-# The vehicles a model was trained on
-# --------------------------------------------------------------------------------------------
-
-
-def _number(value: Any) -> float | None:
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        return None
-    return out if math.isfinite(out) and out > 0 else None
-
-
-def normalise_vehicles(vehicles: Mapping[str, Any] | None) -> dict[str, dict[str, Any]]:
-    """``{"leader": {mass_kg, rotor_radius_m, n_rotors}, "follower": {...}}``, None if unknown.
-
-    A value that is not a positive finite number (or a list of them, when the training flights
-    disagree) becomes ``None``.
-    """
-    out: dict[str, dict[str, Any]] = {}
-    for role in ("leader", "follower"):
-        given = vehicles.get(role) if isinstance(vehicles, Mapping) else None
-        given = given if isinstance(given, Mapping) else {}
-        entry: dict[str, Any] = {}
-        for key in VEHICLE_KEYS:
-            value = given.get(key)
-            if isinstance(value, list | tuple):
-                values = [_number(v) for v in value]
-                entry[key] = values if values and all(v is not None for v in values) else None
-            else:
-                entry[key] = _number(value)
-            if key == "n_rotors" and entry[key] is not None:
-                entry[key] = ([int(v) for v in entry[key]] if isinstance(entry[key], list)
-                              else int(entry[key]))
-        out[role] = entry
-    return out
-
-
-def flight_vehicle_fields(meta: Mapping[str, Any]) -> dict[str, float | None]:
-    """A FlightLog ``meta``'s ``{leader,follower}_{mass_kg,rotor_radius_m,n_rotors}`` (or None)."""
-    return {f"{role}_{key}": _number(meta.get(f"{role}_{key}"))
-            for role in ("leader", "follower") for key in VEHICLE_KEYS}
-
-
-def vehicles_from_flights(flights: Iterable[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
-    """The vehicles of training flights (their ``leader_mass_kg``, ``follower_rotor_radius_m``...).
-
-    A parameter that every flight gives with one value is that value; one that differs between
-    flights is the sorted list of values; one that any flight lacks is ``None``.
-    """
-    flights = list(flights)
-    out: dict[str, dict[str, Any]] = {}
-    for role in ("leader", "follower"):
-        entry: dict[str, Any] = {}
-        for key in VEHICLE_KEYS:
-            values = [_number(f.get(f"{role}_{key}")) for f in flights]
-            if not values or any(v is None for v in values):
-                entry[key] = None
-                continue
-            unique = sorted(set(values))
-            entry[key] = unique[0] if len(unique) == 1 else unique
-        out[role] = entry
-    return normalise_vehicles(out)
-
-
-def configured_vehicles(cfg: Any) -> dict[str, dict[str, Any]]:
-    """The vehicles of an aerodock config (``[vehicle]``: both quadrotors are alike)."""
-    vehicle = cfg.vehicle
-    one = {"mass_kg": vehicle.mass_kg, "rotor_radius_m": vehicle.rotor_radius_m,
-           "n_rotors": vehicle.n_rotors}
-    return normalise_vehicles({"leader": one, "follower": one})
-
-
-def vehicle_mismatches(model_vehicles: Mapping[str, Any] | None,
-                       configured: Mapping[str, Any]) -> list[str]:
-    """One-line notes where a model's training vehicles differ from the configured ones.
-
-    A mass or rotor radius more than :data:`VEHICLE_TOLERANCE` (relative) off, or another rotor
-    count, is noted. A model that records none of them (saved before aerodock recorded them)
-    gets one note saying so; parameters some logs do not carry (simulated logs record masses
-    only) are compared where known.
-    """
-    model = normalise_vehicles(model_vehicles)
-    config = normalise_vehicles(configured)
-    notes: list[str] = []
-    unknown: list[str] = []
-    for role in ("leader", "follower"):
-        for key in VEHICLE_KEYS:
-            have, want = model[role][key], config[role][key]
-            if want is None:
-                continue
-            if have is None:
-                unknown.append(f"{role} {key}")
-                continue
-            values = have if isinstance(have, list) else [have]
-            if key == "n_rotors":
-                off = any(int(v) != int(want) for v in values)
-            else:
-                off = any(abs(v - want) > VEHICLE_TOLERANCE * want for v in values)
-            if off:
-                shown = "/".join(f"{v:g}" for v in values)
-                notes.append(f"model trained with {role} {key} = {shown}, configured {want:g}")
-    known = sum(model[role][key] is not None for role in model for key in VEHICLE_KEYS)
-    if unknown and not known:
-        notes.append("model does not record the vehicles it was trained on (saved before "
-                     "aerodock recorded them, or trained on logs without masses)")
-    return notes
-
-
-def model_vehicle_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
-    """Warnings for running a model (a Predictor or a ``model.json`` dict) on ``cfg``'s vehicles.
-
-    The ``dock`` command and the ROS node print these; an empty list means the vehicles match.
-    """
-    doc = getattr(predictor_or_doc, "meta", predictor_or_doc)
-    if not isinstance(doc, Mapping) or doc.get("kind") == "zero":
-        return []  # the zero model predicts nothing, whatever the vehicles
-    return vehicle_mismatches(doc.get("vehicles"), configured_vehicles(cfg))
-
-
-def model_pairing_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
-    """Warnings for flying a model with ``cfg``'s torque feed-forward when its force labels were
-    made on the paper's command basis (``a_obs - u_1:3``): such a model already counts the tilt
-    the wake's torque causes as force, and cancelling the torque as well holds the follower off
-    the wake's axis (README, *Label basis*). Models that do not record their labels' basis pass.
-    """
-    doc = getattr(predictor_or_doc, "meta", predictor_or_doc)
-    control = getattr(cfg, "control", None)
-    if not isinstance(doc, Mapping) or not getattr(control, "torque_feedforward", False):
-        return []
-    data = doc.get("training", {}).get("data", {}) if isinstance(doc.get("training"),
-                                                                   Mapping) else {}
-    bases = data.get("label_bases") if isinstance(data, Mapping) else None
-    if isinstance(bases, list) and "command" in bases:
-        return ["the model's force labels are on the command basis (a_obs - u_1:3, which counts "
-                "the tilt the wake's torque causes); with control.torque_feedforward that torque "
-                "is compensated twice: train on curriculum.label_basis = \"thrust\" flights"]
-    return []
-
-
-def model_warnings(predictor_or_doc: Any, cfg: Any) -> list[str]:
-    """Every warning for flying a model on ``cfg``: other vehicles
-    (:func:`model_vehicle_warnings`) and a torque feed-forward its labels do not suit
-    (:func:`model_pairing_warnings`). ``dock``, ``targets`` and the ROS node print these."""
-    return model_vehicle_warnings(predictor_or_doc, cfg) + model_pairing_warnings(
-        predictor_or_doc, cfg)
 
 
 def _floats(doc: dict, key: str, n: int, where: Path) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Sample efficiency: held-out error against minutes of training data, per model kind.
 
 For every requested amount of data and every seed, one training subset is drawn
-(:func:`~aerodock.learning.dataset.take_minutes`; the same subset for every model kind, so the
+(:func:`~aerodock.learning.splits.take_minutes`; the same subset for every model kind, so the
 comparison is paired), each kind is trained on it and evaluated on the held-out set. Amounts
 larger than the data available are skipped and recorded. Results go to ``sample_efficiency.json``
 and a figure ``sample_efficiency.png`` (log minutes vs held-out RMSE, mean ± sd over seeds, one
@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open
-from aerodock.learning.dataset import Dataset, take_minutes
+from aerodock.learning.dataset import Dataset
 from aerodock.learning.evaluate import evaluate
 from aerodock.learning.features import check_kind
 from aerodock.learning.runtime import ZeroPredictor
+from aerodock.learning.splits import take_minutes
 from aerodock.learning.train import train_model
 
 JSON_NAME = "sample_efficiency.json"
@@ -52,7 +53,7 @@ def sample_efficiency(
     Args:
         train_ds: data to draw the training subsets from.
         test_ds: held-out data (e.g. other flights, see
-            :func:`~aerodock.learning.dataset.split_by_flight`).
+            :func:`~aerodock.learning.splits.split_by_flight`).
         kinds: model kinds.
         minutes: amounts of training data (minutes of flight); larger than available: skipped.
         seeds: one subset and one training run per seed.

@@ -37,7 +37,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from aerodock.learning.dataset import Dataset, flight_split_ids, time_block_split_mask
+from aerodock.learning.dataset import Dataset
 from aerodock.learning.features import TORQUE_KINDS, check_kind, feature_map, invariant_components
 from aerodock.learning.modelfile import save_model_dir
 from aerodock.learning.models import (
@@ -47,6 +47,7 @@ from aerodock.learning.models import (
     standardised_wrench_loss,
 )
 from aerodock.learning.runtime import Predictor, ZeroPredictor
+from aerodock.learning.splits import flight_split_ids, time_block_split_mask
 
 ProgressFn = Callable[[int, int, float, float | None], None]
 """``progress(epoch, max_epochs, train_loss, val_loss)``, called after every epoch."""

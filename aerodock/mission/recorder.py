@@ -29,8 +29,7 @@ import numpy as np
 
 from aerodock.control.controller import ControlOutput
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import rotmat_to_quat
-from aerodock.ingest.common import thrust_accel
+from aerodock.geometry import rotmat_to_quat, thrust_accel
 from aerodock.world import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",

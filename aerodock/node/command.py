@@ -58,7 +58,8 @@ def node_command(
     from aerodock.config import ConfigError, load_config
     from aerodock.ingest.errors import IngestError
     from aerodock.ingest.rosbag import load_mapping
-    from aerodock.learning.modelfile import ModelFileError, model_warnings
+    from aerodock.learning.compatibility import model_warnings
+    from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
     from aerodock.node.core import STATE_TYPES
 

@@ -162,7 +162,8 @@ def test_damaged_flightlogs_through_the_cli(flightlog_file, model_dir, tmp_path)
 
 def test_damaged_dataset_files(flightlog_file, model_dir, tmp_path):
     """Dataset files (``save_dataset``) damaged at random: a DataError or a valid dataset."""
-    from aerodock.learning.dataset import DataError, build_dataset, load_data_paths, save_dataset
+    from aerodock.learning.datafiles import load_data_paths, save_dataset
+    from aerodock.learning.dataset import DataError, build_dataset
 
     base = save_dataset(tmp_path / "base_ds.npz", build_dataset(load_flightlogs(flightlog_file)))
     blob = base.read_bytes()

@@ -7,7 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from aerodock.geometry import E3, euler_to_rotmat, quat_to_rotmat, rotmat_to_euler
+from aerodock.geometry import (
+    E3,
+    euler_to_rotmat,
+    quat_to_rotmat,
+    rotmat_to_euler,
+    specific_force_to_accel,
+    thrust_accel,
+)
 from aerodock.ingest.common import (
     ENU_TO_NED,
     FLIP_YZ,
@@ -18,8 +25,6 @@ from aerodock.ingest.common import (
     detect_time_unit,
     estimate_lag_s,
     resample_quat,
-    specific_force_to_accel,
-    thrust_accel,
 )
 from aerodock.ingest.errors import IngestError
 

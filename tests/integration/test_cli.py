@@ -161,7 +161,8 @@ def test_train_on_two_paths_and_degenerate_data_keeps_the_good_model(flights, tm
     # loss to NaN) -> refused, the good model untouched
     from dataclasses import replace
 
-    from aerodock.learning.dataset import build_dataset, save_dataset
+    from aerodock.learning.datafiles import save_dataset
+    from aerodock.learning.dataset import build_dataset
 
     ds = build_dataset(load_flightlogs(flights[0]))
     bad = save_dataset(tmp_path / "bad.npz", replace(ds, y=np.full_like(ds.y, 1e30)))

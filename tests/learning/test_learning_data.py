@@ -10,23 +10,15 @@ import pytest
 from learning_synth import make_log, make_logs
 
 from aerodock.flightlog import FlightLog, save_flightlogs
-from aerodock.learning.dataset import (
-    DataError,
-    Dataset,
-    build_dataset,
-    load_data_paths,
-    load_dataset,
-    save_dataset,
-    split_by_flight,
-    take_minutes,
-    time_block_split_mask,
-)
+from aerodock.learning.datafiles import load_data_paths, load_dataset, save_dataset
+from aerodock.learning.dataset import DataError, Dataset, build_dataset
 from aerodock.learning.labels import (
     LabelWarning,
     free_air_mask,
     labels_from_log,
     labels_from_logs,
 )
+from aerodock.learning.splits import split_by_flight, take_minutes, time_block_split_mask
 
 
 def _simple_log(dp: np.ndarray, force: np.ndarray, bias, name="simple", noise=0.0, seed=0):

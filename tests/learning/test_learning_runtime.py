@@ -338,7 +338,8 @@ def test_kill_during_saves_leaves_a_whole_model(tmp_path):
 
 def test_model_records_its_vehicles_and_flags_others(tmp_path):
     from aerodock.config import load_config
-    from aerodock.learning.modelfile import model_vehicle_warnings, vehicles_from_flights
+    from aerodock.learning.compatibility import model_vehicle_warnings
+    from aerodock.learning.training_vehicles import vehicles_from_flights
 
     trained = _random_trained("so2")
     flights = [{"leader_mass_kg": 0.7, "follower_mass_kg": 0.7, "leader_rotor_radius_m": 0.0635,
@@ -395,7 +396,7 @@ def test_onnx_export_matches_onnxruntime(tmp_path, kind):
 def test_onnx_float64_equals_numpy_and_carries_metadata(tmp_path, kind):
     pytest.importorskip("onnxruntime")
     from aerodock.learning.export import read_onnx_metadata
-    from aerodock.learning.modelfile import vehicles_from_flights
+    from aerodock.learning.training_vehicles import vehicles_from_flights
 
     trained = _random_trained(kind, activation="silu" if kind == "so2-ext" else "tanh")
     trained.info["data"] = {"vehicles": vehicles_from_flights(

@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 
 from aerodock.flightlog import save_flightlogs
 from aerodock.learning.commands import evaluate_command, export_command, train_command
-from aerodock.learning.dataset import build_dataset, save_dataset
+from aerodock.learning.datafiles import save_dataset
+from aerodock.learning.dataset import build_dataset
 from aerodock.learning.evaluate import evaluate, regression_metrics
 from aerodock.learning.runtime import Predictor
 from aerodock.learning.sample_efficiency import sample_efficiency

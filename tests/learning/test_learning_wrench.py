@@ -15,7 +15,8 @@ from aerodock.config import load_config
 from aerodock.control.torque_feedforward import feedforward_torque_nm, hub_torque_nm
 from aerodock.downwash.base import BodyState
 from aerodock.geometry import euler_to_rotmat, rot_z
-from aerodock.learning.dataset import DataError, build_dataset, load_dataset, save_dataset
+from aerodock.learning.datafiles import load_dataset, save_dataset
+from aerodock.learning.dataset import DataError, build_dataset
 from aerodock.learning.features import N_FEATURES, feature_map
 from aerodock.learning.labels import (
     OBS_TORQUE_KEY,
@@ -360,8 +361,7 @@ def test_saved_docking_logs_follow_the_label_basis():
     logged (measured) attitude, which real logs without a command log give too. The basis changes
     what is logged, never the flight."""
     from aerodock.control.compensation import Compensation
-    from aerodock.geometry import quat_to_rotmat
-    from aerodock.ingest.common import thrust_accel
+    from aerodock.geometry import quat_to_rotmat, thrust_accel
     from aerodock.mission import MissionSpec, run_campaign
 
     base = load_config(None)
@@ -385,7 +385,7 @@ def test_a_torque_feedforward_on_command_basis_labels_is_warned_about(sim_ds, tr
                                                                        tmp_path):
     """The model file records its labels' basis; flying command-basis labels with the torque
     feed-forward draws a warning (README: Label basis), the thrust basis or no feed-forward none."""
-    from aerodock.learning.modelfile import model_warnings
+    from aerodock.learning.compatibility import model_warnings
 
     assert sim_ds.summary()["label_bases"] == ["command"]
     trained_wrench.save(tmp_path / "model")
