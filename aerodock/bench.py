@@ -1130,7 +1130,10 @@ def bench_command(
         doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config,
                       only=only)
     if as_json:
-        typer.echo(json.dumps(doc, indent=2))
+        from aerodock.cli import print_json
+        from aerodock.fileio import json_ready
+
+        print_json(json_ready(doc))  # a figure that could not be computed is null
         return
     m = doc["machine"]
     load = m.get("load_average_1_5_15_min")

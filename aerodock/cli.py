@@ -43,14 +43,14 @@ def fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
-def print_json(obj: Any) -> None:
-    """Print ``obj`` as indented, strict JSON on stdout.
+def print_json(obj: Any, indent: int | None = 2) -> None:
+    """Print ``obj`` as strict JSON on stdout (indented by ``indent``; one line if None).
 
     A NaN or an infinity anywhere in ``obj`` is refused (JSON has no such numbers): a one-line
     error naming the key, exit code 2, nothing on stdout.
     """
     try:
-        text = dumps_json(obj)
+        text = dumps_json(obj, indent)
     except ValueError as err:
         fail(str(err))
     typer.echo(text)

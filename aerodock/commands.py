@@ -296,8 +296,8 @@ def targets_command(
     the paper's controller and ours, with the learnt model, on the configured field."""
     from aerodock.control.profiles import controller_config
     from aerodock.experiments.report_controllers import targets_markdown
-    from aerodock.experiments.reproduce import _write_json_atomic
     from aerodock.experiments.targets import targets
+    from aerodock.fileio import json_ready, write_json
     from aerodock.learning.runtime import Predictor
     from aerodock.mission.limits import check_campaign_size
 
@@ -325,7 +325,7 @@ def targets_command(
                    "ours + model": (controller_config(cfg, "ours"), predictor)},
                   trials, predictor, seed, say)
     res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
-    _write_json_atomic(out / "targets.json", res)
+    write_json(out / "targets.json", json_ready(res))
     if as_json:
         print_json(res)
         return

@@ -5,7 +5,6 @@ Wired by the CLI as ``app.command("ingest")(ingest_command)``.
 
 from __future__ import annotations
 
-import json
 import warnings
 from enum import StrEnum
 from pathlib import Path
@@ -113,7 +112,10 @@ def ingest_command(
         raise typer.Exit(2) from None
     summary = summarize(logs)
     if json_output:
-        typer.echo(json.dumps({"out": str(written), "flights": summary}))
+        from aerodock.cli import print_json
+        from aerodock.fileio import json_ready
+
+        print_json(json_ready({"out": str(written), "flights": summary}), indent=None)
         return
     for item in summary:
         typer.echo(f"{item['name']}: {item['duration_s']:.1f} s, {item['n_samples']} samples "
