@@ -84,7 +84,7 @@ def test_temps_of_dead_processes_are_removed_by_the_next_write(tmp_path):
 
 
 def test_sigterm_unwinds_an_atomic_write(tmp_path):
-    code = ("import signal, time; from aerodock.cli import _terminate; "
+    code = ("import signal, time; from aerodock.cli.app import _terminate; "
             "signal.signal(signal.SIGTERM, _terminate)\n"
             "from aerodock.fileio import atomic_open\n"
             f"with atomic_open({str(tmp_path / 'a.bin')!r}) as fh:\n"

@@ -1,7 +1,4 @@
-"""``aerodock ingest``: read real flight logs and write them as one FlightLog file.
-
-Wired by the CLI as ``app.command("ingest")(ingest_command)``.
-"""
+"""``aerodock ingest``: read real flight logs and write them as one FlightLog file."""
 
 from __future__ import annotations
 
@@ -14,6 +11,8 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from aerodock.cli.common import fail, print_json
+from aerodock.fileio import json_ready
 from aerodock.flightlog import FlightLog, FlightLogError, save_flightlogs
 from aerodock.ingest import expand_paths, read_logs
 from aerodock.ingest.errors import IngestError, IngestWarning
@@ -104,17 +103,11 @@ def ingest_command(
             raise IngestError(out, "--out is a folder; give a file name such as flights.npz")
         written = save_flightlogs(out, logs)
     except (IngestError, FlightLogError) as error:
-        typer.echo(f"error: {error}", err=True)
-        raise typer.Exit(2) from None
+        fail(str(error))
     except OSError as error:
-        typer.echo(f"error: {getattr(error, 'filename', None) or out}: "
-                   f"{error.strerror or error}", err=True)
-        raise typer.Exit(2) from None
+        fail(f"{getattr(error, 'filename', None) or out}: {error.strerror or error}")
     summary = summarize(logs)
     if json_output:
-        from aerodock.cli import print_json
-        from aerodock.fileio import json_ready
-
         print_json(json_ready({"out": str(written), "flights": summary}), indent=None)
         return
     for item in summary:

@@ -1,5 +1,5 @@
 """Latency of the learnt model next to a flight stack: the predictor alone, and ``aerodock node``
-at its rate, end to end over ROS 2 on this machine (``python -m aerodock.node.bench``).
+at its rate, end to end over ROS 2 on this machine (``python -m aerodock.bench.node``).
 
 - ``predictor``: one ``Predictor.predict_one`` call (the node's per-tick work), µs: median and
   99th percentile over many calls after a warm-up.
@@ -147,8 +147,8 @@ def run(model: Path | None = None, *, seconds: float = 10.0, rate_hz: float = 10
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m aerodock.node.bench [--model DIR] [--seconds S] [--rate HZ] [--json]``."""
-    parser = argparse.ArgumentParser(prog="python -m aerodock.node.bench",
+    """``python -m aerodock.bench.node [--model DIR] [--seconds S] [--rate HZ] [--json]``."""
+    parser = argparse.ArgumentParser(prog="python -m aerodock.bench.node",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--model", type=Path, default=None, help="model directory")
     parser.add_argument("--seconds", type=float, default=10.0, help="replay length, s")
