@@ -33,7 +33,7 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -q $(PYTEST_XDIST)
 
 lint: $(STAMP)
-	$(BIN)/ruff check aerodock tests bench
+	$(BIN)/ruff check aerodock tests studies
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet --no-deps rotorpy torchdiffeq roma

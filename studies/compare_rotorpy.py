@@ -23,7 +23,7 @@ learning and plotting dependencies out)::
     .venv/bin/pip install --no-deps rotorpy               # sequential Multirotor
     .venv/bin/pip install --no-deps torchdiffeq roma      # + its batched simulator (uses torch)
 
-Run: ``.venv/bin/python bench/compare_rotorpy.py [--quick] [--batch 256] [--json]``.
+Run: ``.venv/bin/python studies/compare_rotorpy.py [--quick] [--batch 256] [--json]``.
 """
 
 from __future__ import annotations

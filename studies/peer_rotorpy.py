@@ -8,7 +8,7 @@ attitude and their difference over time (the aero-on run) to a PNG.
 
 Needs RotorPy: ``.venv/bin/pip install --no-deps rotorpy``.
 
-Run: ``.venv/bin/python bench/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
+Run: ``.venv/bin/python studies/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
 [--rtol 1e-9]``.
 """
 
