@@ -29,11 +29,11 @@ Run: ``.venv/bin/python studies/compare_rotorpy.py [--quick] [--batch 256] [--js
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 from aerodock.bench import compare_rotorpy, machine_info
 from aerodock.config import load_config
+from aerodock.fileio import dumps_json, json_ready
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     result = compare_rotorpy(load_config(), quick=args.quick, batch=args.batch,
                              progress=progress)
     if args.json:
-        print(json.dumps({"machine": machine_info(), **result}, indent=2))
+        print(dumps_json(json_ready({"machine": machine_info(), **result})))
         return 0
     sc = result["scenario"]
     m = machine_info()

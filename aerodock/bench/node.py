@@ -16,7 +16,6 @@ as a trained one). The numbers in the README's "Deploy" section come from this m
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import tempfile
@@ -26,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import dumps_json, json_ready
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.features import N_FEATURES, N_OUTPUTS
@@ -157,7 +157,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     doc = run(args.model, seconds=args.seconds, rate_hz=args.rate)
     if args.json:
-        print(json.dumps(doc, indent=2))
+        print(dumps_json(json_ready(doc)))  # a statistic of no sample is null
         return
     p, n = doc["predictor"]["per_call_us"], doc["node"]
     print(f"predictor ({doc['predictor']['kind']}): {p['median']} us per call (p99 {p['p99']})")

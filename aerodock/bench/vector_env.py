@@ -38,9 +38,9 @@ def bench_vector_env(cfg: Any, batches: tuple[int, ...] = ENV_BATCHES, quick: bo
 
 
 if __name__ == "__main__":  # python -m aerodock.bench.vector_env [--quick]: the figures as JSON
-    import json
     import sys
 
     from aerodock.config import load_config
+    from aerodock.fileio import dumps_json, json_ready
 
-    print(json.dumps(bench_vector_env(load_config(), quick="--quick" in sys.argv), indent=2))
+    print(dumps_json(json_ready(bench_vector_env(load_config(), quick="--quick" in sys.argv))))
