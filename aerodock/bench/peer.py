@@ -1,4 +1,5 @@
-"""The RotorPy peer: the same scenario flown by RotorPy and by aerodock, both timed in one run."""
+"""The RotorPy peer: the same vehicle and scenario flown by RotorPy and by aerodock, both timed
+in one run (the rigid-body vehicle, as the world flies it)."""
 
 from __future__ import annotations
 
@@ -50,26 +51,28 @@ def _peer_steps(quick: bool) -> int:
 
 
 def peer_aerodock(cfg: Any, n: int, steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
-    """aerodock's side: ``n`` quadrotors, the vehicle step at 500 Hz and the LQR position
-    controller at 100 Hz (no observer, true state), flying ``ref``; the command is clipped once
-    per control period and held, as :meth:`aerodock.world.world.World.advance` does.
+    """aerodock's side: ``n`` rigid-body quadrotors as the world flies them (the autopilot on the
+    gyro, rotors with motor lag, rigid-body dynamics: :func:`rigid_targets` once per control
+    period, :func:`step_with_autopilot` at 500 Hz) under the LQR position controller at 100 Hz
+    (no observer, true state, no noise), flying ``ref``; the command is clipped once per control
+    period and held, as :meth:`aerodock.world.world.World.advance` does.
 
     Returns the final position error of the first vehicle (m: a check that it tracked) and the
     time spent in the vehicle step alone (s).
     """
     from aerodock.control.controller import PositionController, Reference
-    from aerodock.world.vehicles.point_mass import (
-        VehicleParams,
-        command_targets,
-        hover_state,
-        step_vehicle_targets,
+    from aerodock.world.vehicles.rigid_body import (
+        RigidBodyParams,
+        hover_rigid_state,
+        rigid_targets,
+        step_with_autopilot,
     )
 
-    params = VehicleParams.from_config(cfg)
+    params = RigidBodyParams.from_config(cfg)
     dt = 1.0 / PEER_PHYSICS_HZ
     every = int(round(PEER_PHYSICS_HZ / PEER_CONTROL_HZ))
     ctl = PositionController(cfg, n, use_observer=False)
-    state = hover_state(params, np.zeros((n, 3)))
+    state = hover_rigid_state(params, np.zeros((n, 3)), 0.0, np.ones(n))
     zero3, zero = np.zeros((n, 3)), np.zeros(n)
     # The reference of every control step, for the whole batch (as a planner would hand it).
     refs = [Reference(*(np.repeat(ref[key][k][None], n, 0) for key in ("x", "x_dot", "x_ddot")),
@@ -81,10 +84,10 @@ def peer_aerodock(cfg: Any, n: int, steps: int, ref: dict[str, np.ndarray]) -> t
         if k % every == 0:
             cmd = ctl.step(state.p, state.v, state.rpy, refs[k // every]).command
             t0 = clock()
-            targets = command_targets(cmd, params, dt, n)
+            targets = rigid_targets(cmd, state, params, n)
             physics_s += clock() - t0
         t0 = clock()
-        state, _ = step_vehicle_targets(state, targets, zero3, params, dt)
+        state, _ = step_with_autopilot(state, targets, zero3, zero3, params, dt)
         physics_s += clock() - t0
     return float(np.linalg.norm(state.p[0] - ref["x"][steps - 1])), physics_s
 
@@ -93,27 +96,29 @@ _NED_TO_ZUP = np.array([1.0, -1.0, -1.0])  # RotorPy's world is z-up: (x, y, z) 
 _FLAT_KEYS = ("x", "x_dot", "x_ddot", "x_dddot", "x_ddddot")
 
 
-def _rotorpy_params() -> dict[str, Any]:
-    from rotorpy.vehicles.hummingbird_params import quad_params
+def _rotorpy_params(cfg: Any) -> dict[str, Any]:
+    """aerodock's rigid-body vehicle of ``cfg`` as RotorPy's ``quad_params`` (the mapping of
+    :func:`aerodock.validation.peer.rotorpy_quad_params`): both simulators fly one vehicle."""
+    from aerodock.validation.peer import rigid_params, rotorpy_quad_params
 
-    return quad_params
+    return rotorpy_quad_params(rigid_params(cfg))
 
 
 def _hover_rotor_speed(quad: dict[str, Any]) -> float:
     return float(np.sqrt(quad["mass"] * 9.81 / (quad["num_rotors"] * quad["k_eta"])))
 
 
-def peer_rotorpy(steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
-    """RotorPy's side: one ``Multirotor`` (Hummingbird parameters, its default RK45 integrator
-    and motor-speed commands) stepped sequentially at 500 Hz under ``SE3Control``, which runs at
-    every step as in RotorPy's own ``simulate`` loop.
+def peer_rotorpy(cfg: Any, steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
+    """RotorPy's side: one ``Multirotor`` (aerodock's vehicle, :func:`_rotorpy_params`; its
+    default RK45 integrator and motor-speed commands) stepped sequentially at 500 Hz under
+    ``SE3Control``, which runs at every step as in RotorPy's own ``simulate`` loop.
 
     Returns the final position error (m) and the time spent in ``Multirotor.step`` alone (s).
     """
     from rotorpy.controllers.quadrotor_control import SE3Control
     from rotorpy.vehicles.multirotor import Multirotor
 
-    quad = _rotorpy_params()
+    quad = _rotorpy_params(cfg)
     state = {"x": np.zeros(3), "v": np.zeros(3), "q": np.array([0.0, 0.0, 0.0, 1.0]),
              "w": np.zeros(3), "wind": np.zeros(3),
              "rotor_speeds": np.full(quad["num_rotors"], _hover_rotor_speed(quad))}
@@ -132,9 +137,11 @@ def peer_rotorpy(steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
     return float(np.linalg.norm(state["x"] - ref["x"][steps - 1] * _NED_TO_ZUP)), physics_s
 
 
-def peer_rotorpy_batched(n: int, steps: int, ref: dict[str, np.ndarray]) -> tuple[float, float]:
+def peer_rotorpy_batched(cfg: Any, n: int, steps: int,
+                         ref: dict[str, np.ndarray]) -> tuple[float, float]:
     """RotorPy's batched simulator (PyTorch): ``BatchedMultirotor`` with ``BatchedSE3Control``
-    at 500 Hz, ``n`` Hummingbirds on the CPU, fixed-step RK4 (its faster integrator option).
+    at 500 Hz, ``n`` of aerodock's vehicles on the CPU, fixed-step RK4 (its faster integrator
+    option).
 
     Returns the final position error of the first vehicle (m) and the time spent in
     ``BatchedMultirotor.step`` alone (s).
@@ -151,7 +158,7 @@ def peer_rotorpy_batched(n: int, steps: int, ref: dict[str, np.ndarray]) -> tupl
         from rotorpy.vehicles.batched_multirotor import (  # type: ignore[no-redef]
             BatchedMultirotor,
         )
-    quad = _rotorpy_params()
+    quad = _rotorpy_params(cfg)
     device = torch.device("cpu")
     params = BatchedMultirotorParams([quad] * n, n, device)
     f64 = torch.double
@@ -210,11 +217,13 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
                     progress: Progress = quiet) -> dict[str, Any]:
     """Time the peer scenario with RotorPy and with aerodock in one run; times and ratios.
 
-    Scenario: one quadrotor hovers for 1 s, then flies a 4 s minimum-jerk move (1 m north,
-    0.5 m east, 0.3 m up) under its position controller, 500 Hz physics; ``quick`` flies the
-    first half of it. RotorPy: ``Multirotor`` stepped sequentially (one trial), and its batched
-    simulator when importable (PyTorch, ``torchdiffeq``, ``roma``). aerodock: the vehicle step
-    with its LQR position controller, batch of 1 and of ``batch``.
+    Scenario: one quadrotor, aerodock's rigid-body vehicle of ``cfg`` in both simulators
+    (:func:`aerodock.validation.peer.rotorpy_quad_params`), hovers for 1 s, then flies a 4 s
+    minimum-jerk move (1 m north, 0.5 m east, 0.3 m up) under its position controller, 500 Hz
+    physics; ``quick`` flies the first half of it. RotorPy: ``Multirotor`` stepped sequentially
+    (one trial), and its batched simulator when importable (PyTorch, ``torchdiffeq``, ``roma``).
+    aerodock: the rigid body with its autopilot as the world steps it, under the LQR position
+    controller, batch of 1 and of ``batch``.
 
     Each run's figure is its whole wall time (``value``, median over repetitions after a
     warm-up) and the part of it spent in the physics step (``physics_s``, of the median run).
@@ -268,12 +277,14 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     progress("peer: aerodock batch of 1" + (" and RotorPy Multirotor, alternating"
                                             if have_rotorpy else ""))
     one, seq = pairs(lambda k: peer_aerodock(cfg, 1, k, ref),
-                     (lambda k: peer_rotorpy(k, ref)) if have_rotorpy else None, reps, 50)
-    out["aerodock_1"] = fig(one, 1, "step_vehicle 500 Hz + LQR PositionController 100 Hz")
+                     (lambda k: peer_rotorpy(cfg, k, ref)) if have_rotorpy else None, reps, 50)
+    out["aerodock_1"] = fig(one, 1, "rigid body + autopilot (step_with_autopilot) 500 Hz + LQR "
+                            "PositionController 100 Hz")
     ratios: dict[str, float] = {}
     if have_rotorpy:
         out["rotorpy_sequential"] = fig(
-            seq, 1, "Multirotor.step (RK45) 500 Hz + SE3Control at every step")
+            seq, 1, "Multirotor.step (RK45) 500 Hz + SE3Control at every step, aerodock's "
+            "vehicle")
         ratios["single_trial"] = ratio(seq, one, 0)
         ratios["single_trial_physics_step"] = ratio(seq, one, 1)
 
@@ -281,7 +292,7 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     if have_rotorpy:
         missing = _rotorpy_batched_missing()
         if missing is None:
-            batched = lambda k: peer_rotorpy_batched(batch, k, ref)  # noqa: E731
+            batched = lambda k: peer_rotorpy_batched(cfg, batch, k, ref)  # noqa: E731
         else:
             out["rotorpy_batched"] = unavailable(
                 f"RotorPy's batched simulator not available ({missing})", "s")

@@ -131,11 +131,11 @@ def test_peer_aerodock_tracks_the_move(cfg):
     assert err < 0.05 and physics_s > 0
 
 
-def test_peer_rotorpy_tracks_the_move_when_installed():
+def test_peer_rotorpy_tracks_the_move_when_installed(cfg):
     pytest.importorskip("rotorpy")
     steps = 100
     ref = bench.peer_reference(steps, 1.0 / bench.PEER_PHYSICS_HZ)
-    err, physics_s = bench.peer_rotorpy(steps, ref)
+    err, physics_s = bench.peer_rotorpy(cfg, steps, ref)  # aerodock's vehicle in RotorPy
     assert err < 0.01 and physics_s > 0
 
 
