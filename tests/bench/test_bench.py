@@ -182,3 +182,23 @@ def test_vehicle_step_figures(cfg):
         fig = out[model]["2"]
         assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["per_cpu_s"] > 0
         assert fig["note"].startswith(model)
+
+
+def test_bench_json_is_strict_with_a_missing_figure_as_null(monkeypatch):
+    import aerodock.cli.bench as cli_bench
+
+    doc = {"machine": {}, "figures": {"docking": {"trial_1": bench.figure([1.0], "s")}},
+           "targets": [], "ratio": float("nan"), "spread": [float("inf"), 1.0]}
+    monkeypatch.setattr(cli_bench, "run_all", lambda *args, **kwargs: doc)
+    app = typer.Typer()
+    app.command("bench")(bench_command)
+    app.command("other")(lambda: None)
+    result = CliRunner().invoke(app, ["bench", "--quick", "--json"])
+    assert result.exit_code == 0, result.output
+
+    def refuse(name):
+        raise ValueError(f"not JSON: {name}")
+
+    out = json.loads(result.stdout, parse_constant=refuse)  # no NaN or Infinity in the text
+    assert out["ratio"] is None and out["spread"] == [None, 1.0]
+    assert out["figures"]["docking"]["trial_1"]["value"] == 1.0
