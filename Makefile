@@ -29,11 +29,15 @@ demo: $(STAMP)
 # built once), in collection order: tests/conftest.py puts the long `reproduce --quick` runs first.
 PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder --durations=15
 
+# The import layering first (a second; pyproject.toml's [tool.importlinter] contracts): a broken
+# contract fails CI before the tests run.
 test: $(STAMP)
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q $(PYTEST_XDIST)
 
 lint: $(STAMP)
-	$(BIN)/ruff check aerodock tests bench
+	$(BIN)/ruff check aerodock tests studies
+	$(BIN)/lint-imports
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet --no-deps rotorpy torchdiffeq roma

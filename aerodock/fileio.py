@@ -4,7 +4,12 @@
   the new file gets the permissions an ordinary ``open`` would give it (the umask applies).
 * :func:`write_dir_atomic` -- a directory of files replaced as a whole (a model directory): a
   kill at any moment leaves either the complete old directory or the complete new one.
-* :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused.
+* :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused. Every
+  ``--json`` prints through it, and :func:`write_json` writes every JSON file with it.
+* :func:`json_ready` -- the one policy for a non-finite number that means a figure is missing
+  (a model that could not be scored, a benchmark part that did not run): it becomes ``null``.
+  Used where such gaps are legitimate (``results.json``, ``aerodock bench``, ``aerodock ingest``);
+  anywhere else a NaN is a bug and :func:`dumps_json` refuses it, naming the key.
 * :func:`check_npz_header` -- the ``format``/``version`` keys of an aerodock ``.npz`` file and
   the sizes its members declare, checked before any array is read.
 """
@@ -43,9 +48,18 @@ READ_ERRORS: tuple[type[BaseException], ...] = (
 )
 
 
-def one_line(err: BaseException | str) -> str:
-    """The text of an error (or a string) as one line; the type name if it has no text."""
-    text = " ".join(str(err).split())
+def one_line(err: BaseException | str, *, first_line: bool = False) -> str:
+    """The text of an error (or a string) as one line; the type name if it has no text.
+
+    Every run of whitespace (newlines included) becomes one space; with ``first_line`` the
+    first line of the text is kept as written instead (the messages of ``train``, ``evaluate``
+    and ``export``, which show a path with two spaces in it as it is).
+    """
+    if first_line:
+        text = str(err).strip()
+        text = text.splitlines()[0] if text else ""
+    else:
+        text = " ".join(str(err).split())
     return text or (type(err).__name__ if isinstance(err, BaseException) else "")
 
 
@@ -253,6 +267,26 @@ def _first_non_finite(obj: Any, where: str = "") -> str | None:
     return None
 
 
+def json_ready(obj: Any) -> Any:
+    """A JSON-ready copy of ``obj`` in which a non-finite number means "missing": ``null``.
+
+    NaN and infinities (Python or NumPy floats, in arrays too) become ``None``; arrays become
+    lists and NumPy scalars Python numbers, tuples lists, and dictionary keys strings. For
+    documents where a missing figure is legitimate; :func:`dumps_json` alone refuses them.
+    """
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_ready(obj.tolist())
+    if isinstance(obj, np.generic):
+        return json_ready(obj.item())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
 def dumps_json(obj: Any, indent: int | None = 2) -> str:
     """Strict JSON text for ``obj`` (NumPy values and paths allowed).
 
@@ -266,6 +300,20 @@ def dumps_json(obj: Any, indent: int | None = 2) -> str:
         where = _first_non_finite(obj) or "a value"
         raise ValueError(f"result has a non-finite number at '{where}'; refusing to print "
                          "invalid JSON") from None
+
+
+def write_json(path: str | Path, obj: Any, final_newline: bool = False) -> Path:
+    """Write ``obj`` to ``path`` as indented, strict JSON (:func:`dumps_json`), atomically.
+
+    Raises:
+        ValueError: ``obj`` holds a NaN or an infinity (pass it through :func:`json_ready`
+            first where a missing figure is legitimate); nothing is written.
+        OSError: ``path`` cannot be written.
+    """
+    text = dumps_json(obj) + ("\n" if final_newline else "")
+    with atomic_open(path, "w") as fh:
+        fh.write(text)
+    return Path(path)
 
 
 def npz_int(data: Any, key: str, path: Path, error: type[Exception]) -> int:

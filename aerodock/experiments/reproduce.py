@@ -15,7 +15,6 @@ feed-forward. The oracle (true mean field) is run as an upper bound.
 
 from __future__ import annotations
 
-import json
 import os
 import platform
 import time
@@ -33,7 +32,7 @@ from aerodock.downwash import build_field
 from aerodock.downwash.mean import has_mean, mean_acceleration_fn, mean_source
 from aerodock.experiments.controller_costs import controller_costs
 from aerodock.experiments.targets import learnt_mean_check, targets
-from aerodock.fileio import atomic_open
+from aerodock.fileio import json_ready, write_json
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
 CABLE_OFFSETS_M = (0.36, 0.47, 0.64, 0.87, 1.11, 1.35)
@@ -345,7 +344,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     say("writing results.json, report.md and figures/")
     figures = write_report(results, traces, out_dir, cfg)
     results["figures"] = figures
-    _write_json_atomic(out_dir / "results.json", results)
+    # A figure that could not be computed (NaN) is written as null.
+    write_json(out_dir / "results.json", json_ready(results))
     return results
 
 
@@ -385,23 +385,3 @@ def _trace_keep(res: CampaignResult) -> dict[str, Any]:
     tr["success"] = res.success
     tr["arrival_s"] = res.arrival_s
     return tr
-
-
-def _clean(obj: Any) -> Any:
-    """JSON-safe copy: arrays to lists, non-finite floats to None."""
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, np.generic):
-        return _clean(obj.item())
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
-def _write_json_atomic(path: Path, obj: Any) -> None:
-    with atomic_open(path, "w") as fh:
-        json.dump(_clean(obj), fh, indent=2, allow_nan=False)

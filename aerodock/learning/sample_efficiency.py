@@ -10,14 +10,13 @@ line per kind, the zero model and, with simulated data, the error floor as horiz
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import atomic_open
+from aerodock.fileio import atomic_open, json_ready, write_json
 from aerodock.learning.dataset import Dataset
 from aerodock.learning.evaluate import evaluate
 from aerodock.learning.features import check_kind
@@ -139,24 +138,8 @@ def sample_efficiency(
         out.mkdir(parents=True, exist_ok=True)
         result["figure"] = str(plot_sample_efficiency(result, out / FIGURE_NAME))
         result["json"] = str(out / JSON_NAME)
-        _write_json(out / JSON_NAME, result)
-    return _nan_to_none(result)
-
-
-def _write_json(path: Path, doc: dict[str, Any]) -> None:
-    text = json.dumps(_nan_to_none(doc), indent=2) + "\n"
-    with atomic_open(path, "w") as fh:
-        fh.write(text)
-
-
-def _nan_to_none(obj: Any) -> Any:
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _nan_to_none(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_nan_to_none(v) for v in obj]
-    return obj
+        write_json(out / JSON_NAME, json_ready(result), final_newline=True)
+    return json_ready(result)  # a size with no finished run has a null mean
 
 
 def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:

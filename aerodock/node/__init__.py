@@ -7,6 +7,9 @@ Layout:
   output frame. Pure functions, unit-tested without ``rclpy``.
 - :mod:`aerodock.node.ros`: the ``rclpy`` node (subscriptions, timer, publishers). Needs the
   ``aerodock[ros]`` extra.
-- :mod:`aerodock.node.command`: the ``aerodock node`` command.
-- :mod:`aerodock.node.bench`: latency of the predictor and of the node at its rate.
+- :mod:`aerodock.node.replay`: a flight replayed as state messages, what the node publishes
+  recorded (the end-to-end test, the latency benchmark).
+
+The ``aerodock node`` command is in :mod:`aerodock.cli.node`; the latency of the predictor and of
+the node at its rate is measured by :mod:`aerodock.bench.node`.
 """

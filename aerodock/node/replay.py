@@ -1,6 +1,6 @@
 """Replay a FlightLog as ROS 2 state messages and record what ``aerodock node`` publishes.
 
-Used by the end-to-end test and :mod:`aerodock.node.bench` (needs the ``aerodock[ros]`` extra).
+Used by the end-to-end test and :mod:`aerodock.bench.node` (needs the ``aerodock[ros]`` extra).
 The node runs in its own process (``aerodock node``, started by :func:`start_node`); this side
 publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame, stamped with
 the wall clock when sent, and records every f_ext and diagnostics message it gets back with its

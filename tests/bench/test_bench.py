@@ -14,6 +14,10 @@ import typer
 from typer.testing import CliRunner
 
 from aerodock import bench
+from aerodock.bench.learning import _numpy_predictor
+from aerodock.bench.memory import bench_memory
+from aerodock.bench.peer import _peer_steps
+from aerodock.cli.bench import bench_command
 from aerodock.rng import TrialRNG
 from aerodock.world import World, hover_command
 
@@ -46,7 +50,7 @@ def test_bench_control_period_with_controllers_batch_64(benchmark, cfg):
 
 def test_bench_numpy_predictor_single_call(benchmark):
     pytest.importorskip("aerodock.learning.runtime")
-    pred = bench._numpy_predictor(None)  # an untrained network: same cost as a trained one
+    pred = _numpy_predictor(None)  # an untrained network: same cost as a trained one
     x, rot = bench.predictor_inputs(1)
     out = benchmark.pedantic(pred.predict_one, args=(x[0], rot[0]), rounds=20, iterations=10,
                              warmup_rounds=1)
@@ -90,7 +94,7 @@ def test_predictor_figures_without_a_trained_model():
 
 
 def test_memory_figure_from_a_subprocess():
-    out = bench.bench_memory(trials=2, traced=False)
+    out = bench_memory(trials=2, traced=False)
     assert out["peak_rss_mib"]["unit"] == "MiB"
     assert out["peak_rss_mib"]["value"] >= out["rss_after_imports_mib"]["value"] > 10
     assert out["campaign_wall_s"]["value"] > 0 and "traced_peak_mib" not in out
@@ -110,7 +114,7 @@ def test_targets_report_met_unmet_and_unmeasured():
 
 def test_peer_reference_is_a_rest_to_rest_minimum_jerk_move():
     dt = 1.0 / bench.PEER_PHYSICS_HZ
-    steps = bench._peer_steps(False)
+    steps = _peer_steps(False)
     ref = bench.peer_reference(steps + 1, dt)
     assert np.allclose(ref["x"][0], 0.0) and np.allclose(ref["x"][-1], bench.PEER_MOVE_NED_M)
     assert np.allclose(ref["x_dot"][[0, -1]], 0.0, atol=1e-12)
@@ -121,23 +125,23 @@ def test_peer_reference_is_a_rest_to_rest_minimum_jerk_move():
 
 
 def test_peer_aerodock_tracks_the_move(cfg):
-    steps = bench._peer_steps(False)
+    steps = _peer_steps(False)
     ref = bench.peer_reference(steps, 1.0 / bench.PEER_PHYSICS_HZ)
     err, physics_s = bench.peer_aerodock(cfg, 2, steps, ref)
     assert err < 0.05 and physics_s > 0
 
 
-def test_peer_rotorpy_tracks_the_move_when_installed():
+def test_peer_rotorpy_tracks_the_move_when_installed(cfg):
     pytest.importorskip("rotorpy")
     steps = 100
     ref = bench.peer_reference(steps, 1.0 / bench.PEER_PHYSICS_HZ)
-    err, physics_s = bench.peer_rotorpy(steps, ref)
+    err, physics_s = bench.peer_rotorpy(cfg, steps, ref)  # aerodock's vehicle in RotorPy
     assert err < 0.01 and physics_s > 0
 
 
 def test_bench_command_help_and_table_rows():
     app = typer.Typer()
-    app.command("bench")(bench.bench_command)
+    app.command("bench")(bench_command)
     app.command("other")(lambda: None)  # two commands: `bench` stays a subcommand
     result = CliRunner().invoke(app, ["bench", "--help"])
     assert result.exit_code == 0 and "--json" in result.output and "--quick" in result.output
@@ -166,7 +170,7 @@ def test_bench_only_one_part_and_bad_part(cfg, monkeypatch):
     assert set(doc["figures"]) == {"simulator", "simulator_point_mass", "vehicle_step"}
     assert doc["figures"]["simulator_point_mass"]["1"]["model"] == "point-mass"
     app = typer.Typer()
-    app.command("bench")(bench.bench_command)
+    app.command("bench")(bench_command)
     app.command("other")(lambda: None)
     result = CliRunner().invoke(app, ["bench", "--only", "nonsense"])
     assert result.exit_code == 2 and "error: unknown --only" in result.output
@@ -178,3 +182,23 @@ def test_vehicle_step_figures(cfg):
         fig = out[model]["2"]
         assert fig["unit"] == "vehicle-steps/s" and fig["value"] > 0 and fig["per_cpu_s"] > 0
         assert fig["note"].startswith(model)
+
+
+def test_bench_json_is_strict_with_a_missing_figure_as_null(monkeypatch):
+    import aerodock.cli.bench as cli_bench
+
+    doc = {"machine": {}, "figures": {"docking": {"trial_1": bench.figure([1.0], "s")}},
+           "targets": [], "ratio": float("nan"), "spread": [float("inf"), 1.0]}
+    monkeypatch.setattr(cli_bench, "run_all", lambda *args, **kwargs: doc)
+    app = typer.Typer()
+    app.command("bench")(bench_command)
+    app.command("other")(lambda: None)
+    result = CliRunner().invoke(app, ["bench", "--quick", "--json"])
+    assert result.exit_code == 0, result.output
+
+    def refuse(name):
+        raise ValueError(f"not JSON: {name}")
+
+    out = json.loads(result.stdout, parse_constant=refuse)  # no NaN or Infinity in the text
+    assert out["ratio"] is None and out["spread"] == [None, 1.0]
+    assert out["figures"]["docking"]["trial_1"]["value"] == 1.0

@@ -144,7 +144,7 @@ def test_bench_vector_env_figures(cfg, benchmark):
     """The bench's env-steps/s figures exist for both batch sizes (speed is measured by
     `aerodock bench`, not asserted here)."""
     from aerodock import bench
-    from aerodock.envs.bench import bench_vector_env
+    from aerodock.bench.vector_env import bench_vector_env
 
     figs = benchmark.pedantic(bench_vector_env, args=(cfg, (1, 8), True), rounds=1,
                               iterations=1)

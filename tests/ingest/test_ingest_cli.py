@@ -11,9 +11,9 @@ import typer
 from ingest_helpers import NS_HEADER, write_ns_file
 from typer.testing import CliRunner
 
+from aerodock.cli.ingest import ingest_command
 from aerodock.flightlog import load_flightlogs
 from aerodock.ingest import read_logs
-from aerodock.ingest.command import ingest_command
 from aerodock.ingest.errors import IngestError
 
 app = typer.Typer()

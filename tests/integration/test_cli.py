@@ -112,7 +112,7 @@ def test_bad_numbers_and_sizes_are_refused(args, needle):
 def test_print_json_refuses_nan(capsys):
     import typer
 
-    from aerodock.cli import print_json
+    from aerodock.cli.common import print_json
 
     with pytest.raises(typer.Exit) as exc:
         print_json({"a": {"b": [1.0, float("nan")]}})
@@ -122,7 +122,7 @@ def test_print_json_refuses_nan(capsys):
 
 
 def test_several_paths_after_one_data(tmp_path):
-    from aerodock.cli import _expand_repeatable
+    from aerodock.cli.app import _expand_repeatable
 
     assert _expand_repeatable(["train", "--data", "a.npz", "b.npz", "--out", "m"]) == [
         "train", "--data", "a.npz", "--data", "b.npz", "--out", "m"]

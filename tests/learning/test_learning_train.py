@@ -10,8 +10,8 @@ import typer
 from learning_synth import make_logs
 from typer.testing import CliRunner
 
+from aerodock.cli.learning import evaluate_command, export_command, train_command
 from aerodock.flightlog import save_flightlogs
-from aerodock.learning.commands import evaluate_command, export_command, train_command
 from aerodock.learning.datafiles import save_dataset
 from aerodock.learning.dataset import build_dataset
 from aerodock.learning.evaluate import evaluate, regression_metrics

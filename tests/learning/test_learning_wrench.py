@@ -320,8 +320,8 @@ def test_cli_trains_evaluates_and_exports_a_wrench_model(tmp_path, sim_logs):
     import typer
     from typer.testing import CliRunner
 
+    from aerodock.cli.learning import evaluate_command, export_command, train_command
     from aerodock.flightlog import save_flightlogs
-    from aerodock.learning.commands import evaluate_command, export_command, train_command
 
     app = typer.Typer()
     app.command("train")(train_command)

@@ -127,7 +127,7 @@ def test_node_core_imports_without_ros():
     import subprocess
     import sys
 
-    code = ("import sys\nimport aerodock.node.core, aerodock.node.command\n"
+    code = ("import sys\nimport aerodock.node.core, aerodock.cli.node\n"
             "assert 'rclpy' not in sys.modules\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)

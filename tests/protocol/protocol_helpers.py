@@ -55,11 +55,10 @@ def run_cli(*args: str) -> Any:
     """``aerodock ARGS`` in this process (no interpreter start-up); asserts exit code 0."""
     from typer.testing import CliRunner
 
-    from aerodock.cli import _register_optional, app
+    from aerodock.cli.app import app
 
     if str(HERE) not in sys.path:
         sys.path.insert(0, str(HERE))
-    _register_optional()
     result = CliRunner().invoke(app, list(args))
     assert result.exit_code == 0, (args, result.output, result.exception)
     return result

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.console import Console
 from rich.progress import Progress
 
-from aerodock.commands import bar_callback
+from aerodock.cli.common import bar_callback
 from aerodock.sweep import parse_spec, run_sweep
 
 

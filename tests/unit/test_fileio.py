@@ -16,7 +16,10 @@ from aerodock.fileio import (
     atomic_open,
     check_npz_header,
     dumps_json,
+    json_ready,
+    one_line,
     remove_stale_temps,
+    write_json,
 )
 
 
@@ -81,7 +84,7 @@ def test_temps_of_dead_processes_are_removed_by_the_next_write(tmp_path):
 
 
 def test_sigterm_unwinds_an_atomic_write(tmp_path):
-    code = ("import signal, time; from aerodock.cli import _terminate; "
+    code = ("import signal, time; from aerodock.cli.app import _terminate; "
             "signal.signal(signal.SIGTERM, _terminate)\n"
             "from aerodock.fileio import atomic_open\n"
             f"with atomic_open({str(tmp_path / 'a.bin')!r}) as fh:\n"
@@ -99,6 +102,28 @@ def test_dumps_json_is_strict():
     for bad in ({"x": float("inf")}, {"x": [np.float32("nan")]}, {"x": np.array([np.nan])}):
         with pytest.raises(ValueError, match="non-finite number at 'x"):
             dumps_json(bad)
+
+
+def test_json_ready_writes_a_missing_figure_as_null(tmp_path):
+    doc = {"a": float("nan"), "b": (1, np.float64(-np.inf)), 3: np.array([0.5, np.nan]),
+           "c": np.int64(7)}
+    ready = json_ready(doc)
+    assert ready == {"a": None, "b": [1, None], "3": [0.5, None], "c": 7}
+    assert type(ready["c"]) is int
+    path = write_json(tmp_path / "d.json", ready)
+    assert path.read_text() == dumps_json(ready) and not path.read_text().endswith("\n")
+    assert write_json(path, ready, final_newline=True).read_text().endswith("}\n")
+    with pytest.raises(ValueError, match="non-finite number at 'a'"):
+        write_json(tmp_path / "e.json", doc)  # the strict writer: nothing written
+    assert not (tmp_path / "e.json").exists()
+
+
+def test_one_line_folds_whitespace_or_keeps_the_first_line():
+    err = ValueError("  a  b\n c ")
+    assert one_line(err) == "a b c"
+    assert one_line(err, first_line=True) == "a  b"
+    assert one_line(ValueError(" ")) == one_line(ValueError(), first_line=True) == "ValueError"
+    assert one_line(" ") == ""
 
 
 def _npz(tmp_path, members: dict[str, bytes]):

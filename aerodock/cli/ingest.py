@@ -1,11 +1,7 @@
-"""``aerodock ingest``: read real flight logs and write them as one FlightLog file.
-
-Wired by the CLI as ``app.command("ingest")(ingest_command)``.
-"""
+"""``aerodock ingest``: read real flight logs and write them as one FlightLog file."""
 
 from __future__ import annotations
 
-import json
 import warnings
 from enum import StrEnum
 from pathlib import Path
@@ -15,6 +11,8 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from aerodock.cli.common import fail, print_json
+from aerodock.fileio import json_ready
 from aerodock.flightlog import FlightLog, FlightLogError, save_flightlogs
 from aerodock.ingest import expand_paths, read_logs
 from aerodock.ingest.errors import IngestError, IngestWarning
@@ -105,15 +103,12 @@ def ingest_command(
             raise IngestError(out, "--out is a folder; give a file name such as flights.npz")
         written = save_flightlogs(out, logs)
     except (IngestError, FlightLogError) as error:
-        typer.echo(f"error: {error}", err=True)
-        raise typer.Exit(2) from None
+        fail(str(error))
     except OSError as error:
-        typer.echo(f"error: {getattr(error, 'filename', None) or out}: "
-                   f"{error.strerror or error}", err=True)
-        raise typer.Exit(2) from None
+        fail(f"{getattr(error, 'filename', None) or out}: {error.strerror or error}")
     summary = summarize(logs)
     if json_output:
-        typer.echo(json.dumps({"out": str(written), "flights": summary}))
+        print_json(json_ready({"out": str(written), "flights": summary}), indent=None)
         return
     for item in summary:
         typer.echo(f"{item['name']}: {item['duration_s']:.1f} s, {item['n_samples']} samples "

@@ -1,5 +1,5 @@
 """Latency of the learnt model next to a flight stack: the predictor alone, and ``aerodock node``
-at its rate, end to end over ROS 2 on this machine (``python -m aerodock.node.bench``).
+at its rate, end to end over ROS 2 on this machine (``python -m aerodock.bench.node``).
 
 - ``predictor``: one ``Predictor.predict_one`` call (the node's per-tick work), µs: median and
   99th percentile over many calls after a warm-up.
@@ -16,7 +16,6 @@ as a trained one). The numbers in the README's "Deploy" section come from this m
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import tempfile
@@ -26,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import dumps_json, json_ready
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.features import N_FEATURES, N_OUTPUTS
@@ -147,8 +147,8 @@ def run(model: Path | None = None, *, seconds: float = 10.0, rate_hz: float = 10
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m aerodock.node.bench [--model DIR] [--seconds S] [--rate HZ] [--json]``."""
-    parser = argparse.ArgumentParser(prog="python -m aerodock.node.bench",
+    """``python -m aerodock.bench.node [--model DIR] [--seconds S] [--rate HZ] [--json]``."""
+    parser = argparse.ArgumentParser(prog="python -m aerodock.bench.node",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--model", type=Path, default=None, help="model directory")
     parser.add_argument("--seconds", type=float, default=10.0, help="replay length, s")
@@ -157,7 +157,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     doc = run(args.model, seconds=args.seconds, rate_hz=args.rate)
     if args.json:
-        print(json.dumps(doc, indent=2))
+        print(dumps_json(json_ready(doc)))  # a statistic of no sample is null
         return
     p, n = doc["predictor"]["per_call_us"], doc["node"]
     print(f"predictor ({doc['predictor']['kind']}): {p['median']} us per call (p99 {p['p99']})")

@@ -1,4 +1,8 @@
-"""``aerodock node``: run a trained model as a ROS 2 node (wired as ``app.command("node")``)."""
+"""``aerodock node``: run a trained model as a ROS 2 node (rclpy is imported only when it runs).
+
+An error's text is folded onto one line (every run of whitespace, newlines included, becomes
+one space), so a message quoting a path or a ``--state-type`` value with two spaces shows one.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +13,8 @@ from typing import Annotated
 
 import typer
 
+from aerodock.cli.common import fail
+from aerodock.fileio import one_line
 from aerodock.node.core import DEFAULT_MAX_AGE_S, DEFAULT_RATE_HZ
 
 
@@ -18,11 +24,6 @@ class OutputFrame(StrEnum):
     auto = "auto"
     ned = "ned"
     enu = "enu"
-
-
-def _fail(message: str) -> None:
-    typer.echo("error: " + " ".join(str(message).split()), err=True)
-    raise typer.Exit(2)
 
 
 def node_command(
@@ -64,28 +65,28 @@ def node_command(
     from aerodock.node.core import STATE_TYPES
 
     if not (rate > 0 and rate <= 1000):
-        _fail(f"--rate must be in (0, 1000] Hz, got {rate}")
+        fail(f"--rate must be in (0, 1000] Hz, got {rate}")
     if not (max_age > 0 and max_age < 10):
-        _fail(f"--max-age must be in (0, 10) s, got {max_age}")
+        fail(f"--max-age must be in (0, 10) s, got {max_age}")
     if duration is not None and not duration > 0:
-        _fail(f"--duration must be positive, got {duration}")
+        fail(f"--duration must be positive, got {duration}")
     types: dict[str, str] = {}
     for item in state_type or []:
         topic, sep, type_name = item.partition("=")
         if not sep or type_name not in STATE_TYPES:
-            _fail(f"--state-type {item!r}: expected TOPIC=TYPE with TYPE one of "
-                  f"{', '.join(STATE_TYPES)}")
+            fail(one_line(f"--state-type {item!r}: expected TOPIC=TYPE with TYPE one of "
+                          f"{', '.join(STATE_TYPES)}"))
         types[topic] = type_name
     try:
         predictor = Predictor.load(model)
         cfg = load_config(config)
         merged, _ = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
-        _fail(str(err))
+        fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
     try:
         import rclpy  # noqa: F401
     except ImportError:
-        _fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
+        fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
     from aerodock.node.ros import NodeSettings, run_node
 
     notes = model_warnings(predictor, cfg)
@@ -103,5 +104,5 @@ def node_command(
     try:
         ticks = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes)
     except RuntimeError as err:
-        _fail(str(err))
+        fail(one_line(str(err)))
     typer.echo(f"aerodock node: stopped after {ticks} ticks", err=True)

@@ -2,7 +2,7 @@
 torque feed-forward off and on: the measurement behind README's "learnt wrench" paragraph.
 
     aerodock collect --out out/wrench --config examples/learnt_wrench.toml
-    .venv/bin/python bench/torque_pairing.py out/wrench/models/final --offset 0.36 --trials 100
+    .venv/bin/python studies/torque_pairing.py out/wrench/models/final --offset 0.36 --trials 100
 
 For each setting: docked trials and the terminal tilt (the campaign summary), then medians over
 the approaching trials in the final second before the planned arrival: the follower's distance

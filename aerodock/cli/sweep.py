@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import json
 import time
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
 import typer
+
+from aerodock.cli.common import fail, print_json, progress_bar
 
 
 class Backend(StrEnum):
@@ -35,10 +36,8 @@ def sweep_command(
     from rich.console import Console
     from rich.table import Table
 
-    from aerodock.cli import fail, print_json
-    from aerodock.commands import progress_bar
     from aerodock.config import load_config
-    from aerodock.fileio import atomic_open, json_default
+    from aerodock.fileio import json_ready, write_json
     from aerodock.sweep.figures import cell_summaries, plot_sweep
     from aerodock.sweep.run import run_sweep, write_table
     from aerodock.sweep.spec import load_spec
@@ -59,8 +58,7 @@ def sweep_command(
                "backend": backend.value, "campaigns": len(spec.cells), "trials": len(rows),
                "docked": sum(r["docked"] for r in rows), "wall_s": time.perf_counter() - started,
                "files": files, "figures": figures, "cells": cell_summaries(rows)}
-    with atomic_open(out / "summary.json", "w") as fh:
-        json.dump(summary, fh, indent=2, default=json_default)
+    write_json(out / "summary.json", json_ready(summary))
     if as_json:
         print_json(summary)
         return

@@ -7,6 +7,8 @@ from typing import Annotated
 
 import typer
 
+from aerodock.cli.common import fail, progress_bar
+
 
 def view_command(
     log: Annotated[Path, typer.Argument(help="A FlightLog file (.npz): simulated or ingested.")],
@@ -26,8 +28,6 @@ def view_command(
 ) -> None:
     """Watch a trial: both vehicles, the bar and its cables, the gate's state and the predicted
     force, in a side and a top view."""
-    from aerodock.cli import fail
-    from aerodock.commands import progress_bar
     from aerodock.config import load_config
     from aerodock.flightlog import load_flightlogs
     from aerodock.view.render import render_animation, track_from_flightlog

@@ -8,7 +8,7 @@ attitude and their difference over time (the aero-on run) to a PNG.
 
 Needs RotorPy: ``.venv/bin/pip install --no-deps rotorpy``.
 
-Run: ``.venv/bin/python bench/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
+Run: ``.venv/bin/python studies/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
 [--rtol 1e-9]``.
 """
 
@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from aerodock.config import load_config
-from aerodock.fileio import atomic_open
+from aerodock.fileio import atomic_open, dumps_json
 from aerodock.validation.peer import (
     TOLERANCE_ATTITUDE_DEG,
     TOLERANCE_POSITION_M,
@@ -106,8 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     runs = {aero: compare_with_rotorpy(cfg, aero=aero, integrator_kwargs=kwargs)
             for aero in (True, False)}
     if args.json:
-        print(json.dumps({("aero_on" if k else "aero_off"): c.summary()
-                          for k, c in runs.items()}, indent=2))
+        print(dumps_json({("aero_on" if k else "aero_off"): c.summary()
+                          for k, c in runs.items()}))
     else:
         for aero, comp in runs.items():
             s = comp.summary()

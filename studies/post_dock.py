@@ -1,8 +1,8 @@
 """What happens to a campaign's trials after their own missions end, and how far the docked
 pairs sink.
 
-    .venv/bin/python bench/post_dock.py --controller ours --compensation observer --seed 1
-    .venv/bin/python bench/post_dock.py --controller ours --compensation model --model DIR
+    .venv/bin/python studies/post_dock.py --controller ours --compensation observer --seed 1
+    .venv/bin/python studies/post_dock.py --controller ours --compensation model --model DIR
 
 A campaign flies until its last trial is done; a trial that finished earlier (phase DONE: docked
 and hung on the cables for ``mission.post_dock_s``, or backed off) goes on being simulated.

@@ -1,27 +1,35 @@
-"""Typer command functions for the learning half: ``train``, ``evaluate``, ``export``.
-
-The integrator registers them on the ``aerodock`` app::
-
-    from aerodock.learning import commands as learn_cmds
-    app.command("train")(learn_cmds.train_command)
-    app.command("evaluate")(learn_cmds.evaluate_command)
-    app.command("export")(learn_cmds.export_command)
+"""``aerodock train``, ``evaluate``, ``export`` (a downwash model from flight logs) and
+``collect`` (the curriculum that flies, trains and deploys it stage by stage).
 
 Bad input (missing/corrupt data or model files, unknown model kind, too little or degenerate
-data) prints ``error: <one line>`` on stderr and exits with code 2, without a traceback; ``train``
-refuses to write a model whose training did not give finite weights, so a good model already in
-``--out`` is never replaced by a broken one. Progress goes to
-stderr, so ``--json`` output on stdout stays machine-readable. PyTorch is imported only by the
-commands that need it (``train``, ``export``).
+data) prints ``error: <one line>`` on stderr and exits with code 2, without a traceback; an
+error's text is cut to its first line (a path keeps its spaces). ``train`` refuses to write a
+model whose training did not give finite weights, so a good model already in ``--out`` is never
+replaced by a broken one. Progress goes to stderr, so ``--json`` output on stdout stays
+machine-readable. PyTorch is imported only by the commands that need it (``train``,
+``export``, ``collect``).
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import Annotated, Any
 
 import typer
+
+from aerodock.cli.common import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    bar_callback,
+    err_console,
+    fail,
+    print_json,
+    progress_bar,
+)
+from aerodock.config import load_config
+from aerodock.fileio import one_line
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
 
@@ -33,27 +41,7 @@ DataOpt = Annotated[
              "(--data a.npz b.npz) or --data repeated.",
     ),
 ]
-JsonOpt = Annotated[bool, typer.Option("--json", help="Print the numbers as JSON on stdout.")]
-
-
-def _fail(message: str) -> NoReturn:
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(2)
-
-
-def _one_line(err: BaseException) -> str:
-    text = str(err).strip()
-    return text.splitlines()[0] if text else type(err).__name__
-
-
-def _echo_json(obj: Any) -> None:
-    from aerodock.fileio import dumps_json
-
-    try:
-        text = dumps_json(obj)
-    except ValueError as err:
-        _fail(str(err))
-    typer.echo(text)
+JsonStdoutOpt = Annotated[bool, typer.Option("--json", help="Print the numbers as JSON on stdout.")]
 
 
 def _load_data(paths: list[Path]) -> Any:
@@ -63,7 +51,7 @@ def _load_data(paths: list[Path]) -> Any:
     try:
         return load_data_paths(paths)
     except (DataError, OSError, ValueError) as err:
-        _fail(_one_line(err))
+        fail(one_line(err, first_line=True))
 
 
 def _fmt(v: float | None, digits: int = 3) -> str:
@@ -83,24 +71,24 @@ def train_command(
         float | None,
         typer.Option("--minutes", help="Train on only this many minutes of the data."),
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
+    seed: SeedOpt = 0,
     spectral_norm: Annotated[
         bool, typer.Option("--spectral-norm", help="Spectrally normalise the layers.")
     ] = False,
     max_epochs: Annotated[int, typer.Option("--max-epochs", help="Epoch limit.")] = 200,
-    as_json: JsonOpt = False,
+    as_json: JsonStdoutOpt = False,
 ) -> None:
     """Train a downwash model on flight logs and write it to a model directory."""
     import numpy as np
 
     if model not in TRAINABLE:
-        _fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
+        fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
     if minutes is not None and not (minutes > 0 and math.isfinite(minutes)):
-        _fail(f"--minutes must be a positive finite number, got {minutes}")
+        fail(f"--minutes must be a positive finite number, got {minutes}")
     if max_epochs < 1:
-        _fail(f"--max-epochs must be at least 1, got {max_epochs}")
+        fail(f"--max-epochs must be at least 1, got {max_epochs}")
     if out.exists() and not out.is_dir():
-        _fail(f"{out}: exists and is not a directory")
+        fail(f"{out}: exists and is not a directory")
     ds = _load_data(data)
     available = ds.minutes
     if minutes is not None:
@@ -110,11 +98,11 @@ def train_command(
     try:
         from aerodock.learning.train import check_trainable, train_model
     except ImportError:
-        _fail("training needs PyTorch: pip install 'aerodock[learn]'")
+        fail("training needs PyTorch: pip install 'aerodock[learn]'")
     try:
         check_trainable(ds, kind=model)
     except ValueError as err:
-        _fail(_one_line(err))
+        fail(one_line(err, first_line=True))
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -135,11 +123,11 @@ def train_command(
             trained = train_model(model, ds, seed=seed, spectral_norm=spectral_norm,
                                   max_epochs=max_epochs, progress=progress)
         except ValueError as err:
-            _fail(_one_line(err))
+            fail(one_line(err, first_line=True))
     try:
         path = trained.save(out)
     except (OSError, ValueError) as err:
-        _fail(f"{out}: cannot write model ({_one_line(err)})")
+        fail(f"{out}: cannot write model ({one_line(err, first_line=True)})")
     info = trained.info
     result = {
         "model_dir": str(path),
@@ -162,7 +150,7 @@ def train_command(
         "warnings": ds.meta.get("warnings", []),
     }
     if as_json:
-        _echo_json(result)
+        print_json(result)
         return
     for note in result["warnings"]:
         typer.echo(f"warning: {note}", err=True)
@@ -223,7 +211,7 @@ def evaluate_command(
     lateral_radius: Annotated[
         float, typer.Option("--lateral-radius", help="Interaction region radius, m.")
     ] = 0.2,
-    as_json: JsonOpt = False,
+    as_json: JsonStdoutOpt = False,
 ) -> None:
     """Evaluate a trained model on held-out flights, beside the zero model."""
     from aerodock.learning.evaluate import evaluate
@@ -231,16 +219,16 @@ def evaluate_command(
     from aerodock.learning.runtime import Predictor
 
     if not (lateral_radius > 0 and math.isfinite(lateral_radius)):
-        _fail(f"--lateral-radius must be a positive finite number, got {lateral_radius}")
+        fail(f"--lateral-radius must be a positive finite number, got {lateral_radius}")
     try:
         predictor = Predictor.load(model)
     except ModelFileError as err:
-        _fail(_one_line(err))
+        fail(one_line(err, first_line=True))
     ds = _load_data(data)
     result = evaluate(predictor, ds, lateral_radius_m=lateral_radius)
     result["model_dir"] = str(model)
     if as_json:
-        _echo_json(result)
+        print_json(result)
         return
     from rich.console import Console
 
@@ -259,7 +247,7 @@ def export_command(
     model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
     out: Annotated[Path, typer.Option("--out", help="ONNX file to write.")],
     dtype: Annotated[str, typer.Option("--dtype", help="float32 or float64 graph.")] = "float32",
-    as_json: JsonOpt = False,
+    as_json: JsonStdoutOpt = False,
 ) -> None:
     """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output f_ext_mps2 (n,3),
     and tau_ext_nm (n,3) for so2-wrench)."""
@@ -269,29 +257,29 @@ def export_command(
     try:
         predictor = Predictor.load(model)
     except ModelFileError as err:
-        _fail(_one_line(err))
+        fail(one_line(err, first_line=True))
     if out.is_dir():
-        _fail(f"{out}: is a directory; give a file name such as model.onnx")
+        fail(f"{out}: is a directory; give a file name such as model.onnx")
     if dtype not in ("float32", "float64"):
-        _fail(f"--dtype {dtype!r}: use float32 or float64")
+        fail(f"--dtype {dtype!r}: use float32 or float64")
     from aerodock.fileio import check_writable_target
 
     try:
         check_writable_target(out)
     except OSError as err:
-        _fail(str(err))
+        fail(str(err))
     try:
         import onnx  # noqa: F401
 
         from aerodock.learning.export import export_onnx, onnx_differences
     except ImportError:
-        _fail("ONNX export needs onnx: pip install 'aerodock[export]'")
+        fail("ONNX export needs onnx: pip install 'aerodock[export]'")
     try:
         path = export_onnx(model, out, dtype=dtype)
     except ModelFileError as err:
-        _fail(_one_line(err))
+        fail(one_line(err, first_line=True))
     except (OSError, RuntimeError) as err:
-        _fail(f"{out}: export failed ({_one_line(err)})")
+        fail(f"{out}: export failed ({one_line(err, first_line=True)})")
     try:
         diffs: dict[str, float] | None = onnx_differences(path, predictor)
     except ImportError:
@@ -301,7 +289,7 @@ def export_command(
     if diffs and "tau_ext_nm" in diffs:
         result["max_abs_diff_vs_numpy_torque_nm"] = diffs["tau_ext_nm"]
     if as_json:
-        _echo_json(result)
+        print_json(result)
         return
     if diffs is None:
         check = "not checked (onnxruntime not installed)"
@@ -310,3 +298,36 @@ def export_command(
         if "tau_ext_nm" in diffs:
             check += f", {diffs['tau_ext_nm']:.2e} N m"
     typer.echo(f"wrote {path} ({check})")
+
+
+def collect(
+    out: Annotated[Path, typer.Option(help="Folder for the FlightLogs and stage models.")],
+    model: Annotated[str | None, typer.Option(help="Model kind trained at each stage.")] = None,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Curriculum data collection: each stage trains, deploys and flies 0.3 m closer."""
+    from aerodock.learning.curriculum import run_curriculum
+
+    cfg = load_config(config)
+    if model is not None and model not in ("so2", "so2-ext", "so2-wrench", "mlp"):
+        fail(f"--model must be so2, so2-ext, so2-wrench or mlp, got {model!r}")
+
+    def say(msg: str) -> None:
+        err_console.print(f"[dim]{msg}[/dim]")
+
+    with progress_bar() as bar:
+        update = bar_callback(bar)
+        summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say,
+                                 train_kwargs={"progress": lambda e, n, *_: update(
+                                     "training epochs", e, n)})
+    if as_json:
+        print_json(summary)
+        return
+    for st in summary["stages"]:
+        lo, hi = st["depth_band_m"]
+        typer.echo(f"stage {st['stage']}: {lo:.2f}-{hi:.2f} m, {st['flights']} flights, "
+                   f"{st['minutes']:.2f} min, val RMSE {st['val_rmse_mps2']:.3f} m/s²")
+    typer.echo(f"{summary['minutes']:.1f} min of flight in {summary['wall_s']:.0f} s; "
+               f"logs in {out}/stageK.npz, final model in {summary['final_model']}")

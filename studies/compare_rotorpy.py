@@ -1,21 +1,26 @@
-"""aerodock against RotorPy on the same scenario, both timed in one run.
+"""aerodock against RotorPy on the same scenario and the same vehicle, both timed in one run.
 
-Scenario: one quadrotor hovers for 1 s, then flies a 4 s minimum-jerk move (1 m north, 0.5 m
-east, 0.3 m up; flat outputs from ``aerodock.planning.minjerk``) under its position controller,
-with 500 Hz physics.
+Scenario: one quadrotor, aerodock's rigid-body vehicle (the default ``[vehicle]``: 0.7 kg, its
+inertia, rotors, motor lag, rotor and parasitic drag) in both simulators, hovers for 1 s, then
+flies a 4 s minimum-jerk move (1 m north, 0.5 m east, 0.3 m up; flat outputs from
+``aerodock.planning.minjerk``) under its position controller, with 500 Hz physics.
 
-- RotorPy: ``rotorpy.vehicles.multirotor.Multirotor`` (AscTec Hummingbird parameters, its default
-  RK45 integrator, motor-speed commands) stepped sequentially, with its geometric controller
-  ``SE3Control`` at every step (as RotorPy's own ``simulate`` loop runs it). When its batched
-  simulator is importable (``BatchedMultirotor``; needs PyTorch, ``torchdiffeq`` and ``roma``),
-  also a batch of ``--batch`` vehicles on the CPU (fixed-step RK4, one torch thread).
-- aerodock: ``aerodock.world.vehicles.point_mass.step_vehicle`` at 500 Hz with the LQR
-  ``PositionController`` at 100 Hz, for a batch of 1 and a batch of ``--batch``.
+- RotorPy: ``rotorpy.vehicles.multirotor.Multirotor`` with aerodock's vehicle translated to its
+  ``quad_params`` (``aerodock.validation.peer.rotorpy_quad_params``, the mapping the peer
+  validation checks to 1 cm and 1 deg), its default RK45 integrator and motor-speed commands,
+  stepped sequentially with its geometric controller ``SE3Control`` at every step (as RotorPy's
+  own ``simulate`` loop runs it). When its batched simulator is importable
+  (``BatchedMultirotor``; needs PyTorch, ``torchdiffeq`` and ``roma``), also a batch of
+  ``--batch`` vehicles on the CPU (fixed-step RK4, one torch thread).
+- aerodock: the rigid body as the world steps it (``aerodock.world.vehicles.rigid_body``:
+  ``rigid_targets`` once per control period, ``step_with_autopilot`` at 500 Hz: autopilot,
+  rotors, rigid-body dynamics) with the LQR ``PositionController`` at 100 Hz, for a batch of 1
+  and a batch of ``--batch``.
 
-The models differ (RotorPy integrates rigid-body attitude and rotor dynamics with an adaptive
-integrator; aerodock's vehicle is a point mass behind first-order attitude and thrust lags, as the
-paper's controller sees it), so the ratio is the cost of simulating this scenario in each, not of
-identical physics. Each time is the median of several runs after a warm-up.
+Same vehicle and same reference; the controllers differ (each simulator flies its own) and so
+do the integrators (RotorPy's adaptive RK45 on every step, aerodock's fixed first-order step), so
+the ratio is the cost of simulating this scenario in each. Each time is the median of several
+runs after a warm-up.
 
 Install RotorPy for this (its simulator needs only NumPy and SciPy; ``--no-deps`` keeps its
 learning and plotting dependencies out)::
@@ -23,17 +28,17 @@ learning and plotting dependencies out)::
     .venv/bin/pip install --no-deps rotorpy               # sequential Multirotor
     .venv/bin/pip install --no-deps torchdiffeq roma      # + its batched simulator (uses torch)
 
-Run: ``.venv/bin/python bench/compare_rotorpy.py [--quick] [--batch 256] [--json]``.
+Run: ``.venv/bin/python studies/compare_rotorpy.py [--quick] [--batch 256] [--json]``.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 from aerodock.bench import compare_rotorpy, machine_info
 from aerodock.config import load_config
+from aerodock.fileio import dumps_json, json_ready
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     result = compare_rotorpy(load_config(), quick=args.quick, batch=args.batch,
                              progress=progress)
     if args.json:
-        print(json.dumps({"machine": machine_info(), **result}, indent=2))
+        print(dumps_json(json_ready({"machine": machine_info(), **result})))
         return 0
     sc = result["scenario"]
     m = machine_info()

@@ -1,48 +1,25 @@
-"""Commands registered on the ``aerodock`` app beside the field commands of ``cli``: ``dock``,
-``collect``, ``reproduce`` and the commands of the learning, ingestion and benchmark code."""
+"""``aerodock dock`` and ``aerodock faults``: docking campaigns, with and without faults."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from aerodock.cli import (
+from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
     SeedOpt,
-    _config,
-    app,
     check_number,
     fail,
     print_json,
+    progress_bar,
 )
+from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
-
-err_console = Console(stderr=True)
-
-
-def progress_bar() -> Progress:
-    """A Rich progress bar on stderr (stdout stays clean for --json)."""
-    return Progress(TextColumn("{task.description}"), BarColumn(),
-                    TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
-                    console=err_console, transient=True)
-
-
-def bar_callback(bar: Progress) -> Callable[[str, int, int], None]:
-    """``update(description, done, total)`` driving one task of ``bar`` (shown from the first
-    update): for work that reports its own steps (training epochs, sample-efficiency runs)."""
-    task = bar.add_task("", total=None, visible=False)
-
-    def update(description: str, done: int, total: int) -> None:
-        bar.update(task, description=description, completed=done, total=total, visible=True)
-
-    return update
 
 
 def _load_predictor(model: Path | None, comp: Compensation):
@@ -55,7 +32,6 @@ def _load_predictor(model: Path | None, comp: Compensation):
     return Predictor.load(model)
 
 
-@app.command("dock")
 def dock(
     trials: Annotated[int, typer.Option(help="Number of docking trials (one batch).")] = 50,
     offset: Annotated[float | None, typer.Option(help="Cable length d_p, m.")] = None,
@@ -86,7 +62,7 @@ def dock(
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     try:
-        cfg = controller_config(_config(config), controller)
+        cfg = controller_config(load_config(config), controller)
     except ValueError as exc:
         fail(str(exc))
     if offset is not None:
@@ -150,7 +126,6 @@ def dock(
         typer.echo(f"wrote {summary['logs']}")
 
 
-@app.command("faults")
 def faults_command(
     fault_file: Annotated[Path, typer.Argument(help="TOML file of [[fault]] entries.")],
     trials: Annotated[int, typer.Option(help="Trials per fault (one batch each).")] = 40,
@@ -167,7 +142,7 @@ def faults_command(
     from aerodock.experiments.faults import fault_campaign, rows_markdown
     from aerodock.mission.faults import load_faults
 
-    cfg = _config(config)
+    cfg = load_config(config)
     if not 1 <= trials <= 4096:
         fail(f"--trials must be in 1..4096, got {trials}")
     faults = load_faults(fault_file)
@@ -194,140 +169,3 @@ def faults_command(
                           str(r["clearance_violations"]), str(r["collisions"]),
                           str(r["nan_trials"]))
         Console().print(table)
-
-
-def _register_subpackages() -> None:
-    """Commands that live beside their subpackages."""
-    from aerodock.bench import bench_command
-    from aerodock.ingest.command import ingest_command
-    from aerodock.learning.commands import evaluate_command, export_command, train_command
-    from aerodock.node.command import node_command
-    from aerodock.sweep.command import sweep_command
-    from aerodock.view.command import view_command
-
-    app.command("bench")(bench_command)
-    app.command("ingest")(ingest_command)
-    app.command("train")(train_command)
-    app.command("evaluate")(evaluate_command)
-    app.command("export")(export_command)
-    app.command("node")(node_command)
-    app.command("view")(view_command)
-    app.command("sweep")(sweep_command)
-
-
-_register_subpackages()
-
-
-@app.command("collect")
-def collect(
-    out: Annotated[Path, typer.Option(help="Folder for the FlightLogs and stage models.")],
-    model: Annotated[str | None, typer.Option(help="Model kind trained at each stage.")] = None,
-    config: ConfigOpt = None,
-    seed: SeedOpt = 0,
-    as_json: JsonOpt = False,
-) -> None:
-    """Curriculum data collection: each stage trains, deploys and flies 0.3 m closer."""
-    from aerodock.learning.curriculum import run_curriculum
-
-    cfg = _config(config)
-    if model is not None and model not in ("so2", "so2-ext", "so2-wrench", "mlp"):
-        fail(f"--model must be so2, so2-ext, so2-wrench or mlp, got {model!r}")
-
-    def say(msg: str) -> None:
-        err_console.print(f"[dim]{msg}[/dim]")
-
-    with progress_bar() as bar:
-        update = bar_callback(bar)
-        summary = run_curriculum(cfg, out, seed=seed, model_kind=model, progress=say,
-                                 train_kwargs={"progress": lambda e, n, *_: update(
-                                     "training epochs", e, n)})
-    if as_json:
-        print_json(summary)
-        return
-    for st in summary["stages"]:
-        lo, hi = st["depth_band_m"]
-        typer.echo(f"stage {st['stage']}: {lo:.2f}-{hi:.2f} m, {st['flights']} flights, "
-                   f"{st['minutes']:.2f} min, val RMSE {st['val_rmse_mps2']:.3f} m/s²")
-    typer.echo(f"{summary['minutes']:.1f} min of flight in {summary['wall_s']:.0f} s; "
-               f"logs in {out}/stageK.npz, final model in {summary['final_model']}")
-
-
-@app.command("reproduce")
-def reproduce(
-    quick: Annotated[bool, typer.Option(help="A smaller run (a few minutes).")] = False,
-    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
-    config: ConfigOpt = None,
-    seed: SeedOpt = 0,
-    real_data: Annotated[bool, typer.Option(
-        help="Run the real-data study (step 5; it reads ../shared/data and does not depend on "
-             "--config).")] = True,
-) -> None:
-    """The paper's experiments end to end: results.json, report.md and figures/."""
-    from aerodock.experiments.reproduce import run_reproduce
-
-    cfg = _config(config)
-    shared = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-    here = Path.cwd().parent / "shared" / "data"
-    data = (here if here.is_dir() else shared) if real_data else None
-
-    def say(msg: str) -> None:
-        err_console.print(msg)
-
-    with progress_bar() as bar:
-        results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
-                                bar=bar_callback(bar))
-    typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
-               f"{results['timings_s']['total_s']:.0f} s)")
-
-
-@app.command("targets")
-def targets_command(
-    out: Annotated[Path, typer.Option(help="Folder for the curriculum (when no --model) and "
-                                           "targets.json.")] = Path("out/targets"),
-    model: Annotated[Path | None, typer.Option(
-        help="A trained model DIR (default: fly the deep curriculum first, into OUT/data).")
-    ] = None,
-    trials: Annotated[int, typer.Option(help="Trials per scenario and row.")] = 100,
-    config: ConfigOpt = None,
-    seed: SeedOpt = 0,
-    as_json: JsonOpt = False,
-) -> None:
-    """Docking targets beyond the paper (d_p 0.36 and 0.27 m; leader at 0.25 and 0.5 m/s) for
-    the paper's controller and ours, with the learnt model, on the configured field."""
-    from aerodock.control.profiles import controller_config
-    from aerodock.experiments.report_controllers import targets_markdown
-    from aerodock.experiments.reproduce import _write_json_atomic
-    from aerodock.experiments.targets import targets
-    from aerodock.learning.runtime import Predictor
-    from aerodock.mission.limits import check_campaign_size
-
-    if trials < 1:
-        fail(f"--trials must be >= 1, got {trials}")
-    cfg = _config(config)
-    check_campaign_size(cfg, trials)
-
-    def say(msg: str) -> None:
-        err_console.print(f"[dim]{msg}[/dim]")
-
-    out.mkdir(parents=True, exist_ok=True)
-    if model is None:
-        from aerodock.learning.curriculum import run_curriculum
-
-        say("curriculum (the paper's stages, then the deep ones)")
-        summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
-        model = Path(summary["final_model"])
-    predictor = Predictor.load(model)
-    from aerodock.learning.compatibility import model_warnings
-
-    for note in model_warnings(predictor, cfg):
-        typer.echo(f"warning: {note}", err=True)
-    res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
-                   "ours + model": (controller_config(cfg, "ours"), predictor)},
-                  trials, predictor, seed, say)
-    res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
-    _write_json_atomic(out / "targets.json", res)
-    if as_json:
-        print_json(res)
-        return
-    typer.echo("\n".join(targets_markdown({"targets": res})))
-    typer.echo(f"wrote {out / 'targets.json'}")

@@ -1,4 +1,5 @@
-"""Throughput of the native vector environment (``aerodock bench``: ``gym_vector_env``)."""
+"""Throughput of the native vector environment (``aerodock bench``: ``gym_vector_env``; on its
+own: ``python -m aerodock.bench.vector_env [--quick]``). Needs ``aerodock[gym]``."""
 
 from __future__ import annotations
 
@@ -6,6 +7,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+
+from aerodock.bench.timing import figure, measure
+from aerodock.envs import DockingVectorEnv  # gymnasium: ImportError without aerodock[gym]
 
 ENV_BATCHES = (1, 256)
 
@@ -15,9 +19,6 @@ def bench_vector_env(cfg: Any, batches: tuple[int, ...] = ENV_BATCHES, quick: bo
     """Env-steps per second (environments x steps / wall time) of ``DockingVectorEnv`` stepped
     with random residual actions, per batch size: the whole world at 500 Hz physics, both
     controllers, the planner and the mission logic, one control period (10 ms) per step."""
-    from aerodock.bench import figure, measure
-    from aerodock.envs import DockingVectorEnv
-
     out: dict[str, Any] = {}
     repeats = 3 if quick else 5
     for n in batches:
@@ -36,10 +37,10 @@ def bench_vector_env(cfg: Any, batches: tuple[int, ...] = ENV_BATCHES, quick: bo
     return out
 
 
-if __name__ == "__main__":  # python -m aerodock.envs.bench [--quick]: the figures as JSON
-    import json
+if __name__ == "__main__":  # python -m aerodock.bench.vector_env [--quick]: the figures as JSON
     import sys
 
     from aerodock.config import load_config
+    from aerodock.fileio import dumps_json, json_ready
 
-    print(json.dumps(bench_vector_env(load_config(), quick="--quick" in sys.argv), indent=2))
+    print(dumps_json(json_ready(bench_vector_env(load_config(), quick="--quick" in sys.argv))))

@@ -1,0 +1,142 @@
+"""The measured speed of every hot path (``aerodock bench``; README, "Performance").
+
+Each figure is the median of several timed repetitions after an untimed warm-up, reported with
+its spread (the fastest and slowest repetition) and the number of repetitions. A figure whose
+part is not available (PyTorch, ONNX Runtime, RotorPy not installed, no ``reproduce`` command)
+is ``null`` with a one-line ``reason``; the benchmark never fails because of it.
+
+Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions):
+
+- ``simulator``: vehicle-steps per second (trials x 2 vehicles x physics steps) for batches of
+  1, 64, 256 and 1024 trials: the whole world (both vehicles, bar, gripper, default downwash) at
+  500 Hz physics with both position controllers (LQR + bias observer) at 100 Hz
+  (``with_controllers``), and the physics alone under held commands (``physics_only``), with
+  rigid-body vehicles (``[vehicle] model = "rigid-body"``: attitude, rotors, autopilot, IMU).
+- ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
+  comparison. Each simulator figure also gives ``per_cpu_s``: vehicle-steps per second of the
+  process's CPU time (median), which a busy shared machine does not dilute.
+- ``vehicle_step``: the vehicles' own step alone (``Fleet.step`` on 2n vehicles: for rigid
+  bodies the autopilot, rotor wrench and attitude step), per model and batch of 1, 256 and 1024.
+- ``docking``: wall time of one docking trial and of a 100-trial campaign
+  (:func:`aerodock.mission.batch.run_campaign`, oracle compensation, summary only).
+- ``predictor``: the learnt model's time per single-sample call and per sample in a batch of 1024,
+  for the NumPy runtime, ONNX Runtime and PyTorch (reference), all on one thread.
+- ``training``: wall time to train the SO(2)-equivariant model on 5 minutes of data.
+- ``reproduce_quick``: wall time of ``aerodock reproduce --quick`` (one run, subprocess).
+- ``memory``: peak memory of a 1024-trial campaign (fresh subprocesses): of the whole process,
+  and of the campaign's own allocations.
+- ``gym_vector_env``: env-steps per second of :class:`aerodock.envs.DockingVectorEnv` at 1 and
+  256 environments (:func:`aerodock.bench.vector_env.bench_vector_env`; needs
+  ``aerodock[gym]``).
+- ``peer``: the RotorPy comparison of ``studies/compare_rotorpy.py`` (:func:`compare_rotorpy`).
+
+The same functions serve ``studies/compare_rotorpy.py`` and the pytest-benchmark tests.
+:func:`run_all` measures them all (or one part, :data:`PARTS`) as one JSON-ready document.
+
+Modules: :mod:`~aerodock.bench.timing` (how a figure is measured), :mod:`~aerodock.bench.simulator`,
+:mod:`~aerodock.bench.docking` (with ``reproduce --quick``), :mod:`~aerodock.bench.learning`
+(training and the predictor), :mod:`~aerodock.bench.memory` (a campaign in a fresh process,
+``python -m aerodock.bench.memory``), :mod:`~aerodock.bench.vector_env`,
+:mod:`~aerodock.bench.peer` (RotorPy), :mod:`~aerodock.bench.report` (machine, targets, the
+table's rows) and :mod:`~aerodock.bench.node` (the ROS 2 node's latency, on its own:
+``python -m aerodock.bench.node``).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from aerodock.bench.docking import bench_docking, bench_reproduce
+from aerodock.bench.learning import (
+    bench_predictor,
+    bench_training,
+    predictor_inputs,
+    synthetic_dataset,
+)
+from aerodock.bench.peer import (
+    PEER_CONTROL_HZ,
+    PEER_HOVER_S,
+    PEER_MOVE_NED_M,
+    PEER_MOVE_S,
+    PEER_PHYSICS_HZ,
+    compare_rotorpy,
+    peer_aerodock,
+    peer_reference,
+    peer_rotorpy,
+    peer_rotorpy_batched,
+)
+from aerodock.bench.report import TARGETS, machine_info, table_rows, targets
+from aerodock.bench.simulator import SIM_BATCHES, SimLoop, bench_simulator, bench_vehicle_step
+from aerodock.bench.timing import Progress, failure_reason, figure, measure, quiet, unavailable
+
+__all__ = [
+    "PARTS", "PEER_CONTROL_HZ", "PEER_HOVER_S", "PEER_MOVE_NED_M", "PEER_MOVE_S",
+    "PEER_PHYSICS_HZ", "SIM_BATCHES", "TARGETS", "Progress", "SimLoop", "bench_docking",
+    "bench_predictor", "bench_reproduce", "bench_simulator", "bench_training",
+    "bench_vehicle_step", "compare_rotorpy", "figure", "machine_info", "measure",
+    "peer_aerodock", "peer_reference", "peer_rotorpy", "peer_rotorpy_batched",
+    "predictor_inputs", "run_all", "synthetic_dataset", "table_rows", "targets", "unavailable",
+]
+
+
+PARTS = ("simulator", "docking", "predictor", "memory", "reproduce", "gym", "peer")
+
+
+def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
+            include_reproduce: bool | None = None, include_peer: bool = True,
+            config_path: Path | None = None, only: str | None = None) -> dict[str, Any]:
+    """Every figure (see the module docstring), as a JSON-ready document.
+
+    ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses; ``only`` (one
+    of :data:`PARTS`) measures that part alone (``predictor`` includes training).
+    """
+    if only is not None and only not in PARTS:
+        raise ValueError(f"unknown bench part {only!r}; choose one of {', '.join(PARTS)}")
+
+    def wanted(part: str) -> bool:
+        return only is None or only == part
+
+    started = time.perf_counter()
+    figs: dict[str, Any] = {}
+    if wanted("simulator"):
+        figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                            model="rigid-body")
+        figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
+                                                       model="point-mass")
+        figs["vehicle_step"] = bench_vehicle_step(cfg, quick=quick, progress=progress)
+    if wanted("docking"):
+        figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
+    if wanted("predictor"):
+        figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
+        figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
+    if wanted("memory"):
+        from aerodock.bench.memory import bench_memory  # also the probe's script: not eager
+
+        figs["memory"] = bench_memory(progress=progress, config_path=config_path)
+    if include_reproduce is None:
+        include_reproduce = not quick or only == "reproduce"
+    if wanted("reproduce"):
+        figs["reproduce_quick_s"] = (
+            bench_reproduce(progress, config_path) if include_reproduce
+            else unavailable("skipped with --quick (takes minutes)", "s"))
+    if wanted("gym"):
+        try:
+            from aerodock.bench.vector_env import bench_vector_env
+        except ImportError as err:  # gymnasium is an optional extra
+            figs["gym_vector_env"] = {"1": unavailable(failure_reason(err), "env-steps/s")}
+        else:
+            figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
+    if include_peer and wanted("peer"):
+        figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
+    return {
+        "machine": machine_info(),
+        "settings": {"quick": quick, "physics_rate_hz": cfg.sim.physics_rate_hz,
+                     "control_rate_hz": cfg.sim.control_rate_hz,
+                     "statistic": "median of the repetitions after a warm-up; min and max "
+                                  "give the spread"},
+        "figures": figs,
+        "targets": targets(figs),
+        "bench_wall_s": round(time.perf_counter() - started, 1),
+    }

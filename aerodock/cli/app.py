@@ -1,0 +1,146 @@
+"""The ``aerodock`` app: every command registered in one place, and ``run``/``main`` around it.
+
+Each command area has its module in :mod:`aerodock.cli` (``field``, ``dock``, ``learning``,
+``experiments``, ``ingest``, ``node``, ``view``, ``sweep``, ``bench``) holding plain functions;
+nothing registers itself on import. The order below is the order of ``aerodock --help``. Heavy
+dependencies (PyTorch, rclpy, Ray, rerun) are imported inside the commands that need them, so
+``aerodock --help`` stays fast and every other command works without those extras.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from typing import Any
+
+import typer
+
+from aerodock.cli import bench, dock, experiments, field, ingest, learning, node, sweep, view
+from aerodock.fileio import one_line
+
+app = typer.Typer(
+    add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+    help="Docking two multirotors in close proximity with learnt downwash models.",
+)
+field_app = typer.Typer(no_args_is_help=True, help="Inspect a downwash field or a learnt model.")
+app.add_typer(field_app, name="field")
+
+app.command("dock")(dock.dock)
+app.command("faults")(dock.faults_command)
+app.command("bench")(bench.bench_command)
+app.command("ingest")(ingest.ingest_command)
+app.command("train")(learning.train_command)
+app.command("evaluate")(learning.evaluate_command)
+app.command("export")(learning.export_command)
+app.command("node")(node.node_command)
+app.command("view")(view.view_command)
+app.command("sweep")(sweep.sweep_command)
+app.command("collect")(learning.collect)
+app.command("reproduce")(experiments.reproduce)
+app.command("targets")(experiments.targets_command)
+field_app.command("probe")(field.field_probe)
+field_app.command("plot")(field.field_plot)
+
+
+def _click_exceptions() -> Any:
+    """Click's exceptions module, of the click Typer runs on (recent Typer vendors a copy)."""
+    import importlib
+
+    import typer.core
+
+    package = getattr(typer.core, "_click", None) or typer.core.click
+    return importlib.import_module(f"{package.__name__}.exceptions")
+
+
+def _expand_repeatable(args: list[str]) -> list[str]:
+    """``--data a b`` -> ``--data a --data b`` for the repeatable options of the subcommand.
+
+    Only in commands without positional arguments (there a value list is unambiguous); a value
+    list ends at the next token starting with ``-``.
+    """
+    group = typer.main.get_command(app)
+    names = [a for a in args if not a.startswith("-")]
+    command: Any = group
+    for name in names[:2]:
+        sub = getattr(command, "commands", {}).get(name)
+        if sub is None:
+            break
+        command = sub
+    params = getattr(command, "params", [])
+    if command is group or any(p.param_type_name == "argument" for p in params):
+        return args
+    repeatable = {o for p in params
+                  if p.param_type_name == "option" and getattr(p, "multiple", False)
+                  for o in p.opts}
+    out: list[str] = []
+    current: str | None = None
+    taken = 0
+    for arg in args:
+        flag = arg.split("=", 1)[0]
+        if flag in repeatable:
+            current, taken = flag, int("=" in arg)
+            out.append(arg)
+        elif current is not None and not arg.startswith("-"):
+            if taken:
+                out.append(current)
+            out.append(arg)
+            taken += 1
+        else:
+            current = None
+            out.append(arg)
+    return out
+
+
+def run(argv: list[str] | None = None) -> int:
+    """The command line as a function: run ``argv`` and return the exit code.
+
+    Usage errors and bad input print one ``error:`` line on stderr and return 2; an interrupt
+    returns 130; an unexpected failure (a bug) returns 1 with its type name.
+    """
+    click = _click_exceptions()
+    args = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = _expand_repeatable(args)
+        rv = typer.main.get_command(app).main(args=args, prog_name="aerodock",
+                                              standalone_mode=False)
+        return rv if isinstance(rv, int) else 0
+    except getattr(click, "NoArgsIsHelpError", ()) as err:
+        typer.echo(err.ctx.get_help())
+        return 0
+    except click.UsageError as err:
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        typer.echo(f"error: {one_line(err.format_message())}{hint}", err=True)
+        return 2
+    except click.ClickException as err:
+        typer.echo(f"error: {one_line(err.format_message())}", err=True)
+        return 2
+    except (KeyboardInterrupt, typer.Abort):
+        typer.echo("interrupted", err=True)
+        return 130
+    except Exception as err:  # noqa: BLE001 - the one place errors become messages
+        if os.environ.get("AERODOCK_DEBUG"):
+            raise
+        expected = isinstance(err, ValueError | OSError | MemoryError)
+        if isinstance(err, MemoryError):
+            detail = "out of memory (the input or the run is too large)"
+        elif isinstance(err, OSError) and err.strerror and err.filename:
+            detail = f"{err.filename}: {err.strerror}"
+        else:
+            detail = one_line(err)
+        msg = detail if expected else f"{type(err).__name__}: {detail}"
+        typer.echo(f"error: {msg}", err=True)
+        if not expected:
+            typer.echo("(set AERODOCK_DEBUG=1 for a traceback)", err=True)
+        return 2 if expected else 1
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    # SIGTERM unwinds like an interrupt, so atomic writes remove their temporary files.
+    raise SystemExit(128 + signum)
+
+
+def main() -> None:
+    """Console entry point: run the app; turn errors into one-line messages."""
+    signal.signal(signal.SIGTERM, _terminate)
+    sys.exit(run())

@@ -1,0 +1,61 @@
+"""``aerodock bench``: every hot path's speed, as a table or as JSON (:mod:`aerodock.bench`)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from aerodock.bench import PARTS, run_all, table_rows
+from aerodock.cli.common import ConfigOpt, JsonOpt, fail, print_json
+from aerodock.config import load_config
+from aerodock.fileio import json_ready
+
+
+def bench_command(
+    quick: Annotated[bool, typer.Option(
+        "--quick", help="Fewer, shorter repetitions; skips `reproduce --quick`.")] = False,
+    as_json: JsonOpt = False,
+    config: ConfigOpt = None,
+    only: Annotated[str | None, typer.Option(
+        "--only", help=f"Measure one part alone: {', '.join(PARTS)}.")] = None,
+) -> None:
+    """Measure the speed of every hot path: simulator, docking, learnt model, training,
+    `reproduce --quick`, memory, and RotorPy on the same scenario (if installed)."""
+    if only is not None and only not in PARTS:
+        fail(f"unknown --only {only!r}; choose one of {', '.join(PARTS)}")
+
+    err = Console(stderr=True)
+    with err.status("benchmarking") as status:
+        def progress(msg: str) -> None:
+            if err.is_terminal:
+                status.update(f"benchmarking: {msg}")
+            else:
+                err.print(f"bench: {msg}", highlight=False)
+
+        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config,
+                      only=only)
+    if as_json:
+        print_json(json_ready(doc))  # a figure that could not be computed is null
+        return
+    m = doc["machine"]
+    load = m.get("load_average_1_5_15_min")
+    table = Table(title=f"aerodock bench{' --quick' if quick else ''}: {m['cpu']}, "
+                  f"{m['cores']} cores, Python {m['versions']['python']}"
+                  + (f", load average {load[0]:g} / {load[1]:g} / {load[2]:g} (1/5/15 min, "
+                     "at the end)" if load else ""))
+    for col, justify in (("figure", "left"), ("median", "right"), ("spread (min - max)", "right"),
+                         ("unit", "left"), ("note", "left")):
+        table.add_column(col, justify=justify)  # type: ignore[arg-type]
+    for row in table_rows(doc):
+        table.add_row(*row)
+    console = Console()
+    console.print(table)
+    for t in doc["targets"]:
+        mark = {True: "met", False: "NOT met", None: "not measured"}[t["met"]]
+        value = t["measured"]
+        measured = ("-" if value is None else f"{value:,.0f}" if value >= 1000
+                    else f"{value:.3g}")
+        console.print(f"target {t['target']} {t['threshold']}: {measured} ({mark})")

@@ -1,0 +1,101 @@
+"""``aerodock reproduce`` and ``aerodock targets``: the paper's experiments and the docking
+targets beyond it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aerodock.cli.common import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    bar_callback,
+    err_console,
+    fail,
+    print_json,
+    progress_bar,
+)
+from aerodock.config import load_config
+
+
+def reproduce(
+    quick: Annotated[bool, typer.Option(help="A smaller run (a few minutes).")] = False,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    real_data: Annotated[bool, typer.Option(
+        help="Run the real-data study (step 5; it reads ../shared/data and does not depend on "
+             "--config).")] = True,
+) -> None:
+    """The paper's experiments end to end: results.json, report.md and figures/."""
+    from aerodock.experiments.reproduce import run_reproduce
+
+    cfg = load_config(config)
+    # ../shared/data beside the repository (this file is REPO/aerodock/cli/experiments.py)
+    shared = Path(__file__).resolve().parents[3] / "shared" / "data"
+    here = Path.cwd().parent / "shared" / "data"
+    data = (here if here.is_dir() else shared) if real_data else None
+
+    def say(msg: str) -> None:
+        err_console.print(msg)
+
+    with progress_bar() as bar:
+        results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
+                                bar=bar_callback(bar))
+    typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
+               f"{results['timings_s']['total_s']:.0f} s)")
+
+
+def targets_command(
+    out: Annotated[Path, typer.Option(help="Folder for the curriculum (when no --model) and "
+                                           "targets.json.")] = Path("out/targets"),
+    model: Annotated[Path | None, typer.Option(
+        help="A trained model DIR (default: fly the deep curriculum first, into OUT/data).")
+    ] = None,
+    trials: Annotated[int, typer.Option(help="Trials per scenario and row.")] = 100,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Docking targets beyond the paper (d_p 0.36 and 0.27 m; leader at 0.25 and 0.5 m/s) for
+    the paper's controller and ours, with the learnt model, on the configured field."""
+    from aerodock.control.profiles import controller_config
+    from aerodock.experiments.report_controllers import targets_markdown
+    from aerodock.experiments.targets import targets
+    from aerodock.fileio import json_ready, write_json
+    from aerodock.learning.runtime import Predictor
+    from aerodock.mission.limits import check_campaign_size
+
+    if trials < 1:
+        fail(f"--trials must be >= 1, got {trials}")
+    cfg = load_config(config)
+    check_campaign_size(cfg, trials)
+
+    def say(msg: str) -> None:
+        err_console.print(f"[dim]{msg}[/dim]")
+
+    out.mkdir(parents=True, exist_ok=True)
+    if model is None:
+        from aerodock.learning.curriculum import run_curriculum
+
+        say("curriculum (the paper's stages, then the deep ones)")
+        summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
+        model = Path(summary["final_model"])
+    predictor = Predictor.load(model)
+    from aerodock.learning.compatibility import model_warnings
+
+    for note in model_warnings(predictor, cfg):
+        typer.echo(f"warning: {note}", err=True)
+    res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
+                   "ours + model": (controller_config(cfg, "ours"), predictor)},
+                  trials, predictor, seed, say)
+    res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
+    write_json(out / "targets.json", json_ready(res))
+    if as_json:
+        print_json(res)
+        return
+    typer.echo("\n".join(targets_markdown({"targets": res})))
+    typer.echo(f"wrote {out / 'targets.json'}")

@@ -1,0 +1,126 @@
+"""``aerodock field probe`` and ``aerodock field plot``: a downwash field or a learnt model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from aerodock.cli.common import ConfigOpt, JsonOpt, SeedOpt, check_number, fail, print_json
+from aerodock.config import load_config
+
+
+def field_probe(
+    separation: Annotated[float, typer.Option(help="Depth of the follower below the leader, m.")],
+    radial: Annotated[float, typer.Option(help="Horizontal offset from the leader's axis, m.")],
+    leader_speed: Annotated[float, typer.Option(help="Leader speed towards north, m/s.")] = 0.0,
+    samples: Annotated[int, typer.Option(help="Turbulence samples at the physics rate.")] = 5000,
+    model: Annotated[
+        Path | None, typer.Option(help="A trained model DIR to probe instead of the field.")
+    ] = None,
+    bar: Annotated[bool, typer.Option(
+        "--bar", help="Probe the force on the docking bar (held still, hovering leader).")] = False,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Mean and sd of the acceleration (m/s², NED) on a follower below the leader (or, with
+    --bar, of the force in N on the docking bar there)."""
+    from aerodock.downwash import build_field
+    from aerodock.downwash.probe import probe_bar, probe_bodies, probe_field
+    from aerodock.mission.limits import MAX_PROBE_SAMPLES
+
+    check_number("--separation", separation, -100.0, 100.0)
+    check_number("--radial", radial, -100.0, 100.0)
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
+    check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
+    cfg = load_config(config)
+    mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+    dt = 1.0 / cfg.sim.physics_rate_hz
+    if bar:
+        if model is not None or leader_speed != 0.0:
+            fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
+        area = cfg.platform.bar_length_m * cfg.platform.bar_diameter_m
+        result = probe_bar(build_field(cfg), separation, radial, samples, dt,
+                           np.random.default_rng(seed), area, mass, g)
+        if result is None:
+            result = {"separation_m": separation, "radial_m": radial, "mean_n": None,
+                      "sd_n": None, "lateral_sd_over_vertical_mean": None,
+                      "note": "the field has no bar_force_n(): the world applies no wake force "
+                              "to the bar"}
+        result["source"] = cfg.downwash.field
+        if as_json:
+            print_json(result)
+            return
+        typer.echo(f"{result['source']} on the bar at {separation:g} m below, {radial:g} m off "
+                   "axis, hovering leader:")
+        if result["mean_n"] is None:
+            typer.echo(f"  {result['note']}")
+            return
+        typer.echo("  mean [N, NED] = " + "  ".join(f"{v:+.5f}" for v in result["mean_n"]))
+        typer.echo("  sd   [N, NED] = " + "  ".join(f"{v:.5f}" for v in result["sd_n"]))
+        ratio = result["lateral_sd_over_vertical_mean"]
+        if ratio is not None:
+            typer.echo(f"  sd across the bar / mean vertical drag = {ratio:.3f}")
+        return
+    if model is not None:
+        from aerodock.learning.runtime import Predictor
+
+        predictor = Predictor.load(model)
+        leader, follower = probe_bodies(separation, radial, leader_speed, mass, g)
+        mean = predictor.predict_bodies(leader, follower)[0]
+        result = {
+            "separation_m": separation, "radial_m": radial, "leader_speed_mps": leader_speed,
+            "samples": 1, "frame": "NED", "unit": "m/s^2", "source": str(model),
+            "mean_mps2": mean.tolist(), "sd_mps2": [0.0, 0.0, 0.0],
+        }
+    else:
+        result = probe_field(build_field(cfg), separation, radial, leader_speed, samples, dt,
+                             np.random.default_rng(seed), mass, g)
+        result["source"] = cfg.downwash.field
+    if as_json:
+        print_json(result)
+        return
+    m, s = result["mean_mps2"], result["sd_mps2"]
+    typer.echo(f"{result['source']} at {separation:g} m below, {radial:g} m off axis, "
+               f"leader {leader_speed:g} m/s:")
+    typer.echo("  mean [m/s², NED] = " + "  ".join(f"{v:+.3f}" for v in m))
+    typer.echo("  sd   [m/s², NED] = " + "  ".join(f"{v:.3f}" for v in s))
+    if "field_mean_mps2" in result:
+        typer.echo("  field mean       = " + "  ".join(f"{v:+.3f}" for v in
+                                                      result["field_mean_mps2"])
+                   + f"  ({result['field_mean_source']})")
+
+
+def field_plot(
+    out: Annotated[Path, typer.Option(help="PNG file to write.")] = Path("field.png"),
+    leader_speed: Annotated[float, typer.Option(help="Leader speed towards north, m/s.")] = 0.0,
+    model: Annotated[Path | None, typer.Option(help="Plot a trained model DIR instead.")] = None,
+    config: ConfigOpt = None,
+) -> None:
+    """Draw the field's mean (or a learnt model) as a vertical slice through the wake; a field
+    without mean_acceleration() is drawn from an estimate of its mean (said in the title)."""
+    from aerodock.downwash import build_field
+    from aerodock.downwash.mean import EstimatedMean, mean_acceleration_fn
+    from aerodock.downwash.probe import plot_field_slice
+    from aerodock.fileio import check_writable_target
+
+    check_number("--leader-speed", leader_speed, -100.0, 100.0)
+    check_writable_target(out)
+    cfg = load_config(config)
+    if model is not None:
+        from aerodock.learning.runtime import Predictor
+
+        predictor = Predictor.load(model)
+        mean_fn, title = predictor.predict_bodies, f"learnt model {model.name}"
+    else:
+        field = build_field(cfg)
+        mean_fn = mean_acceleration_fn(field, dt_s=1.0 / cfg.sim.physics_rate_hz)
+        title = cfg.downwash.field.rsplit(":", 1)[-1]
+        if isinstance(mean_fn, EstimatedMean):
+            title += f" (mean estimated, {mean_fn.samples} samples)"
+    path = plot_field_slice(mean_fn, out, cfg.vehicle.mass_kg, cfg.sim.gravity_mps2,
+                            leader_speed, title)
+    typer.echo(f"wrote {path}")
