@@ -277,6 +277,13 @@ def _check_consistency(data: dict[str, Any], source: str) -> None:
         raise ConfigError(
             f"{source}: 'sim.physics_rate_hz' must be a multiple of 'sim.control_rate_hz'"
         )
+    control = data["control"]
+    if control["command_rate_hz"] > sim["control_rate_hz"]:
+        raise ConfigError(f"{source}: 'control.command_rate_hz' must be <= 'sim.control_rate_hz'")
+    ticks = sim["control_rate_hz"] / control["command_rate_hz"]
+    if abs(ticks - round(ticks)) > 1e-9:
+        raise ConfigError(f"{source}: 'sim.control_rate_hz' must be a multiple of "
+                          "'control.command_rate_hz'")
     lo, hi = data["curriculum"]["stage0_depth_m"]
     if not lo < hi:
         raise ConfigError(f"{source}: 'curriculum.stage0_depth_m' must be [low, high] with "

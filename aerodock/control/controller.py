@@ -17,6 +17,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.accel_observer import AccelObserver
+from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
@@ -70,11 +71,21 @@ class PositionController:
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
         self.yaw_rate_max = c.yaw_rate_max_radps
         self.dt_s = 1.0 / cfg.sim.control_rate_hz
-        self.observer = (
-            BiasObserver(n, self.dt_s, c.observer_bias_tau_s, c.observer_pos_noise_m,
-                         c.observer_vel_noise_mps)
-            if use_observer else None
-        )
+        self.observer: BiasObserver | FreyjaBiasEstimator | None = None
+        if use_observer and c.bias_estimator == "freyja":
+            q_p, q_v, q_b, r_p, r_v = c.freyja_estimator_coeffs
+            self.observer = FreyjaBiasEstimator(n, self.dt_s, FreyjaEstimatorParams(
+                propagation_rate_hz=c.freyja_estimator_rate_hz, process_noise=(q_p, q_v, q_b),
+                measurement_noise=(r_p, r_v)))
+        elif use_observer:
+            self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
+                                         c.observer_pos_noise_m, c.observer_vel_noise_mps)
+        # The controller's own rate: a new command every hold_ticks state messages (held in
+        # between, as Freyja's timer does); the reference acceleration's share fed forward.
+        self.hold_ticks = int(round(cfg.sim.control_rate_hz / c.command_rate_hz))
+        self.reference_ff_factor = float(c.reference_ff_factor)
+        self._tick = 0
+        self._held: ControlOutput | None = None
         self.accel_observer = None
         if use_observer and has_accelerometer and c.rejection == "accelerometer":
             v = cfg.vehicle
@@ -93,11 +104,15 @@ class PositionController:
               bias_sd_mps2: float | None = None) -> None:
         """Start from measured states (n, 3), optionally with a bias guess and its uncertainty
         (see :meth:`aerodock.control.observer.BiasObserver.reset`)."""
-        if self.observer is not None:
+        if isinstance(self.observer, FreyjaBiasEstimator):
+            self.observer.reset(p, v)  # Freyja's own prior (it takes no bias guess)
+        elif self.observer is not None:
             self.observer.reset(p, v, bias_mps2, bias_sd_mps2)
         if self.accel_observer is not None:
             self.accel_observer.reset(self.params.hover_thrust_n)
         self._last_input = None
+        self._tick = 0
+        self._held = None
 
     def step(self, p_meas: np.ndarray, v_meas: np.ndarray, rpy_meas: np.ndarray,
              ref: Reference, terminal: np.ndarray | None = None,
@@ -119,8 +134,14 @@ class PositionController:
                 contact with the bar).
         """
         n = self.n
-        if self.observer is not None and self._last_input is not None:
+        freyja = isinstance(self.observer, FreyjaBiasEstimator)
+        if freyja:
+            self.observer.measure(p_meas, v_meas)  # every state message
+        elif self.observer is not None and self._last_input is not None:
             self.observer.update(p_meas, v_meas, self._last_input)
+        self._tick += 1
+        if self._held is not None and (self._tick - 1) % self.hold_ticks:
+            return self._held  # between the controller's own ticks: the last command holds
         residual = None
         if self.accel_observer is not None:
             if accel_mps2 is None:
@@ -130,7 +151,8 @@ class PositionController:
         gain = self.gain
         if terminal is not None and np.any(terminal):
             gain = np.where(terminal[:, None, None], self.gain_terminal, self.gain)
-        accel, yaw_rate = lqr_command(gain, p_meas, v_meas, rpy_meas[:, 2], ref.p, ref.v, ref.a,
+        ref_a = ref.a if self.reference_ff_factor == 1.0 else self.reference_ff_factor * ref.a
+        accel, yaw_rate = lqr_command(gain, p_meas, v_meas, rpy_meas[:, 2], ref.p, ref.v, ref_a,
                                       ref.yaw_rad, ref.yaw_rate_radps)
         bias = self.observer.bias_mps2 if self.observer is not None else np.zeros((n, 3))
         if residual is not None:
@@ -143,6 +165,8 @@ class PositionController:
         )
         applied = attitude_thrust_to_accel(roll, pitch, rpy_meas[:, 2], thrust, p.mass_kg,
                                            p.gravity_mps2)
+        if freyja:  # Freyja hands its estimator the command itself: after both corrections
+            self.observer.set_input(desired)
         # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat
         # (and - r_hat: the bias observer then takes out what the accelerometer cannot see).
         self._last_input = applied + ff if residual is None else applied + ff + residual
@@ -150,5 +174,8 @@ class PositionController:
             self.accel_observer.commanded(thrust, ff)
         yaw_rate = np.clip(yaw_rate, -self.yaw_rate_max, self.yaw_rate_max)
         saturated = np.abs(applied - desired).max(axis=1) > 1e-6
-        return ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
-                             saturated)
+        out = ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
+                            saturated)
+        if self.hold_ticks > 1:
+            self._held = out
+        return out
