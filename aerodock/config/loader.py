@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from aerodock.config.schema import (
+    LEADER_FIXED_KEYS,
     RULES,
     SECTIONS,
     AutopilotSection,
@@ -65,6 +66,17 @@ class Config:
     def vehicle(self) -> VehicleSection:
         """``[vehicle]``."""
         return self._section("vehicle")
+
+    @cached_property
+    def leader(self) -> VehicleSection:
+        """The leader's vehicle: ``[vehicle]`` with the ``[leader]`` table's values."""
+        return VehicleSection(**{**self.data["vehicle"], **self.data["leader"]})
+
+    @property
+    def leader_differs(self) -> bool:
+        """The ``[leader]`` table sets a value other than the follower's."""
+        vehicle = self.data["vehicle"]
+        return any(vehicle[k] != v for k, v in self.data["leader"].items())
 
     @cached_property
     def autopilot(self) -> AutopilotSection:
@@ -157,6 +169,9 @@ def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: st
         if dotted == "downwash":
             _merge_downwash(target[key], value, reference[key], source)
             continue
+        if dotted == "leader":
+            _merge_leader(target[key], value, reference["vehicle"], source)
+            continue
         default = reference[key]
         if isinstance(default, dict):
             if not isinstance(value, Mapping):
@@ -173,6 +188,21 @@ def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: st
                 raise ConfigError(f"{source}: '{dotted}' must be an integer, got {value!r}")
             value = int(value)
         target[key] = float(value) if isinstance(default, float) else value
+
+
+def _merge_leader(target: dict, user: Any, vehicle: dict, source: str) -> None:
+    """``[leader]``: ``[vehicle]`` keys where the leader differs (typed as ``[vehicle]``'s)."""
+    if not isinstance(user, Mapping):
+        raise ConfigError(f"{source}: 'leader' must be a table")
+    for key in user:
+        if key in LEADER_FIXED_KEYS:
+            raise ConfigError(f"{source}: 'leader.{key}' cannot differ from 'vehicle.{key}'")
+    scratch = {key: vehicle[key] for key in user if key in vehicle}
+    try:
+        _merge(scratch, user, vehicle, source, prefix="vehicle.")
+    except ConfigError as err:
+        raise ConfigError(str(err).replace("'vehicle.", "'leader.")) from None
+    target.update(scratch)
 
 
 def _merge_downwash(target: dict, user: Any, reference: dict, source: str) -> None:
@@ -240,6 +270,9 @@ def _validate(data: dict[str, Any], source: str) -> None:
                 else:
                     _check_plugin_params(value, source, f"{dotted}.")
                 continue
+            if section == "leader":
+                _validate_leader_key(key, value, source)
+                continue
             rule = RULES[dotted]
             bounds = (rule.low, rule.high)
             if rule.kind == "choice" and value not in rule.choices:
@@ -264,6 +297,17 @@ def _validate(data: dict[str, Any], source: str) -> None:
     _check_consistency(data, source)
     # Fail now, not mid-run, on an unknown or broken plug-in.
     resolve_factory(data["downwash"]["field"], source)
+
+
+def _validate_leader_key(key: str, value: Any, source: str) -> None:
+    """A ``[leader]`` value against its ``[vehicle]`` key's rule, named as the leader's."""
+    rule = RULES[f"vehicle.{key}"]
+    dotted, bounds = f"leader.{key}", (rule.low, rule.high)
+    if rule.kind == "numbers":
+        for i, item in enumerate(value):
+            _check_number(item, f"{dotted}[{i}]", source, bounds)
+    elif _is_number(value):
+        _check_number(value, dotted, source, bounds)
 
 
 def _check_consistency(data: dict[str, Any], source: str) -> None:

@@ -89,6 +89,10 @@ class VehicleSection:
     # Hover needs 1 g; 10 % more is the least that leaves any authority to manoeuvre.
     thrust_max_g: float = number(1.1, 10)
     thrust_gain_sd: float = number(0, 0.5)
+    mass_sd: float = number(0, 0.3)
+    inertia_sd: float = number(0, 0.3)
+    torque_coeff_sd: float = number(0, 0.3)
+    motor_tau_sd: float = number(0, 0.3)
     accel_noise_mps2: float = number(0, 100)
     inertia_kgm2: list[float] = numbers(3, 1e-07, 1000)
     rotor_thrust_coeff: float = number(1e-10, 0.01)
@@ -276,13 +280,18 @@ class CurriculumSection:
     label_basis: str = choice("command", "thrust")
 
 
+LEADER_FIXED_KEYS = frozenset({"model"})
+"""``[vehicle]`` keys a ``[leader]`` table may not override (both vehicles are one model)."""
+
 SECTIONS: dict[str, type] = {
     "vehicle": VehicleSection, "autopilot": AutopilotSection, "imu": ImuSection,
     "mocap": MocapSection, "sim": SimSection, "downwash": DownwashSection,
     "platform": PlatformSection, "gripper": GripperSection, "control": ControlSection,
     "planner": PlannerSection, "mission": MissionSection, "curriculum": CurriculumSection,
 }
-"""Each TOML table and the section type that holds it, in the order of defaults.toml."""
+"""Each TOML table and the section type that holds it, in the order of defaults.toml. The
+``[leader]`` table is not among them: it holds ``[vehicle]`` keys (checked by their rules) where
+the leader differs from the follower, and reads as a ``VehicleSection`` (``Config.leader``)."""
 
 
 def _rules() -> dict[str, Rule]:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.config.schema import VehicleSection
 from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
@@ -61,11 +62,15 @@ class PositionController:
         has_accelerometer: the caller passes this vehicle's accelerometer to :meth:`step` (the
             follower: the simulated world models its IMU); without it the rejection is the bias
             observer's alone.
+        vehicle: the vehicle it flies (default ``[vehicle]``; ``cfg.leader`` for the leader):
+            its nominal mass, limits and motor lag are all the controller knows of it.
     """
 
-    def __init__(self, cfg: Config, n: int, use_observer: bool, has_accelerometer: bool = False):
+    def __init__(self, cfg: Config, n: int, use_observer: bool, has_accelerometer: bool = False,
+                 vehicle: VehicleSection | None = None):
         c = cfg.control
-        self.params = VehicleParams.from_config(cfg)
+        vehicle = cfg.vehicle if vehicle is None else vehicle
+        self.params = VehicleParams.from_config(cfg, vehicle)
         self.n = n
         self.gain = lqr_gain(c.q_diag, c.r_diag)
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
@@ -88,7 +93,7 @@ class PositionController:
         self._held: ControlOutput | None = None
         self.accel_observer = None
         if use_observer and has_accelerometer and c.rejection == "accelerometer":
-            v = cfg.vehicle
+            v = vehicle
             motor_tau = v.motor_tau_s if v.model == "rigid-body" else v.tau_thrust_s
             self.accel_observer = AccelObserver(n, self.dt_s, c.accel_observer_tau_s, motor_tau,
                                                 self.params.mass_kg, self.params.gravity_mps2,

@@ -15,8 +15,11 @@ from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench, quad_rot
 __all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "follower_wrench",
            "mean_acceleration_fn", "quad_rotor_offsets_body_m"]
 
-# World constants a field factory may accept; passed only when its signature names them.
-_WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3")
+# World constants a field factory may accept; passed only when its signature names them. The
+# plain names are the follower's (both vehicles', for a field that does not tell them apart).
+_WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3", "leader_rotor_radius_m",
+                 "leader_n_rotors", "leader_mass_kg", "follower_rotor_radius_m",
+                 "follower_n_rotors", "follower_mass_kg")
 
 
 def build_field(cfg: Config) -> DownwashField:
@@ -36,8 +39,12 @@ def build_field(cfg: Config) -> DownwashField:
         accepted = inspect.signature(factory).parameters
     except (TypeError, ValueError):
         accepted = {}
-    world = {"rotor_radius_m": cfg.vehicle.rotor_radius_m, "n_rotors": cfg.vehicle.n_rotors,
-             "air_density_kgpm3": cfg.sim.air_density_kgpm3}
+    lead, fol = cfg.leader, cfg.vehicle
+    world = {"rotor_radius_m": fol.rotor_radius_m, "n_rotors": fol.n_rotors,
+             "air_density_kgpm3": cfg.sim.air_density_kgpm3,
+             "leader_rotor_radius_m": lead.rotor_radius_m, "leader_n_rotors": lead.n_rotors,
+             "leader_mass_kg": lead.mass_kg, "follower_rotor_radius_m": fol.rotor_radius_m,
+             "follower_n_rotors": fol.n_rotors, "follower_mass_kg": fol.mass_kg}
     for key in _WORLD_KWARGS:
         if key in accepted and key not in params:
             params[key] = world[key]

@@ -201,7 +201,8 @@ class MissionBatch:
                     start.follower_p_m + self.lead_vel * shift0)
         if spec.moving and pre.start_velocity(self.lead_vel).any():
             world.set_velocities(lead_v, lead_v)
-        self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed)
+        self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed,
+                                             vehicle=cfg.leader)
         self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE,
                                                has_accelerometer=True)
         settle(world, self.leader_ctl, self.follower_ctl,
@@ -210,6 +211,10 @@ class MissionBatch:
         self.shape = approach.ApproachShape.of(params, timing.arrival_s)
         self.plan = approach.first_plan(params, self.shape, start.follower_p_m,
                                         start.leader_p_m, lead_v)
+        # What a docked follower sheds onto the leader, per unit of the leader's mass.
+        self._shed_mps2 = (1.0 - m.post_dock_thrust_fraction) * params.gravity_mps2
+        if params.leader_mass_kg != params.mass_kg:
+            self._shed_mps2 *= params.mass_kg / params.leader_mass_kg
         # The docking status reaches the leader over the network, status_delay_s late.
         delay_ticks = int(round(m.status_delay_s / self.dt_s))
         self._status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
@@ -255,18 +260,21 @@ class MissionBatch:
         return Status(self.phase.copy(), self.abort_reason.copy(), clear.copy(),
                       clear < self.params.mission.clearance_m)
 
-    def _bodies(self, obs: Observation) -> BodyState:
-        """``obs`` as the predictor sees a vehicle: hovering thrust and the nominal mass."""
+    def _bodies(self, obs: Observation, leader: bool = False) -> BodyState:
+        """``obs`` as the predictor sees a vehicle: hovering at its nominal mass (the follower's,
+        or the leader's)."""
         n, params = obs.p.shape[0], self.params
-        return BodyState(obs.p, obs.v, obs.R, np.full(n, params.hover_thrust_n),
-                         np.full(n, params.mass_kg))
+        mass = params.leader_mass_kg if leader else params.mass_kg
+        return BodyState(obs.p, obs.v, obs.R, np.full(n, mass * params.gravity_mps2),
+                         np.full(n, mass))
 
     def _predict(self, obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
         if self.predictor is None:
             return None
         if self.comp == Compensation.ORACLE:
             return self.predictor.predict_bodies(*self.world.body_states())
-        return self.predictor.predict_bodies(self._bodies(obs_l), self._bodies(obs_f))
+        return self.predictor.predict_bodies(self._bodies(obs_l, leader=True),
+                                             self._bodies(obs_f))
 
     # -- the decision half of a control period -------------------------------------------------
     def decide(self) -> Decision:
@@ -283,7 +291,7 @@ class MissionBatch:
         self.lout = leader.leader_command(
             self.leader_ctl, obs_l,
             leader.leader_reference(self.leader_p0, self.lead_vel, self.lead_v, t),
-            self._status_sent[0], (1.0 - m.post_dock_thrust_fraction) * params.gravity_mps2)
+            self._status_sent[0], self._shed_mps2)
         # The follower: plan, phases.
         phase = self.phase
         active = self.active  # approaching when this period began
@@ -364,8 +372,9 @@ class MissionBatch:
         if self.torque_ff:
             # The wake's torque predicted by the model (learnt, or at the rotor hubs from the
             # force), cancelled by the autopilot (not while hanging from the bar).
-            tau = feedforward_torque_nm(self.predictor, self._bodies(obs_l_f),
-                                        self._bodies(obs_f), world.fleet.params.rotor_offsets_m)
+            tau = feedforward_torque_nm(self.predictor, self._bodies(obs_l_f, leader=True),
+                                        self._bodies(obs_f),
+                                        world.follower_fleet.params.rotor_offsets_m)
             tau = np.where(world.captured[:, None], 0.0, tau)
             fout = replace(fout, command=replace(fout.command, torque_ff_nm=-tau))
         close = triggers.active_close_command(obs_f, obs_l_f, self.geom, gp, t,
@@ -443,7 +452,7 @@ class MissionBatch:
             "name": f"dock-seed{spec.seed}-trial{int(self.trials[i]):04d}",
             "source": "aerodock-sim", "frame": "NED",
             "label_basis": self.recorder.label_basis,
-            "leader_mass_kg": params.mass_kg, "follower_mass_kg": params.mass_kg,
+            "leader_mass_kg": params.leader_mass_kg, "follower_mass_kg": params.mass_kg,
             **params.log_meta,
             "compensation": Compensation(spec.compensation).value,
             "offset_m": params.cable_length_m,

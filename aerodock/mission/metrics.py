@@ -67,8 +67,9 @@ class MissionMetrics:
         if world.rigid:
             seg_a, seg_b = platform_segments(anchor_point(lead.p, lead.R, world.platform),
                                              leader_yaw_rad, world.bar, world.platform)
-            self.strikes |= live & rotor_strike(fol.p, fol.R, world.fleet.params.rotor_offsets_m,
-                                                rotor_radius_m, seg_a, seg_b, gp.bar_radius_m)
+            offsets = world.follower_fleet.params.rotor_offsets_m
+            self.strikes |= live & rotor_strike(fol.p, fol.R, offsets, rotor_radius_m, seg_a,
+                                                seg_b, gp.bar_radius_m)
         if self.trace:
             tr = self.trace
             tr["t_s"].append(t_s)

@@ -18,7 +18,8 @@ class MissionParams:
     Attributes:
         mission, planner: ``[mission]`` and ``[planner]``.
         geometry: the offsets between the leader, the bar and the follower at docking.
-        mass_kg, gravity_mps2, rotor_radius_m: the follower's (both vehicles are alike).
+        mass_kg, gravity_mps2, rotor_radius_m: the follower's nominal values.
+        leader_mass_kg: the leader's nominal mass.
         control_rate_hz: the controllers' rate.
         torque_feedforward: ``control.torque_feedforward`` (with a model flown).
         label_basis: what recorded logs hold as the follower's explained acceleration.
@@ -30,6 +31,7 @@ class MissionParams:
     planner: PlannerSection
     geometry: DockGeometry
     mass_kg: float
+    leader_mass_kg: float
     gravity_mps2: float
     rotor_radius_m: float
     control_rate_hz: float
@@ -44,7 +46,8 @@ class MissionParams:
         v = cfg.vehicle
         return cls(
             mission=cfg.mission, planner=cfg.planner, geometry=DockGeometry.from_config(cfg),
-            mass_kg=v.mass_kg, gravity_mps2=cfg.sim.gravity_mps2, rotor_radius_m=v.rotor_radius_m,
+            mass_kg=v.mass_kg, leader_mass_kg=cfg.leader.mass_kg,
+            gravity_mps2=cfg.sim.gravity_mps2, rotor_radius_m=v.rotor_radius_m,
             control_rate_hz=cfg.sim.control_rate_hz,
             torque_feedforward=cfg.control.torque_feedforward,
             label_basis=cfg.curriculum.label_basis, cable_length_m=cfg.platform.cable_length_m,
@@ -59,7 +62,8 @@ class MissionParams:
 
 def vehicle_meta(cfg: Config) -> dict[str, Any]:
     """FlightLog metadata of both simulated vehicles (model files record what they learnt on)."""
-    v = cfg.vehicle
-    return {"leader_rotor_radius_m": v.rotor_radius_m, "follower_rotor_radius_m": v.rotor_radius_m,
-            "leader_n_rotors": int(v.n_rotors), "follower_n_rotors": int(v.n_rotors),
-            "vehicle_model": v.model}
+    lead, fol = cfg.leader, cfg.vehicle
+    return {"leader_rotor_radius_m": lead.rotor_radius_m,
+            "follower_rotor_radius_m": fol.rotor_radius_m,
+            "leader_n_rotors": int(lead.n_rotors), "follower_n_rotors": int(fol.n_rotors),
+            "vehicle_model": fol.model}

@@ -9,7 +9,14 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.world.gripper import GripperParams
 from aerodock.world.platform import PlatformParams
-from aerodock.world.vehicles.fleet import Fleet, build_fleet
+from aerodock.world.vehicles.body import SpreadParams
+from aerodock.world.vehicles.fleet import (
+    Fleet,
+    PairFleet,
+    PointMassFleet,
+    RigidBodyFleet,
+    build_fleet,
+)
 from aerodock.world.vehicles.point_mass import VehicleParams
 
 
@@ -50,8 +57,13 @@ class WorldParams:
     """Every constant the world step and its sensors read (nothing reads the config later).
 
     Attributes:
-        vehicle: the quadrotors' common constants (mass, gravity, limits, accelerometer noise).
-        fleet: the vehicle model flying both vehicles (rigid bodies or point masses).
+        vehicle: the follower's nominal constants (mass, gravity, limits, accelerometer noise).
+        leader_vehicle: the leader's nominal constants (the follower's unless ``[leader]``
+            differs).
+        leader_fleet, follower_fleet: each vehicle's model with its nominal parameters.
+        fleet: what steps the 2n batch: the one fleet of a homogeneous pair, or a
+            :class:`~aerodock.world.vehicles.fleet.PairFleet`.
+        spread, leader_spread: each vehicle type's fleet spread (the true vehicles' draws).
         platform: the bar and its cables.
         gripper: the follower's gripper (and which triggers are armed).
         imu, mocap: the sensors.
@@ -60,7 +72,12 @@ class WorldParams:
     """
 
     vehicle: VehicleParams
+    leader_vehicle: VehicleParams
+    leader_fleet: PointMassFleet | RigidBodyFleet
+    follower_fleet: PointMassFleet | RigidBodyFleet
     fleet: Fleet
+    spread: SpreadParams
+    leader_spread: SpreadParams
     platform: PlatformParams
     gripper: GripperParams
     imu: ImuParams
@@ -75,8 +92,15 @@ class WorldParams:
         """Bind every world constant of ``cfg``."""
         dt_s = 1.0 / cfg.sim.physics_rate_hz
         substeps = int(round(cfg.sim.physics_rate_hz / cfg.sim.control_rate_hz))
+        follower = build_fleet(cfg)
+        leader = build_fleet(cfg, cfg.leader) if cfg.leader_differs else follower
         return cls(
-            vehicle=VehicleParams.from_config(cfg), fleet=build_fleet(cfg),
+            vehicle=VehicleParams.from_config(cfg),
+            leader_vehicle=VehicleParams.from_config(cfg, cfg.leader), leader_fleet=leader,
+            follower_fleet=follower,
+            fleet=follower if leader is follower else PairFleet(leader, follower),
+            spread=SpreadParams.from_section(cfg.vehicle),
+            leader_spread=SpreadParams.from_section(cfg.leader),
             platform=PlatformParams.from_config(cfg), gripper=GripperParams.from_config(cfg),
             imu=ImuParams.from_config(cfg), mocap=MocapParams.from_config(cfg), dt_s=dt_s,
             substeps=substeps, dt_control_s=substeps * dt_s,

@@ -113,7 +113,7 @@ def torque_observations(state: WorldState, params: WorldParams) -> TorqueReading
     if not params.rigid:
         raise ValueError("torque observations need vehicle.model = 'rigid-body'")
     if state.torque_log is None:
-        state.torque_log = TorqueLog(params.fleet.params, state.n, params.dt_s)
+        state.torque_log = TorqueLog(params.follower_fleet.params, state.n, params.dt_s)
         state.steps_at_last_torque = state.step_index
         state.torque_reading = state.torque_log.read()
     elif state.step_index != state.steps_at_last_torque or state.torque_reading is None:

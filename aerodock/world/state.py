@@ -26,8 +26,6 @@ from aerodock.world.vehicles.fleet import Fleet, concat_states, split_state
 class BatchConstants:
     """Arrays of the hot loop that depend only on the batch size (never modified in place)."""
 
-    mass_kg: np.ndarray  # (n,)
-    mass_rows: np.ndarray  # (n, 3): the mass repeated per component (a flat loop, same numbers)
     bar_mass_kg: np.ndarray  # (n,)
     no_close: np.ndarray  # (n,) bool, all False: no active trigger command
     gravity_mps2: np.ndarray  # (3,) g e3
@@ -153,6 +151,7 @@ class StepFrame:
         close_command: (n,) the active trigger's command this step.
         both: the 2n vehicles at the start of the step; ``rot``/``pos``/``vel`` its arrays.
         lead, fol: the two halves as the downwash field sees them.
+        mass_kg, mass_rows_kg: (2n,) and (2n, 3) each vehicle's true mass.
         captured, any_captured: followers hanging from the bar.
         bar_axis_t: (3, n) the bars' axes, ``(cos yaw, sin yaw, 0)``, component-major.
         force_n: (2n, 3) external forces on the vehicles, world NED, N (accumulator).
@@ -174,6 +173,8 @@ class StepFrame:
     vel: np.ndarray
     lead: BodyState
     fol: BodyState
+    mass_kg: np.ndarray
+    mass_rows_kg: np.ndarray
     captured: np.ndarray
     any_captured: bool
     bar_axis_t: np.ndarray

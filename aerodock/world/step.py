@@ -56,7 +56,7 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     both = state.both
     rot, pos, vel = both.R, both.p, both.v
     thrust = both.thrust_n
-    mass = state.constants.mass_kg
+    mass = both.body.mass_kg
     captured = state.gripper.gate == _CAPTURED
     bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(state.bar.yaw_rad, out=bar_axis[0])
@@ -66,8 +66,9 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         targets=targets,
         close_command=state.constants.no_close if close_command is None else close_command,
         both=both, rot=rot, pos=pos, vel=vel,
-        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass),
-        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass),
+        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass[:n]),
+        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass[n:]),
+        mass_kg=mass, mass_rows_kg=both.body.mass_rows_kg,
         captured=captured, any_captured=bool(captured.any()),
         bar_axis_t=bar_axis,
         force_n=np.zeros((2 * n, 3)),

@@ -26,7 +26,7 @@ def wake_on_follower(state: WorldState, frame: StepFrame, params: WorldParams) -
     """The leader's wake on the follower: sampled at each rotor disk of a rigid body (a force and
     a torque), at the centre of a point mass (a force). Random draws: the field's turbulence."""
     n = state.n
-    mass_rows = state.constants.mass_rows
+    mass_rows = frame.mass_rows_kg[n:]
     if params.rigid:
         force, torque = follower_wrench(state.field, frame.lead, frame.fol,
                                         state.constants.rotor_offsets_m, params.dt_s)
@@ -85,7 +85,7 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     rotors do not give, as a force and a torque; the autopilot is not told."""
     if state.rotor_loss is None:
         return
-    n, fleet = state.n, params.fleet.params
+    n, fleet = state.n, params.follower_fleet.params
     both = frame.both
     lost = both.rotor_speed[n:] * both.rotor_speed[n:]
     lost *= (fleet.thrust_coeff * both.thrust_gain[n:])[:, None]
@@ -133,9 +133,9 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     lead_accel, fol_accel = frame.accel[:n], frame.accel[n:]
     captured = frame.captured
     if frame.any_captured:
-        hang_mass = np.where(captured, platform.bar_mass_kg + consts.mass_kg,
+        hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
                              platform.bar_mass_kg)
-        fol_own = (fol_accel - consts.gravity_mps2) * consts.mass_rows
+        fol_own = (fol_accel - consts.gravity_mps2) * frame.mass_rows_kg[n:]
         frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
     else:
         hang_mass = consts.bar_mass_kg

@@ -38,7 +38,8 @@ from aerodock.world.state import AccelWindow, BatchConstants, WorldState
 from aerodock.world.step import WORLD_STEP, Term, step_world
 from aerodock.world.terms import snapshot
 from aerodock.world.torque_sensing import TorqueReading
-from aerodock.world.vehicles.fleet import Fleet
+from aerodock.world.vehicles.body import draw_body
+from aerodock.world.vehicles.fleet import Fleet, PointMassFleet, RigidBodyFleet
 from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams, VehicleState
 
 
@@ -74,14 +75,13 @@ class World:
         self.field = field if field is not None else build_field(cfg)
         self.leader_fixed = leader_fixed
         self.terms = step
-        mass = np.full(n, params.vehicle.mass_kg)
         rigid = params.rigid
         self.constants = BatchConstants(
-            mass_kg=mass, mass_rows=np.repeat(mass[:, None], 3, axis=1),
             bar_mass_kg=np.full(n, params.platform.bar_mass_kg),
             no_close=np.zeros(n, dtype=bool),
             gravity_mps2=np.array([0.0, 0.0, params.vehicle.gravity_mps2]),
-            rotor_offsets_m=params.fleet.params.rotor_offsets_m if rigid else np.zeros((1, 3)),
+            rotor_offsets_m=(params.follower_fleet.params.rotor_offsets_m if rigid
+                             else np.zeros((1, 3))),
         )
         self._mean_fn: Any = None  # built on first use (estimating a mean copies the field)
         self.state: WorldState | None = None
@@ -94,8 +94,18 @@ class World:
 
     @property
     def fleet(self) -> Fleet:
-        """The vehicle model flying both vehicles."""
+        """What flies the 2n batch (one fleet, or a pair of them)."""
         return self.params.fleet
+
+    @property
+    def follower_fleet(self) -> PointMassFleet | RigidBodyFleet:
+        """The follower's vehicle model and nominal parameters."""
+        return self.params.follower_fleet
+
+    @property
+    def leader_fleet(self) -> PointMassFleet | RigidBodyFleet:
+        """The leader's vehicle model and nominal parameters."""
+        return self.params.leader_fleet
 
     @property
     def rigid(self) -> bool:
@@ -133,17 +143,26 @@ class World:
               follower_yaw_rad: np.ndarray | float = 0.0) -> None:
         """Both vehicles at rest at the given positions (n, 3), the bar hanging still.
 
-        Random draws, in order: the thrust gains (leader, follower), the strain gauge's bias and
-        calibration, the field's own, the accelerometer's bias.
+        Random draws, in order: the thrust gains (leader, follower), the other spreads of each
+        vehicle's true constants (leader, follower; none when no spread is set), the strain
+        gauge's bias and calibration, the field's own, the accelerometer's bias.
         """
         n, rng, params = self.n, self.rng, self.params
-        sd = params.vehicle.thrust_gain_sd
+        lead_sd, fol_sd = params.leader_spread, params.spread
         ones = np.ones(n)
-        lead_gain = ones if self.leader_fixed or sd <= 0 else 1.0 + sd * rng.standard_normal(n)
-        fol_gain = ones if sd <= 0 else 1.0 + sd * rng.standard_normal(n)
-        fleet = params.fleet
-        leader = fleet.hover(np.broadcast_to(leader_p_m, (n, 3)), leader_yaw_rad, lead_gain)
-        follower = fleet.hover(np.broadcast_to(follower_p_m, (n, 3)), follower_yaw_rad, fol_gain)
+        lead_gain = (ones if self.leader_fixed or lead_sd.thrust_coeff_sd <= 0
+                     else 1.0 + lead_sd.thrust_coeff_sd * rng.standard_normal(n))
+        fol_gain = (ones if fol_sd.thrust_coeff_sd <= 0
+                    else 1.0 + fol_sd.thrust_coeff_sd * rng.standard_normal(n))
+        lead_fleet, fol_fleet = params.leader_fleet, params.follower_fleet
+        lead_body = lead_fleet.nominal_body(n)
+        if not self.leader_fixed:
+            lead_body = draw_body(lead_body, lead_sd, rng)
+        fol_body = draw_body(fol_fleet.nominal_body(n), fol_sd, rng)
+        leader = lead_fleet.hover(np.broadcast_to(leader_p_m, (n, 3)), leader_yaw_rad, lead_gain,
+                                  lead_body)
+        follower = fol_fleet.hover(np.broadcast_to(follower_p_m, (n, 3)), follower_yaw_rad,
+                                   fol_gain, fol_body)
         anchor = anchor_point(leader.p, leader.R, params.platform)
         bar = hanging_bar(anchor, leader.v, leader.rpy[:, 2], params.platform)
         cable = np.tile([0.0, 0.0, params.platform.bar_mass_kg * params.vehicle.gravity_mps2],
@@ -153,7 +172,7 @@ class World:
         bias = (params.imu.accel_bias_sd_mps2 * rng.standard_normal((n, 3)) if params.rigid
                 else np.zeros((n, 3)))
         state = WorldState(
-            n=n, fleet=fleet, rng=rng, field=self.field, leader_fixed=self.leader_fixed,
+            n=n, fleet=params.fleet, rng=rng, field=self.field, leader_fixed=self.leader_fixed,
             constants=self.constants, bar=bar, cable_force_n=cable, gripper=gripper,
             accel_bias_body_mps2=bias,
             accel_window=AccelWindow(v_mps=follower.v.copy(), t_s=0.0, step_index=0),
@@ -278,9 +297,9 @@ class World:
     # -- what is seen --------------------------------------------------------------------------
     def body_states(self) -> tuple[BodyState, BodyState]:
         """True (leader, follower) states as the downwash field sees them."""
-        lead, fol, mass = self.leader, self.follower, self.constants.mass_kg
-        return (BodyState(lead.p, lead.v, lead.R, lead.thrust_n, mass),
-                BodyState(fol.p, fol.v, fol.R, fol.thrust_n, mass))
+        lead, fol = self.leader, self.follower
+        return (BodyState(lead.p, lead.v, lead.R, lead.thrust_n, lead.body.mass_kg),
+                BodyState(fol.p, fol.v, fol.R, fol.thrust_n, fol.body.mass_kg))
 
     def true_mean_field_mps2(self) -> np.ndarray:
         """(n, 3) the field's mean (turbulence-free) acceleration on the follower: its own

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.config.schema import VehicleSection
+from aerodock.world.vehicles.body import VehicleBody, body_rows, concat_bodies, nominal_body
 from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
     CommandTargets,
@@ -46,12 +48,14 @@ def _field_names(cls: type) -> tuple[str, ...]:
 
 
 def _concat(cls: type, a: Any, b: Any) -> Any:
-    return cls(*[np.concatenate([getattr(a, name), getattr(b, name)])
+    return cls(*[concat_bodies(getattr(a, name), getattr(b, name)) if name == "body"
+                 else np.concatenate([getattr(a, name), getattr(b, name)])
                  for name in _field_names(cls)])
 
 
 def _rows(cls: type, state: Any, sl: slice) -> Any:
-    return cls(*[getattr(state, name)[sl] for name in _field_names(cls)])
+    return cls(*[body_rows(state.body, sl) if name == "body" else getattr(state, name)[sl]
+                 for name in _field_names(cls)])
 
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:
@@ -72,6 +76,16 @@ def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> Attit
                            both("thrust_n"), torque)
 
 
+def _broadcast_command(cmd: AttitudeCommand, n: int) -> AttitudeCommand:
+    """``cmd`` with every field an (n,) array (a scalar command is every vehicle's)."""
+    def rows(name: str) -> np.ndarray:
+        return np.array(np.broadcast_to(np.asarray(getattr(cmd, name), dtype=float), (n,)))
+
+    torque = None if cmd.torque_ff_nm is None else np.broadcast_to(cmd.torque_ff_nm, (n, 3))
+    return AttitudeCommand(rows("roll_rad"), rows("pitch_rad"), rows("yaw_rate_radps"),
+                           rows("thrust_n"), torque)
+
+
 @dataclass(frozen=True)
 class PointMassFleet:
     """Point-mass vehicles (:func:`aerodock.world.vehicles.point_mass.step_vehicle_targets`)."""
@@ -80,10 +94,11 @@ class PointMassFleet:
     state_type: type = VehicleState
     has_torque: bool = False
 
-    def hover(self, p_m: np.ndarray, yaw_rad: np.ndarray | float,
-              gain: np.ndarray) -> VehicleState:
-        """Vehicles at rest at ``p_m`` (n, 3) with thrust gains ``gain`` (n,)."""
-        state = hover_state(self.params, p_m, yaw_rad)
+    def hover(self, p_m: np.ndarray, yaw_rad: np.ndarray | float, gain: np.ndarray,
+              body: VehicleBody | None = None) -> VehicleState:
+        """Vehicles at rest at ``p_m`` (n, 3) with thrust gains ``gain`` (n,) and true
+        constants ``body`` (default nominal)."""
+        state = hover_state(self.params, p_m, yaw_rad, body=body)
         return replace(state, thrust_cmd_state_n=state.thrust_cmd_state_n / gain,
                        thrust_gain=np.asarray(gain, dtype=float).copy())
 
@@ -91,6 +106,15 @@ class PointMassFleet:
                 n: int, dt_s: float) -> CommandTargets:
         """Both halves' commands clipped to the limits, held over a control period."""
         return command_targets(_join_commands(lead, fol, n), self.params, dt_s, 2 * n)
+
+    def nominal_body(self, n: int) -> VehicleBody:
+        """``n`` vehicles exactly as nominal (a point mass: only its mass matters)."""
+        return nominal_body(self.params.mass_kg, np.zeros(3), 0.0, n)
+
+    def half_targets(self, cmd: AttitudeCommand, state: VehicleState, n: int,
+                     dt_s: float) -> CommandTargets:
+        """One batch of ``n`` vehicles' commands clipped to the limits (a pair's half)."""
+        return command_targets(_broadcast_command(cmd, n), self.params, dt_s, n)
 
     def step(self, state: VehicleState, targets: CommandTargets, force_n: np.ndarray,
              torque_nm: np.ndarray | None, dt_s: float,
@@ -103,7 +127,7 @@ class PointMassFleet:
         state.p[rows] = old.p[rows]
         state.v[rows] = old.v[rows]
         state.rpy[rows] = old.rpy[rows]
-        np.divide(self.params.hover_thrust_n, old.thrust_gain[rows],
+        np.divide(old.body.mass_kg[rows] * self.params.gravity_mps2, old.thrust_gain[rows],
                   out=state.thrust_cmd_state_n[rows])
         return state
 
@@ -116,15 +140,26 @@ class RigidBodyFleet:
     state_type: type = RigidBodyState
     has_torque: bool = True
 
-    def hover(self, p_m: np.ndarray, yaw_rad: np.ndarray | float,
-              gain: np.ndarray) -> RigidBodyState:
-        """Vehicles at rest at ``p_m`` (n, 3) with thrust gains ``gain`` (n,)."""
-        return hover_rigid_state(self.params, np.array(p_m, dtype=float), yaw_rad, gain)
+    def hover(self, p_m: np.ndarray, yaw_rad: np.ndarray | float, gain: np.ndarray,
+              body: VehicleBody | None = None) -> RigidBodyState:
+        """Vehicles at rest at ``p_m`` (n, 3) with thrust gains ``gain`` (n,) and true
+        constants ``body`` (default nominal)."""
+        return hover_rigid_state(self.params, np.array(p_m, dtype=float), yaw_rad, gain, body)
 
     def targets(self, lead: AttitudeCommand, fol: AttitudeCommand, state: RigidBodyState,
                 n: int, dt_s: float) -> Any:
         """The autopilots' attitude targets for both halves, held over a control period."""
         return rigid_targets(_join_commands(lead, fol, n), state, self.params, 2 * n)
+
+    def nominal_body(self, n: int) -> VehicleBody:
+        """``n`` vehicles exactly as nominal."""
+        p = self.params
+        return nominal_body(p.mass_kg, p.inertia_kgm2, p.motor_tau_s, n)
+
+    def half_targets(self, cmd: AttitudeCommand, state: RigidBodyState, n: int,
+                     dt_s: float) -> Any:
+        """One batch of ``n`` vehicles' attitude targets (a pair's half)."""
+        return rigid_targets(_broadcast_command(cmd, n), state, self.params, n)
 
     def step(self, state: RigidBodyState, targets: Any, force_n: np.ndarray,
              torque_nm: np.ndarray | None, dt_s: float,
@@ -141,14 +176,62 @@ class RigidBodyFleet:
         return state
 
 
-Fleet = PointMassFleet | RigidBodyFleet
+@dataclass(frozen=True)
+class PairFleet:
+    """Leaders and followers of different types (a heterogeneous pair): each half of the 2n
+    batch is flown by its own fleet (its own nominal parameters, autopilot and mixer); the halves
+    are joined again after every step."""
+
+    leader: PointMassFleet | RigidBodyFleet
+    follower: PointMassFleet | RigidBodyFleet
+
+    @property
+    def state_type(self) -> type:
+        """The state class of both halves."""
+        return self.follower.state_type
+
+    @property
+    def has_torque(self) -> bool:
+        """Rigid bodies (both halves are one model)."""
+        return self.follower.has_torque
+
+    def targets(self, lead: AttitudeCommand, fol: AttitudeCommand, state: Any, n: int,
+                dt_s: float) -> tuple[Any, Any]:
+        """Each half's targets from its own fleet."""
+        lead_state, fol_state = split_state(self, state, n)
+        return (self.leader.half_targets(lead, lead_state, n, dt_s),
+                self.follower.half_targets(fol, fol_state, n, dt_s))
+
+    def step(self, state: Any, targets: tuple[Any, Any], force_n: np.ndarray,
+             torque_nm: np.ndarray | None, dt_s: float,
+             gyro_noise_radps: np.ndarray | None) -> tuple[Any, np.ndarray]:
+        """One physics step of each half, joined."""
+        n = force_n.shape[0] // 2
+        halves = split_state(self, state, n)
+        out = []
+        for i, (fleet, half) in enumerate(zip((self.leader, self.follower), halves)):
+            rows = slice(None, n) if i == 0 else slice(n, None)
+            out.append(fleet.step(half, targets[i], force_n[rows],
+                                  None if torque_nm is None else torque_nm[rows], dt_s,
+                                  None if gyro_noise_radps is None else gyro_noise_radps[rows]))
+        accel = np.concatenate([out[0][1], out[1][1]])
+        return concat_states(self, out[0][0], out[1][0]), accel
+
+    def hovering(self, state: Any, old: Any, rows: slice) -> Any:
+        """``state`` with the leader rows held as in ``old`` (a leader on a stand)."""
+        return self.leader.hovering(state, old, rows)
 
 
-def build_fleet(cfg: Config) -> Fleet:
-    """The fleet of ``cfg``'s ``[vehicle] model``."""
+Fleet = PointMassFleet | RigidBodyFleet | PairFleet
+
+
+def build_fleet(cfg: Config,
+                vehicle: VehicleSection | None = None) -> PointMassFleet | RigidBodyFleet:
+    """The fleet of ``cfg``'s ``[vehicle] model`` for the vehicle section ``vehicle`` (default
+    ``[vehicle]``, the follower's; ``cfg.leader`` for the leader's)."""
     if cfg.vehicle.model == "point-mass":
-        return PointMassFleet(VehicleParams.from_config(cfg))
-    return RigidBodyFleet(RigidBodyParams.from_config(cfg))
+        return PointMassFleet(VehicleParams.from_config(cfg, vehicle))
+    return RigidBodyFleet(RigidBodyParams.from_config(cfg, vehicle))
 
 
 def concat_states(fleet: Fleet, lead: Any, fol: Any) -> Any:

@@ -13,7 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.config.schema import VehicleSection
 from aerodock.geometry import rpy_to_rotmat
+from aerodock.world.vehicles.body import VehicleBody, nominal_body
 
 
 @dataclass(frozen=True)
@@ -34,9 +36,10 @@ class VehicleParams:
     gravity_mps2: float
 
     @classmethod
-    def from_config(cls, cfg: Config) -> VehicleParams:
-        """Bind the ``[vehicle]`` and ``[sim]`` values of ``cfg``."""
-        v = cfg.vehicle
+    def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None) -> VehicleParams:
+        """Bind the ``[vehicle]`` (or the given vehicle section, e.g. ``cfg.leader``) and
+        ``[sim]`` values of ``cfg``."""
+        v = cfg.vehicle if vehicle is None else vehicle
         g = cfg.sim.gravity_mps2
         return cls(
             mass_kg=v.mass_kg, diagonal_m=v.diagonal_m, rotor_radius_m=v.rotor_radius_m,
@@ -62,6 +65,7 @@ class VehicleState:
     rpy: np.ndarray  # (n, 3) rad: roll, pitch, yaw
     thrust_cmd_state_n: np.ndarray  # (n,) thrust the inner loop currently produces (before gain)
     thrust_gain: np.ndarray  # (n,) multiplicative thrust error, ~1
+    body: VehicleBody  # each vehicle's true mass (the point mass has no inertia or rotors)
 
     @property
     def n(self) -> int:
@@ -93,9 +97,13 @@ class AttitudeCommand:
 
 
 def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | float = 0.0,
-                rng: np.random.Generator | None = None) -> VehicleState:
-    """Vehicles at rest at ``p_m`` (n, 3), thrust at hover; thrust gain errors from ``rng``."""
+                rng: np.random.Generator | None = None,
+                body: VehicleBody | None = None) -> VehicleState:
+    """Vehicles at rest at ``p_m`` (n, 3), thrust at hover; thrust gain errors from ``rng``;
+    ``body``: each vehicle's true mass (default: nominal)."""
     n = p_m.shape[0]
+    if body is None:
+        body = nominal_body(params.mass_kg, np.zeros(3), 0.0, n)
     rpy = np.zeros((n, 3))
     rpy[:, 2] = yaw_rad
     gain = np.ones(n)
@@ -103,7 +111,8 @@ def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | fl
         gain = 1.0 + params.thrust_gain_sd * rng.standard_normal(n)
     return VehicleState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), rpy=rpy,
-        thrust_cmd_state_n=np.full(n, params.hover_thrust_n) / gain, thrust_gain=gain,
+        thrust_cmd_state_n=body.mass_kg * params.gravity_mps2 / gain, thrust_gain=gain,
+        body=body,
     )
 
 
@@ -175,12 +184,13 @@ def step_vehicle_targets(
     R: np.ndarray | None = None,  # noqa: N803
 ) -> tuple[VehicleState, np.ndarray]:
     """:func:`step_vehicle` with the command already clipped (:func:`command_targets`)."""
-    m = params.mass_kg
+    body = state.body
+    m = body.mass_kg
     # m a = m g e3 - R e3 T - c_d v + F_ext, evaluated as in the formula, left to right.
     accel = np.negative(thrust_axis(state.rpy) if R is None else R[:, :, 2])
     accel *= (state.thrust_cmd_state_n * state.thrust_gain / m)[:, None]
-    accel -= (params.drag_coeff_kgps / m) * state.v
-    accel += ext_force_n / m
+    accel -= (params.drag_coeff_kgps / body.mass_rows_kg) * state.v
+    accel += ext_force_n / body.mass_rows_kg
     accel[:, 2] += params.gravity_mps2
     v = accel * dt_s
     v += state.v
@@ -203,4 +213,4 @@ def step_vehicle_targets(
     thrust_state = targets.thrust_n - tcs
     thrust_state *= alpha_thr
     thrust_state += tcs
-    return VehicleState(p, v, rpy, thrust_state, state.thrust_gain), accel
+    return VehicleState(p, v, rpy, thrust_state, state.thrust_gain, state.body), accel

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.config.schema import VehicleSection
 from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
@@ -39,6 +40,7 @@ from aerodock.world.vehicles.autopilot import (
     rate_control_t,
     rate_setpoint_t,
 )
+from aerodock.world.vehicles.body import VehicleBody, nominal_body
 from aerodock.world.vehicles.point_mass import AttitudeCommand
 
 
@@ -66,9 +68,10 @@ class RigidBodyParams:
     rotor_drag_sums: np.ndarray  # (4, 6): rotor speeds -> sums of omega_i [1, x, y, x^2, y^2, xy]
 
     @classmethod
-    def from_config(cls, cfg: Config) -> RigidBodyParams:
-        """Bind ``[vehicle]``, ``[autopilot]`` and ``[sim]`` of ``cfg``."""
-        v, a = cfg.vehicle, cfg.autopilot
+    def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None) -> RigidBodyParams:
+        """Bind ``[vehicle]`` (or the given vehicle section, e.g. ``cfg.leader``), ``[autopilot]``
+        and ``[sim]`` of ``cfg``."""
+        v, a = (cfg.vehicle if vehicle is None else vehicle), cfg.autopilot
         g = cfg.sim.gravity_mps2
         n_rotors = int(v.n_rotors)
         if n_rotors != 4:
@@ -127,6 +130,7 @@ class RigidBodyState:
     yaw_setpoint: np.ndarray  # (n,) rad, the autopilot's yaw target (integrated yaw rate)
     thrust_gain: np.ndarray  # (n,) multiplicative thrust error (mis-estimated k_T), ~1
     thrust_n: np.ndarray  # (n,) actual collective thrust, N (from the rotor speeds)
+    body: VehicleBody  # the true mass, inertia, torque coefficient and motor lag of each vehicle
 
     @property
     def n(self) -> int:
@@ -148,19 +152,23 @@ def rotor_thrusts_n(rotor_speed: np.ndarray, thrust_gain: np.ndarray,
 
 
 def hover_rigid_state(params: RigidBodyParams, p_m: np.ndarray, yaw_rad: np.ndarray | float,
-                      thrust_gain: np.ndarray) -> RigidBodyState:
-    """Vehicles at rest at ``p_m`` (n, 3), level, rotors at the speed that balances gravity."""
+                      thrust_gain: np.ndarray, body: VehicleBody | None = None) -> RigidBodyState:
+    """Vehicles at rest at ``p_m`` (n, 3), level, rotors at the speed that balances gravity
+    (each vehicle's true weight; ``body`` default: every vehicle as nominal)."""
     n = p_m.shape[0]
+    if body is None:
+        body = nominal_body(params.mass_kg, params.inertia_kgm2, params.motor_tau_s, n)
+    weight = body.mass_kg * params.gravity_mps2
     yaw = np.broadcast_to(np.asarray(yaw_rad, dtype=float), (n,)).copy()
     c, s = np.cos(yaw), np.sin(yaw)
     rot = np.zeros((n, 3, 3))
     rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
-    omega = np.sqrt(params.hover_thrust_n / 4.0 / (params.thrust_coeff * thrust_gain))
+    omega = np.sqrt(weight / 4.0 / (params.thrust_coeff * thrust_gain))
     return RigidBodyState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), R=rot, w=np.zeros((n, 3)),
         rotor_speed=np.repeat(omega[:, None], 4, axis=1), rate_integral=np.zeros((n, 3)),
         yaw_setpoint=yaw, thrust_gain=np.asarray(thrust_gain, dtype=float).copy(),
-        thrust_n=np.full(n, params.hover_thrust_n),
+        thrust_n=weight, body=body,
     )
 
 
@@ -231,7 +239,8 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
 
 
 def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
-                   w_radps: np.ndarray, params: RigidBodyParams) -> tuple[np.ndarray, np.ndarray]:
+                   w_radps: np.ndarray, params: RigidBodyParams,
+                   torque_gain: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n): force and torque (3, n).
 
     Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
@@ -243,6 +252,8 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.nd
     torque += tmap[1] * f[1]
     torque += tmap[2] * f[2]
     torque += tmap[3] * f[3]
+    if torque_gain is not None:  # each vehicle's true yaw reaction coefficient
+        torque[2] *= torque_gain
     force = np.empty_like(torque)
     thrust = np.add(f[0], f[1], out=force[2])
     thrust += f[2]
@@ -270,18 +281,22 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.nd
     return force, torque
 
 
-def _motor_alpha(params: RigidBodyParams, dt_s: float) -> float:
-    """The motors' first-order step factor ``1 - exp(-dt / tau)`` (cached per params and dt)."""
-    key = (id(params), dt_s)
+def _motor_alpha(body: VehicleBody, dt_s: float) -> np.ndarray | float:
+    """The motors' first-order step factor ``1 - exp(-dt / tau)`` per vehicle, (n, 1), or one
+    number when every vehicle's motors are alike (cached per body and dt)."""
+    key = (id(body), dt_s)
     hit = _ALPHA.get(key)
-    if hit is None or hit[0] is not params:
+    if hit is None or hit[0] is not body:
         if len(_ALPHA) > 64:
             _ALPHA.clear()
-        hit = _ALPHA[key] = (params, 1.0 - np.exp(-dt_s / params.motor_tau_s))
+        tau = body.motor_tau_s
+        alpha = (1.0 - np.exp(-dt_s / float(tau[0])) if np.all(tau == tau[0])
+                 else (1.0 - np.exp(-dt_s / tau))[:, None])
+        hit = _ALPHA[key] = (body, alpha)
     return hit[1]
 
 
-_ALPHA: dict[tuple[int, float], tuple[RigidBodyParams, float]] = {}
+_ALPHA: dict[tuple[int, float], tuple[VehicleBody, np.ndarray | float]] = {}
 
 
 def step_rigid_body(
@@ -305,7 +320,7 @@ def step_rigid_body(
     p, v, rot, w, omega, thrust, accel = _step_arrays(state, rotor_speed_cmd, ext_force_n,
                                                       ext_torque_nm, params, dt_s)
     return RigidBodyState(p, v, rot, w, omega, state.rate_integral, state.yaw_setpoint,
-                          state.thrust_gain, thrust), accel
+                          state.thrust_gain, thrust, state.body), accel
 
 
 def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
@@ -313,7 +328,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
                  dt_s: float) -> tuple[np.ndarray, ...]:
     """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel); vectors are
     computed component-major (3, n) and stored C-ordered (n, 3) like the state's."""
-    m = params.mass_kg
+    body = state.body
     rot = state.R
     omega = state.rotor_speed
     v = state.v
@@ -321,7 +336,8 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     n = v.shape[0]
     omega_t = np.ascontiguousarray(omega.T)
     v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body, w, params)
+    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body, w, params,
+                                        body.torque_gain)
     if ext_torque_nm is not None:
         torque += np.asarray(ext_torque_nm, dtype=float).T
     accel = np.matmul(rot, force_body.T[:, :, None])[:, :, 0]
@@ -335,10 +351,10 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
         speed *= params.parasitic_drag_coeff
         accel_t -= v.T * speed
     accel += ext_force_n
-    accel /= m
+    accel /= body.mass_rows_kg
     accel[:, 2] += params.gravity_mps2
     # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    inertia = gain_columns(params.gains, params.inertia_kgm2, n)[7]
+    inertia = np.ascontiguousarray(body.inertia_kgm2.T)  # (3, n): each vehicle's own
     w_t = w.T
     jx, jy, jz = np.multiply(w_t, inertia, out=np.empty((3, n)))
     wx, wy, wz = w_t
@@ -365,7 +381,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     phi *= 0.5 * dt_s
     rot_new = _rotate_t(rot, phi)
     omega_new = rotor_speed_cmd - omega
-    omega_new *= _motor_alpha(params, dt_s)
+    omega_new *= _motor_alpha(body, dt_s)
     omega_new += omega
     f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
     f_new *= params.thrust_coeff * state.thrust_gain
@@ -400,7 +416,7 @@ def step_with_autopilot(
     yaw_sp %= 2 * np.pi
     yaw_sp -= np.pi
     return RigidBodyState(p, v, rot, w, omega, integral, yaw_sp, state.thrust_gain,
-                          thrust), accel
+                          thrust, state.body), accel
 
 
 def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:

@@ -1,0 +1,98 @@
+"""The flight computer's IMU: the body rates and specific force it samples, as its driver and
+software filters deliver them (noise, vibration, range, anti-alias low-pass, latency).
+
+Per vehicle and physics step (the IMU's sample rate here; an autopilot's fast loop runs at
+400-1000 Hz), batch-first over both vehicles (2n rows, leaders first), component-major (3, 2n):
+
+1. truth: the body rates ``w`` and the specific force ``f = R^T (a - g e3)`` at the step's start
+   (``a``: the last step's acceleration);
+2. what the sensor adds: gyro noise, accelerometer white noise and motor vibration (growing with
+   the square of rotor speed, i.e. with thrust), the accelerometer's residual bias (constant in the
+   body frame, per vehicle);
+3. the range: readings clip at ``gyro_range_radps`` and ``accel_range_mps2``;
+4. the software low-pass (a second-order Butterworth biquad, as ArduPilot's ``LowPassFilter2p``
+   at ``INS_GYRO_FILTER``/``INS_ACCEL_FILTER``; a cut-off of 0 passes the samples through);
+5. the latency: the filtered sample reaches the autopilot ``delay_steps`` physics steps late.
+
+The filtered, delayed gyro feeds the rate loop and the attitude estimator
+(:mod:`aerodock.world.attitude_estimator`); the filtered, delayed accelerometer feeds the
+estimator and, rotated to the world with the estimate, the follower's accelerometer reading.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ImuChainParams:
+    """The IMU chain's constants (``[imu]``)."""
+
+    gyro_cutoff_hz: float  # software low-pass of the rates (0: none)
+    accel_cutoff_hz: float  # software low-pass of the specific force (0: none)
+    delay_steps: int  # transport latency, physics steps
+    gyro_range_radps: float
+    accel_range_mps2: float
+
+
+@dataclass(frozen=True)
+class Biquad:
+    """A second-order Butterworth low-pass (direct form II transposed coefficients)."""
+
+    b0: float
+    b1: float
+    b2: float
+    a1: float
+    a2: float
+
+    @classmethod
+    def butterworth(cls, cutoff_hz: float, dt_s: float) -> Biquad | None:
+        """The filter at ``cutoff_hz`` for samples every ``dt_s`` (None: no filter, or a cut-off
+        at or beyond Nyquist)."""
+        if cutoff_hz <= 0 or cutoff_hz >= 0.5 / dt_s:
+            return None
+        k = math.tan(math.pi * cutoff_hz * dt_s)
+        q = 1.0 / math.sqrt(2.0)
+        norm = 1.0 / (1.0 + k / q + k * k)
+        b0 = k * k * norm
+        return cls(b0, 2.0 * b0, b0, 2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm)
+
+
+@dataclass
+class FilterState:
+    """One signal's filter and delay line, component-major (3, m)."""
+
+    z1: np.ndarray
+    z2: np.ndarray
+    delay: list[np.ndarray]
+
+    @classmethod
+    def at(cls, value: np.ndarray, biquad: Biquad | None, delay_steps: int) -> FilterState:
+        """A filter settled at ``value`` (3, m) (a vehicle at rest since long)."""
+        if biquad is None:
+            z1 = z2 = np.zeros_like(value)
+        else:  # the steady state of the transposed direct form for a constant input
+            z2 = (biquad.b2 - biquad.a2) * value
+            z1 = (biquad.b1 - biquad.a1) * value + z2
+        return cls(z1, z2, [value.copy() for _ in range(delay_steps)])
+
+
+def filter_sample(state: FilterState, sample: np.ndarray, biquad: Biquad | None) -> np.ndarray:
+    """Filter one sample (3, m) and return what comes out of the delay line (in place)."""
+    if biquad is None:
+        out = sample
+    else:
+        out = biquad.b0 * sample + state.z1
+        z1 = biquad.b1 * sample
+        z1 -= biquad.a1 * out
+        z1 += state.z2
+        z2 = biquad.b2 * sample
+        z2 -= biquad.a2 * out
+        state.z1, state.z2 = z1, z2
+    if state.delay:
+        state.delay.append(out)
+        out = state.delay.pop(0)
+    return out
