@@ -122,6 +122,14 @@ class ImuSection:
     accel_vibration_mps2: float = number(0, 1000)
     accel_bias_sd_mps2: float = number(0, 100)
     attitude_noise_rad: float = number(0, 1)
+    chain: str = choice("filtered", "ideal")
+    gyro_cutoff_hz: float = number(0, 10000)
+    accel_cutoff_hz: float = number(0, 10000)
+    latency_s: float = number(0, 1)
+    gyro_range_dps: float = number(10, 1e5)
+    accel_range_g: float = number(1, 1000)
+    accel_gain_radps: float = number(0, 100)
+    heading_gain_radps: float = number(0, 100)
 
 
 @dataclass(frozen=True)
@@ -200,6 +208,7 @@ class GripperSection:
     latency_s: float = number(0, 10)
     close_time_s: float = number(0.001, 10)
     trigger: str = choice("active", "both", "passive")
+    servo_feedback: bool = flag()
 
 
 @dataclass(frozen=True)
@@ -256,6 +265,9 @@ class MissionSection:
     terminal_s: float = number(0, 600)
     active_trigger_delay_s: float = number(0, 600)
     post_dock_s: float = number(0, 600)
+    gate_state_from: str = choice("sensors", "truth")
+    dock_confirm_s: float = number(0.01, 10)
+    dock_drop_m: float = number(0.001, 1)
     backoff_s: float = number(0.1, 600)
     backoff_distance_m: float = number(0, 100)
     settle_s: float = number(0, 600)

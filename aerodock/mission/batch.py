@@ -29,7 +29,16 @@ from aerodock.mission.faults import Fault, FaultRuntime, draw_faults
 from aerodock.mission.metrics import MissionMetrics
 from aerodock.mission.outcome import CampaignResult
 from aerodock.mission.params import MissionParams
-from aerodock.mission.phases import aborts, approach, backoff, leader, resolve, terminal, triggers
+from aerodock.mission.phases import (
+    aborts,
+    approach,
+    backoff,
+    gate_sensing,
+    leader,
+    resolve,
+    terminal,
+    triggers,
+)
 from aerodock.mission.recorder import FlightRecorder
 from aerodock.mission.settle import CruiseStart, settle
 from aerodock.mission.setup import (
@@ -183,6 +192,9 @@ class MissionBatch:
         # Torque feed-forward from the learnt model (rigid bodies, with the model flown).
         self.torque_ff = bool(params.torque_feedforward and comp == Compensation.MODEL
                               and world.rigid)
+        # What the mission knows of its gate: its sensors (or, as earlier worlds did, the truth).
+        self.gate_truth = cfg.mission.gate_state_from == "truth"
+        self.servo_feedback = bool(cfg.gripper.servo_feedback) or self.gate_truth
         self.geom = params.geometry
         self.world = world
         self.timing = timing = mission_timing(params, spec, world.dt_control_s)
@@ -228,6 +240,8 @@ class MissionBatch:
         self.abort_reason = np.zeros(n, dtype=np.int8)
         self.phase_t = np.zeros(n)  # when the current phase began
         self.capture_t = np.full(n, np.nan)
+        self.docked = np.zeros(n, dtype=bool)  # the follower acts as docked (gate believed shut)
+        self.sensed_missed = np.zeros(n, dtype=bool)  # it then found itself not held
         self.post_dock_sink = np.full(n, np.nan)
         self.metrics = MissionMetrics(n, self.steps, self.arrival_s, record != "summary")
         self.recorder = (FlightRecorder(params.label_basis, params.mass_kg)
@@ -287,7 +301,7 @@ class MissionBatch:
             self.faults.apply_to_world(t, world)
         # The leader: its own controller; it feeds forward the payload the follower sheds, once
         # the follower's docking status has arrived.
-        self._status_sent = self._status_sent[1:] + [world.captured.copy()]
+        self._status_sent = self._status_sent[1:] + [self.docked.copy()]
         self.lout = leader.leader_command(
             self.leader_ctl, obs_l,
             leader.leader_reference(self.leader_p0, self.lead_vel, self.lead_v, t),
@@ -303,8 +317,18 @@ class MissionBatch:
                                     world.gripper_params.mount_height_m)
         phase = terminal.enter_terminal(phase, t, self.arrival_s, m.terminal_s)
         abort_now = self._aborts(t, phase, active, obs_f.p - p_ref)
-        captured_now, missed_now = resolve.gate_outcomes(world.gripper.gate, phase, active)
-        self.capture_t = np.where(captured_now, t, self.capture_t)
+        # The gate as the software knows it, and whether the follower is held.
+        grip, close_s = world.gripper, world.gripper_params.close_time_s
+        if self.gate_truth:
+            captured_now, missed_now = gate_sensing.true_outcomes(grip, phase, active)
+        else:
+            closed = gate_sensing.believed_closed(grip, world.t_s, close_s, self.servo_feedback)
+            captured_now, missed_now = resolve.gate_outcomes(
+                closed, gate_sensing.dropped(params, obs_f, obs_l_f), phase, active, t,
+                self.phase_t, m.dock_confirm_s)
+        self.docked = (self.docked | captured_now) & ~missed_now
+        self.sensed_missed |= missed_now
+        self.capture_t = np.where(captured_now, t, np.where(missed_now, np.nan, self.capture_t))
         backoff_now = (abort_now | missed_now) & ~captured_now
         plan = backoff.start_back_off(params, plan, t, obs_f, obs_l_f, backoff_now)
         phase = resolve.next_phases(phase, captured_now, missed_now, abort_now)
@@ -317,7 +341,7 @@ class MissionBatch:
         if np.any(docked_end):
             self.post_dock_sink = np.where(
                 docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2], self.post_dock_sink)
-        ref = backoff.back_off_reference(plan, t, phase, world.captured, (p_ref, v_ref, a_ref))
+        ref = backoff.back_off_reference(plan, t, phase, self.docked, (p_ref, v_ref, a_ref))
         self.phase, self.plan = phase, plan
         return Decision(
             t_s=t, phase=phase, approaching=active, holding=holding, ref=ref,
@@ -331,10 +355,13 @@ class MissionBatch:
                 err: np.ndarray) -> np.ndarray:
         """(n,) trials aborting now (their gates are disarmed); records the reasons."""
         world = self.world
+        grip, close_s = world.gripper, world.gripper_params.close_time_s
         abort_now, reason = aborts.decide_aborts(
             self.params, t, self.timing.timeout_s, phase, active, err,
-            self.faults.last_fresh_leader_t, world.gripper, world.t_s,
-            world.gripper_params.close_time_s)
+            self.faults.last_fresh_leader_t,
+            gate_sensing.commanded(grip, world.t_s, self.gate_truth),
+            gate_sensing.jammed(grip, world.t_s, close_s, self.servo_feedback,
+                                aborts.GATE_STUCK_TRAVELS))
         if abort_now.any():
             world.disarm_gate(abort_now)  # an aborted approach never closes the gate
         self.abort_reason = np.where(abort_now & (self.abort_reason == AbortReason.NONE),
@@ -362,9 +389,10 @@ class MissionBatch:
         accel = hold = None
         if self.follower_ctl.uses_accelerometer:
             accel = world.observed_accel()
-            # The follower's own gripper: a load on the strain gauge or a gate on its way.
+            # The follower's own gripper: a load on the strain gauge or a gate commanded shut.
             grip = world.gripper
-            hold = (grip.reading_n > gp.contact_threshold_n) | (grip.gate != GateState.OPEN)
+            hold = ((grip.reading_n > gp.contact_threshold_n)
+                    | gate_sensing.commanded(grip, world.t_s, self.gate_truth))
         fout = self.follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy,
                                       Reference(p_ref, v_ref, a_ref, yaw0, yaw0), terminal_gains,
                                       ff, accel, hold)
@@ -375,7 +403,7 @@ class MissionBatch:
             tau = feedforward_torque_nm(self.predictor, self._bodies(obs_l_f, leader=True),
                                         self._bodies(obs_f),
                                         world.follower_fleet.params.rotor_offsets_m)
-            tau = np.where(world.captured[:, None], 0.0, tau)
+            tau = np.where(self.docked[:, None], 0.0, tau)
             fout = replace(fout, command=replace(fout.command, torque_ff_nm=-tau))
         close = triggers.active_close_command(obs_f, obs_l_f, self.geom, gp, t,
                                               self.timing.active_at_s, d.approaching)
@@ -386,7 +414,7 @@ class MissionBatch:
             self.recorder.before_step(t, world, d.leader_obs, obs_f, fout, p_ref, d.phase)
         world.advance(self.lout.command, fout.command, close)
         if self.recorder is not None:
-            self.recorder.after_step(world)
+            self.recorder.after_step(world, self.docked, sensed=not self.gate_truth)
         self.last_fout = fout
         self.k += 1
         if np.all(self.phase == Phase.DONE) or self.k >= self.steps:
@@ -398,7 +426,7 @@ class MissionBatch:
     def _hang(self, fout: ControlOutput) -> ControlOutput:
         """Docked followers: level attitude; thrust is the configured fraction of the weight plus
         the follower's own prediction of the wake (the position loop would fight the cables)."""
-        hanging = self.world.captured
+        hanging = self.docked
         if not np.any(hanging):
             return fout
         cmd, params = fout.command, self.params
@@ -425,6 +453,7 @@ class MissionBatch:
             success=(gate == GateState.CAPTURED) & ~collision,
             slipped=world.gripper.slipped.copy(),
             missed=(gate == GateState.MISSED),
+            sensed_missed=self.sensed_missed.copy(),
             aborted=self.abort_reason != AbortReason.NONE,
             abort_reason=self.abort_reason,
             clearance_violation=metrics.min_clear < params.mission.clearance_m,

@@ -19,7 +19,8 @@ class CampaignResult:
     spec: MissionSpec
     success: np.ndarray
     slipped: np.ndarray
-    missed: np.ndarray
+    missed: np.ndarray  # the gate closed without the bar (the truth)
+    sensed_missed: np.ndarray  # the follower found itself not held after closing, backed off
     aborted: np.ndarray
     abort_reason: np.ndarray
     clearance_violation: np.ndarray
@@ -72,6 +73,7 @@ class CampaignResult:
             "success_wilson95": [lo, hi],
             "slip_throughs": int(self.slipped.sum()),
             "missed": int(self.missed.sum()),
+            "sensed_misses": int(self.sensed_missed.sum()),
             "aborts": int(self.aborted.sum()),
             "abort_reasons": {r.name.lower(): int((self.abort_reason == r).sum())
                               for r in AbortReason if r != AbortReason.NONE},

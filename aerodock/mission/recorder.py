@@ -33,7 +33,7 @@ from aerodock.geometry import rotmat_to_quat, thrust_accel
 from aerodock.world import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",
-         "phase", "bar", "valid", "tau_obs", "tau_rotor", "rates", "tau_true")
+         "phase", "bar", "valid", "contact", "tau_obs", "tau_rotor", "rates", "tau_true")
 # Recorded rows -> FlightLog extras of the torque observations (rigid-body vehicles only).
 TORQUE_EXTRAS = {"tau_obs": "follower_obs_torque_nm", "tau_rotor": "follower_rotor_torque_nm",
                  "rates": "follower_body_rates_radps", "tau_true": "true_wake_torque_nm"}
@@ -84,9 +84,13 @@ class FlightRecorder:
         if world.rigid and len(r["t"]) == 1:
             world.observed_torque()  # the first read starts the torque log's window
         world.contact_seen[:] = False
+        world.contact_sensed[:] = False
 
-    def after_step(self, world: World) -> None:
-        """Record the accelerometer over the control period just flown."""
+    def after_step(self, world: World, docked: np.ndarray | None = None,
+                   sensed: bool = True) -> None:
+        """Record the accelerometer over the control period just flown; ``docked`` (n,): the
+        trials whose follower acts as docked (hanging from the bar); ``sensed``: the labels'
+        mask from the strain gauge (False: from the world's true contact, as earlier worlds)."""
         self.rows["aobs"].append(world.observed_accel())
         if world.rigid:
             torque = world.observed_torque()
@@ -94,9 +98,12 @@ class FlightRecorder:
             self.rows["tau_rotor"].append(torque.rotor_nm)
             self.rows["rates"].append(torque.body_rates_radps)
             self.rows["tau_true"].append(torque.true_wake_nm)
-        # Touching the bar or hanging on the cables: the residual is not downwash (a real
-        # pipeline flags the same samples from the gripper's strain gauge).
-        self.rows["valid"].append(~(world.contact_seen | world.captured))
+        # Touching the bar (as the strain gauge senses it) or hanging on the cables: the
+        # residual is not downwash. What the gauge missed is kept for evaluation.
+        docked = np.zeros(world.n, dtype=bool) if docked is None else docked
+        touched = world.contact_sensed if sensed else world.contact_seen
+        self.rows["valid"].append(~(touched | docked))
+        self.rows["contact"].append(world.contact_seen | world.captured)
 
     def flightlogs(self, meta: Callable[[int], dict[str, Any]]) -> list[FlightLog]:
         """One FlightLog per trial; ``meta(i)`` gives trial ``i``'s metadata."""
@@ -114,6 +121,7 @@ class FlightRecorder:
                 extra={"true_field_mean_mps2": arr["fmean"][:, i], "ref_pos_m": arr["ref"][:, i],
                        "feedforward_mps2": arr["ff"][:, i], "phase": arr["phase"][:, i],
                        "bar_pos_m": arr["bar"][:, i], "label_valid": arr["valid"][:, i],
+                       "true_contact": arr["contact"][:, i],
                        **{name: a[:, i] for name, a in torque.items()}},
             )
             for i in range(n)

@@ -96,3 +96,49 @@ def filter_sample(state: FilterState, sample: np.ndarray, biquad: Biquad | None)
         state.delay.append(out)
         out = state.delay.pop(0)
     return out
+
+
+@dataclass
+class ImuState:
+    """Both vehicles' IMU chains and attitude estimates (2n rows, leaders first).
+
+    Attributes:
+        gyro, accel: each signal's filter and delay line, component-major (3, 2n).
+        gyro_filter, accel_filter: the low-passes (None: none).
+        bias_body_mps2: (2n, 3) each accelerometer's residual bias, body frame.
+        attitude: (2n, 3, 3) the flight computers' attitude estimates, body to world.
+        accel_ring: the true accelerations of the last steps (oldest first), from which the
+            navigation's acceleration is taken one control period at a time, motion-capture late.
+        nav_accel_mps2: (2n, 3) the acceleration the navigation knows (the estimator's
+            compensation).
+        gyro_radps: (2n, 3) the rates out of the chain this step (what the rate loop reads).
+        accel_t: (3, 2n) the specific force out of the chain this step.
+    """
+
+    gyro: FilterState
+    accel: FilterState
+    gyro_filter: Biquad | None
+    accel_filter: Biquad | None
+    bias_body_mps2: np.ndarray
+    attitude: np.ndarray
+    accel_ring: list[np.ndarray]
+    nav_accel_mps2: np.ndarray
+    gyro_radps: np.ndarray
+    accel_t: np.ndarray
+
+
+def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: float,
+              chain: ImuChainParams, gyro_filter: Biquad | None, accel_filter: Biquad | None,
+              ring_steps: int) -> ImuState:
+    """The chains of vehicles at rest since long, level at ``attitude`` (2n, 3, 3); the
+    estimates equal to it (the vehicles have stood still before take-off)."""
+    m = attitude.shape[0]
+    rates = np.zeros((3, m))
+    force = -gravity_mps2 * attitude[:, 2, :].T + bias_body_mps2.T  # R^T (-g e3) + bias
+    return ImuState(
+        gyro=FilterState.at(rates, gyro_filter, chain.delay_steps),
+        accel=FilterState.at(force, accel_filter, chain.delay_steps),
+        gyro_filter=gyro_filter, accel_filter=accel_filter, bias_body_mps2=bias_body_mps2,
+        attitude=attitude.copy(), accel_ring=[np.zeros((m, 3)) for _ in range(ring_steps)],
+        nav_accel_mps2=np.zeros((m, 3)), gyro_radps=np.zeros((m, 3)), accel_t=force,
+    )

@@ -7,7 +7,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.world.attitude_estimator import AttitudeEstimatorParams
 from aerodock.world.gripper import GripperParams
+from aerodock.world.imu import Biquad, ImuChainParams
 from aerodock.world.platform import PlatformParams
 from aerodock.world.vehicles.body import SpreadParams
 from aerodock.world.vehicles.fleet import (
@@ -22,19 +24,29 @@ from aerodock.world.vehicles.point_mass import VehicleParams
 
 @dataclass(frozen=True)
 class ImuParams:
-    """What the follower's IMU adds to the truth (``[imu]``; the rigid-body vehicle's)."""
+    """What the flight computers' IMUs add to the truth (``[imu]``; rigid-body vehicles)."""
 
     gyro_noise_radps: float  # sd per physics sample (both vehicles' autopilots)
     accel_vibration_mps2: float  # motor vibration per sample at hover rotor speed (~ speed^2)
     accel_bias_sd_mps2: float  # residual bias after calibration, per trial and axis
-    attitude_noise_rad: float  # sd of the attitude estimate the controllers see
+    attitude_noise_rad: float  # chain "ideal": sd of the attitude the controllers see
+    filtered: bool  # chain "filtered": the IMU chain and the attitude estimator (imu.py)
+    chain: ImuChainParams
+    estimator: AttitudeEstimatorParams
 
     @classmethod
     def from_config(cls, cfg: Config) -> ImuParams:
         """Bind ``[imu]`` of ``cfg``."""
         imu = cfg.imu
+        dt_s = 1.0 / cfg.sim.physics_rate_hz
+        chain = ImuChainParams(
+            gyro_cutoff_hz=imu.gyro_cutoff_hz, accel_cutoff_hz=imu.accel_cutoff_hz,
+            delay_steps=int(round(imu.latency_s / dt_s)),
+            gyro_range_radps=float(np.deg2rad(imu.gyro_range_dps)),
+            accel_range_mps2=imu.accel_range_g * cfg.sim.gravity_mps2)
         return cls(imu.gyro_noise_radps, imu.accel_vibration_mps2, imu.accel_bias_sd_mps2,
-                   imu.attitude_noise_rad)
+                   imu.attitude_noise_rad, imu.chain == "filtered", chain,
+                   AttitudeEstimatorParams(imu.accel_gain_radps, imu.heading_gain_radps))
 
 
 @dataclass(frozen=True)
@@ -111,6 +123,21 @@ class WorldParams:
     def rigid(self) -> bool:
         """Rigid-body vehicles (attitude, rotors, torques) rather than point masses."""
         return self.fleet.has_torque
+
+    @property
+    def filtered_imu(self) -> bool:
+        """The flight computers fly their IMU chain and attitude estimate (rigid bodies)."""
+        return self.rigid and self.imu.filtered
+
+    @property
+    def gyro_filter(self) -> Biquad | None:
+        """The gyro's software low-pass at the physics rate."""
+        return Biquad.butterworth(self.imu.chain.gyro_cutoff_hz, self.dt_s)
+
+    @property
+    def accel_filter(self) -> Biquad | None:
+        """The accelerometer's software low-pass at the physics rate."""
+        return Biquad.butterworth(self.imu.chain.accel_cutoff_hz, self.dt_s)
 
     def with_triggers(self, passive: bool | np.ndarray, active: bool | np.ndarray) -> WorldParams:
         """The same world with these triggers armed (for every trial, or (n,) per trial)."""

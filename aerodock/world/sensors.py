@@ -34,15 +34,18 @@ class Observation:
 
 
 def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation, Observation]:
-    """(leader, follower) as motion capture reports them: ``latency_steps`` late, with noise on
-    position and velocity; the attitude is the flight computer's estimate (the true attitude plus
-    ``imu.attitude_noise_rad`` with rigid bodies). Random draws, per trial: attitude (rigid
-    body), position, velocity; the leader's, then the follower's."""
+    """(leader, follower) as the controllers see them: position and velocity from motion
+    capture, ``latency_steps`` late and noisy; the attitude the flight computer's (its estimate
+    now with the filtered IMU chain; the ideal chain's: the true attitude, as late, plus
+    ``imu.attitude_noise_rad`` with rigid bodies). Random draws, per trial: attitude (ideal
+    chain, rigid body), position, velocity; the leader's, then the follower's."""
     latency = params.latency_steps
     lp, lv, lr, fp, fv, fr = state.history[(state.step_index - latency) % (latency + 1)]
     n, rng = state.n, state.rng
     pos_sd, vel_sd = params.mocap.pos_noise_m, params.mocap.vel_noise_mps
     att_sd = params.imu.attitude_noise_rad if params.rigid else 0.0
+    if state.imu is not None:
+        lr, fr, att_sd = state.imu.attitude[:n], state.imu.attitude[n:], 0.0
     per_trial = isinstance(rng, TrialRNG) and rng.n == n
 
     def noisy(p: np.ndarray, v: np.ndarray, rot: np.ndarray) -> Observation:
@@ -68,10 +71,13 @@ def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation,
 
 
 def accelerometer(state: WorldState, params: WorldParams) -> np.ndarray:
-    """(n, 3) the follower's accelerometer, world NED, averaged since the last read.
+    """(n, 3) the follower's accelerometer, world NED.
 
-    The mean kinematic acceleration over the window plus what the IMU adds: white noise
-    (``vehicle.accel_noise_mps2`` per physics sample) and, with rigid bodies, motor vibration
+    With the filtered IMU chain: its latest filtered, delayed sample of the specific force,
+    turned to the world with the flight computer's attitude estimate, plus gravity. With the
+    ideal chain, averaged since the last read: the mean kinematic acceleration over the window
+    plus what the IMU adds: white noise (``vehicle.accel_noise_mps2`` per physics sample) and,
+    with rigid bodies, motor vibration
     (``imu.accel_vibration_mps2`` per sample at hover rotor speed, growing with the square of
     the rotor speed) and the residual bias (constant in the body frame), both averaged over the
     window's samples as the flight computer's filter does. A second read before the world has
@@ -80,6 +86,13 @@ def accelerometer(state: WorldState, params: WorldParams) -> np.ndarray:
     window = state.accel_window
     if window.reading is not None and state.step_index == window.step_index:
         return window.reading.copy()
+    if state.imu is not None:  # the chain's latest sample, to the world on the estimate
+        n, ims = state.n, state.imu
+        force = ims.accel_t[:, n:].T
+        reading = np.matmul(ims.attitude[n:], force[:, :, None])[:, :, 0]
+        reading[:, 2] += params.vehicle.gravity_mps2
+        window.reading, window.step_index = reading, state.step_index
+        return reading.copy()
     fol, n = state.follower, state.n
     dt = max(state.t_s - window.t_s, 1e-9)
     samples = max(state.step_index - window.step_index, 1)

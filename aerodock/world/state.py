@@ -17,6 +17,7 @@ import numpy as np
 from aerodock.downwash import BodyState, DownwashField
 from aerodock.rng import TrialRNG
 from aerodock.world.gripper import GripperState
+from aerodock.world.imu import ImuState
 from aerodock.world.platform import BarState
 from aerodock.world.torque_sensing import TorqueLog, TorqueReading
 from aerodock.world.vehicles.fleet import Fleet, concat_states, split_state
@@ -59,13 +60,17 @@ class WorldState:
         t_s, step_index: the clock (``t_s = step_index * dt_s``).
         leader_accel, follower_accel: (n, 3) last step's accelerations.
         last_downwash_mps2: (n, 3) last step's wake force on the follower per unit mass.
-        contact_seen: (n,) any bar contact since the recorder last cleared it.
+        contact_seen: (n,) any bar contact since the recorder last cleared it (the truth).
+        contact_sensed: (n,) the strain gauge read above the contact threshold at a sample since
+            then (what the follower knows).
         ground_contact: (n,) a vehicle reached the ground (z = 0) at some step.
         rotor_loss: (n, 4) injected thrust loss of the follower's rotors (None: healthy).
         accel_bias_body_mps2: (n, 3) the accelerometer's residual bias, body frame.
         history: ring buffer of the last ``latency_steps + 1`` true states (motion capture).
         accel_window: the accelerometer's averaging window.
         torque_log: kept once someone reads the torques (None until then).
+        imu: the flight computers' IMU chains and attitude estimates (``imu.chain = "filtered"``;
+            None: the ideal chain).
     """
 
     n: int
@@ -86,9 +91,11 @@ class WorldState:
     follower_accel: np.ndarray | None = None
     last_downwash_mps2: np.ndarray | None = None
     contact_seen: np.ndarray | None = None
+    contact_sensed: np.ndarray | None = None
     ground_contact: np.ndarray | None = None
     rotor_loss: np.ndarray | None = None
     torque_log: TorqueLog | None = None
+    imu: ImuState | None = None
     torque_reading: TorqueReading | None = None
     steps_at_last_torque: int = 0
     # The 2n batch and its halves (see the module docstring).
@@ -162,6 +169,8 @@ class StepFrame:
         wake_torque_nm: (n, 3) the wake's torque on the followers (None: none).
         contact_n, inside: (n,) the gripper's contact force and bar-inside-the-gate flag.
         gyro_noise_radps: (2n, 3) this step's gyro noise (None: a noiseless gyro).
+        gyro_radps, attitude_est: (2n, 3), (2n, 3, 3) what the autopilots read, with the
+            filtered IMU chain (None: the true attitude and the gyro's noisy rates).
         new, accel: the vehicles after the step and their accelerations (2n, 3).
     """
 
@@ -185,5 +194,7 @@ class StepFrame:
     contact_n: np.ndarray | None = None
     inside: np.ndarray | None = None
     gyro_noise_radps: np.ndarray | None = None
+    gyro_radps: np.ndarray | None = None
+    attitude_est: np.ndarray | None = None
     new: Any = None
     accel: np.ndarray | None = None

@@ -1,12 +1,13 @@
 """One physics step of the world: an ordered, named tuple of terms (:mod:`aerodock.world.terms`).
 
 The order is part of the numbers. Forces come first (each term adds into the step's
-accumulators, so the order of additions is the order below), then the vehicles move under them,
-then the constraints that act on the result (the bar and a hanging follower, the ground), then
-``commit`` makes the new state current and advances the clock, and the sensors sample the end of
-the step. Random numbers are drawn in this order too: the field's turbulence (follower, then bar),
-the gyros, the strain gauge. A new effect is one function in :mod:`aerodock.world.terms` and one
-``Term`` here (or in a tuple of one's own, passed to :class:`aerodock.world.World`).
+accumulators, so the order of additions is the order below), then what the flight computers
+sense, then the vehicles move, then the constraints that act on the result (the bar and a hanging
+follower, the ground), then ``commit`` makes the new state current and advances the clock, and the
+sensors sample the end of the step. Random numbers are drawn in this order too: the field's
+turbulence (follower, then bar), the gyros (and, with the filtered IMU chain, the
+accelerometers), the strain gauge. A new effect is one function in :mod:`aerodock.world.terms`
+and one ``Term`` here (or in a tuple of one's own, passed to :class:`aerodock.world.World`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ WORLD_STEP: tuple[Term, ...] = (
     Term("gripper contact", terms.gripper_contact),
     Term("cable on the leader", terms.cable_on_leader),
     Term("rotor faults", terms.rotor_faults),
-    # motion, then the constraints on it
+    # what the flight computers sense, then the motion, then the constraints on it
+    Term("imu", terms.imu),
     Term("vehicles", terms.vehicles),
     Term("hanging pair", terms.hanging_pair),
     Term("ground", terms.ground),

@@ -15,7 +15,9 @@ import numpy as np
 
 from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
 from aerodock.rng import standard_normal_t
+from aerodock.world.attitude_estimator import estimate_step
 from aerodock.world.gripper import bar_in_gripper, step_gripper
+from aerodock.world.imu import filter_sample
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
 from aerodock.world.state import StepFrame, WorldState
@@ -97,10 +99,12 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 
 
 # -- motion ----------------------------------------------------------------------------------
-def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
-    """Both vehicles under the forces and torques so far: autopilots on their gyros, rotors,
-    rigid bodies (or point masses); a leader on its stand stays put at hover thrust. Random
-    draws: the gyros' noise (per trial, the leader's then the follower's)."""
+def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """What the flight computers sense at the step's start: the gyros' noise and, with the
+    filtered chain, each IMU's samples (range, low-pass, latency) and the attitude estimate from
+    them (:mod:`aerodock.world.imu`, :mod:`aerodock.world.attitude_estimator`). Random draws:
+    the gyros' noise (per trial, the leader's then the follower's), then with the filtered chain
+    the accelerometers' noise (the same order)."""
     n = state.n
     both = frame.both
     gyro_sd = params.imu.gyro_noise_radps if params.rigid else 0.0
@@ -110,14 +114,63 @@ def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
         np.multiply(draw[:3], gyro_sd, out=noise[:, :n])
         np.multiply(draw[3:], gyro_sd, out=noise[:, n:])
         frame.gyro_noise_radps = noise.T
+    ims = state.imu
+    if ims is None:
+        return
+    chain = params.imu.chain
+    # The rates: truth and noise, clipped to the range, low-passed, delayed.
+    rates = both.w.T if frame.gyro_noise_radps is None else both.w.T + frame.gyro_noise_radps.T
+    np.clip(rates, -chain.gyro_range_radps, chain.gyro_range_radps, out=rates)
+    gyro_t = filter_sample(ims.gyro, rates, ims.gyro_filter)
+    # The specific force R^T (a - g e3) of the last step's acceleration, bias, white noise and
+    # the motors' vibration (its sd grows with the thrust), clipped, low-passed, delayed.
+    accel = np.concatenate([state.leader_accel, state.follower_accel])
+    accel[:, 2] -= params.vehicle.gravity_mps2
+    force = np.matmul(accel[:, None, :], frame.rot)[:, 0]
+    force += ims.bias_body_mps2
+    hover = np.concatenate([np.full(n, params.leader_vehicle.hover_thrust_n),
+                            np.full(n, params.vehicle.hover_thrust_n)])
+    load = both.thrust_n / hover
+    sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
+                 + (params.imu.accel_vibration_mps2 * load) ** 2)
+    draw = standard_normal_t(state.rng, n, 6)
+    force_t = force.T.copy()
+    force_t[:, :n] += draw[:3] * sd[:n]
+    force_t[:, n:] += draw[3:] * sd[n:]
+    np.clip(force_t, -chain.accel_range_mps2, chain.accel_range_mps2, out=force_t)
+    ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
+    # The navigation's acceleration: the mean over one control period, motion-capture late.
+    ims.accel_ring.append(accel + np.array([0.0, 0.0, params.vehicle.gravity_mps2]))
+    ims.accel_ring.pop(0)
+    if state.step_index % params.substeps == 0:
+        ims.nav_accel_mps2 = np.mean(ims.accel_ring[:params.substeps], axis=0)
+    # The heading the external source reports (the motion capture's, as late).
+    latency = params.latency_steps
+    att = state.history[(state.step_index - latency) % (latency + 1)]
+    rot_ext = np.concatenate([att[2], att[5]])
+    yaw_ext = np.arctan2(rot_ext[:, 1, 0], rot_ext[:, 0, 0])
+    ims.attitude = estimate_step(ims.attitude, gyro_t, ims.accel_t, ims.nav_accel_mps2, yaw_ext,
+                                 params.imu.estimator, params.dt_s)
+    ims.gyro_radps = gyro_t.T
+    frame.gyro_radps, frame.attitude_est = ims.gyro_radps, ims.attitude
+
+
+def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """Both vehicles under the forces and torques so far: autopilots on what their IMUs tell
+    them, rotors, rigid bodies (or point masses); a leader on its stand stays put at hover
+    thrust."""
+    n = state.n
+    both = frame.both
     if state.torque_log is not None:  # only when a flight log reads the torques
-        noise = frame.gyro_noise_radps
+        noise = (frame.gyro_noise_radps if frame.gyro_radps is None
+                 else frame.gyro_radps - both.w)  # the gyro the follower logs
         state.torque_log.add_step(both.w[n:], None if noise is None else noise[n:],
                                   both.rotor_speed[n:], frame.vel[n:], frame.rot[n:],
                                   frame.wake_torque_nm)
     torque = None if frame.torque_t is None else frame.torque_t.T
+    sensed = None if frame.attitude_est is None else (frame.gyro_radps, frame.attitude_est)
     new, accel = params.fleet.step(both, frame.targets, frame.force_n, torque, params.dt_s,
-                                   frame.gyro_noise_radps)
+                                   frame.gyro_noise_radps, sensed)
     if state.leader_fixed:  # on its stand: no motion, hover thrust
         new = params.fleet.hovering(new, both, slice(None, n))
         accel[:n] = 0.0
@@ -183,6 +236,8 @@ def gripper(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     sample = int(t * gp.sensor_rate_hz + 1e-9) != int((t - dt) * gp.sensor_rate_hz + 1e-9)
     state.gripper = step_gripper(state.gripper, t, frame.contact_n, frame.inside, sample,
                                  frame.close_command, gp, state.rng)
+    if sample:  # what the follower knows of a touch (its labels' mask)
+        state.contact_sensed |= state.gripper.reading_n > gp.contact_threshold_n
 
 
 def motion_capture(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

@@ -31,6 +31,7 @@ from aerodock.world.gripper import (
     GripperState,
     calibrated_gripper,
 )
+from aerodock.world.imu import start_imu
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import BarState, PlatformParams, anchor_point, hanging_bar
 from aerodock.world.sensors import Observation
@@ -145,7 +146,8 @@ class World:
 
         Random draws, in order: the thrust gains (leader, follower), the other spreads of each
         vehicle's true constants (leader, follower; none when no spread is set), the strain
-        gauge's bias and calibration, the field's own, the accelerometer's bias.
+        gauge's bias and calibration, the field's own, the follower's accelerometer bias (and
+        with the filtered IMU chain the leader's).
         """
         n, rng, params = self.n, self.rng, self.params
         lead_sd, fol_sd = params.leader_spread, params.spread
@@ -171,6 +173,13 @@ class World:
         self.field.reset(n, rng)
         bias = (params.imu.accel_bias_sd_mps2 * rng.standard_normal((n, 3)) if params.rigid
                 else np.zeros((n, 3)))
+        imu = None
+        if params.filtered_imu:  # the leader's accelerometer has its own bias too
+            lead_bias = params.imu.accel_bias_sd_mps2 * rng.standard_normal((n, 3))
+            attitude = np.concatenate([leader.R, follower.R])
+            imu = start_imu(attitude, np.concatenate([lead_bias, bias]),
+                            params.vehicle.gravity_mps2, params.imu.chain, params.gyro_filter,
+                            params.accel_filter, params.latency_steps + params.substeps)
         state = WorldState(
             n=n, fleet=params.fleet, rng=rng, field=self.field, leader_fixed=self.leader_fixed,
             constants=self.constants, bar=bar, cable_force_n=cable, gripper=gripper,
@@ -178,7 +187,8 @@ class World:
             accel_window=AccelWindow(v_mps=follower.v.copy(), t_s=0.0, step_index=0),
             leader_accel=np.zeros((n, 3)), follower_accel=np.zeros((n, 3)),
             last_downwash_mps2=np.zeros((n, 3)), contact_seen=np.zeros(n, dtype=bool),
-            ground_contact=np.zeros(n, dtype=bool),
+            contact_sensed=np.zeros(n, dtype=bool),
+            ground_contact=np.zeros(n, dtype=bool), imu=imu,
         )
         state.leader, state.follower = leader, follower
         # The motion-capture buffer: the last latency_steps + 1 true states (the arrays
@@ -278,6 +288,11 @@ class World:
     def contact_seen(self) -> np.ndarray:
         """(n,) bool: any bar contact since the recorder last cleared this."""
         return self.state.contact_seen
+
+    @property
+    def contact_sensed(self) -> np.ndarray:
+        """(n,) bool: the strain gauge sensed contact since the recorder last cleared this."""
+        return self.state.contact_sensed
 
     @property
     def ground_contact(self) -> np.ndarray:

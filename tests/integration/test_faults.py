@@ -45,8 +45,20 @@ def test_fault_campaign_is_safe_and_counts_what_each_fault_does(cfg):
         assert r["docked"] + r["aborts"] <= r["struck"]  # never both docked and aborted
     lost = by["leader state lost"]
     assert lost["safe_aborts"] >= 4 and lost["abort_reasons"]["leader_lost"] >= 4
+    # A hobby servo does not report its position: the follower believes the gate shut, acts as
+    # docked, falls away from the bar and backs off (a miss, not an abort).
     jam = by["servo jammed"]
+    assert jam["docked"] == 0 and jam["abort_reasons"]["gate_fault"] == 0
+    assert jam["sensed_misses"] >= 4 and jam["clearance_violations"] == 0
+
+
+def test_a_servo_that_reports_its_position_tells_a_jammed_gate(cfg):
+    c = cfg.with_overrides({"gripper": {"servo_feedback": True}})
+    rows = fault_campaign(c, [Fault("servo jammed", "servo_jammed")], 6, 4,
+                          Compensation.ORACLE, None)
+    jam = {r["fault"]: r for r in rows}["servo jammed"]
     assert jam["docked"] == 0 and jam["abort_reasons"]["gate_fault"] >= 4
+    assert jam["clearance_violations"] == 0
 
 
 def test_a_fault_strikes_only_the_drawn_trials(cfg):

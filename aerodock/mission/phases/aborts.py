@@ -1,5 +1,6 @@
-"""Aborts: a trial still approaching gives up (and its gate is disarmed) on a timeout, a lost
-leader, tracking that brings its top towards the leader, or a gate that never finished closing."""
+"""Aborts: a trial still approaching, its gate not yet commanded, gives up (and its gate is
+disarmed) on a timeout, a lost leader or tracking that brings its top towards the leader; or, with
+a servo that reports its position, when the gate never finished closing."""
 
 from __future__ import annotations
 
@@ -7,7 +8,6 @@ import numpy as np
 
 from aerodock.mission.params import MissionParams
 from aerodock.mission.spec import AbortReason, Phase
-from aerodock.world.gripper import GateState, GripperState
 
 # A gate still closing this many servo travel times after it was commanded is jammed.
 GATE_STUCK_TRAVELS = 4.0
@@ -15,8 +15,8 @@ GATE_STUCK_TRAVELS = 4.0
 
 def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np.ndarray,
                   active: np.ndarray, err_m: np.ndarray, last_fresh_leader_t_s: np.ndarray,
-                  gripper: GripperState, world_t_s: float,
-                  close_time_s: float) -> tuple[np.ndarray, np.ndarray]:
+                  gate_commanded: np.ndarray,
+                  gate_jammed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(abort now (n,), the reason of each (n,) int8, 0 where none): of the trials approaching.
 
     Args:
@@ -25,8 +25,8 @@ def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np
         phase, active: the phases, and which trials are still approaching.
         err_m: (n, 3) the follower's measured position minus its reference.
         last_fresh_leader_t_s: (n,) when each follower last had a fresh leader state.
-        gripper: the gates (the software knows when it commanded one).
-        world_t_s, close_time_s: the world's time and the servo's nominal travel time.
+        gate_commanded: (n,) the software has commanded the gate to close.
+        gate_jammed: (n,) a servo that reports its position has not closed in time.
     """
     m = params.mission
     up_err = -err_m[:, 2]
@@ -36,12 +36,8 @@ def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np
     )
     leader_lost = (t_s - last_fresh_leader_t_s) > m.leader_lost_s
     timeout = t_s >= timeout_s
-    gate = gripper.gate
-    gate_stuck = (gate == GateState.CLOSING) & (
-        world_t_s - gripper.servo_start_s > GATE_STUCK_TRAVELS * close_time_s)
-    abort_now = active & (((gate == GateState.OPEN) & (unsafe | leader_lost | timeout))
-                          | gate_stuck)
-    reason = np.where(gate_stuck, AbortReason.GATE_FAULT,
+    abort_now = active & ((~gate_commanded & (unsafe | leader_lost | timeout)) | gate_jammed)
+    reason = np.where(gate_jammed, AbortReason.GATE_FAULT,
                       np.where(leader_lost, AbortReason.LEADER_LOST,
                                np.where(timeout, AbortReason.TIMEOUT,
                                         AbortReason.UNSAFE_TRACKING)))

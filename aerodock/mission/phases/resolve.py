@@ -1,5 +1,7 @@
-"""The gate's outcome: captured (post-dock: the leader carries the follower for ``post_dock_s``)
-or missed (back off); a trial whose post-dock or back-off time is over is done."""
+"""The gate's outcome as the follower senses it (:mod:`aerodock.mission.phases.gate_sensing`):
+docked once the gate is believed closed (post-dock: the leader carries the follower for
+``post_dock_s``), missed if it then falls away (back off); a trial whose post-dock or back-off
+time is over is done."""
 
 from __future__ import annotations
 
@@ -7,16 +9,15 @@ import numpy as np
 
 from aerodock.mission.params import MissionParams
 from aerodock.mission.spec import Phase
-from aerodock.world.gripper import GateState
 
 
-def gate_outcomes(gate: np.ndarray, phase: np.ndarray,
-                  active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(captured now, missed now), each (n,): a gate that has just closed on the bar (in a trial
-    not already captured or done), or closed empty while the trial approached."""
-    captured_now = (gate == GateState.CAPTURED) & (phase != Phase.CAPTURED) & (
-        phase != Phase.DONE)
-    missed_now = (gate == GateState.MISSED) & active
+def gate_outcomes(closed: np.ndarray, dropped: np.ndarray, phase: np.ndarray,
+                  active: np.ndarray, t_s: float, phase_t_s: np.ndarray,
+                  confirm_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(docked now, missed now), each (n,): an approaching trial whose gate is believed closed
+    acts as docked; a trial docked less than ``confirm_s`` ago that has dropped away missed."""
+    captured_now = closed & active
+    missed_now = (phase == Phase.CAPTURED) & (t_s - phase_t_s < confirm_s) & dropped
     return captured_now, missed_now
 
 

@@ -118,8 +118,10 @@ class PointMassFleet:
 
     def step(self, state: VehicleState, targets: CommandTargets, force_n: np.ndarray,
              torque_nm: np.ndarray | None, dt_s: float,
-             gyro_noise_radps: np.ndarray | None) -> tuple[VehicleState, np.ndarray]:
-        """One physics step (torques and gyro noise do not apply to a point mass)."""
+             gyro_noise_radps: np.ndarray | None,
+             sensed: tuple[np.ndarray, np.ndarray] | None = None,
+             ) -> tuple[VehicleState, np.ndarray]:
+        """One physics step (torques and what an IMU senses do not apply to a point mass)."""
         return step_vehicle_targets(state, targets, force_n, self.params, dt_s, state.R)
 
     def hovering(self, state: VehicleState, old: VehicleState, rows: slice) -> VehicleState:
@@ -162,11 +164,13 @@ class RigidBodyFleet:
         return rigid_targets(_broadcast_command(cmd, n), state, self.params, n)
 
     def step(self, state: RigidBodyState, targets: Any, force_n: np.ndarray,
-             torque_nm: np.ndarray | None, dt_s: float,
-             gyro_noise_radps: np.ndarray | None) -> tuple[RigidBodyState, np.ndarray]:
-        """One physics step: autopilot on the gyro, rotors, rigid-body dynamics."""
+             torque_nm: np.ndarray | None, dt_s: float, gyro_noise_radps: np.ndarray | None,
+             sensed: tuple[np.ndarray, np.ndarray] | None = None,
+             ) -> tuple[RigidBodyState, np.ndarray]:
+        """One physics step: autopilot on the gyro (or the sensed rates and attitude), rotors,
+        rigid-body dynamics."""
         return step_with_autopilot(state, targets, force_n, torque_nm, self.params, dt_s,
-                                   gyro_noise_radps)
+                                   gyro_noise_radps, sensed)
 
     def hovering(self, state: RigidBodyState, old: RigidBodyState,
                  rows: slice) -> RigidBodyState:
@@ -203,8 +207,8 @@ class PairFleet:
                 self.follower.half_targets(fol, fol_state, n, dt_s))
 
     def step(self, state: Any, targets: tuple[Any, Any], force_n: np.ndarray,
-             torque_nm: np.ndarray | None, dt_s: float,
-             gyro_noise_radps: np.ndarray | None) -> tuple[Any, np.ndarray]:
+             torque_nm: np.ndarray | None, dt_s: float, gyro_noise_radps: np.ndarray | None,
+             sensed: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[Any, np.ndarray]:
         """One physics step of each half, joined."""
         n = force_n.shape[0] // 2
         halves = split_state(self, state, n)
@@ -213,7 +217,8 @@ class PairFleet:
             rows = slice(None, n) if i == 0 else slice(n, None)
             out.append(fleet.step(half, targets[i], force_n[rows],
                                   None if torque_nm is None else torque_nm[rows], dt_s,
-                                  None if gyro_noise_radps is None else gyro_noise_radps[rows]))
+                                  None if gyro_noise_radps is None else gyro_noise_radps[rows],
+                                  None if sensed is None else (sensed[0][rows], sensed[1][rows])))
         accel = np.concatenate([out[0][1], out[1][1]])
         return concat_states(self, out[0][0], out[1][0]), accel
 

@@ -203,10 +203,13 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
 
 
 def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
-                        gyro_radps: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3))."""
+                        gyro_radps: np.ndarray, dt_s: float,
+                        attitude: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
+    gyro's rates and its attitude estimate (``attitude``; None: the true attitude)."""
     cols = gain_columns(params.gains, params.inertia_kgm2, state.R.shape[0])
-    rate_sp = rate_setpoint_t(state.R, targets.R_des, targets.yaw_rate_radps, cols)
+    rot = state.R if attitude is None else attitude
+    rate_sp = rate_setpoint_t(rot, targets.R_des, targets.yaw_rate_radps, cols)
     torque, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s)
     if targets.torque_ff_nm is not None:  # (n, 3) feed-forward; the loop's torque is (3, n)
         torque = torque + targets.torque_ff_nm.T
@@ -399,15 +402,20 @@ def step_with_autopilot(
     params: RigidBodyParams,
     dt_s: float,
     gyro_noise_radps: np.ndarray | None = None,
+    sensed: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[RigidBodyState, np.ndarray]:
     """One physics step of N vehicles flown by their autopilots: the autopilot reads the gyro
-    (true rates plus ``gyro_noise_radps``), commands the rotors, then :func:`step_rigid_body`.
-    Returns (state, acceleration (n, 3))."""
-    if gyro_noise_radps is None:
+    (true rates plus ``gyro_noise_radps``; or, given ``sensed = (rates (n, 3), attitude
+    (n, 3, 3))``, what the flight computer's IMU chain and estimator give), commands the rotors,
+    then :func:`step_rigid_body`. Returns (state, acceleration (n, 3))."""
+    attitude = None
+    if sensed is not None:
+        gyro, attitude = sensed
+    elif gyro_noise_radps is None:
         gyro = state.w
     else:  # component-major (a (3, n) array's .T from the world: contiguous rows)
         gyro = np.add(state.w.T, np.asarray(gyro_noise_radps).T, out=np.empty((3, state.n))).T
-    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s)
+    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s, attitude)
     p, v, rot, w, omega, thrust, accel = _step_arrays(state, speed_cmd, ext_force_n,
                                                       ext_torque_nm, params, dt_s)
     yaw_sp = targets.yaw_rate_radps * dt_s
