@@ -19,6 +19,7 @@ from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
 from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
+from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
 from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
@@ -85,6 +86,13 @@ class PositionController:
         elif use_observer:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
                                          c.observer_pos_noise_m, c.observer_vel_noise_mps)
+        # Freyja's state manager filters motion capture's position into position and velocity.
+        self.state_filter = None
+        if c.state_filter == "freyja":
+            r_p, q_p, q_v, q_a = c.freyja_state_filter_params
+            self.state_filter = FreyjaStateFilter(n, self.dt_s, FreyjaStateFilterParams(
+                propagation_rate_hz=c.freyja_state_filter_rate_hz, measurement_noise=r_p,
+                process_noise=(q_p, q_v, q_a)))
         # The controller's own rate: a new command every hold_ticks state messages (held in
         # between, as Freyja's timer does); the reference acceleration's share fed forward.
         self.hold_ticks = int(round(cfg.sim.control_rate_hz / c.command_rate_hz))
@@ -109,6 +117,8 @@ class PositionController:
               bias_sd_mps2: float | None = None) -> None:
         """Start from measured states (n, 3), optionally with a bias guess and its uncertainty
         (see :meth:`aerodock.control.observer.BiasObserver.reset`)."""
+        if self.state_filter is not None:
+            self.state_filter.reset(p, v)
         if isinstance(self.observer, FreyjaBiasEstimator):
             self.observer.reset(p, v)  # Freyja's own prior (it takes no bias guess)
         elif self.observer is not None:
@@ -139,6 +149,8 @@ class PositionController:
                 contact with the bar).
         """
         n = self.n
+        if self.state_filter is not None:  # what the state manager publishes
+            p_meas, v_meas = self.state_filter.measure(p_meas)
         freyja = isinstance(self.observer, FreyjaBiasEstimator)
         if freyja:
             self.observer.measure(p_meas, v_meas)  # every state message

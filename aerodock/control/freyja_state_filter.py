@@ -1,0 +1,88 @@
+"""The paper's state filter as its flight stack publishes it (Freyja's ``state_manager``).
+
+Freyja (unl-nimbus-lab/Freyja, branch ``ros2-devel``, e.g. commit 762ee2b of 2023-10-05; the
+filter since aa8913a of 2023-06-05) does not pass motion capture's velocity on: its state manager
+runs a Kalman filter over ``[p, v, a]`` per axis (``state_estimator.cpp``, ``filter_type:
+kalman`` in ``freyja_flight.launch.yaml``) and publishes its position and velocity, which the
+LQR controller and the bias estimator read:
+
+- **propagation** on its own thread at 200 Hz: ``x <- A x``, ``P <- A P A' + Q`` with
+  ``A = [[1, dt, dt^2/2], [0, 1, dt], [0, 0, 1]]`` and ``Q = diag(0.0051, 0.0147, 6.3836)`` added
+  once per propagation (``kf_params`` after the measurement noise); no control input;
+- **measurement update** at every motion-capture message (``tf_rate`` 100 Hz) on the position
+  alone, ``R = 0.0594``; the state is published right after.
+
+``P`` starts at ``10 I``. As the timing is every trial's and axis's, one 3x3 covariance serves the
+batch. With these numbers the velocity lags a 1-2 Hz motion by about 0.1 s and overshoots a
+ramp by about a quarter: part of what the paper's controller flies.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FreyjaStateFilterParams:
+    """The state filter's constants (defaults: Freyja's source and flight launch file)."""
+
+    propagation_rate_hz: float = 200.0
+    measurement_noise: float = 0.0594  # R on p
+    process_noise: tuple[float, float, float] = (0.0051, 0.0147, 6.3836)  # Q on p, v, a
+    initial_cov: float = 10.0
+
+
+class FreyjaStateFilter:
+    """A batch of Freyja's state filters: :meth:`measure` at every motion-capture message.
+
+    Args:
+        n: trials.
+        measure_dt_s: period of the motion-capture messages, s.
+        params: the filter's constants.
+    """
+
+    def __init__(self, n: int, measure_dt_s: float,
+                 params: FreyjaStateFilterParams | None = None) -> None:
+        self.n = int(n)
+        self.params = params or FreyjaStateFilterParams()
+        self.measure_dt_s = float(measure_dt_s)
+        self.prop_dt_s = 1.0 / self.params.propagation_rate_hz
+        dt = self.prop_dt_s
+        self._a = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+        self._q = np.diag(self.params.process_noise)
+        self.state = np.zeros((self.n, 3, 3))
+        self.cov = self.params.initial_cov * np.eye(3)
+        self._t_to_propagation_s = self.prop_dt_s
+
+    def reset(self, p: np.ndarray, v: np.ndarray) -> None:
+        """Start at a measured state (the filter has run long before the mission)."""
+        self.state = np.zeros((self.n, 3, 3))
+        self.state[:, :, 0] = p
+        self.state[:, :, 1] = v
+        self.cov = self.params.initial_cov * np.eye(3)
+        self._t_to_propagation_s = self.prop_dt_s
+
+    def measure(self, p_meas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One motion-capture position (n, 3): the propagations due, the update; returns the
+        published (position, velocity), each (n, 3)."""
+        self._t_to_propagation_s -= self.measure_dt_s
+        a = self._a
+        while self._t_to_propagation_s <= 1e-9:
+            s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
+            state = np.empty_like(self.state)
+            state[..., 0] = s0 + a[0, 1] * s1 + a[0, 2] * s2
+            state[..., 1] = s1 + a[1, 2] * s2
+            state[..., 2] = s2
+            self.state = state
+            self.cov = a @ self.cov @ a.T + self._q
+            self._t_to_propagation_s += self.prop_dt_s
+        gain = self.cov[:, 0] / (self.cov[0, 0] + self.params.measurement_noise)  # (3,)
+        innov = np.asarray(p_meas, dtype=float) - self.state[..., 0]
+        state = np.empty_like(self.state)
+        for i in range(3):
+            state[..., i] = self.state[..., i] + gain[i] * innov
+        self.state = state
+        self.cov = self.cov - np.outer(gain, self.cov[0])
+        return self.state[..., 0].copy(), self.state[..., 1].copy()

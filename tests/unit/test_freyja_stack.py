@@ -1,0 +1,74 @@
+"""The paper's flight stack as Freyja publishes it: its bias estimator and its state filter."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
+from aerodock.control.freyja_state_filter import FreyjaStateFilter
+
+DT = 0.01  # motion capture at 100 Hz
+
+
+def _step_response(params: FreyjaEstimatorParams, step_mps2: float, seconds: float,
+                   ) -> np.ndarray:
+    """A vehicle held by a PD loop (Freyja's gains) against a disturbance step, its estimate
+    subtracted from the command, as the controller does; the published estimate over time."""
+    est = FreyjaBiasEstimator(1, DT, params)
+    est.t_since_enable_s = 10.0  # long enabled: no ramp-in
+    p = v = 0.0
+    out = []
+    for _ in range(int(seconds / DT)):
+        b = est.bias_mps2[0, 2]
+        u = -3.1623 * p - 2.5347 * v - b
+        est.set_input(np.array([[0.0, 0.0, u]]))
+        a = u + step_mps2
+        p += v * DT + 0.5 * a * DT * DT
+        v += a * DT
+        est.measure(np.array([[0.0, 0.0, p]]), np.array([[0.0, 0.0, v]]))
+        out.append(est.bias_mps2[0, 2])
+    return np.array(out)
+
+
+def test_bias_estimate_rises_as_the_flight_stack_publishes_it():
+    """63 % of a step in about half a second, 95 % of it in the end (the input shaping)."""
+    bias = _step_response(FreyjaEstimatorParams(), 1.0, 6.0)
+    t63 = (np.argmax(bias >= 0.63 * 0.95) + 1) * DT
+    assert 0.3 <= t63 <= 0.7
+    assert bias[-1] == pytest.approx(0.95, abs=0.02)
+    slower = _step_response(FreyjaEstimatorParams(process_noise=(0.1, 0.2, 0.08)), 1.0, 6.0)
+    assert (np.argmax(slower >= 0.6) + 1) * DT > t63  # less process noise: a slower estimate
+
+
+def test_bias_estimate_is_clipped_and_ramps_in():
+    """The vertical bias is clipped to 3 m/s^2 at each propagation (the updates in between may
+    push it a little over, as in the flight stack): against a 6 m/s^2 step it stays near 3
+    instead of reaching 5.7. The published estimate ramps in as (t / 1.5 s)^3 after the
+    estimator is enabled."""
+    bias = _step_response(FreyjaEstimatorParams(), 6.0, 4.0)
+    assert 3.0 < bias.max() < 3.4
+    assert _step_response(FreyjaEstimatorParams(bias_limit_mps2=(2.0, 2.0, 9.0)), 6.0,
+                          4.0)[-1] > 5.5
+    est = FreyjaBiasEstimator(1, DT)
+    est.state[0, 2, 2] = 1.0
+    est.t_since_enable_s = 0.75
+    assert est.bias_mps2[0, 2] == pytest.approx(0.125)
+
+
+def test_state_filter_lags_and_overshoots_a_ramp():
+    """Position measured alone: a 1 m/s ramp from rest is reached late and overshot (the
+    published filter's constant-acceleration model), then tracked."""
+    flt = FreyjaStateFilter(1, DT)
+    flt.reset(np.zeros((1, 3)), np.zeros((1, 3)))
+    for _ in range(200):  # at rest long enough for the gain to settle
+        flt.measure(np.zeros((1, 3)))
+    vel = []
+    for k in range(200):
+        _, v = flt.measure(np.array([[k * DT * 1.0, 0.0, 0.0]]))
+        vel.append(v[0, 0])
+    vel = np.array(vel)
+    t90 = (np.argmax(vel >= 0.9) + 1) * DT
+    assert 0.08 <= t90 <= 0.3
+    assert 1.1 < vel.max() < 1.5
+    assert vel[-1] == pytest.approx(1.0, abs=0.02)
