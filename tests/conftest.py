@@ -50,6 +50,19 @@ def cfg():
     return load_config()
 
 
+IDEAL_WORLD = {"imu": {"chain": "ideal"},
+               "vehicle": {"mass_sd": 0.0, "inertia_sd": 0.0, "torque_coeff_sd": 0.0,
+                           "motor_tau_sd": 0.0}}
+"""The idealised world of earlier releases: the autopilot and the controllers read the true
+attitude, and every vehicle is exactly nominal (for tests of a mechanism's precision)."""
+
+
+@pytest.fixture(scope="session")
+def ideal_cfg(cfg):
+    """The default configuration on the idealised world (:data:`IDEAL_WORLD`)."""
+    return cfg.with_overrides(IDEAL_WORLD)
+
+
 @pytest.fixture
 def rng():
     """A fixed-seed generator."""

@@ -191,7 +191,7 @@ class DockingBatch:
                           docked=docked & live, missed=missed & live,
                           aborted=aborted & live,
                           clearance_violated=flown.clearance_violated & live)
-        self.resolved |= ~mb.active
+        self.resolved |= docked | missed | aborted  # the outcome decided (a dock once confirmed)
         return out
 
     @property

@@ -67,7 +67,8 @@ class Decision:
         feedforward_mps2: the compensation's prediction (None: none flown).
         leader_obs, follower_obs: motion capture of each vehicle, as its own controller sees it.
         leader_at_follower: the leader's state as the follower receives it (over the network).
-        docked, missed, aborted: the outcomes decided at this period.
+        docked, missed, aborted: the outcomes decided at this period (a dock once confirmed:
+            the follower held through ``mission.dock_confirm_s``; a miss once sensed).
     """
 
     t_s: float
@@ -242,6 +243,7 @@ class MissionBatch:
         self.capture_t = np.full(n, np.nan)
         self.docked = np.zeros(n, dtype=bool)  # the follower acts as docked (gate believed shut)
         self.sensed_missed = np.zeros(n, dtype=bool)  # it then found itself not held
+        self.confirmed = np.zeros(n, dtype=bool)  # held through the confirmation window
         self.post_dock_sink = np.full(n, np.nan)
         self.metrics = MissionMetrics(n, self.steps, self.arrival_s, record != "summary")
         self.recorder = (FlightRecorder(params.label_basis, params.mass_kg)
@@ -328,6 +330,12 @@ class MissionBatch:
                 self.phase_t, m.dock_confirm_s)
         self.docked = (self.docked | captured_now) & ~missed_now
         self.sensed_missed |= missed_now
+        # A dock is an outcome once confirmed: held through the confirmation window (or, from
+        # the truth, at once).
+        confirmed_now = captured_now if self.gate_truth else (
+            (phase == Phase.CAPTURED) & self.docked & ~self.confirmed
+            & (t - self.phase_t >= m.dock_confirm_s))
+        self.confirmed |= confirmed_now
         self.capture_t = np.where(captured_now, t, np.where(missed_now, np.nan, self.capture_t))
         backoff_now = (abort_now | missed_now) & ~captured_now
         plan = backoff.start_back_off(params, plan, t, obs_f, obs_l_f, backoff_now)
@@ -346,7 +354,7 @@ class MissionBatch:
         return Decision(
             t_s=t, phase=phase, approaching=active, holding=holding, ref=ref,
             feedforward_mps2=self._predict(obs_l_f, obs_f), leader_obs=obs_l,
-            follower_obs=obs_f, leader_at_follower=obs_l_f, docked=captured_now,
+            follower_obs=obs_f, leader_at_follower=obs_l_f, docked=confirmed_now,
             missed=missed_now & ~captured_now,
             aborted=abort_now & ~captured_now & ~missed_now,
         )

@@ -15,11 +15,18 @@ from aerodock.world import World
 from aerodock.world.vehicles.point_mass import AttitudeCommand
 
 
-def test_tracks_minimum_jerk_without_downwash(cfg):
-    """Closed loop (mocap noise, latency, lags) on a 1 m, 4 s minimum-jerk move: RMS < 0.02 m."""
-    cfg = cfg.with_overrides({"downwash": {"field": "aerodock.downwash.template:ZeroField",
-                                           "params": {}},
-                              "vehicle": {"thrust_gain_sd": 0.0}})
+@pytest.mark.parametrize(("world", "rms_max_m", "final_max_m"),
+                         [("ideal", 0.02, 0.02), ("real", 0.04, 0.08)])
+def test_tracks_minimum_jerk_without_downwash(cfg, ideal_cfg, world, rms_max_m, final_max_m):
+    """Closed loop (mocap noise, latency, lags) on a 1 m, 4 s minimum-jerk move: RMS < 0.02 m
+    on the idealised world. On the default one < 0.04 m, 0.08 m at the end: its vehicle differs
+    from what its controller flies (mass, inertia), and its autopilot flies its own attitude
+    estimate, which the accelerometer's residual bias (0.1 m/s^2) tilts by up to 0.6 degrees,
+    a trim error the bias observer takes out over seconds, as on a real vehicle."""
+    base = ideal_cfg if world == "ideal" else cfg
+    cfg = base.with_overrides({"downwash": {"field": "aerodock.downwash.template:ZeroField",
+                                            "params": {}},
+                               "vehicle": {"thrust_gain_sd": 0.0}})
     n = 8
     world = World(cfg, n, TrialRNG(3, n))
     start = np.tile([0.0, 0.0, -1.0], (n, 1))
@@ -39,11 +46,12 @@ def test_tracks_minimum_jerk_without_downwash(cfg):
         world.advance(hover, out.command)
         errs.append(world.follower.p - plan.sample(world.t_s)[0])
     rms = np.sqrt(np.mean(np.sum(np.array(errs) ** 2, axis=-1)))
-    assert rms < 0.02
-    assert np.allclose(world.follower.p, goal, atol=0.02)
+    assert rms < rms_max_m
+    assert np.allclose(world.follower.p, goal, atol=final_max_m)
 
 
-def test_oracle_docks_and_phases_run_in_order(cfg):
+def test_oracle_docks_and_phases_run_in_order(ideal_cfg):
+    cfg = ideal_cfg
     res = run_campaign(cfg, MissionSpec(trials=12, compensation="oracle", seed=2),
                        record="trace")
     assert res.success.mean() >= 0.9
@@ -152,9 +160,11 @@ def test_a_disarmed_gate_never_closes(cfg):
     assert world.gripper.gate[1] == GateState.CAPTURED
 
 
-def test_settled_start_converges_the_observers_without_truth(cfg):
+def test_settled_start_converges_the_observers_without_truth(ideal_cfg):
     """Before t = 0 both vehicles fly settle_s with observers reset from motion capture only:
-    the leader's bias estimate has found the bar's weight it carries."""
+    the leader's bias estimate has found the bar's weight it carries (on the idealised world,
+    where it is the only bias)."""
+    cfg = ideal_cfg
     from aerodock.control.controller import PositionController
     from aerodock.mission.settle import settle
 
@@ -170,8 +180,10 @@ def test_settled_start_converges_the_observers_without_truth(cfg):
            lambda t: Reference(fol_p, z, z, zn, zn), cfg.mission.settle_s)
     # the leader's bias: the bar (its weight and the wake's drag on it) pulls it down through the
     # cables, its thrust-gain error adds a constant
-    cable_load = world.cable_force_n[:, 2] / cfg.vehicle.mass_kg
-    gain_err = (1.0 - world.leader.thrust_gain) * cfg.sim.gravity_mps2
+    # (the controller flies the nominal mass; the vehicle has its own)
+    mass = world.leader.body.mass_kg
+    cable_load = world.cable_force_n[:, 2] / mass
+    gain_err = (1.0 - world.leader.thrust_gain * cfg.vehicle.mass_kg / mass) * cfg.sim.gravity_mps2
     expected = cable_load + gain_err
     assert np.allclose(lead_ctl.observer.bias_mps2[:, 2], expected, atol=0.08)
     assert np.allclose(world.leader.p, lead_p, atol=0.03)

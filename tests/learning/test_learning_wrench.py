@@ -31,11 +31,13 @@ from aerodock.learning.train import TrainedModel, check_trainable, train_model
 
 
 @pytest.fixture(scope="module")
-def sim_logs():
-    """Eight short simulated wake-excitation flights at 0.5-0.8 m (rigid bodies, torques)."""
+def sim_logs(ideal_cfg):
+    """Eight short simulated wake-excitation flights at 0.5-0.8 m (rigid bodies, torques), on the
+    idealised world (the true attitude, a noisy unfiltered gyro, nominal vehicles): the labels'
+    and the models' mechanisms, before a flight computer's filters blur them."""
     from aerodock.learning.curriculum import excitation_flights
 
-    return excitation_flights(load_config(None), 8, 0.5, 0.8, seed=11)
+    return excitation_flights(ideal_cfg, 8, 0.5, 0.8, seed=11)
 
 
 @pytest.fixture(scope="module")

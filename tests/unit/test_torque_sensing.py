@@ -32,11 +32,12 @@ def _fly(world: World, periods: int, read_torque: bool) -> list:
     return readings
 
 
-def test_noise_free_observations_explain_the_wake_torque_exactly(cfg):
-    """No gyro noise and no thrust-gain error: obs - rotor is the wake torque to rounding (the
-    window of the kinematic torque and of the sums line up step for step)."""
-    quiet = cfg.with_overrides({"imu": {"gyro_noise_radps": 0.0},
-                                "vehicle": {"thrust_gain_sd": 0.0}})
+def test_noise_free_observations_explain_the_wake_torque_exactly(ideal_cfg):
+    """No gyro noise or filter and no thrust-gain or inertia error: obs - rotor is the wake
+    torque to rounding (the window of the kinematic torque and of the sums line up step for
+    step)."""
+    quiet = ideal_cfg.with_overrides({"imu": {"gyro_noise_radps": 0.0},
+                                      "vehicle": {"thrust_gain_sd": 0.0}})
     world = _world(quiet)
     readings = _fly(world, 30, read_torque=True)[1::2]
     for reading in readings[1:]:

@@ -58,7 +58,8 @@ def test_the_physics_flies_the_true_mass_and_the_controllers_the_nominal(cfg):
     assert np.corrcoef(mass, climb)[0, 1] < -0.8
 
 
-def test_no_spread_keeps_every_vehicle_nominal(cfg):
+def test_no_spread_keeps_every_vehicle_nominal(ideal_cfg):
+    cfg = ideal_cfg
     world = World(cfg, 4, TrialRNG(0, 4))
     world.reset(np.array([0.0, 0.0, -3.0]), np.array([0.0, 0.0, -2.0]))
     nominal = nominal_body(cfg.vehicle.mass_kg, cfg.vehicle.inertia_kgm2,
