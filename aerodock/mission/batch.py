@@ -306,7 +306,8 @@ class MissionBatch:
         self._status_sent = self._status_sent[1:] + [self.docked.copy()]
         self.lout = leader.leader_command(
             self.leader_ctl, obs_l,
-            leader.leader_reference(self.leader_p0, self.lead_vel, self.lead_v, t),
+            leader.leader_reference(self.leader_p0, self.lead_vel, self.lead_v, t,
+                                    self.spec.leader_turn_rate_radps if self.spec.moving else 0.0),
             self._status_sent[0], self._shed_mps2)
         # The follower: plan, phases.
         phase = self.phase

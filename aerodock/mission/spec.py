@@ -37,6 +37,7 @@ class MissionSpec:
     trials: int = 50
     offset_m: float | None = None  # cable length d_p (None: config's platform.cable_length_m)
     leader_speed_mps: float = 0.0
+    leader_turn_rate_radps: float = 0.0  # a moving leader's path bends at this rate from t = 0
     leader_fixed: bool = False
     compensation: Compensation = Compensation.OBSERVER
     seed: int = 0

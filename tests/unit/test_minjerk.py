@@ -134,3 +134,22 @@ def test_bad_duration_raises():
     prob["duration_s"] = np.array([1.0, 0.0])
     with pytest.raises(ValueError):
         minjerk(**prob)
+
+
+def test_a_turning_leaders_reference_is_a_level_arc():
+    """From t = 0 the leader's path bends at the turn rate: a quarter turn at 0.5 rad/s and 1 m/s
+    ends 2 m along and 2 m across, flying across; velocity and acceleration are the path's."""
+    from aerodock.mission.phases.leader import leader_reference
+
+    p0, v0 = np.zeros((1, 3)), np.array([1.0, 0.0, 0.0])
+    quarter = leader_reference(p0, v0, v0[None, :], np.pi, 0.5)
+    np.testing.assert_allclose(quarter.p, [[2.0, 2.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(quarter.v, [[0.0, 1.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(quarter.a, [[-0.5, 0.0, 0.0]], atol=1e-12)
+    h = 1e-5
+    ahead, behind, now = (leader_reference(p0, v0, v0[None, :], t, 0.5)
+                          for t in (1.0 + h, 1.0 - h, 1.0))
+    np.testing.assert_allclose((ahead.p - behind.p) / (2 * h), now.v, atol=1e-8)
+    np.testing.assert_allclose((ahead.v - behind.v) / (2 * h), now.a, atol=1e-8)
+    straight = leader_reference(p0, v0, v0[None, :], 2.0)
+    np.testing.assert_allclose(straight.p, [[2.0, 0.0, 0.0]])

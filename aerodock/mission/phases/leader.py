@@ -9,12 +9,25 @@ from aerodock.world import Observation
 
 
 def leader_reference(p0_m: np.ndarray, velocity_mps: np.ndarray, velocity_rows_mps: np.ndarray,
-                     t_s: float) -> Reference:
+                     t_s: float, turn_rate_radps: float = 0.0) -> Reference:
     """The leader's reference at mission time ``t_s``: from ``p0_m`` (n, 3) at the constant
-    ``velocity_mps`` (3,) (``velocity_rows_mps``: the same per trial, (n, 3))."""
+    ``velocity_mps`` (3,) (``velocity_rows_mps``: the same per trial, (n, 3)); with
+    ``turn_rate_radps`` its path bends into a level arc from t = 0 on (same speed, its velocity
+    turning at that rate; the leader keeps its heading, as a multirotor may)."""
     n = p0_m.shape[0]
     zero_n = np.zeros(n)
-    return Reference(p0_m + velocity_mps * t_s, velocity_rows_mps, np.zeros((n, 3)), zero_n,
+    if turn_rate_radps == 0.0 or t_s <= 0.0:
+        return Reference(p0_m + velocity_mps * t_s, velocity_rows_mps, np.zeros((n, 3)),
+                         zero_n, zero_n)
+    w, angle = turn_rate_radps, turn_rate_radps * t_s
+    c, s = np.cos(angle), np.sin(angle)
+    vx, vy = velocity_mps[0], velocity_mps[1]
+    # v(t) = Rz(w t) v0; p(t) = p0 + integral of v; a(t) = w ez x v(t).
+    vel = np.array([c * vx - s * vy, s * vx + c * vy, velocity_mps[2]])
+    shift = np.array([(s * vx - (1.0 - c) * vy) / w, ((1.0 - c) * vx + s * vy) / w,
+                      velocity_mps[2] * t_s])
+    accel = np.array([-w * vel[1], w * vel[0], 0.0])
+    return Reference(p0_m + shift, np.tile(vel, (n, 1)), np.tile(accel, (n, 1)), zero_n,
                      zero_n)
 
 
