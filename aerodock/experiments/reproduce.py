@@ -27,15 +27,22 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import Compensation
+from aerodock.control.observer_response import bias_step_response
 from aerodock.control.profiles import controller_config
 from aerodock.downwash import build_field
 from aerodock.downwash.mean import has_mean, mean_acceleration_fn, mean_source
-from aerodock.experiments.controller_costs import controller_costs
+from aerodock.experiments.cable_study import CABLE_OFFSETS_M, cable_study
+from aerodock.experiments.controller_costs import (
+    GATE_HEIGHTS_M,
+    OBSERVER_TAUS_S,
+    TERMINAL_MIX,
+    CostSize,
+    controller_costs,
+)
+from aerodock.experiments.paper_counts import paper_outcome_probabilities
 from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import json_ready, write_json
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
-
-CABLE_OFFSETS_M = (0.36, 0.47, 0.64, 0.87, 1.11, 1.35)
 
 
 @dataclass(frozen=True)
@@ -51,9 +58,7 @@ class RunSize:
     se_pool_flights: int
     test_flights_per_stage: int
     se_max_time_s: float | None
-    cost_trials: int
-    cost_taus_s: tuple[float, ...]
-    cost_mixes: tuple[float, ...]
+    costs: CostSize  # the sweeps of the levers the paper leaves unstated
     target_trials: int
     target_all_rows: bool  # every controller + model row (quick: the paper's and ours only)
 
@@ -61,12 +66,25 @@ class RunSize:
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
                 moving_trials=8, se_minutes=(0.5, 2),
                 se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=5.0,
-                cost_trials=8, cost_taus_s=(4.0, 0.25), cost_mixes=(0.0, 1.0), target_trials=4,
+                costs=CostSize(trials=8, taus_s=(4.0,), mixes=(0.0, 1.0),
+                               cable_offsets_m=(0.36,), cable_reps=2, gate_heights_m=(0.10,)),
+                target_trials=4,
                 target_all_rows=False)
+# The smallest run that crosses every step (one offset, a handful of trials, one sample-efficiency
+# point, one observer setting): for checking that a plug-in field or a config goes through the
+# whole pipeline, not for any figure.
+SMOKE = RunSize(cable_reps=1, cable_offsets_m=(0.36,), hover_trials=4, moving_trials=2,
+                se_minutes=(0.5,), se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=1,
+                se_max_time_s=3.0,
+                costs=CostSize(trials=2, taus_s=(), mixes=(0.0,), cable_offsets_m=(0.36,),
+                               cable_reps=1, gate_heights_m=()),
+                target_trials=2, target_all_rows=False)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
-               test_flights_per_stage=4, se_max_time_s=None, cost_trials=60,
-               cost_taus_s=(4.0, 2.0, 1.0, 0.5, 0.25), cost_mixes=(0.0, 0.25, 0.5, 1.0, 2.0),
+               test_flights_per_stage=4, se_max_time_s=None,
+               costs=CostSize(trials=60, taus_s=OBSERVER_TAUS_S, mixes=TERMINAL_MIX,
+                              cable_offsets_m=CABLE_OFFSETS_M, cable_reps=10,
+                              gate_heights_m=GATE_HEIGHTS_M),
                target_trials=100, target_all_rows=True)
 
 
@@ -110,22 +128,8 @@ def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
     # 2. Cable-length study -----------------------------------------------------------------
     t0 = time.perf_counter()
     say(f"2/5 cable-length study (leader on a rigid stand), {label}")
-    cable: dict[str, Any] = {"offsets_m": list(size.cable_offsets_m),
-                             "repetitions": size.cable_reps, "without_model": [],
-                             "with_model": []}
-    cable_traces: dict[str, dict[float, dict[str, np.ndarray]]] = {"without": {}, "with": {}}
-    for offset in size.cable_offsets_m:
-        for key, comp in (("without", Compensation.OBSERVER), ("with", Compensation.MODEL)):
-            res = run_campaign(cfg, MissionSpec(
-                trials=size.cable_reps, offset_m=offset, leader_fixed=True, compensation=comp,
-                seed=seed, start_azimuths_deg=(0.0,)), predictor, record="trace")
-            rec = _campaign_record(res)
-            rec["offset_m"] = offset
-            rec["result"] = "dock" if rec["success_rate"] >= 0.5 else "miss"
-            cable[f"{key}_model"].append(rec)
-            cable_traces[key][offset] = res.trace
-    results["cable_study"] = cable
-    traces["cable"] = cable_traces
+    results["cable_study"], traces["cable"] = cable_study(
+        cfg, size.cable_offsets_m, size.cable_reps, predictor, seed, record="trace")
     timings["cable_study_s"] = time.perf_counter() - t0
 
     # 3. Hover docking ----------------------------------------------------------------------
@@ -183,8 +187,12 @@ def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
 def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
                   say: Callable[[str], None] = print,
                   shared_data: Path | None = None,
-                  bar: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
+                  bar: Callable[[str, int, int], None] | None = None,
+                  smoke: bool = False) -> dict[str, Any]:
     """Run every experiment and write ``results.json``, ``report.md`` and ``figures/``.
+
+    ``quick`` is a smaller run (a few minutes); ``smoke`` the smallest that crosses every step
+    (for checking a plug-in field or a config end to end; it implies ``quick``).
 
     ``bar(description, done, total)``, if given, follows training epochs and the sample-efficiency
     runs (a progress bar)."""
@@ -196,7 +204,8 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     from aerodock.learning.runtime import Predictor
     from aerodock.learning.sample_efficiency import sample_efficiency
 
-    size = QUICK if quick else FULL
+    quick = quick or smoke
+    size = SMOKE if smoke else QUICK if quick else FULL
     out_dir = Path(out_dir)
     fig_dir = out_dir / "figures"
     fig_dir.mkdir(parents=True, exist_ok=True)
@@ -204,7 +213,7 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     timings: dict[str, float] = {}
     traces: dict[str, Any] = {}
     results: dict[str, Any] = {
-        "aerodock_reproduce": {"quick": quick, "seed": seed, "config": cfg.source,
+        "aerodock_reproduce": {"quick": quick, "smoke": smoke, "seed": seed, "config": cfg.source,
                                "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
                                           f"Python {platform.python_version()}"},
         "units": {"errors": "m", "integrals_over_0.5s": "m*s (errors), m/s (force)",
@@ -264,15 +273,23 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     docking, traces_paper, times = _docking_experiments(paper_cfg, size, predictor, seed, say,
                                                         "paper's controller")
     results.update(docking)
+    results["paper_counts"] = paper_outcome_probabilities(
+        docking["hover_docking"]["with_model"], docking["hover_docking"]["without_model"],
+        docking["cable_study"])
     traces.update(traces_paper)
     timings.update(times)
     tuned, _, times = _docking_experiments(controller_config(cfg, "tuned"), size, predictor, seed,
                                            say, "tuned controller")
     results["controllers"] = {
-        "paper": {"source": "Freyja's LQR weights in every phase, 4 s bias observer",
+        "paper": {"source": "as its flight stack publishes it: Freyja's LQR weights in every "
+                            "phase, Freyja's bias estimator and state filter, 50 Hz, no reference "
+                            "feed-forward",
                   "q_diag": list(paper_cfg.control.q_diag),
                   "terminal_q_diag": list(paper_cfg.control.terminal_q_diag),
-                  "observer_bias_tau_s": paper_cfg.control.observer_bias_tau_s},
+                  "bias_estimator": paper_cfg.control.bias_estimator,
+                  "command_rate_hz": paper_cfg.control.command_rate_hz,
+                  "reference_ff_factor": paper_cfg.control.reference_ff_factor,
+                  "observer_rise_63_s": bias_step_response(paper_cfg).rise_63_s},
         "tuned": {"source": "the configuration's weights (terminal gain schedule)",
                   "q_diag": list(cfg.control.q_diag),
                   "terminal_q_diag": list(cfg.control.terminal_q_diag),
@@ -320,9 +337,10 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
                                                                             wrench_predictor)
     timings["targets_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    say("    what each lever costs: observer time constant and terminal gains")
-    results["controller_costs"] = controller_costs(cfg, size.cost_trials, predictor, seed + 3,
-                                                   size.cost_taus_s, size.cost_mixes)
+    say("    what each unstated lever costs: observer bandwidth, terminal gains, gripper window")
+    results["controller_costs"] = controller_costs(
+        cfg, size.costs, predictor, seed + 3,
+        ours_predictor=deep_predictor if size.target_all_rows else None)
     timings["controller_costs_s"] = time.perf_counter() - t0
 
     # 5. Real data ----------------------------------------------------------------------------

@@ -37,7 +37,9 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     # the reproduction flies the paper's controller; ours is a separate, named row
     ctl = res["controllers"]
     assert ctl["paper"]["terminal_q_diag"] == ctl["paper"]["q_diag"]
-    assert ctl["paper"]["observer_bias_tau_s"] == 4.0
+    assert ctl["paper"]["bias_estimator"] == "freyja"  # as the paper's flight stack publishes
+    assert ctl["paper"]["command_rate_hz"] == 50.0 and ctl["paper"]["reference_ff_factor"] == 0
+    assert 0.3 < ctl["paper"]["observer_rise_63_s"] < 0.7
     for exp in ("cable_study", "hover_docking", "moving_leader"):
         assert exp in ctl["tuned"]
     # ours (accelerometer observer, deep curriculum's model) and the targets beyond the paper
@@ -58,13 +60,28 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert stages[-1]["depth_band_m"][0] == 0.27  # the deep curriculum reaches the docking depth
     assert res["learning"]["curriculum"]["paper_model"].endswith("paper")
     costs = res["controller_costs"]
-    assert [p["observer_bias_tau_s"] for p in costs["observer_tau"]] == [4.0, 0.25]
+    bandwidth = costs["observer_bandwidth"]
+    assert [p["observer"] for p in bandwidth] == ["freyja", "time-constant"]
+    assert bandwidth[1]["observer_bias_tau_s"] == 4.0
+    assert bandwidth[1]["rise_63_s"] > bandwidth[0]["rise_63_s"]  # 4 s: slower than Freyja's
+    for point in bandwidth:
+        counts = point["paper_counts"]
+        rate = point["hover_with_model"]["success_rate"]
+        assert counts["hover_with_model"]["rate"] == rate
+        assert 0.0 <= counts["cable_with_model"]["probability"] <= 1.0
+    pc = res["paper_counts"]
+    assert set(pc) == {"hover_with_model", "hover_without_model", "cable_with_model",
+                       "cable_without_model", "all_consistent"}
+    assert {(p["gate_height_m"], p["controller"]) for p in costs["gripper_window"]} == {
+        (0.10, "paper")}
     assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
     report = (out / "report.md").read_text()
     assert "figures/hover_docking.gif" in res["figures"]
     assert "Cable-length study" in report and "8/10" in report
     assert "The paper's controller and ours, side by side" in report
     assert "What each lever costs" in report
+    assert "across the observer's bandwidth" in report
+    assert "figures/observer_bandwidth.png" in res["figures"]
     assert "Beyond the paper: targets" in report
     for fig in res["figures"]:
         assert (out / fig).read_bytes()[:4] in (b"\x89PNG", b"GIF8"), fig  # + the docking GIF
