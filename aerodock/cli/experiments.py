@@ -23,6 +23,9 @@ from aerodock.config import load_config
 
 def reproduce(
     quick: Annotated[bool, typer.Option(help="A smaller run (a few minutes).")] = False,
+    smoke: Annotated[bool, typer.Option(
+        help="The smallest run that crosses every step (a plug-in field or a config checked "
+             "end to end; no figure worth quoting).")] = False,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
     config: ConfigOpt = None,
     seed: SeedOpt = 0,
@@ -44,7 +47,7 @@ def reproduce(
 
     with progress_bar() as bar:
         results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
-                                bar=bar_callback(bar))
+                                bar=bar_callback(bar), smoke=smoke)
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
                f"{results['timings_s']['total_s']:.0f} s)")
 

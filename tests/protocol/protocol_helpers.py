@@ -18,7 +18,7 @@ WITHOUT_MEAN = ("MinimalField", "NoWakeField")
 
 # The smallest honest curriculum: one stage (0.5-0.8 m below the leader) of three flights
 # (0.6 min, so the sample-efficiency study still trains at 0.5 min) and one deep stage (0.3-0.5 m)
-# of three. Everything else is what `reproduce --quick` and the other commands do by default.
+# of three. Everything else is what `reproduce --smoke` and the other commands do by default.
 _CONFIG = """[downwash]
 field = "protocol_fields:{name}"
 [downwash.params]

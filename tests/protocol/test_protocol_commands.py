@@ -3,13 +3,14 @@
 Three fields that look nothing like the default jet (``protocol_fields``): a minimal one (only
 ``reset`` and ``acceleration``), one pushing along the leader's thrust axis with an outward
 lateral component (with ``mean_acceleration`` and an old four-argument ``bar_force_n``), and one
-with no wake at all. For each: ``reproduce --quick``, ``dock`` with each compensation,
+with no wake at all. For each: ``reproduce --smoke`` (every step of ``reproduce``, each at its
+smallest: the full quick run is ``tests/e2e``'s), ``dock`` with each compensation,
 ``field probe``, ``field plot``, ``collect`` and ``train`` finish with exit code 0 and finite
 numbers.
 
-Cost: the three ``reproduce --quick`` runs (about 40 s each on one core, one curriculum stage of
-three flights; the rest is ``--quick`` as shipped) start as subprocesses as soon as this module
-begins and run beside the in-process commands; their tests come last and wait for them.
+Cost: the three ``reproduce --smoke`` runs (one curriculum stage of three flights and one deep
+stage, every experiment at its smallest) start as subprocesses as soon as this module begins and
+run beside the in-process commands; their tests come last and wait for them.
 """
 
 from __future__ import annotations
@@ -32,14 +33,14 @@ from protocol_helpers import (
 COMPENSATIONS = ("none", "observer", "model", "oracle")
 
 
-# -- reproduce --quick, three subprocesses started early ----------------------------------------
+# -- reproduce --smoke, three subprocesses started early ----------------------------------------
 @pytest.fixture(scope="module")
 def reproduce_runs(field_configs, tmp_path_factory):
     runs = {}
     for name in FIELDS:
         work = tmp_path_factory.mktemp(f"reproduce-{name}")
         # the real-data study reads logs and no field: tests/e2e runs it once
-        proc = aerodock_process(["reproduce", "--quick", "--no-real-data", "--out",
+        proc = aerodock_process(["reproduce", "--smoke", "--no-real-data", "--out",
                                  str(work / "out"), "--config", str(field_configs[name])],
                                 cwd=work)
         runs[name] = (proc, work / "out")
@@ -154,7 +155,7 @@ def _key_figures(res: dict) -> dict[str, object]:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", FIELDS)
-def test_reproduce_quick(name, reproduce_runs):
+def test_reproduce_smoke(name, reproduce_runs):
     proc, out = reproduce_runs[name]
     stdout, stderr = proc.communicate(timeout=1800)
     assert proc.returncode == 0, stderr
