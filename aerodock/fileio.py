@@ -31,7 +31,7 @@ import tokenize
 import tomllib
 import zipfile
 import zlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
@@ -126,13 +126,22 @@ def remove_stale_temps(path: str | Path) -> list[Path]:
 
 
 @contextmanager
-def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -> Iterator[IO[Any]]:
+def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX,
+                verify: Callable[[Path], None] | None = None) -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path``; on success it replaces ``path`` in one step.
 
     Any existing file at ``path`` stays untouched until the new one is complete; on an error
     (or an interrupt) the temporary file is removed and the error propagates. The new file gets
     the mode of the file it replaces, or ``0o666`` less the umask. A ``path`` that exists but
     is not a regular file (a FIFO, a device node, a folder) is refused.
+
+    Args:
+        path: the file to write.
+        mode: the open mode (``"wb"`` or ``"w"``).
+        suffix: the temporary file's suffix.
+        verify: called with the temporary file's path once it is complete and synced, before
+            the rename: an exception it raises removes the file and propagates, so ``path``
+            never holds a file that failed it (and a kill during it leaves the old file).
 
     Raises:
         OSError: ``path`` is not a regular file, or the write failed.
@@ -152,6 +161,8 @@ def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+        if verify is not None:
+            verify(Path(tmp))
         check_writable_target(path)  # it may have changed while we wrote
         os.replace(tmp, path)
     except BaseException:

@@ -297,3 +297,84 @@ def test_a_leftover_temp_dir_is_removed_by_the_next_save(tmp_path):
     _save("mlp", tmp_path / "b")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "b", "notes.tmp"]
     assert os.listdir(tmp_path / "a") and Predictor.load(tmp_path / "a").kind == "so2"
+
+
+# -- ONNX: the label bases in the metadata, the tolerance enforced before the rename ----------
+
+def test_onnx_metadata_carries_the_label_bases_and_checksum(tmp_path):
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import export_onnx, read_onnx_metadata
+
+    path = _save("so2", tmp_path / "m")
+    meta = read_onnx_metadata(export_onnx(path, tmp_path / "m.onnx"))
+    assert json.loads(meta["aerodock.label_bases"]) == ["command"]
+    assert meta["aerodock.model_sha256"] == _doc(path)[CHECKSUM_KEY]
+    bare = _random_trained("so2-ext").save(tmp_path / "bare")  # records no label bases
+    assert json.loads(read_onnx_metadata(export_onnx(bare, tmp_path / "b.onnx"))
+                      ["aerodock.label_bases"]) is None
+    trained = _random_trained("mlp")  # a trained model, exported without a model directory
+    trained.info["data"] = {"label_bases": ["thrust"]}
+    meta = read_onnx_metadata(export_onnx(trained, tmp_path / "t.onnx"))
+    assert json.loads(meta["aerodock.label_bases"]) == ["thrust"]
+
+
+def _off_by(monkeypatch, delta: float) -> None:
+    """The NumPy runtime, the export's reference, made to disagree with the graph."""
+    real = Predictor.predict_wrench
+
+    def shifted(self, x, leader_R):
+        force, torque = real(self, x, leader_R)
+        return force + delta, torque
+
+    monkeypatch.setattr(Predictor, "predict_wrench", shifted)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_export_enforces_its_tolerance_and_leaves_no_file(tmp_path, monkeypatch, dtype):
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import TOLERANCE, ExportCheckError, export_checked
+
+    path = _save("so2", tmp_path / "m")
+    out = tmp_path / "out" / "m.onnx"
+    _, diffs = export_checked(path, out, dtype=dtype)
+    assert diffs is not None and diffs["f_ext_mps2"] <= TOLERANCE[dtype]
+    good = out.read_bytes()
+    _off_by(monkeypatch, 1e-3)
+    with pytest.raises(ExportCheckError, match=rf"tolerance .* {dtype}\); nothing written"):
+        export_checked(path, out, dtype=dtype)
+    assert out.read_bytes() == good and os.listdir(out.parent) == ["m.onnx"]
+    out.unlink()
+    with pytest.raises(ExportCheckError):
+        export_checked(path, out, dtype=dtype)
+    assert os.listdir(out.parent) == []
+    monkeypatch.delenv("AERODOCK_DEBUG", raising=False)
+    rc, _, err = _cli("export", "--model", path, "--out", out, "--dtype", dtype)
+    assert rc == 2 and "failed its check" in _one_error_line(err)
+    assert os.listdir(out.parent) == []
+    _off_by(monkeypatch, -1e-3)  # the two shifts cancel: within tolerance again
+    rc, out_text, err = _cli("export", "--model", path, "--out", out, "--dtype", dtype,
+                             "--json")
+    assert rc == 0, err
+    assert json.loads(out_text)["max_abs_diff_vs_numpy_mps2"] <= TOLERANCE[dtype]
+
+
+def test_a_kill_during_the_export_check_leaves_the_old_file(tmp_path):
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import export_onnx
+
+    old_model = _save("so2", tmp_path / "old")
+    new_model = _save("mlp", tmp_path / "new")
+    out = export_onnx(old_model, tmp_path / "m.onnx")
+    before = out.read_bytes()
+    code = ("import os, signal\n"
+            "import aerodock.learning.export as e\n"
+            "def die(*args): os.kill(os.getpid(), signal.SIGKILL)\n"
+            "e._check_file = die\n"
+            f"e.export_onnx({str(new_model)!r}, {str(out)!r})\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == -9, proc.stderr
+    assert out.read_bytes() == before  # never the new, unchecked file
+    temps = [p for p in tmp_path.iterdir() if p.name.startswith(".m.onnx.")]
+    assert len(temps) == 1 and temps[0].stat().st_size > 0
+    export_onnx(new_model, out)  # the next write checks, renames, and removes the leftover
+    assert not temps[0].exists() and out.read_bytes() != before
