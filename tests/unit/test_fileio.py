@@ -85,6 +85,26 @@ def test_temps_of_dead_processes_are_removed_by_the_next_write(tmp_path):
     assert mine.exists() and not stale.exists()
 
 
+def test_a_failed_verify_leaves_the_old_file_and_no_temp(tmp_path):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"old")
+    seen = []
+
+    def verify(tmp):
+        seen.append(tmp.read_bytes())  # complete before the check, under its temporary name
+        assert tmp != path and path.read_bytes() == b"old"
+        raise ValueError("wrong")
+
+    with pytest.raises(ValueError, match="wrong"):
+        with atomic_open(path, verify=verify) as fh:
+            fh.write(b"new")
+    assert seen == [b"new"] and path.read_bytes() == b"old"
+    assert os.listdir(tmp_path) == ["a.bin"]
+    with atomic_open(path, verify=lambda tmp: None) as fh:
+        fh.write(b"new")
+    assert path.read_bytes() == b"new"
+
+
 def _dead_pid() -> int:
     return int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                               capture_output=True, text=True).stdout)
