@@ -10,7 +10,8 @@ the force's; a ``so2-wrench`` model also has ``torque_units``, ``"N m NED"``), t
 regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``, ``activation``,
 ``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features, ``out_mean``/
 ``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names), ``training`` (data
-summary, seed, epochs, validation loss, training time, ...) and ``aerodock_version``.
+summary with the flights' ``label_bases``, seed, epochs, validation loss, training time, ...),
+``aerodock_version``, ``created_utc`` and, last, ``model_sha256`` (the document's own checksum).
 
 ``weights.npz`` holds ``W0, b0, W1, b1, ...``: ``W{i}`` has shape ``(layer_sizes[i+1],
 layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``. The network
@@ -406,7 +407,7 @@ def _check_document(doc: dict[str, Any], version: int, jpath: Path) -> None:
         raise ModelFileError(f"{jpath}: corrupt model.json ({err})") from None
     if actual != claimed.lower():
         raise ModelFileError(f"{jpath}: does not match its {CHECKSUM_KEY} (edited or corrupt "
-                             "after it was written); re-train or re-save the model")
+                             "after it was written); restore it or re-train the model")
 
 
 def upgrade_model_dir(path: str | Path) -> Path:
