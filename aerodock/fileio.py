@@ -3,7 +3,8 @@
 * :func:`atomic_open` -- a failure (or an interrupt) never leaves a half-written file behind, and
   the new file gets the permissions an ordinary ``open`` would give it (the umask applies).
 * :func:`write_dir_atomic` -- a directory of files replaced as a whole (a model directory): a
-  kill at any moment leaves either the complete old directory or the complete new one.
+  kill at any moment leaves either the complete old directory or the complete new one; the
+  temporary sibling a kill leaves is removed by the next such write in the same folder.
 * :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused. Every
   ``--json`` prints through it, and :func:`write_json` writes every JSON file with it.
 * :func:`json_ready` -- the one policy for a non-finite number that means a figure is missing
@@ -20,20 +21,27 @@ import ctypes
 import json
 import math
 import os
+import re
 import shutil
 import stat
 import struct
 import tempfile
+import time
 import tokenize
 import tomllib
 import zipfile
 import zlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+
+try:
+    import fcntl
+except ImportError:  # not POSIX
+    fcntl = None  # type: ignore[assignment]
 
 # Largest uncompressed ``.npz`` aerodock reads (all members together): an hour of two-vehicle
 # flight at 100 Hz is about 100 MB, so this leaves room while refusing files that declare
@@ -118,13 +126,22 @@ def remove_stale_temps(path: str | Path) -> list[Path]:
 
 
 @contextmanager
-def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -> Iterator[IO[Any]]:
+def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX,
+                verify: Callable[[Path], None] | None = None) -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path``; on success it replaces ``path`` in one step.
 
     Any existing file at ``path`` stays untouched until the new one is complete; on an error
     (or an interrupt) the temporary file is removed and the error propagates. The new file gets
     the mode of the file it replaces, or ``0o666`` less the umask. A ``path`` that exists but
     is not a regular file (a FIFO, a device node, a folder) is refused.
+
+    Args:
+        path: the file to write.
+        mode: the open mode (``"wb"`` or ``"w"``).
+        suffix: the temporary file's suffix.
+        verify: called with the temporary file's path once it is complete and synced, before
+            the rename: an exception it raises removes the file and propagates, so ``path``
+            never holds a file that failed it (and a kill during it leaves the old file).
 
     Raises:
         OSError: ``path`` is not a regular file, or the write failed.
@@ -144,6 +161,8 @@ def atomic_open(path: str | Path, mode: str = "wb", suffix: str = _TMP_SUFFIX) -
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+        if verify is not None:
+            verify(Path(tmp))
         check_writable_target(path)  # it may have changed while we wrote
         os.replace(tmp, path)
     except BaseException:
@@ -189,6 +208,121 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
+# A swap's temporary directories are named ``.<name>.<pid>.<8 random>.tmp`` (the new directory
+# being filled) and ``.<name>.<pid>.<8 random>.old`` (the old one set aside where the atomic
+# exchange is unsupported); the writer holds an exclusive ``flock`` on the directory while it
+# exists. Earlier versions named them ``.<name>.<8 random>.tmp``/``.old``, with no pid or lock.
+_DIR_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<pid>[0-9]{1,9})\.(?P<rand>[a-z0-9_]{8})\."
+                       r"(?P<kind>tmp|old)$")
+_LEGACY_DIR_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<rand>[a-z0-9_]{8})\.(?P<kind>tmp|old)$")
+# A legacy temporary directory carries no pid or lock: it counts as left behind once nothing in
+# it has changed for this long (its writer, an older aerodock, took seconds to fill it).
+LEGACY_DIR_TEMP_AGE_S = 3600.0
+
+
+def _lock_dir(path: Path) -> int | None:
+    """An fd of ``path`` holding an exclusive ``flock`` on it; None if another process holds it.
+
+    Raises:
+        OSError: ``path`` cannot be opened as a directory.
+    """
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+    if fcntl is None:  # no flock (not a POSIX system): the pid alone decides
+        return fd
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return None
+    return fd
+
+
+def _only_regular_files(path: Path) -> bool:
+    """Whether ``path`` holds nothing but regular files (what :func:`write_dir_atomic` writes)."""
+    try:
+        return all(entry.is_file(follow_symlinks=False) for entry in os.scandir(path))
+    except OSError:
+        return False
+
+
+def _newest_mtime(path: Path) -> float:
+    times = [path.lstat().st_mtime]
+    times += [entry.stat(follow_symlinks=False).st_mtime for entry in os.scandir(path)]
+    return max(times)
+
+
+def remove_stale_dir_temps(parent: str | Path, *, now: float | None = None) -> list[Path]:
+    """Remove the temporary directories of :func:`write_dir_atomic` in ``parent`` that a killed
+    writer left behind; returns what was removed (or restored).
+
+    Only directories named as the swap names them are considered, and only if they hold
+    nothing but regular files (what the swap writes; never a symlink or a sub-folder). One is
+    left behind when the process in its name is gone and nobody holds its lock, or, for the
+    earlier versions' names (no pid, no lock), when nothing in it has changed for
+    :data:`LEGACY_DIR_TEMP_AGE_S`. A ``.old`` directory (the old contents set aside where the
+    atomic exchange is unsupported) whose target no longer exists is renamed back to it, so a
+    kill between the two renames leaves the old directory, not nothing.
+    """
+    parent = Path(parent)
+    now = time.time() if now is None else now
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _DIR_TEMP.match(entry.name)
+        legacy = None if match else _LEGACY_DIR_TEMP.match(entry.name)
+        if not (match or legacy) or not entry.is_dir(follow_symlinks=False):
+            continue
+        path = Path(entry.path)
+        if not _only_regular_files(path):
+            continue
+        if match and _pid_alive(int(match["pid"])):
+            continue
+        try:
+            if legacy and now - _newest_mtime(path) < LEGACY_DIR_TEMP_AGE_S:
+                continue
+            fd = _lock_dir(path)
+        except OSError:
+            continue
+        if fd is None:  # its writer is alive (in another pid namespace, say)
+            continue
+        try:
+            target = parent / (match or legacy)["name"]
+            if (match or legacy)["kind"] == "old" and not os.path.lexists(target):
+                os.rename(path, target)
+            else:
+                shutil.rmtree(path)
+            removed.append(path)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+    return removed
+
+
+def _make_dir_temp(parent: Path, name: str, kind: str) -> tuple[Path, int]:
+    """A new, locked temporary directory for :func:`write_dir_atomic` and the fd holding its
+    lock (see :data:`_DIR_TEMP`)."""
+    for _ in range(5):
+        tmp = Path(tempfile.mkdtemp(dir=parent, prefix=f".{name}.{os.getpid()}.",
+                                    suffix=f".{kind}"))
+        # mkdtemp's random part is 8 characters; the cleaner recognises exactly that
+        try:
+            fd = _lock_dir(tmp)
+        except OSError:
+            continue  # removed already (by a cleaner that mistook it): make another
+        if fd is not None:
+            try:
+                if os.path.samestat(os.fstat(fd), os.lstat(tmp)):
+                    return tmp, fd
+            except OSError:
+                pass
+            os.close(fd)
+    raise OSError(f"cannot create a temporary directory in {parent}")
+
+
 def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
     """Make ``path`` a directory holding exactly ``files`` (name -> bytes), all at once.
 
@@ -196,7 +330,9 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
     with ``path`` atomically (``renameat2`` with ``RENAME_EXCHANGE`` on Linux), or is renamed to
     it if ``path`` does not exist. Where the atomic exchange is unsupported, the old directory
     is renamed aside first and restored if the second rename fails. On any error the temporary
-    directory is removed and ``path`` is left as it was.
+    directory is removed and ``path`` is left as it was. A kill (SIGKILL) leaves the old
+    directory or the new one and possibly a temporary sibling: the next call for any directory
+    in the same folder removes it (:func:`remove_stale_dir_temps`).
 
     The order matters: the files are synced before the swap and the parent directory after it,
     so that a crash never makes the new name point at files that are not on disk yet.
@@ -206,7 +342,8 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
+    remove_stale_dir_temps(path.parent)
+    tmp, lock = _make_dir_temp(path.parent, path.name, "tmp")
     try:
         os.chmod(tmp, 0o777 & ~_umask())
         for name, blob in files.items():
@@ -220,19 +357,30 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
         elif _exchange(tmp, path):
             shutil.rmtree(tmp)  # now holds the old directory
         else:
-            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".old"))
+            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                          suffix=".old"))
             os.rmdir(aside)
             os.rename(path, aside)
+            try:  # its pid protects it until the lock is held
+                aside_lock = _lock_dir(aside)
+            except OSError:
+                aside_lock = None
             try:
-                os.rename(tmp, path)
-            except BaseException:
-                os.rename(aside, path)
-                raise
-            shutil.rmtree(aside, ignore_errors=True)
+                try:
+                    os.rename(tmp, path)
+                except BaseException:
+                    os.rename(aside, path)
+                    raise
+                shutil.rmtree(aside, ignore_errors=True)
+            finally:
+                if aside_lock is not None:
+                    os.close(aside_lock)
         _fsync_dir(path.parent)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        os.close(lock)
     return path
 
 

@@ -271,19 +271,17 @@ def export_command(
     try:
         import onnx  # noqa: F401
 
-        from aerodock.learning.export import export_onnx, onnx_differences
+        from aerodock.learning.export import ExportCheckError, export_checked
     except ImportError:
         fail("ONNX export needs onnx: pip install 'aerodock[export]'")
-    try:
-        path = export_onnx(model, out, dtype=dtype)
+    try:  # checked against the NumPy predictor before it takes the name --out
+        path, diffs = export_checked(model, out, dtype=dtype)
     except ModelFileError as err:
         fail(one_line(err, first_line=True))
+    except ExportCheckError as err:
+        fail(f"{out}: export failed its check ({one_line(err, first_line=True)})")
     except (OSError, RuntimeError) as err:
         fail(f"{out}: export failed ({one_line(err, first_line=True)})")
-    try:
-        diffs: dict[str, float] | None = onnx_differences(path, predictor)
-    except ImportError:
-        diffs = None
     result: dict[str, Any] = {"model_dir": str(model), "kind": predictor.kind, "onnx": str(path),
                               "max_abs_diff_vs_numpy_mps2": diffs and diffs["f_ext_mps2"]}
     if diffs and "tau_ext_nm" in diffs:

@@ -16,8 +16,17 @@ runtimes want) or ``"float64"`` (the whole graph in double precision, equal to t
 to rounding). :func:`check_onnx` feeds whichever type the file declares.
 
 ``metadata_props`` carries what ``model.json`` says about the model (keys ``aerodock.*``): the
-format, kind, units, input and output, the vehicles it was trained on (JSON), the feature version
-and regularisation, the weights' SHA-256 and the aerodock version, and the element type.
+format, kind, units, input and output, the vehicles it was trained on (JSON), the label bases of
+its training flights (JSON: a list such as ``["thrust"]``, or ``null`` where not recorded; see
+docs/learning.md, *Label basis*), the feature version and regularisation, the weights' SHA-256,
+``model.json``'s own checksum, the aerodock version, and the element type.
+
+:func:`export_onnx` checks the file it writes before it takes the output's name: onnxruntime runs
+it on random scenes beside the NumPy predictor (:func:`onnx_differences`), and a difference beyond
+:data:`TOLERANCE` (relative to the predictions' size where they exceed one) raises
+:class:`ExportCheckError` with nothing written. A kill during the check leaves the old file (or
+none) and a temporary file that the next write to the same path removes. Without onnxruntime the
+file is written unchecked, and the result says so.
 """
 
 from __future__ import annotations
@@ -32,6 +41,7 @@ import numpy as np
 from aerodock.fileio import atomic_open
 from aerodock.learning.features import TORQUE_KINDS
 from aerodock.learning.modelfile import (
+    CHECKSUM_KEY,
     MODEL_FORMAT,
     TORQUE_UNITS,
     UNITS,
@@ -45,6 +55,15 @@ INPUT_NAMES = ("x", "leader_R")
 OUTPUT_NAME = "f_ext_mps2"
 TORQUE_OUTPUT_NAME = "tau_ext_nm"
 DTYPES = ("float32", "float64")
+# Largest difference the export accepts between onnxruntime and the NumPy predictor, per element
+# type, in the outputs' units (m/s^2, N m), scaled by the largest prediction where that exceeds
+# one (float32 arithmetic is relative: about 1e-7 of the values through a 64-wide layer).
+TOLERANCE = {"float32": 1e-5, "float64": 1e-10}
+
+
+class ExportCheckError(ValueError):
+    """The ONNX graph does not reproduce the NumPy predictor (or cannot be run); nothing is
+    written. One-line message."""
 
 
 def _source(model: Any) -> tuple[ModelSpec, list[tuple[np.ndarray, np.ndarray]], dict[str, Any]]:
@@ -232,6 +251,17 @@ def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
     return model
 
 
+def label_bases(doc: dict[str, Any]) -> list[str] | None:
+    """The label bases of a model's training flights (``model.json`` ->
+    ``training.data.label_bases``), or None where the model does not record them."""
+    training = doc.get("training")
+    data = training.get("data") if isinstance(training, dict) else None
+    bases = data.get("label_bases") if isinstance(data, dict) else None
+    if isinstance(bases, list) and all(isinstance(b, str) for b in bases):
+        return list(bases)
+    return None
+
+
 def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
               doc: dict[str, Any], dtype: str) -> dict[str, str]:
     sha = (doc.get("weights") or {}).get("sha256") if isinstance(doc.get("weights"), dict) \
@@ -252,10 +282,12 @@ def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
                                if spec.kind in TORQUE_KINDS else ""),
         **({"aerodock.torque_units": TORQUE_UNITS} if spec.kind in TORQUE_KINDS else {}),
         "aerodock.vehicles": json.dumps(normalise_vehicles(doc.get("vehicles"))),
+        "aerodock.label_bases": json.dumps(label_bases(doc)),
         "aerodock.feature_version": str(spec.feature_version),
         "aerodock.eps_pos_m": repr(spec.eps_pos_m),
         "aerodock.eps_vel_mps": repr(spec.eps_vel_mps),
         "aerodock.weights_sha256": sha or "",
+        "aerodock.model_sha256": str(doc.get(CHECKSUM_KEY) or ""),
         "aerodock.aerodock_version": str(doc.get("aerodock_version", "")),
         "aerodock.dtype": dtype,
     }
@@ -263,7 +295,26 @@ def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
 
 def export_onnx(model: Any, out: str | Path, *, dtype: str = "float32",
                 opset: int = ONNX_OPSET) -> Path:
-    """Export ``model`` to an ONNX file, atomically (the old file stays until the new is whole).
+    """Export ``model`` to an ONNX file, checked and atomically (see :func:`export_checked`).
+
+    Raises:
+        ModelFileError: ``model`` is a directory with missing, corrupt or mismatched files.
+        ExportCheckError: the graph does not reproduce the NumPy predictor within
+            :data:`TOLERANCE`; nothing is written.
+        ValueError: an unknown ``dtype``.
+    """
+    return export_checked(model, out, dtype=dtype, opset=opset)[0]
+
+
+def export_checked(model: Any, out: str | Path, *, dtype: str = "float32",
+                   opset: int = ONNX_OPSET, n_check: int = 256
+                   ) -> tuple[Path, dict[str, float] | None]:
+    """Export ``model`` to an ONNX file and check it before it takes the name ``out``.
+
+    The graph is written to a temporary file beside ``out``; onnxruntime runs that file beside
+    the NumPy predictor (:func:`onnx_differences`, ``n_check`` random scenes) and only a file
+    within :data:`TOLERANCE` is renamed to ``out``, so ``out`` never holds an unchecked file
+    (the old one stays until then, and stays if the check fails or the process is killed).
 
     Args:
         model: a model directory, or a trained model (``TrainedModel`` or module of this
@@ -271,17 +322,64 @@ def export_onnx(model: Any, out: str | Path, *, dtype: str = "float32",
         out: the ``.onnx`` file to write.
         dtype: element type of the graph's inputs, output and arithmetic.
         opset: ONNX opset version.
+        n_check: scenes of the check.
+
+    Returns:
+        ``(out, differences)``: the differences per output as :func:`onnx_differences` gives
+        them, or None where onnxruntime is not installed (the file is then written unchecked).
 
     Raises:
         ModelFileError: ``model`` is a directory with missing, corrupt or mismatched files.
+        ExportCheckError: a difference beyond the tolerance, or a file onnxruntime cannot run.
         ValueError: an unknown ``dtype``.
     """
     spec, weights, doc = _source(model)
     proto = build_onnx(spec, weights, doc, dtype=dtype, opset=opset)
+    predictor = _predictor(spec, weights, doc)
+    found: dict[str, dict[str, float] | None] = {"diffs": None}
+
+    def verify(tmp: Path) -> None:
+        found["diffs"] = _check_file(tmp, predictor, dtype, n_check)
+
     out = Path(out)
-    with atomic_open(out, "wb") as fh:
+    with atomic_open(out, "wb", verify=verify) as fh:
         fh.write(proto.SerializeToString())
-    return out
+    return out, found["diffs"]
+
+
+def _predictor(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
+               doc: dict[str, Any]) -> Any:
+    """The NumPy predictor the export is checked against."""
+    from aerodock.learning.runtime import Predictor, ZeroPredictor
+
+    return ZeroPredictor(doc) if spec.kind == "zero" else Predictor(spec, weights, doc)
+
+
+def _check_file(path: Path, predictor: Any, dtype: str, n: int) -> dict[str, float] | None:
+    """Differences per output of the ONNX file at ``path``; None without onnxruntime.
+
+    Raises:
+        ExportCheckError: beyond :data:`TOLERANCE`, or onnxruntime cannot run the file.
+    """
+    try:
+        import onnxruntime  # noqa: F401
+    except ImportError:
+        return None
+    try:
+        compared = _compare(path, predictor, n=n, rng=None)
+    except Exception as err:  # onnxruntime's own errors are plain Exceptions
+        raise ExportCheckError(f"onnxruntime cannot run the exported graph "
+                               f"({type(err).__name__}: {' '.join(str(err).split())[:200]}); "
+                               "nothing written") from None
+    units = {OUTPUT_NAME: "m/s^2", TORQUE_OUTPUT_NAME: "N m"}
+    for name, (diff, scale) in compared.items():
+        limit = TOLERANCE[dtype] * max(1.0, scale)
+        if not diff <= limit:  # a NaN fails too
+            raise ExportCheckError(
+                f"the exported {name} differs from the NumPy model by {diff:.3g} {units[name]} "
+                f"(tolerance {limit:.3g} for {dtype}); nothing written"
+            )
+    return {name: diff for name, (diff, _) in compared.items()}
 
 
 def read_onnx_metadata(path: str | Path) -> dict[str, str]:
@@ -326,6 +424,12 @@ def onnx_differences(
         ImportError: onnxruntime is not installed.
         ValueError: the file's outputs do not match the predictor's (a torque one or not).
     """
+    return {name: diff for name, (diff, _) in _compare(path, predictor, n=n, rng=rng).items()}
+
+
+def _compare(path: str | Path, predictor: Any, *, n: int,
+             rng: np.random.Generator | None) -> dict[str, tuple[float, float]]:
+    """Per output: (max absolute difference, max absolute prediction of ``predictor``)."""
     import onnxruntime as ort
 
     from aerodock.geometry import euler_to_rotmat
@@ -347,7 +451,14 @@ def onnx_differences(
     force, torque = (predictor.predict_wrench(xs.astype(float), rs.astype(float))
                      if has_torque else (predictor.predict(xs.astype(float), rs.astype(float)),
                                          None))
-    out = {OUTPUT_NAME: float(np.max(np.abs(got[OUTPUT_NAME] - force)))}
+    out = {OUTPUT_NAME: _diff_and_scale(got[OUTPUT_NAME], force)}
     if torque is not None:
-        out[TORQUE_OUTPUT_NAME] = float(np.max(np.abs(got[TORQUE_OUTPUT_NAME] - torque)))
+        out[TORQUE_OUTPUT_NAME] = _diff_and_scale(got[TORQUE_OUTPUT_NAME], torque)
     return out
+
+
+def _diff_and_scale(got: np.ndarray, want: np.ndarray) -> tuple[float, float]:
+    with np.errstate(invalid="ignore", over="ignore"):
+        diff = np.abs(np.asarray(got, dtype=float) - want)
+    return (float(np.max(diff)) if diff.size else 0.0,
+            float(np.max(np.abs(want))) if want.size else 0.0)

@@ -10,7 +10,8 @@ the force's; a ``so2-wrench`` model also has ``torque_units``, ``"N m NED"``), t
 regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``, ``activation``,
 ``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features, ``out_mean``/
 ``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names), ``training`` (data
-summary, seed, epochs, validation loss, training time, ...) and ``aerodock_version``.
+summary with the flights' ``label_bases``, seed, epochs, validation loss, training time, ...),
+``aerodock_version``, ``created_utc`` and, last, ``model_sha256`` (the document's own checksum).
 
 ``weights.npz`` holds ``W0, b0, W1, b1, ...``: ``W{i}`` has shape ``(layer_sizes[i+1],
 layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``. The network
@@ -23,8 +24,19 @@ flagged (:mod:`aerodock.learning.compatibility`).
 
 The directory is written as a whole (:func:`aerodock.fileio.write_dir_atomic`): a kill at any
 moment leaves either the complete old model or the complete new one, never a mix, and a failed
-save leaves no temporary directory behind. The SHA-256 of ``weights.npz`` in ``model.json`` is
-required on load: it detects a weights file that does not belong to it.
+save leaves no temporary directory behind (a kill's is removed by the next save in the folder).
+
+Both files are checked whole on load (format version 2). ``weights.sha256`` is the SHA-256 of
+``weights.npz``; ``model_sha256`` is the SHA-256 of ``model.json`` itself without that one key,
+in a canonical form (:func:`model_checksum`: the parsed document written by Python's ``json``
+with sorted keys, no spaces, ASCII only), so it covers everything a prediction depends on (kind,
+features, layer sizes, activation, normalisation, the weights through their SHA-256) and
+everything else the file says (units, vehicles, the training data's label bases, ...): any
+change to the document is refused, whatever its layout (reindenting is not a change). It
+detects damage and edits, not an adversary (anyone can recompute it). Version 1 files (before
+the document had a checksum) still load, with only their weights verified;
+:func:`upgrade_model_dir` re-saves one as version 2. The normalisation must also be plausible
+(:func:`check_normalisation`), whatever the version.
 """
 
 from __future__ import annotations
@@ -55,12 +67,27 @@ from aerodock.learning.features import (
 from aerodock.learning.training_vehicles import normalise_vehicles
 
 MODEL_FORMAT = "aerodock-model"
-MODEL_VERSION = 1
+# 2: model.json carries model_sha256 (the document's own checksum); 1: only the weights' one.
+MODEL_VERSION = 2
+CHECKSUM_KEY = "model_sha256"
 MODEL_JSON = "model.json"
 WEIGHTS_NPZ = "weights.npz"
 ACTIVATIONS = ("tanh", "silu")
 UNITS = "m/s^2 NED"
 TORQUE_UNITS = "N m NED"
+
+
+# Plausibility limits of the normalisation, checked on save and on load (a model file is
+# refused beyond them, whatever its checksum says). The features are metres, metres per second or
+# cosines: a mean or a scale beyond 1e4 (two vehicles 10 km apart, or flying at 10 km/s) is no
+# docking flight. The outputs are m/s^2 (force) or N m (torque): 1e3 m/s^2 is about 100 g, beyond
+# any flight controller's accelerometer range (16-32 g) plus any commanded acceleration, and 1e3
+# N m beyond the motors of any multirotor (the wake's torque on the paper's 0.7 kg vehicles is
+# 0.03 N m RMS). A scale below 1e-6 (a micrometre, a micrometre per second, ...) is below any
+# sensor's resolution; training floors its scales at 0.05 (features) and 1e-3 (outputs).
+MAX_INPUT_SCALE = 1e4
+MAX_OUTPUT_SCALE = 1e3
+MIN_SCALE = 1e-6
 
 
 class ModelFileError(ValueError):
@@ -118,6 +145,49 @@ def _f32_list(a: np.ndarray) -> list[float]:
     return [float(v) for v in np.asarray(a, dtype=np.float32)]
 
 
+def model_checksum(doc: Mapping[str, Any]) -> str:
+    """SHA-256 (hex) of a ``model.json`` document without its :data:`CHECKSUM_KEY`.
+
+    The canonical form is the document written by Python's ``json`` with sorted keys, no
+    spaces and ASCII only (numbers as Python writes them: parsing and writing again gives the
+    same text, so the file's own layout does not matter).
+
+    Raises:
+        ValueError: the document cannot be written as JSON.
+        RecursionError: it is nested too deeply.
+    """
+    body = {key: value for key, value in doc.items() if key != CHECKSUM_KEY}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode("ascii")).hexdigest()
+
+
+def check_normalisation(spec: ModelSpec) -> None:
+    """Refuse a normalisation no trained model has (see :data:`MAX_INPUT_SCALE` and the notes
+    beside it): non-finite values, scales not positive or below :data:`MIN_SCALE`, means or
+    scales beyond :data:`MAX_INPUT_SCALE` (features) or :data:`MAX_OUTPUT_SCALE` (outputs).
+
+    Raises:
+        ValueError: one line naming the first value out of its range.
+    """
+    if spec.kind == "zero":
+        return
+    for key, limit, unit in (("in_mean", MAX_INPUT_SCALE, "m or m/s"),
+                             ("in_std", MAX_INPUT_SCALE, "m or m/s"),
+                             ("out_mean", MAX_OUTPUT_SCALE, "m/s^2 or N m"),
+                             ("out_std", MAX_OUTPUT_SCALE, "m/s^2 or N m")):
+        values = np.asarray(getattr(spec, key), dtype=float)
+        for i, value in enumerate(values.tolist()):
+            where = f"normalisation.{key}[{i}] = {value:.6g}"
+            if not np.isfinite(value):
+                raise ValueError(f"{where}: not finite")
+            if key.endswith("std") and value < MIN_SCALE:
+                raise ValueError(f"{where}: a scale must be at least {MIN_SCALE:g} "
+                                 "(below any sensor's resolution)")
+            if abs(value) > limit:
+                raise ValueError(f"{where}: beyond the plausible {limit:g} ({unit}; no "
+                                 "docking flight has it)")
+
+
 def save_model_dir(
     path: str | Path,
     spec: ModelSpec,
@@ -139,8 +209,8 @@ def save_model_dir(
             ``training["data"]["vehicles"]`` (what the training data's flights said).
 
     Raises:
-        ValueError: weights that do not match ``spec``, or a ``path`` that is not a model
-            directory.
+        ValueError: weights that do not match ``spec``, an implausible normalisation
+            (:func:`check_normalisation`), or a ``path`` that is not a model directory.
         OSError: the directory cannot be written (the old model is left as it was).
     """
     path = Path(path)
@@ -156,6 +226,7 @@ def save_model_dir(
         np.shape(w) != ws or np.shape(b) != bs for (w, b), (ws, bs) in zip(weights, expected)
     ):
         raise ValueError(f"weights do not match layer sizes {list(spec.layer_sizes)}")
+    check_normalisation(spec)
     if vehicles is None:
         data = (training or {}).get("data")
         vehicles = data.get("vehicles") if isinstance(data, Mapping) else None
@@ -204,6 +275,7 @@ def save_model_dir(
         }
     else:
         doc["weights"] = None
+    doc[CHECKSUM_KEY] = model_checksum(doc)
     files[MODEL_JSON] = (json.dumps(doc, indent=2) + "\n").encode()
     write_dir_atomic(path, files)
     return path
@@ -230,8 +302,9 @@ def load_model_dir(
 
     Raises:
         ModelFileError: one line naming the file: missing, corrupt, wrong format or version,
-            unknown kind or activation, feature version mismatch, shapes that do not match,
-            non-finite values, or a weights file that does not belong to ``model.json``.
+            a ``model.json`` that does not match its checksum (version 2), unknown kind or
+            activation, feature version mismatch, shapes that do not match, non-finite or
+            implausible values, or a weights file that does not belong to ``model.json``.
     """
     path = Path(path)
     if path.is_file() and path.name == MODEL_JSON:
@@ -250,13 +323,14 @@ def load_model_dir(
     if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT:
         raise ModelFileError(f"{jpath}: not an aerodock model file")
     version = doc.get("version")
-    if not isinstance(version, int) or version < 1:
+    if type(version) is not int or version < 1:
         raise ModelFileError(f"{jpath}: bad version {version!r}")
     if version > MODEL_VERSION:
         raise ModelFileError(
             f"{jpath}: model format version {version} is newer than this aerodock "
             f"({MODEL_VERSION}); upgrade aerodock"
         )
+    _check_document(doc, version, jpath)
     kind = doc.get("kind")
     if kind not in KINDS:
         raise ModelFileError(f"{jpath}: unknown model kind {kind!r}")
@@ -271,6 +345,9 @@ def load_model_dir(
         raise ModelFileError(f"{jpath}: torque_units {doc.get('torque_units')!r}, expected "
                              f"{TORQUE_UNITS!r}")
     if kind == "zero":
+        if doc.get("layer_sizes") or doc.get("weights") is not None:
+            raise ModelFileError(f"{jpath}: kind 'zero' with layer sizes or weights "
+                                 "(edited kind?)")
         return ModelSpec(kind="zero"), [], doc
     sizes = doc.get("layer_sizes")
     if (not isinstance(sizes, list) or len(sizes) < 2
@@ -304,9 +381,51 @@ def load_model_dir(
         spectral_norm=bool(doc.get("spectral_norm", False)),
         eps_pos_m=eps_pos, eps_vel_mps=eps_vel,
     )
-    if np.any(spec.in_std <= 0):
-        raise ModelFileError(f"{jpath}: normalisation.in_std must be positive")
+    try:
+        check_normalisation(spec)
+    except ValueError as err:
+        raise ModelFileError(f"{jpath}: {err}") from None
     return spec, _load_weights(path, spec, doc), doc
+
+
+def _check_document(doc: dict[str, Any], version: int, jpath: Path) -> None:
+    """Verify ``model.json``'s own checksum (version 2); refuse a version 1 file that has one."""
+    claimed = doc.get(CHECKSUM_KEY)
+    if version < 2:
+        if CHECKSUM_KEY in doc:
+            raise ModelFileError(f"{jpath}: format version {version} with {CHECKSUM_KEY} "
+                                 "(version 2 files have it; edited version?)")
+        return
+    if not isinstance(claimed, str) or len(claimed) != 64:
+        raise ModelFileError(f"{jpath}: {CHECKSUM_KEY} missing or malformed: the model file "
+                             "cannot be verified (re-save the model with this aerodock)")
+    try:
+        actual = model_checksum(doc)
+    except RecursionError:
+        raise ModelFileError(f"{jpath}: corrupt model.json (nested too deeply)") from None
+    except (ValueError, TypeError) as err:
+        raise ModelFileError(f"{jpath}: corrupt model.json ({err})") from None
+    if actual != claimed.lower():
+        raise ModelFileError(f"{jpath}: does not match its {CHECKSUM_KEY} (edited or corrupt "
+                             "after it was written); restore it or re-train the model")
+
+
+def upgrade_model_dir(path: str | Path) -> Path:
+    """Re-save a model directory in the current format (a version 1 one gets the document's
+    checksum); its predictions do not change. Returns its path.
+
+    Raises:
+        ModelFileError: the directory does not load (see :func:`load_model_dir`).
+        OSError: it cannot be written (the old files are left as they were).
+    """
+    spec, weights, doc = load_model_dir(path)
+    path = Path(path)
+    if path.name == MODEL_JSON:
+        path = path.parent
+    training = doc.get("training")
+    return save_model_dir(path, spec, weights,
+                          training=training if isinstance(training, dict) else None,
+                          vehicles=doc.get("vehicles"))
 
 
 def _load_weights(

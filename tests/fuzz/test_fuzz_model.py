@@ -1,8 +1,10 @@
 """Model directories damaged at random: a ModelFileError, or a predictor that gives finite numbers.
 
 Covers model.json (values replaced, keys deleted, deep nesting, text damage, extreme feature
-constants) and weights.npz (byte damage, crafted members with the checksum updated so that the
-npz parser itself is reached).
+constants; half of the damaged documents re-sealed with a fresh ``model_sha256`` so that the
+checks behind the checksum are reached), single-field tampering through the command line (refused
+unless re-sealed), and weights.npz (byte damage, crafted members with both checksums updated so
+that the npz parser itself is reached).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from fuzz_helpers import (
     run_cli,
 )
 
-from aerodock.learning.modelfile import ModelFileError
+from aerodock.learning.modelfile import CHECKSUM_KEY, ModelFileError, model_checksum
 from aerodock.learning.runtime import Predictor
 
 X = np.array([[0.05, -0.02, 0.4, 0.1, 0.0, 0.0, 0.0, 0.2, -0.1],
@@ -74,6 +76,13 @@ def _mutate_doc(doc, rng: random.Random):
     return doc
 
 
+def _seal(doc):
+    """The document with a fresh checksum of itself (what a deliberate edit would do)."""
+    doc = {k: v for k, v in doc.items() if k != CHECKSUM_KEY}
+    doc[CHECKSUM_KEY] = model_checksum(doc)
+    return doc
+
+
 def _check(model) -> str:
     try:
         predictor = Predictor.load(model)
@@ -102,10 +111,15 @@ def test_damaged_model_json(model_dir, tmp_path):
         if i % 4 == 0:
             (model / "model.json").write_bytes(mutate_bytes(text.encode(), rng))
         else:
-            (model / "model.json").write_text(json.dumps(_mutate_doc(doc, rng)))
-        outcomes[_check(model)] += 1
+            damaged = _mutate_doc(doc, rng)
+            sealed = i % 2 == 1
+            (model / "model.json").write_text(json.dumps(_seal(damaged) if sealed else damaged))
+        outcome = _check(model)
+        if i % 4 and not sealed and damaged != doc:
+            assert outcome == "refused", "an edited model.json loaded"
+        outcomes[outcome] += 1
         count("model-json")
-    assert outcomes["refused"] > 0
+    assert outcomes["refused"] > 0 and outcomes["loaded"] > 0
 
 
 def test_named_model_defects(model_dir, tmp_path):
@@ -115,7 +129,11 @@ def test_named_model_defects(model_dir, tmp_path):
     for eps in (1e-300, 1e308, float("nan")):
         bad = copy.deepcopy(doc)
         bad["features"]["eps_pos_m"] = eps
-        cases[f"eps {eps}"] = json.dumps(bad)
+        cases[f"eps {eps}"] = json.dumps(_seal(bad))
+    for key, value in (("out_std", 1e300), ("in_std", 0.0), ("out_mean", -1e4)):
+        bad = copy.deepcopy(doc)
+        bad["normalisation"][key][0] = value
+        cases[f"{key} {value}"] = json.dumps(_seal(bad))
     for what, text in cases.items():
         model = _copy(model_dir, tmp_path / "m")
         (model / "model.json").write_text(text)
@@ -149,7 +167,7 @@ def test_damaged_weights(model_dir, tmp_path):
         if rng.random() < 0.7:  # keep the checksum consistent so the npz parser is reached
             fixed = copy.deepcopy(doc)
             fixed["weights"]["sha256"] = hashlib.sha256(weights.read_bytes()).hexdigest()
-            (model / "model.json").write_text(json.dumps(fixed))
+            (model / "model.json").write_text(json.dumps(_seal(fixed)))
         _check(model)
         count("model-weights")
 
@@ -167,3 +185,62 @@ def test_damaged_models_through_the_cli(model_dir, tmp_path):
             args = ["export", "--model", model, "--out", tmp_path / "m.onnx", "--json"]
         results.append(run_cli(args, family="cli-model"))
     assert_clean(results)
+
+
+def _fields(doc, prefix=()):
+    """Every field of a document with a value that is not a container."""
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield from _fields(v, (*prefix, k))
+    elif isinstance(doc, list):
+        if not doc:
+            yield prefix
+        for i, v in enumerate(doc):
+            yield from _fields(v, (*prefix, i))
+    elif prefix:
+        yield prefix
+
+
+def _tampered(value, rng: random.Random):
+    """A plausible-looking edit of one value (what a hand edit or a bad merge does)."""
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, int | float):
+        return rng.choice([-value, value * 1.01 + 0.01, 0, 1e300, value + 1])
+    if isinstance(value, str):
+        return rng.choice(["zero", "so2", "so2-ext", "mlp", "silu", "tanh", "thrust",
+                           "command", value.upper(), ""])
+    return rng.choice([0, "x", [], None])
+
+
+def test_tampered_model_json_through_the_cli(model_dir, tmp_path):
+    """One field of model.json changed by hand: every command refuses it (exit 2, one
+    error line, no traceback); re-sealed with a fresh checksum, exit 0 or 2, still clean."""
+    rng = random.Random(11)
+    doc = json.loads((model_dir / "model.json").read_text())
+    fields = [p for p in _fields(doc) if p != (CHECKSUM_KEY,)]
+    results = []
+    for i in range(n_cases(120)):
+        model = _copy(model_dir, tmp_path / f"t{i % 3}")
+        path = rng.choice(fields)
+        bad = copy.deepcopy(doc)
+        _set(bad, path, _tampered(_get(bad, path), rng))
+        sealed = i % 3 == 2
+        (model / "model.json").write_text(json.dumps(_seal(bad) if sealed else bad, indent=1))
+        args = ["field", "probe", "--model", model, "--separation", "0.36", "--radial", "0",
+                "--json"]
+        if i % 6 == 0:
+            args = ["export", "--model", model, "--out", tmp_path / "t.onnx", "--json"]
+        elif i % 6 == 3 and not sealed and bad != doc:  # refused before ROS is touched
+            args = ["node", "--model", model, "--duration", "0.1"]
+        res = run_cli(args, family="cli-model-tampered")
+        results.append(res)
+        if not sealed and bad != doc:
+            assert res.rc == 2 and "model.json" in res.err, (path, res.err)
+    assert_clean(results)
+
+
+def _get(doc, path):
+    for key in path:
+        doc = doc[key]
+    return doc

@@ -14,7 +14,12 @@ import torch
 from aerodock.downwash.base import BodyState
 from aerodock.geometry import euler_to_rotmat
 from aerodock.learning.export import check_onnx, export_onnx
-from aerodock.learning.modelfile import ModelFileError, load_model_dir
+from aerodock.learning.modelfile import (
+    CHECKSUM_KEY,
+    ModelFileError,
+    load_model_dir,
+    model_checksum,
+)
 from aerodock.learning.models import build_model, load_torch_model
 from aerodock.learning.runtime import Predictor, ZeroPredictor, load_predictor
 from aerodock.learning.train import TrainedModel
@@ -122,6 +127,15 @@ def test_importing_runtime_does_not_import_torch(tmp_path):
 
 # -- model files: corrupt or mismatched ------------------------------------------------------
 
+def _write_doc(path, doc, reseal=True):
+    """Write a model.json; ``reseal`` recomputes its checksum, so the checks behind it (what a
+    version 1 file or a deliberately re-sealed one meets) are reached."""
+    if reseal:
+        doc = {k: v for k, v in doc.items() if k != CHECKSUM_KEY}
+        doc[CHECKSUM_KEY] = model_checksum(doc)
+    (path / "model.json").write_text(json.dumps(doc))
+
+
 def _edit_json(path, **changes):
     doc = json.loads((path / "model.json").read_text())
     for key, value in changes.items():
@@ -129,7 +143,7 @@ def _edit_json(path, **changes):
             doc.pop(key)
         else:
             doc[key] = value
-    (path / "model.json").write_text(json.dumps(doc))
+    _write_doc(path, doc)
 
 
 _DELETE = object()
@@ -144,7 +158,7 @@ def _write_weights(path, arrays, update_hash=True):
     if update_hash:
         doc = json.loads((path / "model.json").read_text())
         doc["weights"]["sha256"] = hashlib.sha256(buf.getvalue()).hexdigest()
-        (path / "model.json").write_text(json.dumps(doc))
+        _write_doc(path, doc)
 
 
 def _corruptions():
@@ -162,7 +176,7 @@ def _corruptions():
         truncated_weights(p)
         doc = json.loads((p / "model.json").read_text())
         doc["weights"]["sha256"] = None
-        (p / "model.json").write_text(json.dumps(doc))
+        _write_doc(p, doc)
 
     def no_weights(p):
         (p / "weights.npz").unlink()

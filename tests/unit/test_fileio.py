@@ -18,7 +18,9 @@ from aerodock.fileio import (
     dumps_json,
     json_ready,
     one_line,
+    remove_stale_dir_temps,
     remove_stale_temps,
+    write_dir_atomic,
     write_json,
 )
 
@@ -81,6 +83,109 @@ def test_temps_of_dead_processes_are_removed_by_the_next_write(tmp_path):
     mine.write_bytes(b"busy")
     assert remove_stale_temps(path) == [stale]
     assert mine.exists() and not stale.exists()
+
+
+def test_a_failed_verify_leaves_the_old_file_and_no_temp(tmp_path):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"old")
+    seen = []
+
+    def verify(tmp):
+        seen.append(tmp.read_bytes())  # complete before the check, under its temporary name
+        assert tmp != path and path.read_bytes() == b"old"
+        raise ValueError("wrong")
+
+    with pytest.raises(ValueError, match="wrong"):
+        with atomic_open(path, verify=verify) as fh:
+            fh.write(b"new")
+    assert seen == [b"new"] and path.read_bytes() == b"old"
+    assert os.listdir(tmp_path) == ["a.bin"]
+    with atomic_open(path, verify=lambda tmp: None) as fh:
+        fh.write(b"new")
+    assert path.read_bytes() == b"new"
+
+
+def _dead_pid() -> int:
+    return int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True).stdout)
+
+
+def _dir_with(path, files):
+    path.mkdir()
+    for name, blob in files.items():
+        (path / name).write_bytes(blob)
+    return path
+
+
+def test_a_killed_swap_leaves_a_temp_dir_that_the_next_write_removes(tmp_path):
+    """SIGKILL while the new directory is being filled: the old directory stays, and the
+    temporary sibling left behind goes with the next write in the same folder."""
+    write_dir_atomic(tmp_path / "m", {"a": b"old"})
+    code = ("import os, signal\n"
+            "import aerodock.fileio as f\n"
+            "real = f._fsync_dir\n"
+            "def die(path):\n"
+            "    if path.name.endswith('.tmp'): os.kill(os.getpid(), signal.SIGKILL)\n"
+            "    real(path)\n"
+            "f._fsync_dir = die\n"
+            f"f.write_dir_atomic({str(tmp_path / 'm')!r}, {{'a': b'new'}})\n")
+    proc = subprocess.run([sys.executable, "-c", code])
+    assert proc.returncode == -9
+    left = [p.name for p in tmp_path.iterdir() if p.name != "m"]
+    assert len(left) == 1 and left[0].startswith(".m.") and left[0].endswith(".tmp"), left
+    assert (tmp_path / "m" / "a").read_bytes() == b"old"
+    write_dir_atomic(tmp_path / "other", {"b": b"x"})  # a write to a sibling cleans it
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m", "other"]
+
+
+def test_only_our_dead_unlocked_temp_dirs_are_removed(tmp_path):
+    import fcntl
+    import time
+
+    dead, alive = _dead_pid(), os.getpid()
+    stale = _dir_with(tmp_path / f".m.{dead}.abcd_123.tmp", {"model.json": b"{}"})
+    busy = _dir_with(tmp_path / f".m.{alive}.abcd_124.tmp", {"model.json": b"{}"})
+    locked = _dir_with(tmp_path / f".m.{dead}.abcd_125.tmp", {"model.json": b"{}"})
+    fd = os.open(locked, os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # a writer in another pid namespace holds it
+    keep = {
+        "not ours": _dir_with(tmp_path / "m.tmp", {"a": b""}),
+        "user folder": _dir_with(tmp_path / f".m.{dead}.toolong12.tmp", {"a": b""}),
+        "a file": tmp_path / f".m.{dead}.abcd_126.tmp",
+        "sub-folder": _dir_with(tmp_path / f".m.{dead}.abcd_127.tmp", {"a": b""}),
+    }
+    keep["a file"].write_bytes(b"atomic_open's")
+    (keep["sub-folder"] / "inner").mkdir()
+    link_target = _dir_with(tmp_path / "precious", {"a": b"mine"})
+    (tmp_path / f".m.{dead}.abcd_128.tmp").symlink_to(link_target)
+    legacy_new = _dir_with(tmp_path / ".m.abcd_129.tmp", {"a": b""})
+    legacy_old = _dir_with(tmp_path / ".m.abcd_130.tmp", {"a": b""})
+    past = time.time() - 2 * 3600  # old enough that age alone would not keep any of them
+    for p in (legacy_old, legacy_old / "a", *keep.values()):
+        os.utime(p, (past, past))
+    try:
+        removed = remove_stale_dir_temps(tmp_path)
+    finally:
+        os.close(fd)
+    assert sorted(removed) == sorted([stale, legacy_old])
+    assert busy.exists() and locked.exists() and legacy_new.exists()
+    assert all(p.exists() for p in keep.values())
+    assert (link_target / "a").read_bytes() == b"mine"
+    assert not stale.exists() and not legacy_old.exists()
+
+
+def test_an_old_directory_set_aside_is_restored_when_its_target_is_gone(tmp_path):
+    """Without the atomic exchange the old directory is renamed aside first: a kill between
+    the two renames leaves it there, and the next write puts it back before anything else."""
+    dead = _dead_pid()
+    aside = _dir_with(tmp_path / f".m.{dead}.abcd_123.old", {"a": b"old"})
+    new = _dir_with(tmp_path / f".m.{dead}.abcd_124.tmp", {"a": b"new"})
+    assert sorted(remove_stale_dir_temps(tmp_path)) == sorted([aside, new])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m"]
+    assert (tmp_path / "m" / "a").read_bytes() == b"old"
+    done = _dir_with(tmp_path / f".m.{dead}.abcd_125.old", {"a": b"older"})  # target exists
+    assert remove_stale_dir_temps(tmp_path) == [done]
+    assert (tmp_path / "m" / "a").read_bytes() == b"old"
 
 
 def test_sigterm_unwinds_an_atomic_write(tmp_path):
