@@ -41,12 +41,15 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import (
+    MAX_NPZ_BYTES,
     READ_ERRORS,
+    InputError,
     atomic_open,
     check_npz_header,
     json_default,
     npz_int,
     one_line,
+    open_input,
 )
 
 FORMAT_NAME = "aerodock-flightlog"
@@ -180,7 +183,8 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_input(path, "FlightLog file", MAX_NPZ_BYTES) as fh, \
+                np.load(fh, allow_pickle=False) as data:
             keys = check_npz_header(data, path, FORMAT_NAME, FORMAT_VERSION, "FlightLog",
                                     FlightLogError)
             n_flights = npz_int(data, "n_flights", path, FlightLogError)
@@ -208,6 +212,8 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
         raise FlightLogError(f"{path}: is a folder, not a FlightLog file") from None
     except FlightLogError:
         raise
+    except InputError as err:
+        raise FlightLogError(str(err)) from None
     except MemoryError:
         raise FlightLogError(f"{path}: too large to read into memory") from None
     except READ_ERRORS as err:
