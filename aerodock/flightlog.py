@@ -46,12 +46,16 @@ from aerodock.fileio import (
     InputError,
     atomic_open,
     check_npz_header,
+    check_writable_target,
     json_default,
     npz_int,
     one_line,
     open_input,
 )
 
+LABEL_BASES = ("command", "thrust")
+"""What ``meta["label_basis"]`` may say the follower's explained acceleration is (see
+:mod:`aerodock.mission.recorder`); any other value is refused."""
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
 VEC3_FIELDS = (
@@ -109,6 +113,10 @@ class FlightLog:
                 if np.any(np.abs(norm - 1.0) > 0.1):
                     raise FlightLogError(f"{where}: {name} holds quaternions of norm "
                                          f"{norm[np.argmax(np.abs(norm - 1.0))]:.3g}, not unit")
+        basis = self.meta.get("label_basis")
+        if basis is not None and basis not in LABEL_BASES:
+            raise FlightLogError(f"{where}: label_basis must be one of {'|'.join(LABEL_BASES)}, "
+                                 f"got {basis!r}")
         for key, arr in self.extra.items():
             if np.shape(arr)[:1] != (n,):
                 raise FlightLogError(f"{where}: extra {key!r} must have {n} rows")
@@ -138,8 +146,15 @@ class FlightLog:
 
 
 def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
-    """Write ``logs`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact."""
-    path = Path(path)
+    """Write ``logs`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact.
+
+    ``.npz`` is added to a name without it; a ``path`` that exists and is not a regular file
+    (``/dev/null``, a FIFO, a folder) is refused as given, before the suffix is added.
+
+    Raises:
+        OSError: ``path`` is not a regular file, or the write failed.
+    """
+    path = check_writable_target(path)  # /dev/null must not become /dev/null.npz
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, np.ndarray] = {

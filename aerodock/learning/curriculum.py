@@ -202,10 +202,12 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
     """
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.train import train_model
+    from aerodock.mission.limits import check_flight_steps
 
     c = cfg.curriculum
     kind = model_kind or c.model
     out_dir = Path(out_dir)
+    check_flight_steps(cfg, cfg.mission.settle_s + FLIGHT_S, "curriculum flight")
     (out_dir / "models").mkdir(parents=True, exist_ok=True)
     logs: list[FlightLog] = []
     predictor = None
