@@ -552,3 +552,143 @@ def read_input_text(path: str | Path, what: str = "file", max_bytes: int = MAX_T
         OSError: it cannot be read.
     """
     return read_input_bytes(path, what, max_bytes).decode(encoding, errors)
+
+
+# --------------------------------------------------------------------------------------------
+# Building a folder of several files as a whole
+# --------------------------------------------------------------------------------------------
+
+
+def remove_stale_build_dirs(path: str | Path) -> list[Path]:
+    """Remove the temporary folders of :func:`building_dir` for ``path`` left by killed runs.
+
+    Each temporary folder names its process id (``.NAME.PID.XXXX.tmp``); one whose process is
+    gone is removed (a SIGKILL cannot clean up). Returns the removed folders.
+    """
+    path = Path(path)
+    removed = []
+    for tmp in path.parent.glob(f".{glob_escape(path.name)}.*{_TMP_SUFFIX}"):
+        pid_text = tmp.name[len(path.name) + 2:].split(".", 1)[0]
+        if tmp.is_dir() and pid_text.isdigit() and not _pid_alive(int(pid_text)):
+            shutil.rmtree(tmp, ignore_errors=True)
+            removed.append(tmp)
+    return removed
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with the glob pattern characters (``*?[``) escaped."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in name)
+
+
+def _fsync_tree(root: Path) -> None:
+    """Sync every file and folder under ``root`` (files first, then their folders)."""
+    for folder, _, names in os.walk(root, topdown=False):
+        for name in names:
+            try:
+                fd = os.open(os.path.join(folder, name), os.O_RDONLY | os.O_NONBLOCK)
+            except OSError:
+                continue
+            try:
+                os.fsync(fd)
+            except OSError:
+                pass
+            finally:
+                os.close(fd)
+        _fsync_dir(Path(folder))
+
+
+def check_output_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Path:
+    """Refuse an output folder :func:`building_dir` would refuse, before the work begins.
+
+    Raises:
+        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+    """
+    path = Path(path)
+    _check_owned(path, owned)
+    return path
+
+
+def _check_owned(path: Path, owned: tuple[str, ...]) -> None:
+    """Refuse to replace a folder holding entries the command does not write (a user's files,
+    or the current folder given as ``--out``)."""
+    import fnmatch
+
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise InputError(path, "exists and is not a folder; give a folder name")
+    foreign = sorted(entry.name for entry in path.iterdir()
+                     if not any(fnmatch.fnmatchcase(entry.name, pattern) for pattern in owned))
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (f" (+{len(foreign) - 3} more)" if len(foreign) > 3
+                                          else "")
+        raise InputError(path, f"holds files this command does not write ({shown}); the "
+                               "folder is replaced as a whole, so give a new folder or one "
+                               "this command wrote")
+
+
+def swap_in_dir(tmp: str | Path, path: str | Path) -> None:
+    """Put the finished folder ``tmp`` at ``path`` in one step; the old folder is removed.
+
+    Uses the atomic exchange of :func:`write_dir_atomic` (``renameat2`` with
+    ``RENAME_EXCHANGE``), or a plain rename where ``path`` does not exist; where the exchange
+    is unsupported, the old folder is renamed aside first and restored if the second rename
+    fails. Everything under ``tmp`` is synced before the swap and the parent folder after it.
+
+    Raises:
+        OSError: the swap failed; ``path`` is as it was and ``tmp`` is left for the caller.
+    """
+    tmp, path = Path(tmp), Path(path)
+    _fsync_tree(tmp)
+    if not path.exists():
+        os.rename(tmp, path)
+    elif _exchange(tmp, path):
+        shutil.rmtree(tmp, ignore_errors=True)  # now holds the old folder
+    else:
+        aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                      suffix=_TMP_SUFFIX))
+        os.rmdir(aside)
+        os.rename(path, aside)
+        try:
+            os.rename(tmp, path)
+        except BaseException:
+            os.rename(aside, path)
+            raise
+        shutil.rmtree(aside, ignore_errors=True)
+    _fsync_dir(path.parent)
+
+
+@contextmanager
+def building_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Iterator[Path]:
+    """Build a folder of several files in a temporary sibling; on success it replaces ``path``.
+
+    ``with building_dir(out, ("results.csv", "figures")) as work:`` -- write everything into
+    ``work``; when the block ends without an error, ``work`` takes ``out``'s place in one step
+    (:func:`swap_in_dir`). A failure, an interrupt or a kill at any moment leaves the old
+    folder as it was (a killed run's temporary folder, ``.NAME.PID.XXXX.tmp``, is removed by the
+    next build of the same folder), so ``path`` holds one run's files, never a mix.
+
+    Args:
+        path: the output folder.
+        owned: glob patterns of the entries the command writes; an existing ``path`` holding
+            anything else is refused rather than replaced (``--out .`` would otherwise replace
+            the current folder).
+
+    Raises:
+        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+        OSError: the folder cannot be made or swapped in.
+    """
+    path = Path(path)
+    _check_owned(path, owned)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_build_dirs(path)
+    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                suffix=_TMP_SUFFIX))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())
+        yield tmp
+        _check_owned(path, owned)  # it may have changed while we built
+        swap_in_dir(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
