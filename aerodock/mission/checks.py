@@ -85,6 +85,8 @@ def check_dropout(value: Any, name: str = "leader_dropout_s") -> tuple[float, fl
     if not ok:
         raise MissionSpecError(f"{name} must be [start_s, duration_s], got {value!r}")
     start, duration = float(value[0]), float(value[1])
+    if not (math.isfinite(start) and math.isfinite(duration)):
+        raise MissionSpecError(f"{name}: start and duration must be finite, got {value!r}")
     try:
         check_fault(Fault("leader dropout", "leader_state_lost", 1.0, (start, start), duration),
                     name)
