@@ -71,10 +71,10 @@ def check_leader_speed(value: Any, name: str = "leader_speed_mps") -> float:
 def check_offset(value: Any, name: str = "offset_m") -> float:
     """A cable length d_p, m: finite, > 0 and at most :data:`MAX_OFFSET_M` (the config's rules,
     such as the docking point above the ground, are applied by :func:`config_with_offset`)."""
-    offset = check_number(name, value, 0.0, MAX_OFFSET_M)
+    offset = check_number(name, value, -math.inf, math.inf)
     if not offset > 0:
         raise MissionSpecError(f"{name} must be > 0 m, got {value!r}")
-    return offset
+    return check_number(name, offset, 0.0, MAX_OFFSET_M)
 
 
 def check_dropout(value: Any, name: str = "leader_dropout_s") -> tuple[float, float]:
