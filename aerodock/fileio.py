@@ -13,6 +13,9 @@
   anywhere else a NaN is a bug and :func:`dumps_json` refuses it, naming the key.
 * :func:`check_npz_header` -- the ``format``/``version`` keys of an aerodock ``.npz`` file and
   the sizes its members declare, checked before any array is read.
+* :func:`check_input_file`, :func:`open_input`, :func:`read_input_bytes`,
+  :func:`read_input_text` -- every input is a regular file (a FIFO or a device is refused before
+  it is opened, so nothing blocks or reads for ever) of bounded size.
 """
 
 from __future__ import annotations
@@ -540,18 +543,300 @@ def check_npz_header(data: Any, path: Path, format_name: str, max_version: int, 
 def read_toml(path: str | Path, what: str, error: type[Exception]) -> dict[str, Any]:
     """Parse the TOML file at ``path``; every failure is one ``error`` naming the file.
 
+    The file must be a regular file of at most :data:`MAX_TOML_BYTES` (a FIFO, a device such
+    as ``/dev/zero`` or a huge file is refused before it is read; see :func:`read_input_text`).
+
     Args:
         path: the file.
         what: what the file is, for the messages (e.g. ``"config file"``).
         error: the exception class to raise (a ``ValueError`` subclass of the caller's).
     """
     try:
-        return tomllib.loads(Path(path).read_text())
+        return tomllib.loads(read_input_text(path, what, MAX_TOML_BYTES))
     except FileNotFoundError:
         raise error(f"{path}: {what} not found") from None
+    except InputError as err:
+        raise error(str(err)) from None
     except (OSError, UnicodeDecodeError) as err:
         raise error(f"{path}: cannot read {what} ({err})") from None
     except tomllib.TOMLDecodeError as err:
         raise error(f"{path}: invalid TOML ({err})") from None
     except RecursionError:
         raise error(f"{path}: invalid TOML (nested too deeply)") from None
+
+
+# --------------------------------------------------------------------------------------------
+# Reading inputs: regular files only, and only so many bytes
+# --------------------------------------------------------------------------------------------
+
+MAX_TOML_BYTES = 1024**2
+"""Largest TOML input (a config, fault file, topic mapping or sweep specification): these are a
+few kilobytes; a megabyte leaves room and parses in well under a second."""
+MAX_CSV_BYTES = 256 * 1024**2
+"""Largest CSV flight log (about an hour of two-vehicle flight at 100 Hz in the generic schema;
+parsing holds several times its size in memory)."""
+MAX_JSON_BYTES = 16 * 1024**2
+"""Largest JSON document read (a model directory's ``model.json``)."""
+_CHUNK = 1024**2
+
+
+class InputError(ValueError):
+    """An input path that cannot be read as one: not a regular file, or too large.
+
+    The message is one line, ``PATH: reason``; ``path`` and ``reason`` are kept apart for
+    callers whose errors name the file themselves.
+    """
+
+    def __init__(self, path: str | Path, reason: str) -> None:
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"{path}: {reason}")
+
+
+def _size_text(n_bytes: int) -> str:
+    for unit, size in (("GiB", 1024**3), ("MiB", 1024**2), ("KiB", 1024)):
+        if n_bytes >= size:
+            return f"{n_bytes / size:g} {unit}"
+    return f"{n_bytes} bytes"
+
+
+def _check_input_mode(path: str | Path, mode: int, what: str) -> None:
+    if stat.S_ISDIR(mode):
+        raise InputError(path, f"is a folder, not a {what}")
+    if not stat.S_ISREG(mode):
+        raise InputError(path, f"not a regular file (a FIFO, device or socket); refusing to "
+                               f"read it as a {what}")
+
+
+def check_input_file(path: str | Path, what: str = "file", max_bytes: int | None = None) -> int:
+    """Refuse an input path that is not a regular file, or holds more than ``max_bytes``.
+
+    Checked with ``os.stat`` before anything opens the file, so a FIFO (which would block the
+    reader for ever), a device such as ``/dev/zero`` (endless) or a folder is refused at once.
+
+    Args:
+        path: the input.
+        what: what the file is, for the message (``"config file"``).
+        max_bytes: the largest size accepted (None: any).
+
+    Returns:
+        The file's size in bytes.
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        InputError: ``path`` is not a regular file, or is larger than ``max_bytes``.
+    """
+    st = os.stat(path)
+    _check_input_mode(path, st.st_mode, what)
+    if max_bytes is not None and st.st_size > max_bytes:
+        raise InputError(path, f"{what} is {_size_text(st.st_size)}, more than the "
+                               f"{_size_text(max_bytes)} aerodock reads")
+    return st.st_size
+
+
+@contextmanager
+def open_input(path: str | Path, what: str = "file",
+               max_bytes: int | None = None) -> Iterator[IO[bytes]]:
+    """Open a regular input file for binary reading, never blocking on a FIFO.
+
+    The path is checked with :func:`check_input_file`, then opened with ``O_NONBLOCK`` (a FIFO
+    swapped in after the check does not block the open) and checked again on the open
+    descriptor, so what is read is the regular file that was checked.
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        InputError: not a regular file, or larger than ``max_bytes``.
+        OSError: it cannot be opened.
+    """
+    check_input_file(path, what, max_bytes)
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    try:
+        st = os.fstat(fd)
+        _check_input_mode(path, st.st_mode, what)
+        os.set_blocking(fd, True)
+        fh = os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+    with fh:
+        yield fh
+
+
+def read_input_bytes(path: str | Path, what: str = "file", max_bytes: int = MAX_NPZ_BYTES) -> bytes:
+    """The bytes of a regular input file of at most ``max_bytes`` (see :func:`open_input`).
+
+    The size is checked before reading and again while reading (a file that grows, or a file
+    whose size the system does not report, such as one under ``/proc``, is cut off at the limit
+    and refused), so no more than ``max_bytes + 1`` bytes are ever held.
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        InputError: not a regular file, or larger than ``max_bytes``.
+        OSError: it cannot be read.
+    """
+    chunks: list[bytes] = []
+    total = 0
+    with open_input(path, what, max_bytes) as fh:
+        while True:
+            chunk = fh.read(min(_CHUNK, max_bytes + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+            if total > max_bytes:
+                raise InputError(path, f"{what} is more than the {_size_text(max_bytes)} "
+                                       "aerodock reads")
+    return b"".join(chunks)
+
+
+def read_input_text(path: str | Path, what: str = "file", max_bytes: int = MAX_TOML_BYTES,
+                    encoding: str = "utf-8", errors: str = "strict") -> str:
+    """The text of a regular input file of at most ``max_bytes`` (see :func:`read_input_bytes`).
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        InputError: not a regular file, or larger than ``max_bytes``.
+        UnicodeDecodeError: not text in ``encoding`` (with ``errors="strict"``).
+        OSError: it cannot be read.
+    """
+    return read_input_bytes(path, what, max_bytes).decode(encoding, errors)
+
+
+# --------------------------------------------------------------------------------------------
+# Building a folder of several files as a whole
+# --------------------------------------------------------------------------------------------
+
+
+def remove_stale_build_dirs(path: str | Path) -> list[Path]:
+    """Remove the temporary folders of :func:`building_dir` for ``path`` left by killed runs.
+
+    Each temporary folder names its process id (``.NAME.PID.XXXX.tmp``); one whose process is
+    gone is removed (a SIGKILL cannot clean up). Returns the removed folders.
+    """
+    path = Path(path)
+    removed = []
+    for tmp in path.parent.glob(f".{glob_escape(path.name)}.*{_TMP_SUFFIX}"):
+        pid_text = tmp.name[len(path.name) + 2:].split(".", 1)[0]
+        if tmp.is_dir() and pid_text.isdigit() and not _pid_alive(int(pid_text)):
+            shutil.rmtree(tmp, ignore_errors=True)
+            removed.append(tmp)
+    return removed
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with the glob pattern characters (``*?[``) escaped."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in name)
+
+
+def _fsync_tree(root: Path) -> None:
+    """Sync every file and folder under ``root`` (files first, then their folders)."""
+    for folder, _, names in os.walk(root, topdown=False):
+        for name in names:
+            try:
+                fd = os.open(os.path.join(folder, name), os.O_RDONLY | os.O_NONBLOCK)
+            except OSError:
+                continue
+            try:
+                os.fsync(fd)
+            except OSError:
+                pass
+            finally:
+                os.close(fd)
+        _fsync_dir(Path(folder))
+
+
+def check_output_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Path:
+    """Refuse an output folder :func:`building_dir` would refuse, before the work begins.
+
+    Raises:
+        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+    """
+    path = Path(path)
+    _check_owned(path, owned)
+    return path
+
+
+def _check_owned(path: Path, owned: tuple[str, ...]) -> None:
+    """Refuse to replace a folder holding entries the command does not write (a user's files,
+    or the current folder given as ``--out``)."""
+    import fnmatch
+
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise InputError(path, "exists and is not a folder; give a folder name")
+    foreign = sorted(entry.name for entry in path.iterdir()
+                     if not any(fnmatch.fnmatchcase(entry.name, pattern) for pattern in owned))
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (f" (+{len(foreign) - 3} more)" if len(foreign) > 3
+                                          else "")
+        raise InputError(path, f"holds files this command does not write ({shown}); the "
+                               "folder is replaced as a whole, so give a new folder or one "
+                               "this command wrote")
+
+
+def swap_in_dir(tmp: str | Path, path: str | Path) -> None:
+    """Put the finished folder ``tmp`` at ``path`` in one step; the old folder is removed.
+
+    Uses the atomic exchange of :func:`write_dir_atomic` (``renameat2`` with
+    ``RENAME_EXCHANGE``), or a plain rename where ``path`` does not exist; where the exchange
+    is unsupported, the old folder is renamed aside first and restored if the second rename
+    fails. Everything under ``tmp`` is synced before the swap and the parent folder after it.
+
+    Raises:
+        OSError: the swap failed; ``path`` is as it was and ``tmp`` is left for the caller.
+    """
+    tmp, path = Path(tmp), Path(path)
+    _fsync_tree(tmp)
+    if not path.exists():
+        os.rename(tmp, path)
+    elif _exchange(tmp, path):
+        shutil.rmtree(tmp, ignore_errors=True)  # now holds the old folder
+    else:
+        aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                      suffix=_TMP_SUFFIX))
+        os.rmdir(aside)
+        os.rename(path, aside)
+        try:
+            os.rename(tmp, path)
+        except BaseException:
+            os.rename(aside, path)
+            raise
+        shutil.rmtree(aside, ignore_errors=True)
+    _fsync_dir(path.parent)
+
+
+@contextmanager
+def building_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Iterator[Path]:
+    """Build a folder of several files in a temporary sibling; on success it replaces ``path``.
+
+    ``with building_dir(out, ("results.csv", "figures")) as work:`` -- write everything into
+    ``work``; when the block ends without an error, ``work`` takes ``out``'s place in one step
+    (:func:`swap_in_dir`). A failure, an interrupt or a kill at any moment leaves the old
+    folder as it was (a killed run's temporary folder, ``.NAME.PID.XXXX.tmp``, is removed by the
+    next build of the same folder), so ``path`` holds one run's files, never a mix.
+
+    Args:
+        path: the output folder.
+        owned: glob patterns of the entries the command writes; an existing ``path`` holding
+            anything else is refused rather than replaced (``--out .`` would otherwise replace
+            the current folder).
+
+    Raises:
+        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+        OSError: the folder cannot be made or swapped in.
+    """
+    path = Path(path)
+    _check_owned(path, owned)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_build_dirs(path)
+    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                suffix=_TMP_SUFFIX))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())
+        yield tmp
+        _check_owned(path, owned)  # it may have changed while we built
+        swap_in_dir(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise

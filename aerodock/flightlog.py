@@ -41,14 +41,21 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import (
+    MAX_NPZ_BYTES,
     READ_ERRORS,
+    InputError,
     atomic_open,
     check_npz_header,
+    check_writable_target,
     json_default,
     npz_int,
     one_line,
+    open_input,
 )
 
+LABEL_BASES = ("command", "thrust")
+"""What ``meta["label_basis"]`` may say the follower's explained acceleration is (see
+:mod:`aerodock.mission.recorder`); any other value is refused."""
 FORMAT_NAME = "aerodock-flightlog"
 FORMAT_VERSION = 1
 VEC3_FIELDS = (
@@ -106,6 +113,10 @@ class FlightLog:
                 if np.any(np.abs(norm - 1.0) > 0.1):
                     raise FlightLogError(f"{where}: {name} holds quaternions of norm "
                                          f"{norm[np.argmax(np.abs(norm - 1.0))]:.3g}, not unit")
+        basis = self.meta.get("label_basis")
+        if basis is not None and basis not in LABEL_BASES:
+            raise FlightLogError(f"{where}: label_basis must be one of {'|'.join(LABEL_BASES)}, "
+                                 f"got {basis!r}")
         for key, arr in self.extra.items():
             if np.shape(arr)[:1] != (n,):
                 raise FlightLogError(f"{where}: extra {key!r} must have {n} rows")
@@ -135,8 +146,15 @@ class FlightLog:
 
 
 def save_flightlogs(path: str | Path, logs: list[FlightLog]) -> Path:
-    """Write ``logs`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact."""
-    path = Path(path)
+    """Write ``logs`` to ``path`` (``.npz``) atomically: a failure leaves any old file intact.
+
+    ``.npz`` is added to a name without it; a ``path`` that exists and is not a regular file
+    (``/dev/null``, a FIFO, a folder) is refused as given, before the suffix is added.
+
+    Raises:
+        OSError: ``path`` is not a regular file, or the write failed.
+    """
+    path = check_writable_target(path)  # /dev/null must not become /dev/null.npz
     if path.suffix != ".npz":
         path = path.with_suffix(path.suffix + ".npz") if path.suffix else path.with_suffix(".npz")
     arrays: dict[str, np.ndarray] = {
@@ -180,7 +198,8 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_input(path, "FlightLog file", MAX_NPZ_BYTES) as fh, \
+                np.load(fh, allow_pickle=False) as data:
             keys = check_npz_header(data, path, FORMAT_NAME, FORMAT_VERSION, "FlightLog",
                                     FlightLogError)
             n_flights = npz_int(data, "n_flights", path, FlightLogError)
@@ -208,6 +227,8 @@ def load_flightlogs(path: str | Path) -> list[FlightLog]:
         raise FlightLogError(f"{path}: is a folder, not a FlightLog file") from None
     except FlightLogError:
         raise
+    except InputError as err:
+        raise FlightLogError(str(err)) from None
     except MemoryError:
         raise FlightLogError(f"{path}: too large to read into memory") from None
     except READ_ERRORS as err:

@@ -55,7 +55,8 @@ def dock(
     from aerodock.control.profiles import controller_config
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
-    from aerodock.mission.limits import check_campaign_size
+    from aerodock.mission.checks import DOCK_NAMES, check_mission
+    from aerodock.mission.faults import load_faults
 
     check_number("--offset", offset, 0.0, 100.0)
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
@@ -65,25 +66,22 @@ def dock(
         cfg = controller_config(load_config(config), controller)
     except ValueError as exc:
         fail(str(exc))
-    if offset is not None:
-        # Validated like a config value (range, docking point above the ground), named as given.
-        cfg = cfg.with_overrides({"platform": {"cable_length_m": float(offset)}},
-                                 source=f"--offset {offset:g}")
-    check_campaign_size(cfg, trials, keep_logs=save_logs is not None)
+    injected = tuple(load_faults(faults)) if faults is not None else ()
+    spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
+                       leader_fixed=leader_fixed, compensation=compensation, seed=seed,
+                       faults=injected)
+    # The validation sweep and the environments share: the cable length like a config value
+    # (range, docking point above the ground), the faults, and the run's size.
+    cfg = check_mission(cfg, spec, DOCK_NAMES, size=True, keep_logs=save_logs is not None)
     if save_logs is not None:
         from aerodock.fileio import check_writable_target
 
         check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
     from aerodock.learning.compatibility import model_warnings
-    from aerodock.mission.faults import load_faults
 
     for note in model_warnings(predictor, cfg):
         typer.echo(f"warning: {note}", err=True)
-    injected = tuple(load_faults(faults)) if faults is not None else ()
-    spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
-                       leader_fixed=leader_fixed, compensation=compensation, seed=seed,
-                       faults=injected)
     with progress_bar() as bar:
         task = bar.add_task(f"docking x{trials} ({compensation.value})", total=1.0)
         result = run_campaign(cfg, spec, predictor,
@@ -141,10 +139,12 @@ def faults_command(
     clearance violations, collisions and NaN among the trials each fault struck."""
     from aerodock.experiments.faults import fault_campaign, rows_markdown
     from aerodock.mission.faults import load_faults
+    from aerodock.mission.limits import check_campaign_size
 
     cfg = load_config(config)
     if not 1 <= trials <= 4096:
         fail(f"--trials must be in 1..4096, got {trials}")
+    check_campaign_size(cfg, trials)
     faults = load_faults(fault_file)
     predictor = _load_predictor(model, compensation)
     with progress_bar() as bar:

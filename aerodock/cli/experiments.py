@@ -20,6 +20,9 @@ from aerodock.cli.common import (
 )
 from aerodock.config import load_config
 
+TARGETS_OUTPUTS = ("data", "targets.json")
+"""What ``targets --out`` holds: the folder is replaced as a whole by the next run."""
+
 
 def reproduce(
     quick: Annotated[bool, typer.Option(help="A smaller run (a few minutes).")] = False,
@@ -68,7 +71,7 @@ def targets_command(
     from aerodock.control.profiles import controller_config
     from aerodock.experiments.report_controllers import targets_markdown
     from aerodock.experiments.targets import targets
-    from aerodock.fileio import json_ready, write_json
+    from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
     from aerodock.learning.runtime import Predictor
     from aerodock.mission.limits import check_campaign_size
 
@@ -80,23 +83,32 @@ def targets_command(
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")
 
-    out.mkdir(parents=True, exist_ok=True)
-    if model is None:
-        from aerodock.learning.curriculum import run_curriculum
+    check_output_dir(out, TARGETS_OUTPUTS)
+    if model is not None and out.resolve() in (model.resolve(), *model.resolve().parents):
+        fail(f"--model {model} is inside --out {out}, which this run replaces as a whole; "
+             "copy the model elsewhere or give another --out")
+    # The folder is built beside --out and swapped in whole: a kill leaves the old curriculum
+    # and targets.json or the new ones, never one run's data beside the other's results.
+    with building_dir(out, TARGETS_OUTPUTS) as work:
+        if model is None:
+            from aerodock.learning.curriculum import run_curriculum
 
-        say("curriculum (the paper's stages, then the deep ones)")
-        summary = run_curriculum(cfg, out / "data", seed=seed, progress=lambda m: say("  " + m))
-        model = Path(summary["final_model"])
-    predictor = Predictor.load(model)
-    from aerodock.learning.compatibility import model_warnings
+            say("curriculum (the paper's stages, then the deep ones)")
+            run_curriculum(cfg, work / "data", seed=seed, progress=lambda m: say("  " + m),
+                           name_as=out / "data")
+            predictor = Predictor.load(work / "data" / "models" / "final")
+            model = out / "data" / "models" / "final"
+        else:
+            predictor = Predictor.load(model)
+        from aerodock.learning.compatibility import model_warnings
 
-    for note in model_warnings(predictor, cfg):
-        typer.echo(f"warning: {note}", err=True)
-    res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
-                   "ours + model": (controller_config(cfg, "ours"), predictor)},
-                  trials, predictor, seed, say)
-    res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
-    write_json(out / "targets.json", json_ready(res))
+        for note in model_warnings(predictor, cfg):
+            typer.echo(f"warning: {note}", err=True)
+        res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
+                       "ours + model": (controller_config(cfg, "ours"), predictor)},
+                      trials, predictor, seed, say)
+        res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
+        write_json(work / "targets.json", json_ready(res))
     if as_json:
         print_json(res)
         return

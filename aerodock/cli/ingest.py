@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from aerodock.cli.common import fail, print_json
-from aerodock.fileio import json_ready
+from aerodock.fileio import json_ready, one_line
 from aerodock.flightlog import FlightLog, FlightLogError, save_flightlogs
 from aerodock.ingest import expand_paths, read_logs
 from aerodock.ingest.errors import IngestError, IngestWarning
@@ -105,7 +105,9 @@ def ingest_command(
     except (IngestError, FlightLogError) as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{getattr(error, 'filename', None) or out}: {error.strerror or error}")
+        if error.strerror is None:  # aerodock's own message, which names the path
+            fail(one_line(error))
+        fail(f"{getattr(error, 'filename', None) or out}: {error.strerror}")
     summary = summarize(logs)
     if json_output:
         print_json(json_ready({"out": str(written), "flights": summary}), indent=None)

@@ -11,6 +11,9 @@ import typer
 
 from aerodock.cli.common import fail, print_json, progress_bar
 
+OUTPUTS = ("results.csv", "results.parquet", "summary.json", "figures")
+"""What ``sweep --out`` holds: the folder is replaced as a whole by the next sweep into it."""
+
 
 class Backend(StrEnum):
     """Where the cells run."""
@@ -37,28 +40,37 @@ def sweep_command(
     from rich.table import Table
 
     from aerodock.config import load_config
-    from aerodock.fileio import json_ready, write_json
+    from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
     from aerodock.sweep.figures import cell_summaries, plot_sweep
     from aerodock.sweep.run import run_sweep, write_table
-    from aerodock.sweep.spec import load_spec
+    from aerodock.sweep.spec import check_against_config, load_spec
 
     spec = load_spec(spec_path)
     if address is not None and backend != Backend.RAY:
         fail("--address needs --backend ray")
     cfg = load_config(spec.config)
+    check_against_config(spec, cfg)  # every cell as dock would check it, before any runs
+    check_output_dir(out, OUTPUTS)  # refused now, not after the study has run
     started = time.perf_counter()
     with progress_bar() as bar:
         task = bar.add_task(f"sweep: {len(spec.cells)} campaigns x {spec.trials} trials "
                             f"({backend.value})", total=len(spec.cells))
         rows = run_sweep(spec, cfg, backend=backend.value, jobs=jobs, address=address,
                          progress=lambda d, n: bar.update(task, completed=d))
-    files = write_table(rows, out)
-    figures = [str(p) for p in plot_sweep(rows, out / "figures", spec.name)]
-    summary = {"name": spec.name, "kind": spec.kind, "spec": str(spec_path),
-               "backend": backend.value, "campaigns": len(spec.cells), "trials": len(rows),
-               "docked": sum(r["docked"] for r in rows), "wall_s": time.perf_counter() - started,
-               "files": files, "figures": figures, "cells": cell_summaries(rows)}
-    write_json(out / "summary.json", json_ready(summary))
+    # The folder is built beside --out and swapped in whole: a kill leaves the old study or the
+    # new one, never the new table beside the old summary and figures.
+    with building_dir(out, OUTPUTS) as work:
+        def named(path: str | Path) -> str:
+            return str(out / Path(path).relative_to(work))
+
+        files = {kind: named(p) for kind, p in write_table(rows, work).items()}
+        figures = [named(p) for p in plot_sweep(rows, work / "figures", spec.name)]
+        summary = {"name": spec.name, "kind": spec.kind, "spec": str(spec_path),
+                   "backend": backend.value, "campaigns": len(spec.cells), "trials": len(rows),
+                   "docked": sum(r["docked"] for r in rows),
+                   "wall_s": time.perf_counter() - started,
+                   "files": files, "figures": figures, "cells": cell_summaries(rows)}
+        write_json(work / "summary.json", json_ready(summary))
     if as_json:
         print_json(summary)
         return

@@ -29,14 +29,20 @@ def view_command(
     """Watch a trial: both vehicles, the bar and its cables, the gate's state and the predicted
     force, in a side and a top view."""
     from aerodock.config import load_config
+    from aerodock.fileio import check_writable_target
     from aerodock.flightlog import load_flightlogs
     from aerodock.view.render import render_animation, track_from_flightlog
 
     cfg = load_config(config)
+    if rerun is not None:  # an output: refused now (a FIFO would block), not after rendering
+        check_writable_target(rerun)
     logs = load_flightlogs(log)
     if not 0 <= flight < len(logs):
         fail(f"{log}: --flight {flight} out of range (the file holds {len(logs)} flights)")
     flown = logs[flight]
+    if flown.n_samples < 2:
+        fail(f"{log}: flight {flight} holds {flown.n_samples} samples; at least 2 are needed "
+             "to draw it")
     t = flown.t_s - flown.t_s[0]
     end = t[-1] if duration is None else start + duration
     keep = (t >= start) & (t <= end)

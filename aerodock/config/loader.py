@@ -183,10 +183,9 @@ def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: st
             raise ConfigError(f"{source}: '{dotted}' must be a number, got {value!r}")
         if not numeric and type(value) is not type(default):
             raise ConfigError(f"{source}: '{dotted}' must be {_type_name(default)}, got {value!r}")
-        if isinstance(default, int) and numeric:
-            if not (isinstance(value, int) or (math.isfinite(value) and value.is_integer())):
-                raise ConfigError(f"{source}: '{dotted}' must be an integer, got {value!r}")
-            value = int(value)
+        if isinstance(default, int) and numeric and not isinstance(value, int):
+            # An integer key takes an integer: 4.0 is a float written where a count belongs.
+            raise ConfigError(f"{source}: '{dotted}' must be an integer, got {value!r}")
         target[key] = float(value) if isinstance(default, float) else value
 
 

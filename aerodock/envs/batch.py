@@ -23,6 +23,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
 from aerodock.mission import MissionBatch, MissionSpec, Phase
+from aerodock.mission.checks import check_mission
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import World
 from aerodock.world.gripper import GateState
@@ -106,10 +107,12 @@ class DockingBatch:
         comp = Compensation(spec.compensation)
         if comp == Compensation.MODEL and predictor is None:
             raise ValueError("compensation 'model' needs a predictor (a trained model)")
-        if spec.offset_m is not None and not spec.offset_m > 0:
-            raise ValueError(f"offset_m must be > 0 m, got {spec.offset_m}")
+        spec = replace(spec, trials=n, first_trial=0)
+        # The validation dock and sweep use (values, faults, the run's size), named as the
+        # environment's keyword arguments; the config the episodes fly is unchanged.
+        check_mission(cfg, spec, size=True)
         self.cfg, self.n = cfg, n
-        self.spec = replace(spec, trials=n, first_trial=0)
+        self.spec = spec
         self.model_predictor = predictor if comp == Compensation.MODEL else None
         self.residual_max_mps2 = float(residual_max_mps2)
         self.weights = weights or RewardWeights()

@@ -41,7 +41,7 @@ from aerodock.experiments.controller_costs import (
 )
 from aerodock.experiments.paper_counts import paper_outcome_probabilities
 from aerodock.experiments.targets import learnt_mean_check, targets
-from aerodock.fileio import json_ready, write_json
+from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
 
@@ -90,6 +90,9 @@ FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200,
 
 WRENCH_ROW = "ours + learnt wrench (thrust-basis so2-wrench, torque feed-forward)"
 
+
+OUTPUTS = ("results.json", "report.md", "figures", "data", "data-wrench")
+"""What ``reproduce --out`` holds: the folder is replaced as a whole by the next reproduction."""
 
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
     """Mean |vertical error| (follower vs its reference) in [t0, t1) over approaching trials."""
@@ -195,7 +198,21 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     (for checking a plug-in field or a config end to end; it implies ``quick``).
 
     ``bar(description, done, total)``, if given, follows training epochs and the sample-efficiency
-    runs (a progress bar)."""
+    runs (a progress bar); ``say`` reports each step. The folder is written as a whole
+    (:func:`aerodock.fileio.building_dir`): it is built beside ``out_dir`` and swapped in at the
+    end, so a kill leaves the old reproduction or the new one, never a mix; ``out_dir`` may hold
+    only what a reproduction writes (:data:`OUTPUTS`)."""
+    out_dir = Path(out_dir)
+    check_output_dir(out_dir, OUTPUTS)
+    with building_dir(out_dir, OUTPUTS) as work:
+        return _reproduce_into(cfg, work, out_dir, quick, seed, say, shared_data, bar)
+
+
+def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: int,
+                    say: Callable[[str], None], shared_data: Path | None,
+                    bar: Callable[[str, int, int], None] | None) -> dict[str, Any]:
+    """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
+    naming the folder ``named`` it becomes."""
     from aerodock.experiments.report import write_report
     from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
     from aerodock.learning.datafiles import save_dataset
@@ -226,11 +243,11 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     data_dir = out_dir / "data"
     epochs = None if bar is None else {"progress": lambda e, n, *_: bar("training epochs", e, n)}
     curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m),
-                                train_kwargs=epochs)
+                                train_kwargs=epochs, name_as=named / "data")
     # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
     # trained before the deep stages: the reproduction flies the paper's.
-    deep_predictor = Predictor.load(Path(curriculum["final_model"]))
-    predictor = (Predictor.load(Path(curriculum["paper_model"]))
+    deep_predictor = Predictor.load(data_dir / "models" / "final")
+    predictor = (Predictor.load(data_dir / "models" / "paper")
                  if "paper_model" in curriculum else deep_predictor)
     test_logs = []
     for st in curriculum_stages(cfg):
@@ -323,9 +340,9 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
         wrench_curriculum = run_curriculum(wrench_cfg, out_dir / "data-wrench", seed=seed,
                                            model_kind="so2-wrench",
                                            progress=lambda m: say("    " + m),
-                                           train_kwargs=epochs)
+                                           train_kwargs=epochs, name_as=named / "data-wrench")
         results["learning"]["wrench_curriculum"] = wrench_curriculum
-        wrench_predictor = Predictor.load(Path(wrench_curriculum["final_model"]))
+        wrench_predictor = Predictor.load(out_dir / "data-wrench" / "models" / "final")
         rows[WRENCH_ROW] = (ours_tff_cfg, wrench_predictor)
     else:
         rows = {k: v for k, v in rows.items() if k in ("paper's controller + paper's model",

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from aerodock.flightlog import FlightLog
+from aerodock.ingest.common import check_bag_folder, check_regular_input
 from aerodock.ingest.errors import IngestError, IngestWarning
 
 FORMATS = ("neural-swarm", "csv", "rosbag", "ulog")
@@ -46,7 +47,8 @@ def expand_paths(fmt: str, paths: list[Path]) -> list[Path]:
     ``.db3``/``.mcap`` files). Duplicates are dropped, the order is kept.
 
     Raises:
-        IngestError: unknown format, a path that does not exist, or a folder without such files.
+        IngestError: unknown format, a path that does not exist, a file that is not a regular
+            file (a FIFO, a device), or a folder without such files.
     """
     if fmt not in FORMATS:
         raise IngestError(fmt, f"unknown format; use one of {', '.join(FORMATS)}")
@@ -56,7 +58,10 @@ def expand_paths(fmt: str, paths: list[Path]) -> list[Path]:
     for path in (Path(p) for p in paths):
         if not path.exists():
             raise IngestError(path, "no such file or folder")
-        if path.is_dir() and not (fmt == "rosbag" and _is_bag_dir(path)):
+        if path.is_dir() and fmt == "rosbag" and _is_bag_dir(path):
+            check_bag_folder(path)
+            out.append(path)
+        elif path.is_dir():
             found = sorted(
                 p for p in path.iterdir()
                 if (p.is_file() and p.suffix.lower() in _SUFFIXES[fmt]
@@ -67,8 +72,14 @@ def expand_paths(fmt: str, paths: list[Path]) -> list[Path]:
                 kinds = " or ".join(_SUFFIXES[fmt]) + (" files or bag folders"
                                                        if fmt == "rosbag" else " files")
                 raise IngestError(path, f"folder has no {kinds} for format {fmt}")
+            for item in found:
+                if item.is_dir():
+                    check_bag_folder(item)
+                else:
+                    check_regular_input(item)
             out.extend(found)
         else:
+            check_regular_input(path)
             out.append(path)
     seen: set[Path] = set()
     unique = []

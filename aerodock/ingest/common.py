@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from aerodock.fileio import MAX_CSV_BYTES, InputError, check_input_file, read_input_text
 from aerodock.geometry import GRAVITY_MPS2
 from aerodock.ingest.errors import IngestError
 
@@ -407,6 +408,41 @@ def estimate_lag_s(t_a: np.ndarray, x_a: np.ndarray, t_b: np.ndarray, x_b: np.nd
 
 
 # --------------------------------------------------------------------------------------------
+# Input files
+# --------------------------------------------------------------------------------------------
+
+BAG_SUFFIXES = (".db3", ".mcap")
+
+
+def check_regular_input(path: Path, what: str = "log file") -> None:
+    """Refuse an input that is not a regular file, before any reader opens it: a FIFO would
+    block its reader for ever and a device such as ``/dev/zero`` never ends.
+
+    Raises:
+        IngestError: ``path`` is missing, a FIFO, a device, a socket or a folder.
+    """
+    try:
+        check_input_file(path, what)
+    except FileNotFoundError:
+        raise IngestError(path, "file not found") from None
+    except InputError as err:
+        raise IngestError(path, err.reason) from None
+    except OSError as err:
+        raise IngestError(path, f"cannot read ({err.strerror or err})") from None
+
+
+def check_bag_folder(path: Path) -> None:
+    """A ROS 2 bag folder's ``metadata.yaml`` and storage files must be regular files.
+
+    Raises:
+        IngestError: one of them is a FIFO, a device, a socket or a folder.
+    """
+    for item in sorted(Path(path).iterdir()):
+        if item.name == "metadata.yaml" or item.suffix.lower() in BAG_SUFFIXES:
+            check_regular_input(item, "bag file")
+
+
+# --------------------------------------------------------------------------------------------
 # CSV tables
 # --------------------------------------------------------------------------------------------
 
@@ -430,7 +466,8 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
     """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
 
     Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
-    starting with ``#`` are comments.
+    starting with ``#`` are comments. The file must be a regular file of at most
+    :data:`aerodock.fileio.MAX_CSV_BYTES` (a FIFO or a device is refused unread).
 
     Args:
         path: The file.
@@ -438,16 +475,20 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
             otherwise it is the first line that is not a ``#`` comment.
 
     Raises:
-        IngestError: unreadable or empty file, no header, no data rows, rows with a different
-            number of fields than the header (naming the line), or a field that is not a number.
+        IngestError: unreadable, non-regular, too large or empty file, no header, no data
+            rows, rows with a different number of fields than the header (naming the line), or a
+            field that is not a number.
     """
     import csv
 
     where = str(path)
     try:
-        text = path.read_text(encoding="utf-8-sig", errors="replace")
+        text = read_input_text(path, "CSV file", MAX_CSV_BYTES, encoding="utf-8-sig",
+                               errors="replace")
     except FileNotFoundError:
         raise IngestError(where, "file not found") from None
+    except InputError as err:
+        raise IngestError(where, err.reason) from None
     except OSError as err:
         raise IngestError(where, f"cannot read file ({err.strerror or err})") from None
     if not text.strip():

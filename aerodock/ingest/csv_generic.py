@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open, json_default
-from aerodock.flightlog import FlightLog
+from aerodock.flightlog import LABEL_BASES, FlightLog
 from aerodock.geometry import E3, GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
     ENU_TO_NED,
@@ -90,9 +90,18 @@ def _parse_meta(comments: list[str], where: str) -> dict[str, Any]:
                 parsed = json.loads(value)
             except json.JSONDecodeError as err:
                 raise IngestError(where, f"'# meta:' line is not valid JSON ({err.msg})") from None
+            except RecursionError:  # the parser recurses once per bracket
+                raise IngestError(where, "'# meta:' line is nested too deeply") from None
             if not isinstance(parsed, dict):
                 raise IngestError(where, "'# meta:' line must hold a JSON object")
             meta.update(parsed)
+    name = meta.get("name")
+    if name is not None and (not isinstance(name, str) or not name.strip()):
+        raise IngestError(where, f"'# meta:' name must be a non-empty string, got {name!r}")
+    basis = meta.get("label_basis")
+    if basis is not None and basis not in LABEL_BASES:
+        raise IngestError(where, f"'# meta:' label_basis must be one of "
+                                 f"{'|'.join(LABEL_BASES)}, got {basis!r}")
     return meta
 
 

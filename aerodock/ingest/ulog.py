@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import InputError, check_input_file
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import (
     E3,
@@ -122,9 +123,13 @@ def _load(path: Path) -> Any:
     except ImportError:  # pragma: no cover - the ingest extra is not installed
         raise IngestError(path, "reading ULog needs pyulog: pip install 'aerodock[ingest]'") \
             from None
-    if not path.exists():
-        raise IngestError(path, "file not found")
-    if path.is_file() and path.stat().st_size == 0:
+    try:
+        size = check_input_file(path, "ULog file")
+    except FileNotFoundError:
+        raise IngestError(path, "file not found") from None
+    except InputError as err:
+        raise IngestError(path, err.reason) from None
+    if size == 0:
         raise IngestError(path, "empty file")
     sink = io.StringIO()  # pyulog prints corruption notes; keep them off the user's terminal
     try:

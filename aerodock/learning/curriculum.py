@@ -24,6 +24,7 @@ from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor
 from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
+from aerodock.fileio import building_dir, check_output_dir
 from aerodock.flightlog import FlightLog, save_flightlogs
 from aerodock.mission.params import vehicle_meta
 from aerodock.mission.recorder import FlightRecorder
@@ -35,6 +36,8 @@ from aerodock.world import World
 # (duration_s, waypoint index moved to); waypoint 0 is the start. Rest-to-rest segments.
 _SEGMENTS = ((1.0, 0), (3.0, 1), (1.5, 2), (1.5, 2), (1.5, 3), (1.0, 3), (2.0, 4), (1.0, 4))
 FLIGHT_S = float(sum(d for d, _ in _SEGMENTS))
+OUTPUTS = ("stage*.npz", "models")
+"""What a collection's folder holds (``collect --out``): replaced as a whole by the next one."""
 
 
 @dataclass(frozen=True)
@@ -192,21 +195,34 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
 
 def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | None = None,
                    progress: Callable[[str], None] | None = None,
-                   train_kwargs: dict[str, Any] | None = None) -> dict[str, Any]:
+                   train_kwargs: dict[str, Any] | None = None,
+                   name_as: Path | None = None) -> dict[str, Any]:
     """Collect the curriculum into ``out_dir`` (``stageK.npz`` FlightLogs and
     ``models/stageK`` model dirs, plus ``models/final`` trained on everything). With deep stages
     configured, ``models/paper`` is the model of the paper's curriculum (down to
     ``min_depth_m``), trained before the deep stages were flown.
 
+    The folder is written as a whole (:func:`aerodock.fileio.building_dir`): it is built beside
+    ``out_dir`` and swapped in when the last model is saved, so a kill leaves the old
+    collection or the new one, never stages and models of two seeds; ``out_dir`` may hold only
+    what a collection writes (:data:`OUTPUTS`). Progress goes to ``progress`` meanwhile.
+
+    Args:
+        name_as: the folder the summary's paths name (default ``out_dir``), for a caller that
+            builds ``out_dir`` itself in a temporary folder and moves it there afterwards.
+
     Returns a JSON-ready summary (stages, minutes, per-stage validation loss, timings).
     """
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.train import train_model
+    from aerodock.mission.limits import check_flight_steps
 
     c = cfg.curriculum
     kind = model_kind or c.model
     out_dir = Path(out_dir)
-    (out_dir / "models").mkdir(parents=True, exist_ok=True)
+    named = Path(name_as) if name_as is not None else out_dir
+    check_flight_steps(cfg, cfg.mission.settle_s + FLIGHT_S, "curriculum flight")
+    check_output_dir(out_dir, OUTPUTS)
     logs: list[FlightLog] = []
     predictor = None
     summary: dict[str, Any] = {"stages": [], "model": kind, "seed": seed}
@@ -215,39 +231,42 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
     stages = curriculum_stages(cfg)
     trained = None
     paper_stages = len(curriculum_stages(cfg, deep=False))
-    for stage in stages:
-        t0 = time.perf_counter()
-        flights = int(c.deep_flights_per_stage if stage.deep else c.flights_per_stage)
-        if progress:
-            progress(f"stage {stage.index}: flying {flights} flights at "
-                     f"{stage.depth_min_m:.2f}-{stage.depth_max_m:.2f} m"
-                     + (" with the stage model" if predictor is not None else ""))
-        stage_logs = excitation_flights(
-            cfg, flights, stage.depth_min_m, stage.depth_max_m,
-            seed + 1000 * stage.index, predictor, name=f"stage{stage.index}",
-        )
-        save_flightlogs(out_dir / f"stage{stage.index}.npz", stage_logs)
-        logs.extend(stage_logs)
-        fly_s = time.perf_counter() - t0
-        if progress:
-            progress(f"stage {stage.index}: training {kind} on {len(logs)} flights")
-        t1 = time.perf_counter()
-        trained = train_model(kind, build_dataset(logs), seed=seed, **kwargs)
-        trained.save(out_dir / "models" / f"stage{stage.index}")
-        predictor = trained.predictor()
-        if stage.index == paper_stages - 1:
-            trained.save(out_dir / "models" / "paper")
-            summary["paper_model"] = str(out_dir / "models" / "paper")
-        summary["stages"].append({
-            "stage": stage.index, "depth_band_m": [stage.depth_min_m, stage.depth_max_m],
-            "flights": len(stage_logs), "minutes": sum(lg.duration_s for lg in stage_logs) / 60,
-            "fly_s": fly_s, "train_s": time.perf_counter() - t1,
-            "val_rmse_mps2": trained.info.get("val_rmse_mps2"),
-        })
-    if trained is not None:
-        trained.save(out_dir / "models" / "final")
+    with building_dir(out_dir, OUTPUTS) as work:
+        (work / "models").mkdir()
+        for stage in stages:
+            t0 = time.perf_counter()
+            flights = int(c.deep_flights_per_stage if stage.deep else c.flights_per_stage)
+            if progress:
+                progress(f"stage {stage.index}: flying {flights} flights at "
+                         f"{stage.depth_min_m:.2f}-{stage.depth_max_m:.2f} m"
+                         + (" with the stage model" if predictor is not None else ""))
+            stage_logs = excitation_flights(
+                cfg, flights, stage.depth_min_m, stage.depth_max_m,
+                seed + 1000 * stage.index, predictor, name=f"stage{stage.index}",
+            )
+            save_flightlogs(work / f"stage{stage.index}.npz", stage_logs)
+            logs.extend(stage_logs)
+            fly_s = time.perf_counter() - t0
+            if progress:
+                progress(f"stage {stage.index}: training {kind} on {len(logs)} flights")
+            t1 = time.perf_counter()
+            trained = train_model(kind, build_dataset(logs), seed=seed, **kwargs)
+            trained.save(work / "models" / f"stage{stage.index}")
+            predictor = trained.predictor()
+            if stage.index == paper_stages - 1:
+                trained.save(work / "models" / "paper")
+                summary["paper_model"] = str(named / "models" / "paper")
+            summary["stages"].append({
+                "stage": stage.index, "depth_band_m": [stage.depth_min_m, stage.depth_max_m],
+                "flights": len(stage_logs),
+                "minutes": sum(lg.duration_s for lg in stage_logs) / 60,
+                "fly_s": fly_s, "train_s": time.perf_counter() - t1,
+                "val_rmse_mps2": trained.info.get("val_rmse_mps2"),
+            })
+        if trained is not None:
+            trained.save(work / "models" / "final")
     summary["minutes"] = sum(lg.duration_s for lg in logs) / 60
     summary["flights"] = len(logs)
     summary["wall_s"] = time.perf_counter() - started
-    summary["final_model"] = str(out_dir / "models" / "final")
+    summary["final_model"] = str(named / "models" / "final")
     return summary

@@ -16,7 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
-from aerodock.fileio import READ_ERRORS, atomic_open, check_npz_header, one_line
+from aerodock.fileio import (
+    MAX_NPZ_BYTES,
+    READ_ERRORS,
+    InputError,
+    atomic_open,
+    check_npz_header,
+    one_line,
+    open_input,
+)
 from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.learning.dataset import (
@@ -54,10 +62,13 @@ def save_dataset(path: str | Path, ds: Dataset) -> Path:
 def _npz_format(path: Path) -> str | None:
     """The ``format`` string of an npz file, or None (raises DataError if unreadable)."""
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_input(path, "data file", MAX_NPZ_BYTES) as fh, \
+                np.load(fh, allow_pickle=False) as data:
             return str(data["format"]) if "format" in data.files else None
     except FileNotFoundError:
         raise DataError(f"{path}: file not found") from None
+    except InputError as err:
+        raise DataError(str(err)) from None
     except (*READ_ERRORS, MemoryError) as err:
         raise DataError(f"{path}: not a readable .npz file ({type(err).__name__}: "
                         f"{one_line(err)})") from None
@@ -71,7 +82,8 @@ def load_dataset(path: str | Path) -> Dataset:
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_input(path, "dataset file", MAX_NPZ_BYTES) as fh, \
+                np.load(fh, allow_pickle=False) as data:
             keys = check_npz_header(data, path, DATASET_FORMAT, DATASET_VERSION, "dataset",
                                     DataError)
             missing = [k for k in ("x", "leader_R", "y", "flight_id", "t_s", "meta")
@@ -85,6 +97,8 @@ def load_dataset(path: str | Path) -> Dataset:
         raise DataError(f"{path}: file not found") from None
     except DataError:
         raise
+    except InputError as err:
+        raise DataError(str(err)) from None
     except (*READ_ERRORS, MemoryError) as err:
         raise DataError(f"{path}: corrupt or unreadable dataset file ({type(err).__name__}: "
                         f"{one_line(err)})") from None

@@ -440,7 +440,9 @@ def _compare(path: str | Path, predictor: Any, *, n: int,
         rng.normal(0.0, 0.3, size=(n, 6)),
     ], axis=1)
     rot = euler_to_rotmat(rng.normal(0, 0.1, n), rng.normal(0, 0.1, n), rng.uniform(-3, 3, n))
-    sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    # The model's bytes, not its name: onnxruntime takes only a UTF-8 path, and a file name
+    # need not be one (a POSIX name is any bytes).
+    sess = ort.InferenceSession(Path(path).read_bytes(), providers=["CPUExecutionProvider"])
     dtype = np.float64 if sess.get_inputs()[0].type == "tensor(double)" else np.float32
     xs, rs = x.astype(dtype), rot.astype(dtype)
     names = [o.name for o in sess.get_outputs()]

@@ -52,7 +52,16 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.fileio import READ_ERRORS, check_npz_sizes, write_dir_atomic
+from aerodock.fileio import (
+    MAX_JSON_BYTES,
+    MAX_NPZ_BYTES,
+    READ_ERRORS,
+    InputError,
+    check_npz_sizes,
+    read_input_bytes,
+    read_input_text,
+    write_dir_atomic,
+)
 from aerodock.learning.features import (
     EPS_POS_M,
     EPS_VEL_MPS,
@@ -315,7 +324,9 @@ def load_model_dir(
     if not jpath.is_file():
         raise ModelFileError(f"{jpath}: not found (not an aerodock model directory)")
     try:
-        doc = json.loads(jpath.read_text())
+        doc = json.loads(read_input_text(jpath, MODEL_JSON, MAX_JSON_BYTES))
+    except InputError as err:
+        raise ModelFileError(str(err)) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
         raise ModelFileError(f"{jpath}: corrupt model.json ({err})") from None
     except RecursionError:
@@ -436,9 +447,11 @@ def _load_weights(
     if not isinstance(winfo, dict):
         raise ModelFileError(f"{path / MODEL_JSON}: weights entry missing")
     try:
-        blob = wpath.read_bytes()
+        blob = read_input_bytes(wpath, WEIGHTS_NPZ, MAX_NPZ_BYTES)
     except FileNotFoundError:
         raise ModelFileError(f"{wpath}: not found") from None
+    except InputError as err:
+        raise ModelFileError(str(err)) from None
     except OSError as err:
         raise ModelFileError(f"{wpath}: unreadable ({err})") from None
     sha = winfo.get("sha256")

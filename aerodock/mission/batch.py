@@ -25,6 +25,7 @@ from aerodock.control.compensation import AccelPredictor, Compensation, OraclePr
 from aerodock.control.controller import ControlOutput, PositionController, Reference
 from aerodock.control.torque_feedforward import feedforward_torque_nm
 from aerodock.downwash import BodyState, build_field
+from aerodock.mission.checks import DOCK_NAMES, check_mission
 from aerodock.mission.faults import Fault, FaultRuntime, draw_faults
 from aerodock.mission.metrics import MissionMetrics
 from aerodock.mission.outcome import CampaignResult
@@ -161,14 +162,10 @@ class MissionBatch:
 
     def __init__(self, cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
                  record: str = "summary", trials: np.ndarray | None = None):
-        if spec.trials < 1:
-            raise ValueError(f"--trials must be >= 1, got {spec.trials}")
         if record not in ("summary", "trace", "full"):
             raise ValueError(f"record must be summary, trace or full, got {record!r}")
-        if spec.offset_m is not None:
-            if not spec.offset_m > 0:
-                raise ValueError(f"--offset must be > 0 m, got {spec.offset_m}")
-            cfg = cfg.with_overrides({"platform": {"cable_length_m": float(spec.offset_m)}})
+        # The one validation of dock, sweep and the environments (the cable length applied).
+        cfg = check_mission(cfg, spec, DOCK_NAMES)
         comp = Compensation(spec.compensation)
         if comp == Compensation.MODEL and predictor is None:
             raise ValueError("compensation 'model' needs a trained model (--model DIR)")

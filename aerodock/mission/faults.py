@@ -7,19 +7,25 @@ A fault file (TOML) lists faults as ``[[fault]]`` tables::
     kind = "follower_mocap_dropout"   # one of KINDS
     probability = 1.0                 # fraction of trials that suffer it
     start_s = [2.0, 3.8]              # when it starts: uniform in this range (mission time)
-    duration_s = 0.3                  # how long (inf: to the end)
+    duration_s = 0.3                  # how long, s (leave it out: to the end of the trial)
     magnitude = 0.0                   # kind-specific (see KINDS)
 
 Kinds (``magnitude`` in brackets):
 
 - ``follower_mocap_dropout`` / ``leader_mocap_dropout``: that vehicle's motion capture freezes
   at its last value (the vehicle's own controller and the follower's view of it);
-- ``latency_spike``: the follower's motion capture arrives [magnitude s] late;
+- ``latency_spike``: the follower's motion capture arrives [magnitude s, 0-10] late;
 - ``leader_state_lost``: the leader's state stops reaching the follower (network);
-- ``contact_sensor_dead`` / ``contact_sensor_stuck``: the strain gauge reads 0 / [magnitude N];
-- ``servo_slow`` / ``servo_jammed``: the gate closes [magnitude] times slower / never;
-- ``rotor_thrust_loss``: one of the follower's rotors (drawn per trial) loses [magnitude] of its
-  thrust (rigid-body world).
+- ``contact_sensor_dead`` / ``contact_sensor_stuck``: the strain gauge reads 0 /
+  [magnitude N, 0-10 000];
+- ``servo_slow`` / ``servo_jammed``: the gate closes [magnitude, 1-100] times slower / never;
+- ``rotor_thrust_loss``: one of the follower's rotors (drawn per trial) loses [magnitude, a
+  fraction 0-1] of its thrust (rigid-body world).
+
+Kinds without a magnitude take none (0 if given). ``probability`` is in [0, 1], ``start_s``
+and ``duration_s`` are finite, at most :data:`MAX_FAULT_TIME_S` (the longest mission time a
+config allows), and ``duration_s`` is positive. :func:`check_fault` applies these rules to
+faults built in code too (the mission checks every fault it is given).
 
 Every draw comes from the campaign's per-trial random streams: same file and seed, same faults.
 """
@@ -41,6 +47,15 @@ KINDS = ("follower_mocap_dropout", "leader_mocap_dropout", "latency_spike", "lea
 _DEFAULT_MAGNITUDE = {"latency_spike": 0.1, "contact_sensor_stuck": 1.0, "servo_slow": 3.0,
                       "rotor_thrust_loss": 0.3}
 MAX_FAULTS = 64
+MAGNITUDE_RANGES: dict[str, tuple[float, float]] = {
+    "latency_spike": (0.0, 10.0),  # s, as mocap.latency_s
+    "contact_sensor_stuck": (0.0, 10_000.0),  # N, as gripper.contact_threshold_n
+    "servo_slow": (1.0, 100.0),  # x the closing time: slower, never faster
+    "rotor_thrust_loss": (0.0, 1.0),  # a fraction of the rotor's thrust
+}
+"""Each kind's physical range of ``magnitude`` (inclusive); kinds not listed have none (0)."""
+MAX_FAULT_TIME_S = 600.0
+"""Latest start and longest duration of a fault, s (durations in the config go up to 600 s)."""
 
 
 @dataclass(frozen=True)
@@ -79,9 +94,39 @@ def _number(entry: dict[str, Any], key: str, default: float, where: str) -> floa
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise FaultFileError(f"{where}: '{key}' must be a number, got {value!r}")
     value = float(value)
-    if math.isnan(value) or value < 0 or (math.isinf(value) and key != "duration_s"):
+    if key in entry and (not math.isfinite(value) or value < 0):
         raise FaultFileError(f"{where}: '{key}' must be finite and >= 0, got {value!r}")
     return value
+
+
+def check_fault(fault: Fault, where: str) -> None:
+    """Refuse a fault whose values are outside their physical ranges (see the module docstring).
+
+    Raises:
+        FaultFileError: unknown kind, a probability outside [0, 1], a start or duration that is
+            not finite or beyond :data:`MAX_FAULT_TIME_S` (an infinite duration is allowed only
+            as the default, "to the end"), or a magnitude outside its kind's range.
+    """
+    if fault.kind not in KINDS:
+        raise FaultFileError(f"{where}: 'kind' must be one of {'|'.join(KINDS)}, "
+                             f"got {fault.kind!r}")
+    if not 0.0 <= fault.probability <= 1.0:
+        raise FaultFileError(f"{where}: 'probability' must be in [0, 1], got {fault.probability}")
+    lo, hi = fault.start_s
+    if not (0.0 <= lo <= hi <= MAX_FAULT_TIME_S):
+        raise FaultFileError(f"{where}: 'start_s' must be a number or [low, high] with "
+                             f"0 <= low <= high <= {MAX_FAULT_TIME_S:g}, got {[lo, hi]!r}")
+    duration = fault.duration_s
+    if not (duration == math.inf or 0.0 < duration <= MAX_FAULT_TIME_S):
+        raise FaultFileError(f"{where}: 'duration_s' must be > 0 and <= {MAX_FAULT_TIME_S:g} s "
+                             f"(leave it out for a fault that lasts to the end), got {duration!r}")
+    low, high = MAGNITUDE_RANGES.get(fault.kind, (0.0, 0.0))
+    if not low <= fault.magnitude <= high:
+        if high == 0.0:
+            raise FaultFileError(f"{where}: kind {fault.kind} has no 'magnitude' (0 if given), "
+                                 f"got {fault.magnitude!r}")
+        raise FaultFileError(f"{where}: 'magnitude' of {fault.kind} must be between {low:g} "
+                             f"and {high:g}, got {fault.magnitude!r}")
 
 
 def parse_faults(data: dict[str, Any], source: str) -> list[Fault]:
@@ -120,11 +165,13 @@ def parse_faults(data: dict[str, Any], source: str) -> list[Fault]:
                 or not all(math.isfinite(x) and x >= 0 for x in start) or start[0] > start[1]):
             raise FaultFileError(f"{where}: 'start_s' must be a number or [low, high] with "
                                  f"0 <= low <= high, got {start!r}")
-        faults.append(Fault(
+        fault = Fault(
             name=name, kind=kind, probability=prob, start_s=(float(start[0]), float(start[1])),
             duration_s=_number(entry, "duration_s", math.inf, where),
             magnitude=_number(entry, "magnitude", _DEFAULT_MAGNITUDE.get(kind, 0.0), where),
-        ))
+        )
+        check_fault(fault, where)
+        faults.append(fault)
     return faults
 
 

@@ -21,6 +21,14 @@ MAX_PHYSICS_TRIAL_STEPS = 50_000_000
 """Trials x physics steps of a campaign (about 2 minutes on two cores)."""
 MAX_PROBE_SAMPLES = 200_000
 """Turbulence samples of ``field probe`` (about 10 s; 400 s of flight at 500 Hz)."""
+MAX_FLIGHT_PHYSICS_STEPS = 100_000
+"""Physics steps of one trial or flight (its simulated time x the physics rate). A batch's steps
+run one after another whatever its size, about 0.5 ms each on two cores even for 2 trials, so
+this is about a minute: 200 s of flight at the default 500 Hz (a default trial is 22.5 s)."""
+MAX_SWEEP_CELLS = 10_000
+"""Campaigns (points x seeds) of one ``sweep``."""
+MAX_SWEEP_TRIALS = 200_000
+"""Trials of one ``sweep`` in all: its tidy table holds one row (about 1 kB) per trial."""
 
 
 class LimitError(ValueError):
@@ -41,13 +49,20 @@ def campaign_duration_s(cfg: Config) -> float:
 def check_campaign_size(cfg: Config, trials: int, keep_logs: bool = False) -> None:
     """Refuse a campaign whose memory or time would exceed the limits above.
 
+    Every time of the mission counts (the settled start, the approach, the docking window and
+    the back-off, :func:`campaign_duration_s`), at the configured rates: one trial's physics
+    steps are limited (:data:`MAX_FLIGHT_PHYSICS_STEPS`) whatever the number of trials, and so
+    are trials x control steps and trials x physics steps.
+
     Raises:
-        LimitError: too many trials, or trials x steps beyond a limit (the message says which).
+        LimitError: too many trials, a trial too long, or trials x steps beyond a limit (the
+            message says which).
     """
     if trials > MAX_TRIALS:
         raise LimitError(f"--trials {trials} exceeds the limit of {MAX_TRIALS} per campaign; "
                          "run several campaigns with different --seed")
     duration_s = campaign_duration_s(cfg)
+    check_flight_steps(cfg, duration_s, "trial")
     control = trials * math.ceil(duration_s * cfg.sim.control_rate_hz)
     physics = trials * math.ceil(duration_s * cfg.sim.physics_rate_hz)
     limit = MAX_LOGGED_TRIAL_STEPS if keep_logs else MAX_TRIAL_STEPS
@@ -66,3 +81,38 @@ def check_probe_samples(samples: int) -> None:
     """Refuse a ``field probe`` beyond :data:`MAX_PROBE_SAMPLES` (or below 2)."""
     if not 2 <= samples <= MAX_PROBE_SAMPLES:
         raise LimitError(f"--samples must be between 2 and {MAX_PROBE_SAMPLES}, got {samples}")
+
+
+def check_flight_steps(cfg: Config, duration_s: float, what: str = "trial") -> None:
+    """Refuse one flight of ``duration_s`` simulated seconds beyond
+    :data:`MAX_FLIGHT_PHYSICS_STEPS` at the configured physics rate.
+
+    Raises:
+        LimitError: the flight is too long; the message names the times and the rate to change.
+    """
+    steps = math.ceil(duration_s * cfg.sim.physics_rate_hz)
+    if steps > MAX_FLIGHT_PHYSICS_STEPS:
+        raise LimitError(
+            f"one {what} of {duration_s:g} s at {cfg.sim.physics_rate_hz:g} Hz is {steps} physics "
+            f"steps, over the limit of {MAX_FLIGHT_PHYSICS_STEPS}; shorten the mission's times "
+            "(mission.settle_s, mission.dock_window_s, mission.backoff_s, the planner's horizons) "
+            "or lower sim.physics_rate_hz")
+
+
+def check_sweep_size(cells: int, trials: int) -> None:
+    """Refuse a sweep of more than :data:`MAX_SWEEP_CELLS` campaigns or
+    :data:`MAX_SWEEP_TRIALS` trials in all (``cells`` campaigns of ``trials`` each).
+
+    Called with the counts before the cells are expanded, so a 3000 x 3000 grid is refused
+    without building nine million cells.
+
+    Raises:
+        LimitError: the message states the limit.
+    """
+    if cells > MAX_SWEEP_CELLS:
+        raise LimitError(f"the sweep has {cells} campaigns (points x seeds), over the limit of "
+                         f"{MAX_SWEEP_CELLS}; split it into several sweeps")
+    if cells * trials > MAX_SWEEP_TRIALS:
+        raise LimitError(f"the sweep has {cells} campaigns x {trials} trials = {cells * trials} "
+                         f"trials, over the limit of {MAX_SWEEP_TRIALS}; use fewer trials or "
+                         "points, or split it into several sweeps")

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.control.controller import ControlOutput
-from aerodock.flightlog import FlightLog
+from aerodock.flightlog import LABEL_BASES, FlightLog
 from aerodock.geometry import rotmat_to_quat, thrust_accel
 from aerodock.world import Observation, World
 
@@ -37,7 +37,6 @@ _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean"
 # Recorded rows -> FlightLog extras of the torque observations (rigid-body vehicles only).
 TORQUE_EXTRAS = {"tau_obs": "follower_obs_torque_nm", "tau_rotor": "follower_rotor_torque_nm",
                  "rates": "follower_body_rates_radps", "tau_true": "true_wake_torque_nm"}
-LABEL_BASES = ("command", "thrust")
 
 
 class FlightRecorder:

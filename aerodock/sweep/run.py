@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.sweep.spec import Cell, SweepSpec
+from aerodock.sweep.spec import Cell, SweepSpec, check_against_config
 
 OUTCOME_COLUMNS = (
     ("trial", "trial index within the campaign"),
@@ -111,11 +111,16 @@ def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | 
             Ray instance it starts, default all).
         address: an existing Ray cluster's address (``ray`` backend), e.g. ``"auto"``.
         progress: called as ``progress(done, total)`` after every cell.
+
+    Raises:
+        SweepSpecError: a cell ``dock`` would refuse, or a campaign too large.
+        ValueError: an unknown backend, or ``jobs`` < 1.
     """
     if backend not in ("local", "ray"):
         raise ValueError(f"--backend must be local or ray, got {backend!r}")
     if jobs is not None and jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
+    check_against_config(spec, cfg)  # every cell as dock would check it, before any runs
     model = None if spec.model is None else str(spec.model)
     args = [(cfg.data, cfg.source, c, spec.trials, model) for c in spec.cells]
     results: dict[int, list[dict[str, Any]]] = {}

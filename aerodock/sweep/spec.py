@@ -21,24 +21,42 @@ compensation = ["observer", "oracle"]    # none | observer | model | oracle
 Axes left out keep the config's value (compensation: ``observer``; no fault). A grid's points
 are the Cartesian product in the order above; a random study draws each axis independently
 (uniform on ``{min, max}``, uniform choice from a list).
+
+Every value is checked by the rule ``aerodock dock`` applies to it (:mod:`aerodock.mission.checks`:
+a cable length in (0, 100] m with the docking point above the ground, a leader speed within
++-100 m/s, a dropout as the fault it becomes), and the size is limited
+(:mod:`aerodock.mission.limits`: at most 10 000 trials per campaign, 10 000 campaigns and 200 000
+trials in all, counted before the cells are expanded).
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from aerodock.config import Config
 from aerodock.control.compensation import Compensation
 from aerodock.fileio import read_toml
+from aerodock.mission.checks import (
+    MissionSpecError,
+    check_dropout,
+    check_leader_speed,
+    check_mission,
+    check_number,
+    check_offset,
+)
+from aerodock.mission.limits import MAX_TRIALS, LimitError, check_sweep_size
 
 AXES = ("cable_length_m", "leader_speed_mps", "mocap_noise_scale", "leader_dropout_s",
         "compensation")
-_NUMERIC = {"cable_length_m": (0.0, False), "leader_speed_mps": (None, True),
-            "mocap_noise_scale": (0.0, True)}  # axis: (lower bound, bound allowed)
+_NUMERIC = ("cable_length_m", "leader_speed_mps", "mocap_noise_scale")
+MAX_NOISE_SCALE = 1e6
+"""Largest motion-capture noise scale (the scaled noise must also fit the config's ranges)."""
 _SWEEP_KEYS = {"kind", "trials", "seeds", "samples", "sampling_seed", "model", "config", "name"}
 
 
@@ -92,14 +110,20 @@ def _fail(source: str, msg: str) -> SweepSpecError:
 
 
 def _check_value(source: str, axis: str, value: Any) -> Any:
-    """One axis value, validated and normalised."""
+    """One axis value, validated and normalised: by the rule ``dock`` applies to the same value
+    (:mod:`aerodock.mission.checks`), named as the axis."""
     if axis in _NUMERIC:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise _fail(source, f"axes.{axis}: values must be numbers, got {value!r}")
-        low, equal_ok = _NUMERIC[axis]
-        if low is not None and (value < low or (value == low and not equal_ok)):
-            raise _fail(source, f"axes.{axis}: {value!r} must be "
-                        f"{'>=' if equal_ok else '>'} {low}")
+        try:
+            if axis == "cable_length_m":
+                check_offset(value, f"axes.{axis}")
+            elif axis == "leader_speed_mps":
+                check_leader_speed(value, f"axes.{axis}")
+            else:
+                check_number(f"axes.{axis}", value, 0.0, MAX_NOISE_SCALE)
+        except MissionSpecError as err:
+            raise _fail(source, str(err)) from None
         return float(value)
     if axis == "compensation":
         try:
@@ -116,7 +140,10 @@ def _check_value(source: str, axis: str, value: Any) -> Any:
         if not ok:
             raise _fail(source, f"axes.leader_dropout_s: {value!r} must be \"none\" or "
                         "[start_s, duration_s] with duration > 0")
-        return (float(value[0]), float(value[1]))
+        try:
+            return check_dropout(value, "axes.leader_dropout_s")
+        except MissionSpecError as err:
+            raise _fail(source, str(err)) from None
     raise _fail(source, f"unknown axis 'axes.{axis}' (known: {', '.join(AXES)})")
 
 
@@ -136,18 +163,37 @@ def parse_spec(data: dict[str, Any], source: str = "spec", base_dir: Path | None
     trials = sw.get("trials", 8)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
         raise _fail(source, f"sweep.trials must be an integer >= 1, got {trials!r}")
+    if trials > MAX_TRIALS:
+        raise _fail(source, f"sweep.trials {trials} exceeds the limit of {MAX_TRIALS} per "
+                    "campaign")
     seeds = sw.get("seeds", [0])
     if (not isinstance(seeds, list) or not seeds
             or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)):
         raise _fail(source, f"sweep.seeds must be a non-empty list of integers, got {seeds!r}")
     samples = sw.get("samples", 0)
-    if kind == "random" and (not isinstance(samples, int) or samples < 1):
+    if kind == "random" and (isinstance(samples, bool) or not isinstance(samples, int)
+                             or samples < 1):
         raise _fail(source, f"sweep.samples must be an integer >= 1 for a random study, "
                     f"got {samples!r}")
+    sampling_seed = sw.get("sampling_seed", 0)
+    if isinstance(sampling_seed, bool) or not isinstance(sampling_seed, int) or sampling_seed < 0:
+        raise _fail(source, f"sweep.sampling_seed must be an integer >= 0, got {sampling_seed!r}")
+    for key in ("model", "config", "name"):
+        if key in sw and not isinstance(sw[key], str):
+            raise _fail(source, f"sweep.{key} must be a string, got {sw[key]!r}")
     base = base_dir or Path.cwd()
     model = Path(base, sw["model"]) if "model" in sw else None
     config = Path(base, sw["config"]) if "config" in sw else None
     raw_axes = data.get("axes", {})
+    if not isinstance(raw_axes, dict):
+        raise _fail(source, "[axes] must be a table")
+    # The size before anything is expanded: a 3000 x 3000 grid is refused, not built.
+    points = samples if kind == "random" else math.prod(
+        len(v) if isinstance(v, list) else 1 for v in raw_axes.values())
+    try:
+        check_sweep_size(points * len(seeds), trials)
+    except LimitError as err:
+        raise _fail(source, str(err)) from None
     axes: dict[str, Any] = {}
     for axis, values in raw_axes.items():
         if axis not in AXES:
@@ -168,9 +214,52 @@ def parse_spec(data: dict[str, Any], source: str = "spec", base_dir: Path | None
     if "model" in comps and model is None:
         raise _fail(source, "compensation \"model\" needs sweep.model = \"MODEL_DIR\"")
     spec = SweepSpec(kind=kind, trials=trials, seeds=tuple(seeds), axes=axes, samples=samples,
-                     sampling_seed=int(sw.get("sampling_seed", 0)), model=model, config=config,
+                     sampling_seed=sampling_seed, model=model, config=config,
                      name=str(sw.get("name", "sweep")), source=source)
     return _with_cells(spec)
+
+
+SWEEP_NAMES = {"trials": "sweep.trials", "offset_m": "axes.cable_length_m",
+               "leader_speed_mps": "axes.leader_speed_mps",
+               "leader_dropout_s": "axes.leader_dropout_s", "compensation": "axes.compensation"}
+"""How :func:`aerodock.mission.checks.check_mission` names a cell's values in a sweep."""
+
+
+def check_against_config(spec: SweepSpec, cfg: Config) -> None:
+    """Check the sweep's cells against the configuration they fly, before any cell runs.
+
+    Every value was checked on parsing by the rule ``dock`` applies to it; what depends on the
+    configuration is checked here by the same :func:`~aerodock.mission.checks.check_mission`
+    ``dock`` calls: the run's size (per campaign), and the cable lengths and noise scales as
+    config values. Those rules are monotonic in the value (a range, the docking point above the
+    ground), so the smallest and largest value of each axis stand for all of them.
+
+    Raises:
+        SweepSpecError: a cell ``dock`` would refuse (the message names the axis).
+    """
+    from aerodock.config import ConfigError
+    from aerodock.mission.spec import MissionSpec
+
+    def extremes(axis: str) -> list[float | None]:
+        values = spec.axes.get(axis)
+        if values is None:
+            return [None]
+        if isinstance(values, dict):
+            return [values["min"], values["max"]]
+        return [min(values), max(values)]
+
+    try:
+        for offset in extremes("cable_length_m"):
+            check_mission(cfg, MissionSpec(trials=spec.trials, offset_m=offset), SWEEP_NAMES,
+                          size=True)
+        for scale in extremes("mocap_noise_scale"):
+            if scale is not None:
+                cfg.with_overrides(
+                    {"mocap": {"pos_noise_m": cfg.mocap.pos_noise_m * scale,
+                               "vel_noise_mps": cfg.mocap.vel_noise_mps * scale}},
+                    source=f"axes.mocap_noise_scale {scale:g}")
+    except (ConfigError, LimitError, MissionSpecError) as err:
+        raise _fail(spec.source, str(err)) from None
 
 
 def load_spec(path: str | Path) -> SweepSpec:

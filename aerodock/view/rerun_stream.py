@@ -8,10 +8,13 @@ timeline ``flight_time`` (seconds).
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from aerodock.fileio import atomic_open, check_writable_target, one_line
 from aerodock.view.render import FORCE_SCALE_M_PER_MPS2, Track, _arms
 
 
@@ -21,6 +24,8 @@ def stream_to_rerun(track: Track, save: str | Path | None = None, spawn: bool = 
 
     Raises:
         ValueError: rerun-sdk is not installed, or neither ``save`` nor ``spawn`` is given.
+        OSError: ``save`` cannot be written (a bad path, a read-only folder, a full disk, a
+            FIFO or a device); any old file at ``save`` is left as it was.
     """
     try:
         import rerun as rr
@@ -29,13 +34,34 @@ def stream_to_rerun(track: Track, save: str | Path | None = None, spawn: bool = 
                          "pip install 'aerodock[viz]'") from None
     if save is None and not spawn:
         raise ValueError("give a .rrd file to save to, or spawn a viewer")
-    rec = rr.RecordingStream(app_id)
-    if save is not None:  # the sink is set before anything is logged
-        save = Path(save)
-        save.parent.mkdir(parents=True, exist_ok=True)
-        rec.save(str(save))
-    else:
+    if save is None:
+        rec = rr.RecordingStream(app_id)
         rec.spawn()
+        _log_track(rr, rec, track)
+        return None
+    save = Path(save)
+    # rerun writes the file itself and reports a failure as RuntimeError: it writes into a
+    # temporary folder, and the recording then replaces ``save`` atomically (a failure leaves
+    # any old file as it was and becomes an OSError naming the file).
+    check_writable_target(save)
+    with tempfile.TemporaryDirectory(prefix="aerodock-rrd-") as scratch:
+        tmp = Path(scratch) / "recording.rrd"
+        try:
+            rec = rr.RecordingStream(app_id)
+            rec.save(str(tmp))  # the sink is set before anything is logged
+            _log_track(rr, rec, track)
+            rec.disconnect()
+        except RuntimeError as err:
+            raise OSError(f"{save}: cannot write the rerun recording ({one_line(err)})") from None
+        if not tmp.is_file() or tmp.stat().st_size == 0:
+            raise OSError(f"{save}: cannot write the rerun recording (nothing was written)")
+        with atomic_open(save, "wb") as fh:
+            fh.write(tmp.read_bytes())
+    return save
+
+
+def _log_track(rr: Any, rec: Any, track: Track) -> None:
+    """Log every sample of ``track`` to the recording stream ``rec``, then flush it."""
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_DOWN, static=True)
     for k in range(track.n_samples):
         rec.set_time("flight_time", duration=float(track.t_s[k]))
@@ -53,7 +79,6 @@ def stream_to_rerun(track: Track, save: str | Path | None = None, spawn: bool = 
                                                vectors=[track.force_mps2[k]
                                                         * FORCE_SCALE_M_PER_MPS2]))
     rec.flush()
-    return save
 
 
 def _row(arr: np.ndarray | None, k: int) -> np.ndarray | None:

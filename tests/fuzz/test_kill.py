@@ -183,3 +183,98 @@ def test_kill_during_export(models, tmp_path):
         _kill_at(new_args, delay)
         assert _digest([out]) in (old, new), f"mixed ONNX file after a kill at {delay:.2f} s"
         onnx.checker.check_model(onnx.load(str(out)))
+
+
+# ---- folders of several files: sweep --out and collect --out ------------------------------
+
+SWEEP_SPEC = ("[sweep]\ntrials = 1\nseeds = [{seed}]\n"
+              "[axes]\ncompensation = [\"observer\", \"oracle\"]\n")
+COLLECT_CONFIG = ("[curriculum]\nflights_per_stage = 1\nstage0_depth_m = [0.9, 1.2]\n"
+                  "min_depth_m = 0.9\ndeep_depths_m = []\nmodel = \"mlp\"\n")
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` (relative name -> bytes); hidden temporaries excluded."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _sweep_seeds(folder: Path) -> set[str]:
+    """The campaign seeds a sweep folder's files speak for (table, summary), as 'csv:S' etc."""
+    import csv
+    import json
+
+    seeds = set()
+    with open(folder / "results.csv") as fh:
+        seeds |= {f"csv:{row['seed']}" for row in csv.DictReader(fh)}
+    summary = json.loads((folder / "summary.json").read_text())
+    seeds |= {f"summary:{c['seed']}" for c in summary["cells"]}
+    return seeds
+
+
+def test_kill_during_sweep_leaves_one_study(tmp_path):
+    """sweep --out killed at random moments: the folder is the old study, byte for byte, or the
+    new one complete (its table and summary of the new seed, its figures); never a mix."""
+    out = tmp_path / "study"
+    specs = {}
+    for seed in (0, 1):
+        specs[seed] = tmp_path / f"spec{seed}.toml"
+        specs[seed].write_text(SWEEP_SPEC.format(seed=seed))
+    new_args = ["sweep", specs[1], "--out", out, "--jobs", "1"]
+    old_args = ["sweep", specs[0], "--out", out, "--jobs", "1"]
+    duration = _run(new_args)
+    new_names = set(_tree(out))
+    new_figures = {k: v for k, v in _tree(out).items() if k.startswith("figures")}
+    assert _sweep_seeds(out) == {"csv:1", "summary:1"}
+    _run(old_args)
+    old = _tree(out)
+    for delay in _moments(duration, 3, seed=4):
+        _kill_at(new_args, delay)
+        now = _tree(out)
+        if now != old:
+            assert set(now) == new_names, f"files of two runs after a kill at {delay:.2f} s"
+            assert _sweep_seeds(out) == {"csv:1", "summary:1"}, f"mixed at {delay:.2f} s"
+            assert {k: v for k, v in now.items() if k.startswith("figures")} == new_figures
+            _run(old_args)
+            old = _tree(out)
+    _run(old_args)
+    assert not _temps(tmp_path), "a killed sweep's temporary folder outlived the next sweep"
+
+
+def _collect_seeds(folder: Path) -> dict[str, int]:
+    """The seed each file of a collect folder comes from (stage logs and every model)."""
+    import json
+
+    from aerodock.flightlog import load_flightlogs
+
+    seeds = {}
+    for path in sorted(folder.glob("stage*.npz")):
+        stage = int(path.stem[len("stage"):])
+        seeds[path.name] = load_flightlogs(path)[0].meta["seed"] - 1000 * stage
+    for model in sorted((folder / "models").iterdir()):
+        seeds[f"models/{model.name}"] = json.loads((model / "model.json").read_text())[
+            "training"]["seed"]
+    return seeds
+
+
+def test_kill_during_collect_leaves_one_collection(tmp_path):
+    """collect --out killed at random moments: every stage log and model in the folder comes
+    from one seed, old or new, and the set is complete."""
+    cfg = tmp_path / "tiny.toml"
+    cfg.write_text(COLLECT_CONFIG)
+    out = tmp_path / "collected"
+    new_args = ["collect", "--out", out, "--config", cfg, "--seed", "2"]
+    old_args = ["collect", "--out", out, "--config", cfg, "--seed", "1"]
+    duration = _run(new_args)
+    complete = set(_collect_seeds(out))
+    assert set(_collect_seeds(out).values()) == {2}
+    _run(old_args)
+    for delay in _moments(duration, 3, seed=5):
+        _kill_at(new_args, delay)
+        seeds = _collect_seeds(out)
+        assert set(seeds) == complete, f"incomplete folder after a kill at {delay:.2f} s"
+        assert len(set(seeds.values())) == 1, f"two seeds mixed after a kill at {delay:.2f} s"
+        if set(seeds.values()) == {2}:
+            _run(old_args)
+    _run(old_args)
+    assert not _temps(tmp_path), "a killed collect's temporary folder outlived the next one"

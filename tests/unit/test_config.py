@@ -178,6 +178,10 @@ def test_plugin_failures_are_config_errors(tmp_path, monkeypatch, body, needle):
     assert needle in str(err.value) and str(path) in str(err.value)
 
 
-def test_integral_float_is_accepted_for_an_integer_key(tmp_path):
-    cfg = load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6.0\n"))
+def test_integral_float_is_refused_for_an_integer_key(tmp_path):
+    """An integer key takes an integer (the documented rule; the audit of issue 25 found 6.0
+    accepted): a float is refused even when it is whole."""
+    with pytest.raises(ConfigError, match="'vehicle.n_rotors' must be an integer, got 6.0"):
+        load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6.0\n"))
+    cfg = load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6\n"))
     assert cfg.vehicle.n_rotors == 6 and isinstance(cfg.vehicle.n_rotors, int)

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from aerodock.fileio import MAX_TOML_BYTES, InputError, read_input_text
 from aerodock.ingest.common import check_hover_thrust, check_mass
 from aerodock.ingest.errors import IngestError
 
@@ -100,12 +101,17 @@ def load_mapping(
 
 def _read_toml(path: str | Path, where: str) -> dict[str, Any]:
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        return tomllib.loads(read_input_text(path, "mapping file", MAX_TOML_BYTES))
     except FileNotFoundError:
         raise IngestError(where, "mapping file not found") from None
+    except InputError as err:
+        raise IngestError(where, err.reason) from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise IngestError(where, f"cannot read mapping file ({err})") from None
     except tomllib.TOMLDecodeError as err:
         raise IngestError(where, f"invalid TOML ({err})") from None
+    except RecursionError:
+        raise IngestError(where, "invalid TOML (nested too deeply)") from None
 
 
 def _merge(user: dict[str, Any], where: str) -> tuple[dict[str, Any], set[str]]:

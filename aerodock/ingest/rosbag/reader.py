@@ -25,7 +25,9 @@ from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
 from aerodock.ingest.common import (
     bracket_gap_s,
+    check_bag_folder,
     check_mass,
+    check_regular_input,
     check_time,
     check_time_unit,
     differentiate,
@@ -132,6 +134,10 @@ def _reader_class(path: Path) -> Any:
                                 "'aerodock[ingest]'") from None
     if not path.exists():
         raise IngestError(path, "file not found")
+    if path.is_dir():
+        check_bag_folder(path)
+    else:
+        check_regular_input(path, "bag file")
     if path.is_file() and path.stat().st_size == 0:
         raise IngestError(path, "empty file")
     return Reader
