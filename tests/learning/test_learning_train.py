@@ -151,6 +151,25 @@ def test_cli_train_evaluate_export(tmp_path, cli, synth_logs, held_out):
     out = json.loads(res.stdout)
     assert out["kind"] == "so2-ext" and out["minutes"] == pytest.approx(1.0, abs=0.01)
     assert Predictor.load(tmp_path / "model").kind == "so2-ext"
+    assert len(out["history"]["train_loss"]) == len(out["history"]["val_loss"]) == 3
+    assert out["learning_curve"] is None
+    saved = json.loads((tmp_path / "model" / "model.json").read_text())
+    assert saved["training"]["history"] == out["history"]
+
+    res = runner.invoke(app, ["train", "--model", "mlp", "--data", str(tmp_path / "logs"),
+                              "--out", str(tmp_path / "mlp"), "--max-epochs", "4",
+                              "--split", "flight", "--curve", str(tmp_path / "curve.png"),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["split"] == "flight" and len(out["history"]["val_loss"]) == out["epochs"]
+    assert (tmp_path / "curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert out["learning_curve"] == str(tmp_path / "curve.png")
+    for bad, msg in ((["--split", "random"], "--split must be"),
+                     (["--curve", str(tmp_path / "mlp" / "c.png")], "not inside the model")):
+        res = runner.invoke(app, ["train", "--model", "mlp", "--data", str(tmp_path / "logs"),
+                                  "--out", str(tmp_path / "mlp"), "--max-epochs", "1", *bad])
+        assert res.exit_code == 2 and msg in res.output, res.output
 
     res = runner.invoke(app, ["evaluate", "--model", str(tmp_path / "model"),
                               "--data", str(tmp_path / "test.npz"), "--json"])
