@@ -32,6 +32,8 @@ from aerodock.config import load_config
 from aerodock.fileio import one_line
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
+SPLITS = ("auto", "flight", "time-blocks")
+"""``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
 DataOpt = Annotated[
     list[Path],
@@ -76,13 +78,34 @@ def train_command(
         bool, typer.Option("--spectral-norm", help="Spectrally normalise the layers.")
     ] = False,
     max_epochs: Annotated[int, typer.Option("--max-epochs", help="Epoch limit.")] = 200,
+    split: Annotated[
+        str, typer.Option("--split", help="Validation split: auto (by flight with 20 flights or "
+                                          "more, else 5 s time blocks of every flight), flight "
+                                          "or time-blocks.")
+    ] = "auto",
+    curve: Annotated[
+        Path | None,
+        typer.Option("--curve", help="Also draw the learning curves (training and validation "
+                                     "RMSE per epoch) to this PNG file."),
+    ] = None,
     as_json: JsonStdoutOpt = False,
 ) -> None:
-    """Train a downwash model on flight logs and write it to a model directory."""
+    """Train a downwash model on flight logs and write it to a model directory.
+
+    The per-epoch training and validation losses (the learning curves) are in the ``--json``
+    output (``history``) and in ``model.json`` (``training.history``); ``--curve`` draws them.
+    """
     import numpy as np
 
     if model not in TRAINABLE:
         fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
+    if split not in SPLITS:
+        fail(f"--split must be one of {', '.join(SPLITS)}, got {split!r}")
+    if curve is not None:
+        if curve.is_dir():
+            fail(f"{curve}: is a directory; give a file name such as learning_curve.png")
+        if curve.resolve().parent == out.resolve():
+            fail(f"{curve}: not inside the model directory (it holds only the model's files)")
     if minutes is not None and not (minutes > 0 and math.isfinite(minutes)):
         fail(f"--minutes must be a positive finite number, got {minutes}")
     if max_epochs < 1:
@@ -121,7 +144,7 @@ def train_command(
 
         try:
             trained = train_model(model, ds, seed=seed, spectral_norm=spectral_norm,
-                                  max_epochs=max_epochs, progress=progress)
+                                  max_epochs=max_epochs, split=split, progress=progress)
         except ValueError as err:
             fail(one_line(err, first_line=True))
     try:
@@ -147,8 +170,17 @@ def train_command(
                                       "val_torque_vs_true_rmse_nm", "val_true_torque_rms_nm")
            if key in info},
         "train_time_s": info.get("train_time_s"),
+        "history": info.get("history"),
+        "learning_curve": None,
         "warnings": ds.meta.get("warnings", []),
     }
+    if curve is not None and model != "zero":
+        from aerodock.learning.curves import plot_learning_curve
+
+        try:
+            result["learning_curve"] = str(plot_learning_curve(info, curve))
+        except OSError as err:
+            fail(f"{curve}: cannot write the learning curve ({one_line(err, first_line=True)})")
     if as_json:
         print_json(result)
         return
@@ -156,8 +188,9 @@ def train_command(
         typer.echo(f"warning: {note}", err=True)
     typer.echo(
         f"trained {model} on {ds.n} samples ({ds.minutes:.2f} min, {ds.n_flights} flights) in "
-        f"{_fmt(result['train_time_s'], 1)} s, {result['epochs']} epochs ({result['stopped']}); "
-        f"validation RMSE {_fmt(result['val_rmse_mps2'])} m/s² ({result['split']} split)"
+        f"{_fmt(result['train_time_s'], 1)} s, {result['epochs']} epochs ({result['stopped']}, "
+        f"best epoch {result['best_epoch']}); validation RMSE {_fmt(result['val_rmse_mps2'])} "
+        f"m/s² ({result['split']} split)"
     )
     if "val_rmse_torque_nm" in result:
         truth = ""
@@ -166,6 +199,8 @@ def train_command(
                      f"wake torque (its RMS {_fmt(result['val_true_torque_rms_nm'], 4)} N m)")
         typer.echo(f"torque: validation RMSE {_fmt(result['val_rmse_torque_nm'], 4)} N m "
                    f"against the labels{truth}")
+    if result["learning_curve"]:
+        typer.echo(f"wrote {result['learning_curve']}")
     typer.echo(f"wrote {path}")
 
 

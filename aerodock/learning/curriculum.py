@@ -228,6 +228,10 @@ def run_curriculum(cfg: Config, out_dir: Path, seed: int = 0, model_kind: str | 
     summary: dict[str, Any] = {"stages": [], "model": kind, "seed": seed}
     started = time.perf_counter()
     kwargs = dict(train_kwargs or {})
+    # The curriculum keeps the flight split (train_model's rule before split="auto"): a stage's
+    # flights are random excitations of one depth band, alike enough that a held-out flight is a
+    # fair sample, and the docking results were measured with the models this split gave.
+    kwargs.setdefault("split", "flight")
     stages = curriculum_stages(cfg)
     trained = None
     paper_stages = len(curriculum_stages(cfg, deep=False))

@@ -126,6 +126,15 @@ SCALE_FLOOR: dict[str, tuple[float, ...]] = {
     "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
     "zero": (),
 }
+# Features standardised with one shared scale (indices into a kind's features). The MLP's inputs
+# are world vectors: the horizontal components of each (north, east) share one scale, so that
+# standardising keeps a rotation of the scene about the vertical a rotation (a pass flown
+# north-south looks, to the network, like the same pass flown east-west; with a scale per axis
+# the axis the training flights hardly moved along is magnified). Features not listed here have
+# their own scale.
+SCALE_GROUPS: dict[str, tuple[tuple[int, ...], ...]] = {
+    "mlp": ((0, 1), (3, 4), (6, 7)),
+}
 
 
 def check_kind(kind: str) -> str:

@@ -19,7 +19,9 @@ the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A 
   ``tau = tau_radial e_r + tau_tangential e_t + tau_axial a3`` (world NED). ``forward`` is the
   force, as for every kind; :meth:`DownwashModel.wrench` gives both. Trained on standardised
   outputs (:func:`standardised_wrench_loss`), so force and torque weigh alike.
-* :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame.
+* :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame
+  (standardised with one scale for the north and east components of each vector, see
+  :meth:`DownwashModel.set_normalisation`).
 * :class:`ZeroModel` (``"zero"``): always 0.
 
 Network: fully connected, two hidden layers of 64 by default, **tanh** activations. tanh is smooth
@@ -46,6 +48,7 @@ from aerodock.learning.features import (
     N_FEATURES,
     N_OUTPUTS,
     SCALE_FLOOR,
+    SCALE_GROUPS,
     TORQUE_KINDS,
     check_kind,
     feature_map_torch,
@@ -156,11 +159,16 @@ class DownwashModel(nn.Module):
         """Standardisation statistics from training features ``z`` (n, F) and targets ``c`` (n, K).
 
         Feature scales are floored (``features.SCALE_FLOOR``) so that a feature that hardly
-        varies in training is not magnified when it does vary in use.
+        varies in training is not magnified when it does vary in use. The features of a group
+        of ``features.SCALE_GROUPS`` (the horizontal components of the MLP's world vectors)
+        share one scale, the RMS of their standard deviations.
         """
         z = np.asarray(z, dtype=float)
         c = np.asarray(c, dtype=float)
-        in_std = np.maximum(z.std(axis=0), np.asarray(SCALE_FLOOR[self.kind]))
+        std = z.std(axis=0)
+        for group in SCALE_GROUPS.get(self.kind, ()):
+            std[list(group)] = np.sqrt(np.mean(std[list(group)] ** 2))
+        in_std = np.maximum(std, np.asarray(SCALE_FLOOR[self.kind]))
         out_std = np.maximum(c.std(axis=0), 1e-3)
         for name, val in (("in_mean", z.mean(axis=0)), ("in_std", in_std),
                           ("out_mean", c.mean(axis=0)), ("out_std", out_std)):

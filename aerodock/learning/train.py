@@ -1,4 +1,4 @@
-"""Training: Adam on the mean squared error, validation split by flight, early stopping.
+"""Training: Adam on the mean squared error, a validation split, early stopping.
 
 ::
 
@@ -6,13 +6,24 @@
     trained.save("models/so2")           # weights.npz + model.json
     predictor = trained.predictor()      # NumPy runtime, same numbers
 
-Validation is split **by flight** (no flight in both parts) so that the validation loss measures
-generalisation to a new flight rather than to the turbulence of neighbouring samples. When there
-is a single flight, or when whole flights cannot approach the requested fraction (two flights of
-equal length would hold out half of the data), whole contiguous time blocks of 5 s (far longer
-than the wake's ~0.1 s turbulence correlation) are held out instead; ``info["split"]`` records
-which. Features are computed once; the loop then only runs the small MLP, so a 30 000-sample data
-set (5 minutes at 100 Hz) trains in well under a minute on two CPU cores.
+Validation (``split``, the same rule for every model kind). ``"flight"`` holds out whole flights
+(no flight in both parts), so that the validation loss measures generalisation to a new flight
+rather than to the turbulence of neighbouring samples; when there is a single flight, or when
+whole flights cannot approach the requested fraction (two flights of equal length would hold out
+half of the data), it falls back to ``"time-blocks"``: whole contiguous time blocks of 5 s (far
+longer than the wake's ~0.1 s turbulence correlation) of every flight. ``"auto"`` (the default)
+splits by flight only when there are at least :data:`MIN_FLIGHTS_FOR_FLIGHT_SPLIT` flights, and
+otherwise by time blocks: with a few flights the held-out ones are one or two particular flights,
+and a flight whose geometry no other flight covers takes that geometry out of training and turns
+early stopping into a test of extrapolation. On the shared swap_ss logs (10 flights) the flight
+split held out, for every seed, the only flight whose passes run north-south; a model in world
+coordinates (``mlp``) had never seen such a pass, its validation loss rose from the second epoch
+and early stopping kept an almost untrained network (best epoch 1-3 of 21). ``info["split"]``
+records the split used. Features are computed once; the loop then only runs the small MLP, so a
+30 000-sample data set (5 minutes at 100 Hz) trains in well under a minute on two CPU cores.
+
+The per-epoch losses are kept (``TrainedModel.history``) and recorded, rounded, in
+``info["history"]`` (so in ``model.json`` -> ``training.history``): the learning curves.
 
 A ``so2-wrench`` model (:mod:`aerodock.learning.models`) learns the force and the torque labels
 (``Dataset.y_torque``) together, on their standardised errors
@@ -92,6 +103,12 @@ class TrainedModel:
         return self.model(xt, rt).double().numpy()
 
 
+SPLITS = ("auto", "flight", "time-blocks")
+"""Validation split rules (see the module docstring)."""
+MIN_FLIGHTS_FOR_FLIGHT_SPLIT = 20
+"""Fewest flights ``split="auto"`` splits by flight (20 % of them: at least 4 held out)."""
+
+
 # Largest |value| of a model input (m, m/s) or label (m/s²) training accepts: far beyond any
 # flight, and small enough that float32 squares and sums stay finite.
 MAX_ABS_INPUT = 1e6
@@ -134,14 +151,24 @@ def _check_trained(model: nn.Module, train_mse: float) -> None:
 
 
 def validation_split(
-    ds: Dataset, val_fraction: float, rng: np.random.Generator
+    ds: Dataset, val_fraction: float, rng: np.random.Generator, split: str = "auto"
 ) -> tuple[np.ndarray, np.ndarray, str]:
-    """Train and validation indices and the split method (``"flight"`` or ``"time-blocks"``).
+    """Train and validation indices and the split method used (``"flight"`` or
+    ``"time-blocks"``).
 
-    By flight when whole flights can hold out between half and twice ``val_fraction`` (and at
-    most half of the data); otherwise by contiguous time blocks within the flights.
+    ``split="flight"``: by flight when whole flights can hold out between half and twice
+    ``val_fraction`` (and at most half of the data), otherwise by contiguous time blocks within
+    the flights. ``"time-blocks"``: always by time blocks. ``"auto"``: as ``"flight"`` when the
+    data hold at least :data:`MIN_FLIGHTS_FOR_FLIGHT_SPLIT` flights, otherwise by time blocks.
+
+    Raises:
+        ValueError: unknown ``split``.
     """
-    val_ids = flight_split_ids(ds, val_fraction, rng)
+    if split not in SPLITS:
+        raise ValueError(f"unknown split {split!r} (expected one of {', '.join(SPLITS)})")
+    if split == "auto":
+        split = "flight" if ds.n_flights >= MIN_FLIGHTS_FOR_FLIGHT_SPLIT else "time-blocks"
+    val_ids = flight_split_ids(ds, val_fraction, rng) if split == "flight" else None
     if val_ids is not None:
         in_val = np.isin(ds.flight_id, val_ids)
         frac = in_val.mean()
@@ -149,6 +176,28 @@ def validation_split(
             return np.flatnonzero(~in_val), np.flatnonzero(in_val), "flight"
     in_val = time_block_split_mask(ds, val_fraction, rng)
     return np.flatnonzero(~in_val), np.flatnonzero(in_val), "time-blocks"
+
+
+def learning_curve_record(history: dict[str, list[float]], wrench: bool = False
+                          ) -> dict[str, Any]:
+    """The per-epoch losses as a JSON-ready record (4 significant digits).
+
+    Args:
+        history: ``train_loss`` and ``val_loss`` lists (``val_loss`` empty without validation).
+        wrench: the losses are a wrench model's standardised loss (dimensionless) rather than
+            the force's MSE.
+
+    Returns:
+        ``{"loss": what the numbers are, "train_loss": [...], "val_loss": [...]}``, one entry
+        per epoch (``val_loss`` empty without validation). ``train_loss`` is the mean over the
+        epoch's mini-batches while the weights change; ``val_loss`` is computed after the epoch.
+    """
+    return {
+        "loss": ("standardised MSE (dimensionless)" if wrench
+                 else "MSE of the force, m^2/s^4 (sqrt: RMSE, m/s^2)"),
+        "train_loss": [float(f"{v:.4g}") for v in history.get("train_loss", [])],
+        "val_loss": [float(f"{v:.4g}") for v in history.get("val_loss", [])],
+    }
 
 
 def _features_tensors(
@@ -218,6 +267,7 @@ def train_model(
     lr: float = 3e-3,
     batch_size: int = 256,
     weight_decay: float = 0.0,
+    split: str = "auto",
     max_time_s: float | None = None,
     num_threads: int | None = 1,
     progress: ProgressFn | None = None,
@@ -239,6 +289,8 @@ def train_model(
         lr: Adam learning rate (halved when the validation loss plateaus).
         batch_size: mini-batch size.
         weight_decay: Adam weight decay.
+        split: validation split rule, ``"auto"``, ``"flight"`` or ``"time-blocks"`` (see
+            :func:`validation_split`; ``"flight"`` was the only rule before ``"auto"``).
         max_time_s: wall-clock limit on the epoch loop (None: none).
         num_threads: torch intra-op threads during training (restored afterwards); None leaves
             the setting alone. The default, 1, is as fast as 2 for these small networks on a
@@ -258,6 +310,8 @@ def train_model(
         raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
     if max_epochs < 1 or patience < 1 or batch_size < 1:
         raise ValueError("max_epochs, patience and batch_size must be positive")
+    if split not in SPLITS:
+        raise ValueError(f"unknown split {split!r} (expected one of {', '.join(SPLITS)})")
     check_trainable(train, kind=kind)
     wrench = kind in TORQUE_KINDS
     info: dict[str, Any] = {
@@ -265,7 +319,8 @@ def train_model(
         "hyperparameters": {
             "hidden": list(hidden), "activation": activation, "lr": lr,
             "batch_size": batch_size, "weight_decay": weight_decay, "max_epochs": max_epochs,
-            "patience": patience, "val_fraction": val_fraction, "optimizer": "Adam",
+            "patience": patience, "val_fraction": val_fraction, "split_rule": split,
+            "optimizer": "Adam",
             "loss": ("standardised MSE: mean of force and torque MSE, each over its label "
                      "scale squared" if wrench else "MSE (m^2/s^4, world NED)"),
         },
@@ -275,9 +330,9 @@ def train_model(
     t_start = time.perf_counter()
     rng = np.random.default_rng(seed)
     if val_fraction > 0:
-        tr_idx, va_idx, split = validation_split(train, val_fraction, rng)
+        tr_idx, va_idx, split_used = validation_split(train, val_fraction, rng, split)
     else:
-        tr_idx, va_idx, split = np.arange(train.n), np.zeros(0, dtype=np.int64), "none"
+        tr_idx, va_idx, split_used = np.arange(train.n), np.zeros(0, dtype=np.int64), "none"
     old_threads = torch.get_num_threads()
     if num_threads:
         torch.set_num_threads(num_threads)
@@ -355,11 +410,11 @@ def train_model(
             torch.set_num_threads(old_threads)
     _check_trained(model, train_mse)
     info.update({
-        "split": split,
+        "split": split_used,
         "n_train": int(n_tr),
         "n_val": int(len(va_idx)),
         "val_flights": sorted({train.flight_names[k] for k in np.unique(train.flight_id[va_idx])})
-        if split == "flight" else [],
+        if split_used == "flight" else [],
         "epochs": len(history["train_loss"]),
         "best_epoch": int(best_epoch),
         "stopped": stopped,
@@ -368,5 +423,6 @@ def train_model(
         **fit,
         "train_time_s": round(time.perf_counter() - t_start, 3),
         "torch_version": torch.__version__,
+        "history": learning_curve_record(history, wrench),
     })
     return TrainedModel(kind, model, info, history)

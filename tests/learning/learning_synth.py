@@ -100,3 +100,83 @@ def make_logs(
         for i, s in enumerate(seps)
     ]
 
+
+
+def true_torque(dp: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    """Mean wake torque (n, 3) on the follower, N m, world NED, for offsets ``dp`` (n, 3).
+
+    Along the tangential direction ``e_t`` (the wake pushes the rotors nearer the axis down),
+    proportional to the planar force of :func:`true_field`: 5 mN m per m/s² of it (so about
+    3 mN m at its peak under the docking-depth wake), zero on the axis and far off it.
+    """
+    body = np.einsum("nij,ni->nj", leader_R, dp)
+    rho = np.maximum(np.hypot(body[:, 0], body[:, 1]), 1e-9)
+    radial = np.einsum("nij,ni->nj", leader_R, true_field(dp, leader_R))[:, :2]
+    f_r = np.sum(radial * body[:, :2], axis=1) / rho
+    e_t = np.stack([-body[:, 1] / rho, body[:, 0] / rho, np.zeros(len(rho))], axis=1)
+    return np.einsum("nij,nj->ni", leader_R, 0.005 * f_r[:, None] * e_t)
+
+
+def make_pass_log(
+    rng: np.random.Generator,
+    *,
+    heading_rad: float,
+    duration_s: float = 15.0,
+    separation_m: float = 0.45,
+    amplitude_m: float = 0.4,
+    period_s: float = 6.0,
+    noise_mps2: float = 0.15,
+    torque_noise_nm: float = 5e-4,
+    name: str = "pass",
+) -> FlightLog:
+    """One flight of passes under a level (yawed) hovering leader, like the shared swap flights.
+
+    The follower swings back and forth through the wake along ``heading_rad`` (NED, from north),
+    ``amplitude_m`` either side of the axis, a few cm of cross-track and vertical wander; the
+    first 3 s are in free air (1 m aside) for the bias estimate. Labels as :func:`make_log`; the
+    torque extras (``follower_obs_torque_nm`` = rotor torque + :func:`true_torque` + bias +
+    noise) give torque labels, with the follower level so that body and world frames agree.
+    """
+    t = np.arange(0.0, duration_s, DT_S)
+    n = len(t)
+    yaw = np.full(n, rng.uniform(-np.pi, np.pi))
+    leader_R = euler_to_rotmat(np.zeros(n), np.zeros(n), yaw)
+    leader_pos = np.tile([0.0, 0.0, -2.0], (n, 1))
+    along = amplitude_m * np.sin(2 * np.pi * t / period_s + rng.uniform(0, 2 * np.pi))
+    across = _smooth(rng, t, 0.05)
+    away = np.clip((3.0 - t) / 0.5, 0.0, 1.0)  # 1 m aside until 2.5 s, in by 3 s
+    c, s = np.cos(heading_rad), np.sin(heading_rad)
+    dp = np.stack([
+        c * (along + away) - s * across, s * (along + away) + c * across,
+        separation_m + _smooth(rng, t, 0.04),
+    ], axis=1)
+    follower_pos = leader_pos + dp
+    follower_vel = np.gradient(follower_pos, DT_S, axis=0)
+    cmd = np.stack([_smooth(rng, t, 0.5), _smooth(rng, t, 0.5), _smooth(rng, t, 0.8)], axis=1)
+    true = true_field(dp, leader_R)
+    obs = cmd + true + np.array([0.1, -0.05, 0.3]) + noise_mps2 * rng.standard_normal((n, 3))
+    tau_true = true_torque(dp, leader_R)
+    rotor = 0.01 * np.stack([_smooth(rng, t, 1.0) for _ in range(3)], axis=1)
+    tau_obs = (rotor + tau_true + np.array([1e-3, -5e-4, 2e-4])
+               + torque_noise_nm * rng.standard_normal((n, 3)))
+    return FlightLog(
+        t_s=t, leader_pos_m=leader_pos, leader_vel_mps=np.zeros((n, 3)),
+        leader_quat=rotmat_to_quat(leader_R),
+        follower_pos_m=follower_pos, follower_vel_mps=follower_vel,
+        follower_quat=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
+        follower_cmd_accel_mps2=cmd, follower_thrust_n=np.full(n, 0.7 * 9.81),
+        follower_obs_accel_mps2=obs,
+        meta={"name": name, "source": "synthetic", "mass_kg": 0.7},
+        extra={"true_field_mean_mps2": true, "follower_obs_torque_nm": tau_obs,
+               "follower_rotor_torque_nm": rotor, "true_wake_torque_nm": tau_true},
+    )
+
+
+def make_pass_logs(
+    rng: np.random.Generator, headings_rad: np.ndarray, **kwargs
+) -> list[FlightLog]:
+    """One :func:`make_pass_log` per heading, separations spread over 0.35-0.6 m."""
+    seps = np.linspace(0.35, 0.6, len(headings_rad))
+    return [make_pass_log(rng, heading_rad=float(h), separation_m=float(s), name=f"pass{i}",
+                          **kwargs)
+            for i, (h, s) in enumerate(zip(headings_rad, rng.permutation(seps)))]

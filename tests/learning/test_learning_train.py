@@ -17,7 +17,11 @@ from aerodock.learning.dataset import build_dataset
 from aerodock.learning.evaluate import evaluate, regression_metrics
 from aerodock.learning.runtime import Predictor
 from aerodock.learning.sample_efficiency import sample_efficiency
-from aerodock.learning.train import train_model, validation_split
+from aerodock.learning.train import (
+    MIN_FLIGHTS_FOR_FLIGHT_SPLIT,
+    train_model,
+    validation_split,
+)
 
 
 @pytest.fixture(scope="module")
@@ -39,8 +43,8 @@ def test_so2_learns_the_equivariant_field(trained_so2, held_out):
     assert inter["model"]["r2"]["overall"] > inter["error_floor"]["r2"]["overall"] - 0.1
     assert inter["zero"]["r2"]["overall"] < 0.0
     assert res["all"]["n"] == held_out.n
-    assert trained_so2.info["split"] == "flight"
-    assert len(trained_so2.info["val_flights"]) >= 1
+    assert trained_so2.info["split"] == "time-blocks"  # 6 flights: too few to split by flight
+    assert trained_so2.info["val_flights"] == []
 
 
 @pytest.mark.parametrize("kind", ["so2-ext", "mlp"])
@@ -63,9 +67,24 @@ def test_training_is_deterministic(synth_ds):
 
 def test_validation_split_by_flight_or_time_blocks(synth_ds):
     rng = np.random.default_rng(0)
-    tr, va, method = validation_split(synth_ds, 0.2, rng)
+    tr, va, method = validation_split(synth_ds, 0.2, rng, "flight")
     assert method == "flight"
     assert not set(synth_ds.flight_id[tr]) & set(synth_ds.flight_id[va])
+    # "auto": by flight only with MIN_FLIGHTS_FOR_FLIGHT_SPLIT flights or more.
+    tr, va, method = validation_split(synth_ds, 0.2, rng)
+    assert method == "time-blocks" and len(va) and len(tr)
+    many = build_dataset(make_logs(np.random.default_rng(5), n_flights=MIN_FLIGHTS_FOR_FLIGHT_SPLIT,
+                                   duration_s=4.0))
+    tr, va, method = validation_split(many, 0.2, rng)
+    assert method == "flight"
+    assert 4 <= len(np.unique(many.flight_id[va])) <= 5
+    assert not set(many.flight_id[tr]) & set(many.flight_id[va])
+    tr, va, method = validation_split(many, 0.2, rng, "time-blocks")
+    assert method == "time-blocks"
+    with pytest.raises(ValueError, match="unknown split"):
+        validation_split(many, 0.2, rng, "random")
+    with pytest.raises(ValueError, match="unknown split"):
+        train_model("so2", many, split="random")
     one = synth_ds.subset(synth_ds.flight_id == 1)
     tr, va, method = validation_split(one, 0.2, rng)
     assert method == "time-blocks" and len(va) and len(tr)
@@ -132,6 +151,25 @@ def test_cli_train_evaluate_export(tmp_path, cli, synth_logs, held_out):
     out = json.loads(res.stdout)
     assert out["kind"] == "so2-ext" and out["minutes"] == pytest.approx(1.0, abs=0.01)
     assert Predictor.load(tmp_path / "model").kind == "so2-ext"
+    assert len(out["history"]["train_loss"]) == len(out["history"]["val_loss"]) == 3
+    assert out["learning_curve"] is None
+    saved = json.loads((tmp_path / "model" / "model.json").read_text())
+    assert saved["training"]["history"] == out["history"]
+
+    res = runner.invoke(app, ["train", "--model", "mlp", "--data", str(tmp_path / "logs"),
+                              "--out", str(tmp_path / "mlp"), "--max-epochs", "4",
+                              "--split", "flight", "--curve", str(tmp_path / "curve.png"),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["split"] == "flight" and len(out["history"]["val_loss"]) == out["epochs"]
+    assert (tmp_path / "curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert out["learning_curve"] == str(tmp_path / "curve.png")
+    for bad, msg in ((["--split", "random"], "--split must be"),
+                     (["--curve", str(tmp_path / "mlp" / "c.png")], "not inside the model")):
+        res = runner.invoke(app, ["train", "--model", "mlp", "--data", str(tmp_path / "logs"),
+                                  "--out", str(tmp_path / "mlp"), "--max-epochs", "1", *bad])
+        assert res.exit_code == 2 and msg in res.output, res.output
 
     res = runner.invoke(app, ["evaluate", "--model", str(tmp_path / "model"),
                               "--data", str(tmp_path / "test.npz"), "--json"])
