@@ -94,6 +94,7 @@ WRENCH_ROW = "ours + learnt wrench (thrust-basis so2-wrench, torque feed-forward
 OUTPUTS = ("results.json", "report.md", "figures", "data", "data-wrench")
 """What ``reproduce --out`` holds: the folder is replaced as a whole by the next reproduction."""
 
+
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
     """Mean |vertical error| (follower vs its reference) in [t0, t1) over approaching trials."""
     t = trace["t_s"]
@@ -205,12 +206,13 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     out_dir = Path(out_dir)
     check_output_dir(out_dir, OUTPUTS)
     with building_dir(out_dir, OUTPUTS) as work:
-        return _reproduce_into(cfg, work, out_dir, quick, seed, say, shared_data, bar)
+        return _reproduce_into(cfg, work, out_dir, quick, seed, say, shared_data, bar, smoke)
 
 
 def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: int,
                     say: Callable[[str], None], shared_data: Path | None,
-                    bar: Callable[[str, int, int], None] | None) -> dict[str, Any]:
+                    bar: Callable[[str, int, int], None] | None, smoke: bool = False
+                    ) -> dict[str, Any]:
     """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
     naming the folder ``named`` it becomes."""
     from aerodock.experiments.report import write_report
@@ -230,7 +232,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     timings: dict[str, float] = {}
     traces: dict[str, Any] = {}
     results: dict[str, Any] = {
-        "aerodock_reproduce": {"quick": quick, "smoke": smoke, "seed": seed, "config": cfg.source,
+        "aerodock_reproduce": {"quick": quick, "smoke": smoke, "seed": seed,
+                               "config": cfg.source,
                                "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
                                           f"Python {platform.python_version()}"},
         "units": {"errors": "m", "integrals_over_0.5s": "m*s (errors), m/s (force)",
