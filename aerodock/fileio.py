@@ -326,6 +326,40 @@ def _make_dir_temp(parent: Path, name: str, kind: str) -> tuple[Path, int]:
     raise OSError(f"cannot create a temporary directory in {parent}")
 
 
+def _swap_synced_dir(tmp: Path, path: Path) -> None:
+    """Put the synced folder ``tmp`` at ``path`` in one step and remove the old one.
+
+    ``renameat2`` with ``RENAME_EXCHANGE`` where the system has it, a plain rename where
+    ``path`` does not exist; otherwise the old folder is renamed aside (``.NAME.PID.XXXX.old``,
+    which :func:`remove_stale_dir_temps` restores if a kill comes between the two renames) and
+    put back if the second rename fails. The parent folder is synced last.
+    """
+    if not path.exists():
+        os.rename(tmp, path)
+    elif _exchange(tmp, path):
+        shutil.rmtree(tmp, ignore_errors=True)  # now holds the old folder
+    else:
+        aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
+                                      suffix=".old"))
+        os.rmdir(aside)
+        os.rename(path, aside)
+        try:  # its pid protects it until the lock is held
+            aside_lock = _lock_dir(aside)
+        except OSError:
+            aside_lock = None
+        try:
+            try:
+                os.rename(tmp, path)
+            except BaseException:
+                os.rename(aside, path)
+                raise
+            shutil.rmtree(aside, ignore_errors=True)
+        finally:
+            if aside_lock is not None:
+                os.close(aside_lock)
+    _fsync_dir(path.parent)
+
+
 def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
     """Make ``path`` a directory holding exactly ``files`` (name -> bytes), all at once.
 
@@ -355,30 +389,7 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
                 fh.flush()
                 os.fsync(fh.fileno())
         _fsync_dir(tmp)
-        if not path.exists():
-            os.rename(tmp, path)
-        elif _exchange(tmp, path):
-            shutil.rmtree(tmp)  # now holds the old directory
-        else:
-            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
-                                          suffix=".old"))
-            os.rmdir(aside)
-            os.rename(path, aside)
-            try:  # its pid protects it until the lock is held
-                aside_lock = _lock_dir(aside)
-            except OSError:
-                aside_lock = None
-            try:
-                try:
-                    os.rename(tmp, path)
-                except BaseException:
-                    os.rename(aside, path)
-                    raise
-                shutil.rmtree(aside, ignore_errors=True)
-            finally:
-                if aside_lock is not None:
-                    os.close(aside_lock)
-        _fsync_dir(path.parent)
+        _swap_synced_dir(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -788,22 +799,7 @@ def swap_in_dir(tmp: str | Path, path: str | Path) -> None:
     """
     tmp, path = Path(tmp), Path(path)
     _fsync_tree(tmp)
-    if not path.exists():
-        os.rename(tmp, path)
-    elif _exchange(tmp, path):
-        shutil.rmtree(tmp, ignore_errors=True)  # now holds the old folder
-    else:
-        aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
-                                      suffix=_TMP_SUFFIX))
-        os.rmdir(aside)
-        os.rename(path, aside)
-        try:
-            os.rename(tmp, path)
-        except BaseException:
-            os.rename(aside, path)
-            raise
-        shutil.rmtree(aside, ignore_errors=True)
-    _fsync_dir(path.parent)
+    _swap_synced_dir(tmp, path)
 
 
 @contextmanager
