@@ -109,7 +109,8 @@ def fig_cable(traces: dict[str, dict[float, dict]], fig_dir: Path) -> list[Path]
         n = min(e.shape[0] for e in errs)
         allerr = np.concatenate([e[:n] for e in errs], axis=1)
         t = next(iter(traces[key].values()))["t_s"][:n]
-        with np.errstate(invalid="ignore"):
+        with warnings.catch_warnings():  # a time with no trial approaching: a gap, not a warning
+            warnings.simplefilter("ignore", RuntimeWarning)
             mean, sd = np.nanmean(allerr, 1), np.nanstd(allerr, 1)
         label = "with model" if key == "with" else "without model (LQG)"
         ax.plot(t, mean, color=colour, label=label)
