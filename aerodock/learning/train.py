@@ -110,7 +110,7 @@ class TrainedModel:
         xt = torch.as_tensor(np.asarray(x), dtype=torch.float32)
         rt = torch.as_tensor(np.asarray(leader_R), dtype=torch.float32)
         st = None if wake_scales is None else torch.as_tensor(
-            np.broadcast_to(np.asarray(wake_scales, float), (xt.shape[0], 3)),
+            np.array(np.broadcast_to(np.asarray(wake_scales, float), (xt.shape[0], 3))),
             dtype=torch.float32)
         return self.model(xt, rt, st).double().numpy()
 
