@@ -1,4 +1,4 @@
-"""Feature maps and SO(2) equivariance of the so2 / so2-ext / so2-leader models (hypothesis properties)."""
+"""Feature maps and SO(2) equivariance of the so2, so2-ext and so2-leader models (hypothesis)."""
 
 from __future__ import annotations
 
