@@ -127,3 +127,46 @@ def test_saved_leader_model_runs_the_same_and_from_bodies(two_leader_models, tmp
     # no scales given: the training data's median
     np.testing.assert_allclose(pred.predict(x, rot),
                                pred.predict(x, rot, pred.default_wake_scales), atol=1e-12)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_leader_model_exports_to_onnx_with_its_scales(two_leader_models, tmp_path, dtype):
+    """The ONNX graph takes a third input, wake_scales (n, 3), and passes the export's own
+    parity check against the NumPy predictor (random leaders of 2-9 m/s induced velocity)."""
+    pytest.importorskip("onnxruntime")
+    from aerodock.learning.export import export_checked, onnx_differences
+
+    model_dir = two_leader_models["so2-leader"].save(tmp_path / "m")
+    out, diffs = export_checked(model_dir, tmp_path / f"m_{dtype}.onnx", dtype=dtype)
+    assert diffs is not None
+    assert max(diffs.values()) < (1e-5 if dtype == "float32" else 1e-10), diffs
+    import onnxruntime as ort
+
+    sess = ort.InferenceSession(str(out), providers=["CPUExecutionProvider"])
+    assert [i.name for i in sess.get_inputs()] == ["x", "leader_R", "wake_scales"]
+    # a so2 model's file keeps its two inputs
+    so2_out, _ = export_checked(two_leader_models["so2"].save(tmp_path / "s"),
+                                tmp_path / "s.onnx", dtype=dtype)
+    so2_sess = ort.InferenceSession(str(so2_out), providers=["CPUExecutionProvider"])
+    assert [i.name for i in so2_sess.get_inputs()] == ["x", "leader_R"]
+    assert max(onnx_differences(so2_out, Predictor.load(tmp_path / "s")).values()) < 1e-5
+
+
+def test_node_step_passes_the_scales_and_defaults_to_the_model_file(two_leader_models,
+                                                                     tmp_path):
+    from aerodock.node.core import VehicleState, model_inputs, prediction_step
+
+    pred = Predictor.load(two_leader_models["so2-leader"].save(tmp_path / "m"))
+    lead = VehicleState(np.array([0.0, 0.0, -2.0]), np.zeros(3), np.eye(3), 1.0)
+    fol = VehicleState(np.array([0.05, 0.02, -1.5]), np.array([0.1, 0.0, 0.0]), np.eye(3), 1.0)
+    x, rot = model_inputs(lead, fol)
+    default = prediction_step(pred, lead, fol, 1.01, max_age_s=0.05)
+    np.testing.assert_allclose(default.f_ext_mps2, pred.predict(x[None], rot[None])[0],
+                               atol=1e-12)
+    strong = wake_scales([1.5 * MASS_KG * 9.81], RADIUS_M, N_ROTORS, MASS_KG, RADIUS_M,
+                         N_ROTORS)[0]
+    given = prediction_step(pred, lead, fol, 1.01, max_age_s=0.05, wake_scales=strong)
+    np.testing.assert_allclose(given.f_ext_mps2, pred.predict(x[None], rot[None], strong)[0],
+                               atol=1e-12)
+    assert not default.stale and not given.stale
+    assert np.linalg.norm(given.f_ext_mps2 - default.f_ext_mps2) > 0.1
