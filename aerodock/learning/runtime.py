@@ -214,6 +214,8 @@ class Predictor:
             wake_scales: (n, 3) or (3,), a leader-aware model's third input (default:
                 :attr:`default_wake_scales`); ignored by other kinds.
         """
+        if wake_scales is None:  # the call of every kind but the leader-aware ones, unchanged
+            return self.predict_wrench(x, leader_R)[0]
         return self.predict_wrench(x, leader_R, wake_scales)[0]
 
     __call__ = predict
