@@ -317,7 +317,8 @@ class StepResult:
 def prediction_step(predictor: Any, leader: VehicleState | None,
                     follower: VehicleState | None, now_s: float, *, max_age_s: float,
                     output_frame: str = "ned", clock: Any = None,
-                    faults: Mapping[str, str | None] | None = None) -> StepResult:
+                    faults: Mapping[str, str | None] | None = None,
+                    wake_scales: np.ndarray | None = None) -> StepResult:
     """One tick: the prediction for the newest states, or zero (flagged stale).
 
     Args:
@@ -330,6 +331,11 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
         clock: a ``() -> float`` seconds clock timing the prediction (default
             ``time.perf_counter``).
         faults: role -> the :class:`InputMonitor` verdict on its newest message (None: fine).
+        wake_scales: (3,) a leader-aware model's wake scales (leader_vh_mps, leader_size_m,
+            follower_vh_mps; :func:`aerodock.learning.features.wake_scales`). The state
+            messages carry no thrust, so the node passes None: the model file's recorded
+            training scales (``Predictor.default_wake_scales``). Ignored by other kinds, which
+            run exactly as before.
 
     A prediction that is not finite is also replaced by zero and flagged stale.
     """
@@ -345,7 +351,10 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
     assert leader is not None and follower is not None
     x, rot = model_inputs(leader, follower)
     t0 = clock()
-    f_ned = predictor.predict_one(x, rot)
+    if getattr(predictor, "needs_wake_scales", False):
+        f_ned = predictor.predict_one(x, rot, wake_scales)
+    else:
+        f_ned = predictor.predict_one(x, rot)
     compute = clock() - t0
     if not np.all(np.isfinite(f_ned)):
         return StepResult(np.zeros(3), True, *ages, compute, *stamps,
