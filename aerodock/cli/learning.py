@@ -31,7 +31,7 @@ from aerodock.cli.common import (
 from aerodock.config import load_config
 from aerodock.fileio import one_line
 
-TRAINABLE = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
+TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
 SPLITS = ("auto", "flight", "time-blocks")
 """``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
@@ -67,7 +67,9 @@ def train_command(
     out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
     model: Annotated[
         str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, so2-wrench (force "
-                                          "and torque; needs logs with torques), mlp (or zero).")
+                                          "and torque; needs logs with torques), so2-leader "
+                                          "(leader-aware; needs the vehicles' rotors in the "
+                                          "logs), mlp (or zero).")
     ] = "so2",
     minutes: Annotated[
         float | None,

@@ -42,7 +42,9 @@ def node_command(
         "--diagnostics-topic", help="Diagnostics topic (diagnostic_msgs/DiagnosticArray).",
     )] = "/aerodock/diagnostics",
     output_frame: Annotated[OutputFrame, typer.Option(
-        "--output-frame", help="f_ext world frame; auto: NED for Freyja/PX4, else the mapping's.",
+        "--output-frame", help="f_ext world frame; auto: the follower's --state-type decides "
+                               "(Odometry: the mapping's frame), else the mapping file's frame, "
+                               "else NED (Freyja's default mapping). Decided once at start.",
     )] = OutputFrame.auto,
     state_type: Annotated[list[str] | None, typer.Option(
         "--state-type", help="TOPIC=TYPE (e.g. /bravo/odom=nav_msgs/msg/Odometry) instead of "
@@ -80,7 +82,7 @@ def node_command(
     try:
         predictor = Predictor.load(model)
         cfg = load_config(config)
-        merged, _ = load_mapping(mapping)
+        merged, explicit = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
         fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
     try:
@@ -96,7 +98,7 @@ def node_command(
         mapping=merged, rate_hz=rate, max_age_s=max_age, output_topic=output_topic,
         diagnostics_topic=diagnostics_topic,
         output_frame=None if output_frame == OutputFrame.auto else output_frame.value,
-        state_types=types,
+        frame_set="frame" in explicit, state_types=types,
     )
     typer.echo(f"aerodock node: {predictor.kind} model {model}, {rate:g} Hz, "
                f"{merged['leader']['state']} + {merged['follower']['state']} -> {output_topic} "

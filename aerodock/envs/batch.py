@@ -22,11 +22,15 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
-from aerodock.mission import MissionBatch, MissionSpec, Phase
-from aerodock.mission.checks import check_mission
+from aerodock.mission import AbortReason, MissionBatch, MissionSpec, Phase
+from aerodock.mission.checks import MissionSpecError, check_mission, check_positive
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import World
 from aerodock.world.gripper import GateState
+
+MAX_RESIDUAL_MPS2 = 50.0
+"""Largest residual acceleration bound ``residual_max_mps2`` an environment accepts, m/s² (the
+observation's bound on accelerations)."""
 
 OBS_DIM = 24
 """Length of one trial's observation vector (see :data:`OBS_LAYOUT`)."""
@@ -81,6 +85,7 @@ class StepOutcome:
     missed: np.ndarray  # decided this period: gate closed without the bar
     aborted: np.ndarray  # decided this period: abort (see abort_reason)
     clearance_violated: np.ndarray  # first clearance violation this period
+    timed_out: np.ndarray  # decided this period: aborted because the approach ran out of time
 
 
 class DockingBatch:
@@ -102,20 +107,31 @@ class DockingBatch:
                  weights: RewardWeights | None = None):
         if n < 1:
             raise ValueError(f"number of environments must be >= 1, got {n}")
-        if not residual_max_mps2 > 0:
-            raise ValueError(f"residual_max_mps2 must be > 0, got {residual_max_mps2}")
-        comp = Compensation(spec.compensation)
-        if comp == Compensation.MODEL and predictor is None:
-            raise ValueError("compensation 'model' needs a predictor (a trained model)")
+        residual_max_mps2 = check_positive("residual_max_mps2", residual_max_mps2,
+                                           MAX_RESIDUAL_MPS2)
         spec = replace(spec, trials=n, first_trial=0)
         # The validation dock and sweep use (values, faults, the run's size), named as the
         # environment's keyword arguments; the config the episodes fly is unchanged.
         check_mission(cfg, spec, size=True)
+        comp = Compensation(spec.compensation)
+        spec = replace(spec, compensation=comp)
+        if comp == Compensation.MODEL and predictor is None:
+            raise ValueError("compensation 'model' needs a predictor (a trained model)")
+        weights = weights or RewardWeights()
+        if not isinstance(weights, RewardWeights):
+            raise MissionSpecError(f"reward_weights must be a RewardWeights or a dict of its "
+                                   f"fields, got {weights!r}")
+        for name in weights.__dataclass_fields__:
+            value = getattr(weights, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(
+                    value):
+                raise MissionSpecError(f"reward_weights.{name} must be a finite number, "
+                                       f"got {value!r}")
         self.cfg, self.n = cfg, n
         self.spec = spec
         self.model_predictor = predictor if comp == Compensation.MODEL else None
         self.residual_max_mps2 = float(residual_max_mps2)
-        self.weights = weights or RewardWeights()
+        self.weights = weights
         timing = MissionBatch.timing_of(cfg, self.spec)
         self.arrival_s, self.dt_s, self.max_steps = timing.arrival_s, timing.dt_s, timing.steps
 
@@ -133,6 +149,7 @@ class DockingBatch:
         self.mission = MissionBatch(self.cfg, self.spec, self.model_predictor,
                                     trials=self.trials)
         self.resolved = np.zeros(self.n, dtype=bool)
+        self.timed_out = np.zeros(self.n, dtype=bool)
 
     @property
     def world(self) -> World:
@@ -177,7 +194,12 @@ class DockingBatch:
         (``action * residual_max_mps2`` m/s², NED, added to the follower's reference
         acceleration while it approaches), then decide the next period."""
         mb, n = self.mission, self.n
-        action = np.clip(np.asarray(action, dtype=float).reshape(n, 3), -1.0, 1.0)
+        action = np.asarray(action, dtype=float).reshape(n, 3)
+        if not np.all(np.isfinite(action)):
+            bad = np.flatnonzero(~np.all(np.isfinite(action), axis=1)).tolist()
+            raise ValueError(f"the action holds NaN or infinite values (rows {bad}); actions "
+                             "must be finite, in [-1, 1]")
+        action = np.clip(action, -1.0, 1.0)
         active = mb.active
         flown = mb.fly(action * self.residual_max_mps2)
         none = np.zeros(n, dtype=bool)
@@ -190,11 +212,14 @@ class DockingBatch:
                           - w.action_per_s * np.sum(action**2, axis=1) * dt, 0.0)
         reward += w.dock * docked - w.miss * missed
         reward -= w.abort * aborted + w.clearance * flown.clearance_violated
+        timed_out = aborted & live & (mb.abort_reason == AbortReason.TIMEOUT)
         out = StepOutcome(reward=np.where(live, reward, 0.0),
                           docked=docked & live, missed=missed & live,
                           aborted=aborted & live,
-                          clearance_violated=flown.clearance_violated & live)
+                          clearance_violated=flown.clearance_violated & live,
+                          timed_out=timed_out)
         self.resolved |= docked | missed | aborted  # the outcome decided (a dock once confirmed)
+        self.timed_out |= timed_out
         return out
 
     @property

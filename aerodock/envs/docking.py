@@ -12,8 +12,14 @@ approaches; after the gate resolves or the mission aborts the episode ends.
   (m/s², NED; default bound 2 m/s² per axis), applied during the approach only.
 - Reward: :class:`aerodock.envs.batch.RewardWeights` (+10 docked, -5 missed or slipped, -5
   aborted, -10 on a clearance violation, a dense -|tracking error| m·s and a small action cost).
-- Termination: the mission decides the trial (docked, missed, aborted); truncation only if the
-  mission's whole time budget runs out (a safety net).
+- Termination and truncation: ``terminated`` when the mission decides the trial (docked, missed,
+  or aborted because the leader's state was lost, the tracking became unsafe or the gate jammed);
+  ``truncated`` when time runs out: the approach's docking window closes undocked (the mission
+  aborts it with ``info["abort_reason"] == AbortReason.TIMEOUT``, the abort reward included) or,
+  as a safety net, the mission's whole time budget is spent.
+- Errors: ``step`` before ``reset`` raises ``RuntimeError``; an action holding NaN or infinity
+  raises ``ValueError``; invalid keyword arguments raise ``ValueError``
+  (:class:`aerodock.mission.checks.MissionSpecError`, checked as ``aerodock dock`` checks them).
 - Seeding: ``reset(seed=k)`` flies trial ``k`` of campaign ``campaign_seed``: every random number
   comes from the per-trial stream ``(campaign_seed, k)`` (:class:`aerodock.rng.TrialRNG`), the
   same as ``run_campaign(MissionSpec(seed=campaign_seed, first_trial=k))`` and the same as
@@ -46,7 +52,8 @@ class DockingEnv(gym.Env):
         predictor: a feed-forward model (``aerodock.learning.runtime.Predictor``) for ``model``.
         leader_dropout_s: ``(start_s, duration_s)`` of a leader-state dropout (fault injection).
         campaign_seed: the campaign seed of the per-trial random streams.
-        residual_max_mps2: residual acceleration at a normalised action of 1, m/s².
+        residual_max_mps2: residual acceleration at a normalised action of 1, m/s² (finite,
+            0 < value <= 50).
         reward_weights: :class:`aerodock.envs.batch.RewardWeights` or a dict of its fields.
         render_mode: ``"rgb_array"`` draws the current state (matplotlib), or None.
     """
@@ -61,6 +68,7 @@ class DockingEnv(gym.Env):
         self.observation_space = observation_space()
         self.action_space = action_space()
         self._history: list[dict[str, np.ndarray]] = []
+        self._started = False
 
     @property
     def batch(self):
@@ -78,16 +86,29 @@ class DockingEnv(gym.Env):
         else:
             trial = int(self.np_random.integers(0, MAX_TRIAL_INDEX))
         self._batch.reset(trial)
+        self._started = True
         self._history = []
         self._remember()
         return self._batch.observation()[0], _scalars(step_info(self._batch))
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Fly one control period (1 / ``sim.control_rate_hz`` s) with ``action``."""
-        out = self._batch.act(np.asarray(action, dtype=float)[None, :])
+        """Fly one control period (1 / ``sim.control_rate_hz`` s) with ``action``.
+
+        Raises:
+            RuntimeError: called before :meth:`reset`.
+            ValueError: ``action`` is not 3 finite numbers.
+        """
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        act = np.asarray(action, dtype=float)
+        if act.shape != (3,):
+            raise ValueError(f"the action must have shape (3,), got {act.shape}")
+        out = self._batch.act(act[None, :])
         self._remember()
-        terminated = bool(self._batch.resolved[0])
-        truncated = bool(self._batch.out_of_time and not terminated)
+        batch = self._batch
+        timed_out = bool(batch.timed_out[0])
+        terminated = bool(batch.resolved[0]) and not timed_out
+        truncated = timed_out or bool(batch.out_of_time and not batch.resolved[0])
         return (self._batch.observation()[0], float(out.reward[0]), terminated, truncated,
                 _scalars(step_info(self._batch, out)))
 

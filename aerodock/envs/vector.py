@@ -8,7 +8,8 @@ advances all N trials with one NumPy call per operation (no loop over environmen
 Episodes run in lockstep, because the batch-first world starts all its trials together: a
 sub-environment whose trial is decided early returns its last observation with zero reward (an
 absorbing state; ``info["waiting"]`` is True) until every trial is decided; then all report
-``terminated`` (decided trials) or ``truncated`` (time budget spent) on the same step, and the
+``terminated`` (decided trials) or ``truncated`` (trials whose time ran out: the docking window
+closed undocked, or the time budget was spent) on the same step, and the
 next ``step`` resets the whole batch (``AutoresetMode.NEXT_STEP``: observations of the new
 episodes, zero rewards, no flags). The return of every sub-environment is that of its own trial.
 
@@ -50,6 +51,7 @@ class DockingVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._first_trial = 0
         self._autoreset = False
+        self._started = False
         self._held_obs = np.zeros((self.num_envs, self.single_observation_space.shape[0]),
                                   dtype=np.float32)
 
@@ -81,6 +83,7 @@ class DockingVectorEnv(VectorEnv):
         self._first_trial = first_trial
         self._batch.reset(first_trial, trials)
         self._autoreset = False
+        self._started = True
         self._held_obs = self._batch.observation()
         info = step_info(self._batch)
         info["waiting"] = np.zeros(self.num_envs, dtype=bool)
@@ -88,18 +91,28 @@ class DockingVectorEnv(VectorEnv):
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                  np.ndarray, dict[str, Any]]:
-        """One control period for every sub-environment (or the batch's autoreset)."""
+        """One control period for every sub-environment (or the batch's autoreset).
+
+        Raises:
+            RuntimeError: called before :meth:`reset`.
+            ValueError: ``actions`` is not ``(num_envs, 3)`` finite numbers.
+        """
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
         n = self.num_envs
+        actions = np.asarray(actions, dtype=float)
+        if actions.shape != (n, 3):
+            raise ValueError(f"the actions must have shape ({n}, 3), got {actions.shape}")
         if self._autoreset:
             obs, info = self._start(self._first_trial + n)
             return (obs, np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), info)
         batch = self._batch
         was_resolved = batch.resolved.copy()
-        out = batch.act(np.asarray(actions, dtype=float).reshape(n, 3))
+        out = batch.act(actions)
         self._held_obs = np.where(was_resolved[:, None], self._held_obs, batch.observation())
         ended = bool(batch.resolved.all() or batch.out_of_time)
-        terminated = batch.resolved & ended
-        truncated = ~batch.resolved & ended
+        terminated = batch.resolved & ~batch.timed_out & ended
+        truncated = (batch.timed_out | ~batch.resolved) & ended
         self._autoreset = ended
         info = step_info(batch, out)
         info["waiting"] = was_resolved & ~ended

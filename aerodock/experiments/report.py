@@ -192,7 +192,7 @@ def fig_docking_animation(tr: dict[str, Any], fig_dir: Path, cfg: Config) -> Pat
     track = track_from_trace({k: tr[k][:end] for k in ("t_s", "leader_p", "follower_p",
                                                        "bar_p", "gate", "ff")}, i, cfg,
                              f"hover docking with the model, trial {i} (docked)")
-    return render_animation(track, fig_dir / "hover_docking.gif", fps=10, max_frames=60, dpi=60)
+    return render_animation(track, fig_dir / "hover_docking.gif", fps=10, max_frames=60, dpi=90)
 
 
 # -- report ----------------------------------------------------------------------------------

@@ -18,7 +18,10 @@ Conversion (checked on hover samples of the real data, see ``tests/ingest``):
   ``a_obs - cmd = C (a_meas - R_zup e3 sum(u) / m)``, the dataset's residual in NED. Its constant
   bias (about 0.3-0.5 m/s², present with or without a vehicle above) is *not* removed here.
 - Masses: both vehicles from :data:`VEHICLE_MASSES_KG` by ``vehicle`` (``"small"``, ``"large"``
-  or per vehicle ``"cf50=small,cf51=large"``), or ``mass_kg`` for both.
+  or per vehicle ``"cf50=small,cf51=large"``), or ``mass_kg`` for both. With a vehicle type
+  (not ``mass_kg``) the rotor radius and count of :data:`VEHICLE_ROTORS` go into the meta too
+  (``{leader,follower}_{rotor_radius_m,n_rotors}``), which the leader-aware models need; the
+  leader's logged thrust (``u1+u2+u3+u4``) is ``extra["leader_thrust_n"]``.
 """
 
 from __future__ import annotations
@@ -58,6 +61,11 @@ from aerodock.ingest.errors import IngestError, ingest_warning
 SOURCE = "neural-swarm"
 # Crazyflie 2.1 masses of the Neural-Swarm dataset, kg.
 VEHICLE_MASSES_KG: dict[str, float] = {"small": 0.032, "large": 0.067}
+# Rotor radius (m) and count of each vehicle type: the stock Crazyflie 2.x propeller is about
+# 45 mm across (0.0225 m); the dataset does not state the large vehicle's propellers, and
+# 0.0325 m (65 mm propellers, about sqrt(0.067 / 0.032) = 1.45x the small one's, i.e. the same
+# disc loading) is our assumption, not a measurement. Both are quadrotors.
+VEHICLE_ROTORS: dict[str, tuple[float, int]] = {"small": (0.0225, 4), "large": (0.0325, 4)}
 EXPECTED_DT_S = 0.01  # about 100 Hz on board
 FILE_PATTERN = re.compile(r"^(?P<vehicle>cf\d+)_(?P<flight>\d+)\.csv$", re.IGNORECASE)
 
@@ -237,6 +245,18 @@ def vehicle_masses(vehicle: str, mass_kg: float | None, ids: list[str],
     return masses
 
 
+def vehicle_rotors(vehicle: str, ids: list[str]) -> dict[str, tuple[float, int]]:
+    """``(rotor_radius_m, n_rotors)`` of each vehicle id from :data:`VEHICLE_ROTORS` by its
+    type in ``vehicle`` (as :func:`vehicle_masses`, which has already checked it)."""
+    spec = (vehicle or "small").strip().lower()
+    if "=" in spec:
+        kinds = {key.strip(): kind.strip() for key, _, kind in
+                 (item.partition("=") for item in spec.split(","))}
+    else:
+        kinds = dict.fromkeys(ids, spec)
+    return {vid: VEHICLE_ROTORS[kinds[vid]] for vid in ids}
+
+
 def pair_files(paths: list[Path]) -> list[tuple[Path, Path]]:
     """Group ``cfXX_NN.csv`` files into the two files of each flight (same folder, same NN).
 
@@ -274,8 +294,12 @@ def pair_files(paths: list[Path]) -> list[tuple[Path, Path]]:
 def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_mass_kg: float,
                     leader_mass_kg: float, max_start_offset_s: float = 0.5,
                     min_overlap_fraction: float = 0.8, max_gap_s: float = 0.05,
-                    max_lag_s: float = 0.1) -> FlightLog:
+                    max_lag_s: float = 0.1,
+                    rotors: dict[str, tuple[float, int]] | None = None) -> FlightLog:
     """One FlightLog of ``follower`` with ``leader``, on the follower's time stamps.
+
+    ``rotors`` (``{"leader": (rotor_radius_m, n_rotors), "follower": ...}``), when given, go
+    into the meta as ``{role}_rotor_radius_m`` and ``{role}_n_rotors``.
 
     The leader is interpolated onto the follower's samples over the common time window; samples
     where the leader's log has a gap longer than ``max_gap_s`` are dropped (counted in the meta).
@@ -314,6 +338,8 @@ def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_ma
         "label_basis": "thrust",
         "leader_mass_kg": leader_mass_kg,
         "follower_mass_kg": follower_mass_kg,
+        **{f"{role}_{key}": value for role, (radius, count) in (rotors or {}).items()
+           for key, value in (("rotor_radius_m", radius), ("n_rotors", count))},
         "leader_id": leader.vehicle_id,
         "follower_id": follower.vehicle_id,
         "flight_id": follower.flight_id,
@@ -385,13 +411,16 @@ def read_neural_swarm(paths: list[Path], *, vehicle: str = "small",
             progress(done, total)
         track_b = read_vehicle_file(path_b, time_unit=time_unit)
         done += 1
-        masses = vehicle_masses(vehicle, mass_kg, [track_a.vehicle_id, track_b.vehicle_id],
-                                str(path_a))
+        ids = [track_a.vehicle_id, track_b.vehicle_id]
+        masses = vehicle_masses(vehicle, mass_kg, ids, str(path_a))
+        rotors = None if mass_kg is not None else vehicle_rotors(vehicle, ids)
         for follower, leader in ((track_a, track_b), (track_b, track_a)):
             logs.append(build_flightlog(
                 follower, leader, follower_mass_kg=masses[follower.vehicle_id],
                 leader_mass_kg=masses[leader.vehicle_id], max_start_offset_s=max_start_offset_s,
                 min_overlap_fraction=min_overlap_fraction, max_gap_s=max_gap_s,
+                rotors=None if rotors is None else {"leader": rotors[leader.vehicle_id],
+                                                    "follower": rotors[follower.vehicle_id]},
             ))
         if progress:
             progress(done, total)

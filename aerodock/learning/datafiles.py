@@ -29,6 +29,7 @@ from aerodock.flightlog import FORMAT_NAME as FLIGHTLOG_FORMAT
 from aerodock.flightlog import FlightLog, FlightLogError, load_flightlogs
 from aerodock.learning.dataset import (
     OPTIONAL_ARRAYS,
+    OPTIONAL_SCALARS,
     DataError,
     Dataset,
     build_dataset,
@@ -51,7 +52,7 @@ def save_dataset(path: str | Path, ds: Dataset) -> Path:
         "x": ds.x, "leader_R": ds.leader_R, "y": ds.y, "flight_id": ds.flight_id, "t_s": ds.t_s,
         "meta": np.array(json.dumps(ds.meta)),
     }
-    for name in OPTIONAL_ARRAYS:
+    for name in OPTIONAL_ARRAYS + OPTIONAL_SCALARS:
         if getattr(ds, name) is not None:
             arrays[name] = getattr(ds, name)
     with atomic_open(path, "wb") as fh:
@@ -91,7 +92,7 @@ def load_dataset(path: str | Path) -> Dataset:
             if missing:
                 raise DataError(f"{path}: dataset lacks {', '.join(missing)}")
             arrays = {k: data[k] for k in ("x", "leader_R", "y", "flight_id", "t_s")}
-            optional = {k: data[k] for k in OPTIONAL_ARRAYS if k in keys}
+            optional = {k: data[k] for k in OPTIONAL_ARRAYS + OPTIONAL_SCALARS if k in keys}
             meta = json.loads(str(data["meta"]))
     except FileNotFoundError:
         raise DataError(f"{path}: file not found") from None

@@ -26,6 +26,7 @@ import numpy as np
 
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
+from aerodock.learning.features import AIR_DENSITY_KGPM3, GRAVITY_MPS2, wake_scales
 from aerodock.learning.labels import (
     FREE_AIR_RADIUS_M,
     BiasEstimate,
@@ -40,6 +41,9 @@ TRUE_FIELD_KEY = "true_field_mean_mps2"
 TRUE_TORQUE_KEY = "true_wake_torque_nm"
 # Optional (n, 3) arrays of a Dataset (NaN rows for flights without them).
 OPTIONAL_ARRAYS = ("y_true_mean", "y_torque", "y_torque_true")
+# Optional (n,) arrays of a Dataset (NaN for flights without them).
+OPTIONAL_SCALARS = ("leader_thrust_n",)
+LEADER_THRUST_KEY = "leader_thrust_n"
 INTERACTION_RADIUS_M = 0.2
 
 
@@ -67,6 +71,9 @@ class Dataset:
             extras), or None when no flight has them.
         y_torque_true: (n, 3) the simulator's wake torque over the same periods, N m, world NED
             (NaN rows where unknown), or None.
+        leader_thrust_n: (n,) the leader's collective thrust, N, where its log has one
+            (``extra["leader_thrust_n"]``: logged or commanded), NaN elsewhere; or None when no
+            flight has it. Used by the leader-aware kinds (:meth:`wake_scales`).
     """
 
     x: np.ndarray
@@ -78,6 +85,7 @@ class Dataset:
     meta: dict[str, Any] = field(default_factory=dict)
     y_torque: np.ndarray | None = None
     y_torque_true: np.ndarray | None = None
+    leader_thrust_n: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.x)[0] if np.ndim(self.x) == 2 else -1
@@ -94,6 +102,13 @@ class Dataset:
             arr = np.asarray(getattr(self, name), dtype=float)
             if arr.shape != (n, 3):
                 raise DataError(f"dataset: {name} has shape {arr.shape}, expected {(n, 3)}")
+            object.__setattr__(self, name, arr)
+        for name in OPTIONAL_SCALARS:
+            if getattr(self, name) is None:
+                continue
+            arr = np.asarray(getattr(self, name), dtype=float)
+            if arr.shape != (n,):
+                raise DataError(f"dataset: {name} has shape {arr.shape}, expected {(n,)}")
             object.__setattr__(self, name, arr)
         meta = dict(self.meta)
         meta.setdefault("flights", [])
@@ -151,8 +166,43 @@ class Dataset:
             x=self.x[index], leader_R=self.leader_R[index], y=self.y[index],
             flight_id=new_fid.reshape(-1), t_s=self.t_s[index], meta=meta,
             **{name: None if getattr(self, name) is None else getattr(self, name)[index]
-               for name in OPTIONAL_ARRAYS},
+               for name in OPTIONAL_ARRAYS + OPTIONAL_SCALARS},
         )
+
+    def wake_scales(self, *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
+                    gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
+        """The leader-aware kinds' wake scales (n, 3) (:data:`features.WAKE_SCALE_NAMES`).
+
+        The leader's thrust is its logged (or commanded) thrust where the flight has one
+        (:attr:`leader_thrust_n`), otherwise its hover thrust ``m g``; its rotor radius and
+        count, and the follower's mass, rotor radius and count, come from the flight's
+        metadata (``meta["flights"][k]``, from the FlightLog's ``meta``).
+
+        Raises:
+            DataError: a flight whose metadata lack one of these (one line naming it).
+        """
+        out = np.empty((self.n, 3))
+        thrust = (np.full(self.n, np.nan) if self.leader_thrust_n is None
+                  else self.leader_thrust_n)
+        for k in np.unique(self.flight_id):
+            flight = self.meta["flights"][int(k)]
+            keys = ("leader_mass_kg", "leader_rotor_radius_m", "leader_n_rotors",
+                    "follower_mass_kg", "follower_rotor_radius_m", "follower_n_rotors")
+            vals = {key: flight.get(key) for key in keys}
+            missing = [key for key, v in vals.items() if v is None]
+            if missing:
+                raise DataError(f"dataset: flight {self.flight_names[int(k)]} does not say its "
+                                f"{', '.join(missing)} (a leader-aware model needs them; for "
+                                "Neural-Swarm logs ingest with --vehicle)")
+            rows = self.flight_id == k
+            hover_n = float(vals["leader_mass_kg"]) * gravity_mps2
+            lead = np.where(np.isfinite(thrust[rows]) & (thrust[rows] > 0), thrust[rows], hover_n)
+            out[rows] = wake_scales(
+                lead, vals["leader_rotor_radius_m"], vals["leader_n_rotors"],
+                vals["follower_mass_kg"], vals["follower_rotor_radius_m"],
+                vals["follower_n_rotors"], air_density_kgpm3=air_density_kgpm3,
+                gravity_mps2=gravity_mps2)
+        return out
 
     def torque_labels(self) -> np.ndarray:
         """The torque labels (n, 3), N m, world NED, every sample having one.
@@ -226,6 +276,7 @@ class _FlightSamples:
     y_true_mean: np.ndarray | None
     y_torque: np.ndarray | None
     y_torque_true: np.ndarray | None
+    leader_thrust_n: np.ndarray | None = None
 
 
 def build_dataset(
@@ -258,9 +309,10 @@ def build_dataset(
     torque_of = {id(log): (lab, bias) for log, lab, bias
                  in zip(torque_logs, torque_labels, torque_biases, strict=True)}
     any_true = any(TRUE_FIELD_KEY in log.extra for log in logs)
+    any_thrust = any(LEADER_THRUST_KEY in log.extra for log in logs)
     flights = [
         _flight_samples(i, log, lab, bias, with_true=any_true, with_torque=bool(torque_logs),
-                        torque=torque_of.get(id(log)))
+                        torque=torque_of.get(id(log)), with_leader_thrust=any_thrust)
         for i, (log, lab, bias) in enumerate(zip(logs, labels, biases, strict=True))
     ]
     if not sum(len(f.flight_id) for f in flights):
@@ -284,7 +336,8 @@ def build_dataset(
 
 def _flight_samples(i: int, log: FlightLog, labels: np.ndarray, bias: BiasEstimate, *,
                     with_true: bool, with_torque: bool,
-                    torque: tuple[np.ndarray, BiasEstimate] | None) -> _FlightSamples:
+                    torque: tuple[np.ndarray, BiasEstimate] | None,
+                    with_leader_thrust: bool = False) -> _FlightSamples:
     """Flight ``i``'s valid samples: inputs, attitudes, labels and, if ``with_true`` or
     ``with_torque``, the true field and the torque arrays (NaN rows where it has none)."""
     keep = valid_mask(log)
@@ -302,6 +355,14 @@ def _flight_samples(i: int, log: FlightLog, labels: np.ndarray, bias: BiasEstima
                 f"expected {(log.n_samples, 3)}"
             )
         y_true_mean = true[keep]
+    leader_thrust = None
+    if with_leader_thrust:
+        raw = log.extra.get(LEADER_THRUST_KEY)
+        raw = np.full(log.n_samples, np.nan) if raw is None else np.asarray(raw, float)
+        if raw.shape != (log.n_samples,):
+            raise DataError(f"{log.name}: extra {LEADER_THRUST_KEY!r} has shape {raw.shape}, "
+                            f"expected {(log.n_samples,)}")
+        leader_thrust = raw[keep]
     y_torque = y_torque_true = None
     torque_fields: dict[str, Any] = {}
     if with_torque:
@@ -327,6 +388,7 @@ def _flight_samples(i: int, log: FlightLog, labels: np.ndarray, bias: BiasEstima
         x=x[keep], leader_R=quat_to_rotmat(log.leader_quat)[keep], y=labels[keep],
         flight_id=np.full(int(keep.sum()), i, dtype=np.int64), t_s=log.t_s[keep], meta=meta,
         y_true_mean=y_true_mean, y_torque=y_torque, y_torque_true=y_torque_true,
+        leader_thrust_n=leader_thrust,
     )
 
 
@@ -351,6 +413,7 @@ def _join_flights(flights: list[_FlightSamples], meta: dict[str, Any]) -> Datase
         meta=meta,
         y_torque=joined("y_torque"),
         y_torque_true=tau_true if tau_true is not None and np.isfinite(tau_true).any() else None,
+        leader_thrust_n=joined("leader_thrust_n"),
     )
 
 
@@ -390,6 +453,11 @@ def concat_datasets(datasets: Sequence[Dataset]) -> Dataset:
         if any(getattr(d, name) is not None for d in datasets):
             optional[name] = np.concatenate([
                 getattr(d, name) if getattr(d, name) is not None else np.full((d.n, 3), np.nan)
+                for d in datasets])
+    for name in OPTIONAL_SCALARS:
+        if any(getattr(d, name) is not None for d in datasets):
+            optional[name] = np.concatenate([
+                getattr(d, name) if getattr(d, name) is not None else np.full(d.n, np.nan)
                 for d in datasets])
     meta = {
         "flights": flights,

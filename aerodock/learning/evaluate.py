@@ -124,7 +124,10 @@ def evaluate(
         ``interaction`` torque regions, see the module docstring) when the predictor has a
         torque and the data torque labels.
     """
-    pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
+    if getattr(predictor, "needs_wake_scales", False):  # a leader-aware model: the data's
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales()), dtype=float)
+    else:
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
     if pred.shape != ds.y.shape:
         raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
     out = {

@@ -6,7 +6,10 @@ output scaling folded into its first and last layers (as in the NumPy runtime), 
 of the invariant outputs back to the world. No PyTorch is imported: ``aerodock[export]`` is
 enough.
 
-Inputs ``x`` (n, 9: ``[dp, v_A, v_B]``, NED) and ``leader_R`` (n, 3, 3, leader body to world);
+Inputs ``x`` (n, 9: ``[dp, v_A, v_B]``, NED) and ``leader_R`` (n, 3, 3, leader body to world),
+and for a leader-aware model (``so2-leader``) ``wake_scales`` (n, 3: the leader's hover induced
+velocity, m/s, its size ``sqrt(n) R``, m, the follower's hover induced velocity, m/s; see
+:func:`aerodock.learning.features.wake_scales`);
 output ``f_ext_mps2`` (n, 3, NED), with a dynamic batch axis ``n``; a ``so2-wrench`` model has a
 second output, ``tau_ext_nm`` (n, 3: the wake's torque on the follower, N m, world NED; rotate it
 with the follower's attitude for the body frame), from its last three network outputs through the
@@ -39,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open
-from aerodock.learning.features import TORQUE_KINDS
+from aerodock.learning.features import GRAVITY_MPS2, LEADER_KINDS, TORQUE_KINDS
 from aerodock.learning.modelfile import (
     CHECKSUM_KEY,
     MODEL_FORMAT,
@@ -52,6 +55,8 @@ from aerodock.learning.training_vehicles import normalise_vehicles
 
 ONNX_OPSET = 17
 INPUT_NAMES = ("x", "leader_R")
+SCALES_INPUT_NAME = "wake_scales"
+"""The leader-aware kinds' third input (n, 3): leader_vh_mps, leader_size_m, follower_vh_mps."""
 OUTPUT_NAME = "f_ext_mps2"
 TORQUE_OUTPUT_NAME = "tau_ext_nm"
 DTYPES = ("float32", "float64")
@@ -157,12 +162,22 @@ def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
     va2 = g.add(g.mul(ax, ax), g.mul(ay, ay))
     vb_soft = g.sqrt(g.add(vb2, eps_v2))
     cos_b = g.div(g.add(g.mul(urx, bx), g.mul(ury, by)), vb_soft)
-    if kind == "so2":
+    if kind in ("so2", "so2-leader"):
         z = g.stack([cos_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2)])
+        accel_scale = None
+        if kind == "so2-leader":
+            s3 = g.op("Unsqueeze", SCALES_INPUT_NAME, g.const([1], "axis", np.int64))
+            vh_a, size_a, vh_b = (g.col(s3, 0, k) for k in range(3))
+            z = g.stack([cos_b, g.div(g.sqrt(rho2), size_a), g.div(g.sqrt(vb2), vh_a),
+                         g.div(pz, size_a), g.div(bz, vh_a), g.div(g.sqrt(va2), vh_a)])
+            ratio = g.div(vh_a, vh_b)
+            accel_scale = g.mul(g.mul(ratio, ratio), g.const(GRAVITY_MPS2, "g"))
 
         def out_so2(c: str) -> str:
             c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))  # (n, 1, 2)
             cr, ca = g.col(c3, 0, 0), g.col(c3, 0, 1)
+            if accel_scale is not None:
+                cr, ca = g.mul(cr, accel_scale), g.mul(ca, accel_scale)
             # f = R (cr e_r + ca e3) with e_r = (urx, ury, 0) in leader-body coordinates
             return _rotate(g, [g.mul(cr, urx), g.mul(cr, ury), ca])
 
@@ -236,10 +251,12 @@ def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
     if spec.kind in TORQUE_KINDS:  # the torque's components: the network's last three
         g.nodes.append(helper.make_node("Identity", [to_world(c, 3)], [TORQUE_OUTPUT_NAME]))
         outputs.append(TORQUE_OUTPUT_NAME)
+    inputs = [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
+              helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])]
+    if spec.kind in LEADER_KINDS:
+        inputs.append(helper.make_tensor_value_info(SCALES_INPUT_NAME, g.elem, ["n", 3]))
     graph = helper.make_graph(
-        g.nodes, f"aerodock_{spec.kind.replace('-', '_')}",
-        [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
-         helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])],
+        g.nodes, f"aerodock_{spec.kind.replace('-', '_')}", inputs,
         [helper.make_tensor_value_info(name, g.elem, ["n", 3]) for name in outputs],
         initializer=g.inits,
     )
@@ -445,14 +462,26 @@ def _compare(path: str | Path, predictor: Any, *, n: int,
     sess = ort.InferenceSession(Path(path).read_bytes(), providers=["CPUExecutionProvider"])
     dtype = np.float64 if sess.get_inputs()[0].type == "tensor(double)" else np.float32
     xs, rs = x.astype(dtype), rot.astype(dtype)
+    feeds = {"x": xs, "leader_R": rs}
+    scales = None
+    if getattr(predictor, "needs_wake_scales", False):  # leaders of 0.25-4x a hover's v_h^2
+        scales = np.stack([rng.uniform(2.0, 9.0, n), rng.uniform(0.03, 0.3, n),
+                           rng.uniform(3.0, 8.0, n)], axis=1)
+        feeds[SCALES_INPUT_NAME] = scales.astype(dtype)
+        scales = feeds[SCALES_INPUT_NAME].astype(float)
+    if (SCALES_INPUT_NAME in [i.name for i in sess.get_inputs()]) != (scales is not None):
+        raise ValueError(f"{path}: inputs do not match a {predictor.kind!r} model")
     names = [o.name for o in sess.get_outputs()]
     has_torque = bool(getattr(predictor, "has_torque", False))
     if (TORQUE_OUTPUT_NAME in names) != has_torque:
         raise ValueError(f"{path}: outputs {names} do not match a {predictor.kind!r} model")
-    got = dict(zip(names, sess.run(None, {"x": xs, "leader_R": rs}), strict=True))
-    force, torque = (predictor.predict_wrench(xs.astype(float), rs.astype(float))
-                     if has_torque else (predictor.predict(xs.astype(float), rs.astype(float)),
-                                         None))
+    got = dict(zip(names, sess.run(None, feeds), strict=True))
+    if has_torque:
+        force, torque = predictor.predict_wrench(xs.astype(float), rs.astype(float))
+    elif scales is not None:
+        force, torque = predictor.predict(xs.astype(float), rs.astype(float), scales), None
+    else:
+        force, torque = predictor.predict(xs.astype(float), rs.astype(float)), None
     out = {OUTPUT_NAME: _diff_and_scale(got[OUTPUT_NAME], force)}
     if torque is not None:
         out[TORQUE_OUTPUT_NAME] = _diff_and_scale(got[TORQUE_OUTPUT_NAME], torque)

@@ -63,6 +63,28 @@ the scene about the leader's axis rotates both predictions. The wake's torque on
 the axis points along ``+e_t`` (it pushes the rotors nearer the axis down). Labels are measured in
 the follower's body frame and rotated to the world frame with its attitude before training.
 
+Leader-aware kind (``"so2-leader"``). The paper's ``h`` carries nothing of the leader's thrust or
+size, so a model on it trained on a small and a large leader learns their average. This kind
+takes, besides ``x`` and ``leader_R``, three **wake scales** per sample (n, 3), all invariant
+scalars (:data:`WAKE_SCALE_NAMES`, built by :func:`wake_scales` from the vehicles)::
+
+    v_hA = sqrt(T_A / (2 rho n_A pi R_A^2))     leader's hover induced velocity, m/s
+    L_A  = sqrt(n_A) R_A                        the radius of one disc of the leader's total
+                                                rotor area (the wake's width scale), m
+    v_hB = sqrt(m_B g / (2 rho n_B pi R_B^2))   follower's hover induced velocity, m/s
+
+and makes the so2 model dimensionless by momentum theory: positions in units of ``L_A``,
+velocities in units of ``v_hA``, the force in units of ``a_s = g (v_hA / v_hB)^2``::
+
+    z = ( cos_B, |proj dp| / L_A, |proj v_B| / v_hA, a3 . dp / L_A, a3 . v_B / v_hA,
+          |proj v_A| / v_hA )
+    f = a_s (c_r s(rho) e_r' + c_a a3)
+
+(``a_s``: a follower of mass ``m_B`` with rotor area ``A_B`` in a wake of speed ``w`` feels about
+``rho A_B w^2 / m_B = g (w / v_hB)^2 / 2``, and ``w`` scales with ``v_hA``.) Scales are
+invariant, so the equivariance of ``"so2"`` carries over unchanged; with one leader and one
+follower the features are a fixed rescaling of ``h``.
+
 Kind ``"mlp"`` (the baseline) uses ``x`` itself, in the world frame, with an identity output map.
 
 The implementations below are written once, generically, and run on NumPy arrays (the runtime)
@@ -81,11 +103,18 @@ FEATURE_VERSION = 1
 EPS_POS_M = 1e-3
 EPS_VEL_MPS = 1e-2
 
-KINDS = ("so2", "so2-ext", "so2-wrench", "mlp", "zero")
+KINDS = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
+LEADER_KINDS = ("so2-leader",)
+"""Kinds that take the wake scales (:data:`WAKE_SCALE_NAMES`) as a third input."""
+WAKE_SCALE_NAMES = ("leader_vh_mps", "leader_size_m", "follower_vh_mps")
+"""The wake scales' columns: the leader's hover induced velocity (m/s), its wake's width scale
+``sqrt(n) R`` (m) and the follower's hover induced velocity (m/s)."""
+AIR_DENSITY_KGPM3 = 1.225
+GRAVITY_MPS2 = 9.81
 TORQUE_KINDS = ("so2-wrench",)
 """Kinds that also predict the wake's torque (their outputs: force components, then torque's)."""
-N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "mlp": 9, "zero": 0}
-N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "mlp": 3, "zero": 0}
+N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "so2-leader": 6, "mlp": 9, "zero": 0}
+N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "so2-leader": 2, "mlp": 3, "zero": 0}
 FEATURE_NAMES: dict[str, tuple[str, ...]] = {
     "so2": (
         "cos_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps", "rho_vA_mps",
@@ -98,6 +127,10 @@ FEATURE_NAMES: dict[str, tuple[str, ...]] = {
         "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
         "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
     ),
+    "so2-leader": (
+        "cos_dp_vB", "rho_dp_per_size", "rho_vB_per_vh", "axial_dp_per_size", "axial_vB_per_vh",
+        "rho_vA_per_vh",
+    ),
     "mlp": (
         "dp_n_m", "dp_e_m", "dp_d_m", "vA_n_mps", "vA_e_mps", "vA_d_mps",
         "vB_n_mps", "vB_e_mps", "vB_d_mps",
@@ -109,6 +142,7 @@ OUTPUT_NAMES: dict[str, tuple[str, ...]] = {
     "so2-ext": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2"),
     "so2-wrench": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2",
                    "tau_radial_nm", "tau_tangential_nm", "tau_axial_nm"),
+    "so2-leader": ("f_radial_per_scale", "f_axial_per_scale"),
     "mlp": ("f_n_mps2", "f_e_mps2", "f_d_mps2"),
     "zero": (),
 }
@@ -123,6 +157,8 @@ SCALE_FLOOR: dict[str, tuple[float, ...]] = {
                 _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
     "so2-wrench": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
                    _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
+    # dimensionless: 1 leader size (about 5 cm on a Crazyflie), 0.01 v_h (about 4 cm/s)
+    "so2-leader": (_ANGLE_FLOOR, 1.0, 0.01, 1.0, 0.01, 0.01),
     "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
     "zero": (),
 }
@@ -154,7 +190,8 @@ def _body(w: Any, rot: Any) -> Any:
 
 
 def _feature_map_generic(
-    kind: str, x: Any, rot: Any, stack: Callable[..., Any], eps_pos_m: float, eps_vel_mps: float
+    kind: str, x: Any, rot: Any, stack: Callable[..., Any], eps_pos_m: float, eps_vel_mps: float,
+    scales: Any = None,
 ) -> tuple[Any, Any]:
     """Features ``z`` (n, F) and output map ``M`` (n, 3, K) for one array library.
 
@@ -182,6 +219,13 @@ def _feature_map_generic(
     if kind == "so2":
         z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
         out_map = stack([e_r, a3], -1)
+    elif kind == "so2-leader":
+        vh_a, size_a, vh_b = scales[..., 0], scales[..., 1], scales[..., 2]
+        ratio = vh_a / vh_b
+        accel_scale = (ratio * ratio * GRAVITY_MPS2)[..., None]
+        z = stack([cos_b, rho / size_a, vb2**0.5 / vh_a, pz / size_a, bz / vh_a,
+                   va2**0.5 / vh_a], -1)
+        out_map = stack([e_r * accel_scale, a3 * accel_scale], -1)
     elif kind in ("so2-ext", "so2-wrench"):
         va_soft = (va2 + eps_vel_mps * eps_vel_mps) ** 0.5
         sin_b = (ur_x * by - ur_y * bx) / vb_soft
@@ -227,6 +271,63 @@ def check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.nd
     return x, leader_r
 
 
+def check_wake_scales(wake_scales: Any, n: int) -> np.ndarray:
+    """Validate wake scales (n, 3) (:data:`WAKE_SCALE_NAMES`): finite and positive.
+
+    Raises:
+        ValueError: missing, of the wrong shape, or not finite and positive.
+    """
+    if wake_scales is None:
+        raise ValueError("a leader-aware model needs wake_scales (n, 3): "
+                         + ", ".join(WAKE_SCALE_NAMES))
+    scales = np.asarray(wake_scales, dtype=float)
+    if scales.shape == (3,):
+        scales = np.broadcast_to(scales, (n, 3))
+    if scales.shape != (n, 3):
+        raise ValueError(f"wake_scales must have shape ({n}, 3), got {scales.shape}")
+    if not np.all(np.isfinite(scales) & (scales > 0)):
+        raise ValueError("wake_scales must be finite and positive")
+    return scales
+
+
+def hover_induced_velocity_mps(thrust_n: Any, rotor_radius_m: Any, n_rotors: Any,
+                               air_density_kgpm3: float = AIR_DENSITY_KGPM3) -> np.ndarray:
+    """Momentum theory's induced velocity ``sqrt(T / (2 rho n pi R^2))`` (m/s) of a rotorcraft
+    producing thrust ``thrust_n`` (N) with ``n_rotors`` rotors of radius ``rotor_radius_m``."""
+    area_m2 = np.asarray(n_rotors, float) * np.pi * np.asarray(rotor_radius_m, float) ** 2
+    return np.sqrt(np.maximum(np.asarray(thrust_n, float), 0.0)
+                   / (2.0 * air_density_kgpm3 * area_m2))
+
+
+def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotors: Any,
+                follower_mass_kg: Any, follower_rotor_radius_m: Any, follower_n_rotors: Any,
+                *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
+                gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
+    """The wake scales (n, 3) of kind ``"so2-leader"`` (see the module docstring).
+
+    Args:
+        leader_thrust_n: (n,) or scalar, the leader's collective thrust, N (logged or
+            commanded; its hover thrust ``m g`` when neither is known).
+        leader_rotor_radius_m, leader_n_rotors: the leader's rotor radius (m) and count.
+        follower_mass_kg: the follower's mass, kg (its hover thrust is ``m g``: not its
+            instantaneous thrust, which is part of the label).
+        follower_rotor_radius_m, follower_n_rotors: the follower's rotors.
+        air_density_kgpm3: air density, kg/m^3.
+        gravity_mps2: gravity, m/s^2.
+
+    Returns:
+        ``[v_hA (m/s), sqrt(n_A) R_A (m), v_hB (m/s)]`` per sample.
+    """
+    thrust = np.atleast_1d(np.asarray(leader_thrust_n, float))
+    vh_a = hover_induced_velocity_mps(thrust, leader_rotor_radius_m, leader_n_rotors,
+                                      air_density_kgpm3)
+    size = np.sqrt(np.asarray(leader_n_rotors, float)) * np.asarray(leader_rotor_radius_m, float)
+    vh_b = hover_induced_velocity_mps(np.asarray(follower_mass_kg, float) * gravity_mps2,
+                                      follower_rotor_radius_m, follower_n_rotors,
+                                      air_density_kgpm3)
+    return np.stack(np.broadcast_arrays(vh_a, size, vh_b), axis=-1).astype(float)
+
+
 def feature_map(
     kind: str,
     x: np.ndarray,
@@ -234,15 +335,18 @@ def feature_map(
     *,
     eps_pos_m: float = EPS_POS_M,
     eps_vel_mps: float = EPS_VEL_MPS,
+    wake_scales: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """NumPy features and output map of a model kind.
 
     Args:
-        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"`` or ``"mlp"``.
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"so2-leader"`` or ``"mlp"``.
         x: (n, 9) ``[dp, v_A, v_B]``, world NED.
         leader_R: (n, 3, 3) leader attitude, body to world.
         eps_pos_m: radial regularisation (see the module docstring).
         eps_vel_mps: velocity-direction regularisation.
+        wake_scales: (n, 3) or (3,) wake scales (:data:`WAKE_SCALE_NAMES`); needed by the
+            leader-aware kinds, ignored by the others.
 
     Returns:
         ``(z, M)``: features (n, F) and the output map (n, 3, K) taking the network's K outputs
@@ -252,7 +356,8 @@ def feature_map(
     if kind == "mlp":
         return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
     check_eps(eps_pos_m, eps_vel_mps)
-    return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps)
+    scales = check_wake_scales(wake_scales, x.shape[0]) if kind in LEADER_KINDS else None
+    return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps, scales)
 
 
 def feature_map_torch(
@@ -262,6 +367,7 @@ def feature_map_torch(
     *,
     eps_pos_m: float = EPS_POS_M,
     eps_vel_mps: float = EPS_VEL_MPS,
+    wake_scales: Any = None,
 ) -> tuple[Any, Any]:
     """Torch version of :func:`feature_map` (same operations; tensors in, tensors out)."""
     import torch
@@ -269,7 +375,10 @@ def feature_map_torch(
     if kind == "mlp":
         eye = torch.eye(3, dtype=x.dtype, device=x.device)
         return x, eye.expand(x.shape[0], 3, 3)
-    return _feature_map_generic(kind, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps)
+    if kind in LEADER_KINDS and wake_scales is None:
+        raise ValueError(f"model kind {kind!r} needs wake_scales (n, 3)")
+    return _feature_map_generic(kind, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps,
+                                wake_scales)
 
 
 def so2_features(
@@ -304,18 +413,22 @@ def invariant_components(
     leader_R: np.ndarray,
     y: np.ndarray,
     torque: np.ndarray | None = None,
+    wake_scales: np.ndarray | None = None,
 ) -> np.ndarray:
     """World-frame forces ``y`` (n, 3) (and, for a wrench kind, torques ``torque`` (n, 3))
     expressed in a kind's output components (n, K).
 
     Uses ``c = M^T y`` (exact for the orthonormal columns of ``M`` away from the leader's axis);
-    used to standardise the network's outputs.
+    used to standardise the network's outputs. For a leader-aware kind, whose columns have the
+    length of the force scale ``a_s``, ``c = M^T y / a_s^2`` (``wake_scales`` needed).
 
     Raises:
-        ValueError: a wrench kind without torques.
+        ValueError: a wrench kind without torques, a leader-aware kind without wake scales.
     """
-    _, out_map = feature_map(kind, x, leader_R)
+    _, out_map = feature_map(kind, x, leader_R, wake_scales=wake_scales)
     c = np.einsum("nik,ni->nk", out_map, np.asarray(y, dtype=float))
+    if kind in LEADER_KINDS:
+        c = c / np.sum(out_map[:, :, -1] ** 2, axis=1)[:, None]  # the a3 column: |a_s a3|^2
     if kind not in TORQUE_KINDS:
         return c
     if torque is None:

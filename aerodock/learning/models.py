@@ -19,6 +19,9 @@ the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A 
   ``tau = tau_radial e_r + tau_tangential e_t + tau_axial a3`` (world NED). ``forward`` is the
   force, as for every kind; :meth:`DownwashModel.wrench` gives both. Trained on standardised
   outputs (:func:`standardised_wrench_loss`), so force and torque weigh alike.
+* :class:`SO2LeaderModel` (``"so2-leader"``): ``"so2"`` made leader-aware: a third input, the
+  wake scales (n, 3: the leader's hover induced velocity and rotor size, the follower's hover
+  induced velocity), makes its features and outputs dimensionless by momentum theory.
 * :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame
   (standardised with one scale for the north and east components of each vector, see
   :meth:`DownwashModel.set_normalisation`).
@@ -111,11 +114,13 @@ class DownwashModel(nn.Module):
         self.register_buffer("out_std", torch.ones(n_out))
 
     def features(
-        self, x: torch.Tensor, leader_R: torch.Tensor
+        self, x: torch.Tensor, leader_R: torch.Tensor, wake_scales: torch.Tensor | None = None
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Features ``z`` (n, F) and output map ``M`` (n, 3, K)."""
+        """Features ``z`` (n, F) and output map ``M`` (n, 3, K) (``wake_scales`` (n, 3): the
+        leader-aware kinds' third input, see :mod:`aerodock.learning.features`)."""
         return feature_map_torch(
-            self.kind, x, leader_R, eps_pos_m=self.eps_pos_m, eps_vel_mps=self.eps_vel_mps
+            self.kind, x, leader_R, eps_pos_m=self.eps_pos_m, eps_vel_mps=self.eps_vel_mps,
+            wake_scales=wake_scales,
         )
 
     def components(self, z: torch.Tensor) -> torch.Tensor:
@@ -145,14 +150,16 @@ class DownwashModel(nn.Module):
             return force, None
         return force, (out_map * c[:, None, k:]).sum(-1)
 
-    def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, leader_R: torch.Tensor,
+                wake_scales: torch.Tensor | None = None) -> torch.Tensor:
         """Predicted downwash acceleration (n, 3), m/s², NED."""
-        return self.head(*self.features(x, leader_R))
+        return self.head(*self.features(x, leader_R, wake_scales))
 
-    def wrench(self, x: torch.Tensor, leader_R: torch.Tensor
+    def wrench(self, x: torch.Tensor, leader_R: torch.Tensor,
+               wake_scales: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor | None]:
         """Predicted force (n, 3), m/s², and torque (n, 3), N m, world NED (None without)."""
-        return self.wrench_head(*self.features(x, leader_R))
+        return self.wrench_head(*self.features(x, leader_R, wake_scales))
 
     @torch.no_grad()
     def set_normalisation(self, z: np.ndarray, c: np.ndarray) -> None:
@@ -234,6 +241,15 @@ def standardised_wrench_loss(force: torch.Tensor, force_label: torch.Tensor,
                   + torch.mean((torque - torque_label) ** 2) / torque_scale**2)
 
 
+class SO2LeaderModel(DownwashModel):
+    """Leader-aware SO(2) model: ``"so2"``'s features made dimensionless with the leader's wake
+    scales (hover induced velocity, rotor size) and the force in units of
+    ``g (v_hA / v_hB)^2`` (see :mod:`aerodock.learning.features`); predicts ``(f_radial,
+    f_axial)`` in those units."""
+
+    kind = "so2-leader"
+
+
 class MLPModel(DownwashModel):
     """Baseline: plain MLP on ``x`` (world frame) predicting the world-frame force."""
 
@@ -247,7 +263,8 @@ class ZeroModel(nn.Module):
 
     has_torque = False
 
-    def forward(self, x: torch.Tensor, leader_R: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, leader_R: torch.Tensor,
+                wake_scales: torch.Tensor | None = None) -> torch.Tensor:
         """Zeros (n, 3)."""
         return torch.zeros(x.shape[0], 3, dtype=x.dtype, device=x.device)
 
@@ -261,7 +278,8 @@ class ZeroModel(nn.Module):
 
 
 MODEL_CLASSES: dict[str, type[nn.Module]] = {
-    "so2": SO2Model, "so2-ext": SO2ExtModel, "so2-wrench": SO2WrenchModel, "mlp": MLPModel,
+    "so2": SO2Model, "so2-ext": SO2ExtModel, "so2-wrench": SO2WrenchModel,
+    "so2-leader": SO2LeaderModel, "mlp": MLPModel,
     "zero": ZeroModel,
 }
 

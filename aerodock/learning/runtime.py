@@ -23,6 +23,21 @@ A ``so2-wrench`` model also predicts the wake's torque (:attr:`Predictor.has_tor
 :meth:`Predictor.predict_torque` in the world frame (N m, NED) and
 :meth:`Predictor.predict_torque_bodies` in the follower's body frame (N m, FRD), what the
 autopilot's torque feed-forward subtracts (:mod:`aerodock.control.torque_feedforward`).
+
+A leader-aware model (``so2-leader``, :attr:`Predictor.needs_wake_scales`) takes a third input,
+the wake scales (n, 3) of :func:`aerodock.learning.features.wake_scales`. Where they come from:
+
+* :meth:`Predictor.predict` / :meth:`Predictor.predict_one`: the caller's ``wake_scales``, or,
+  when none are given, :attr:`Predictor.default_wake_scales`: the median of the training data's
+  (``model.json`` -> ``training.wake_scales.default``, the training pairing's hover scales).
+* :meth:`Predictor.predict_bodies`: from the :class:`BodyState`: the leader's
+  ``thrust_n`` (its hover thrust ``mass_kg * g`` where that is not finite and positive) and the
+  follower's ``mass_kg``, with the rotor radii and counts of :attr:`Predictor.rotor_geometry`:
+  the training flights' (``model.json`` -> ``vehicles``) unless set with
+  :meth:`Predictor.set_rotor_geometry` (from a config). Without a known geometry (training
+  flights that differ, and none set) it falls back to the default scales.
+
+Other kinds ignore ``wake_scales``: they run exactly as before.
 """
 
 from __future__ import annotations
@@ -35,11 +50,15 @@ import numpy as np
 
 from aerodock.downwash.base import BodyState
 from aerodock.learning.features import (
+    GRAVITY_MPS2,
+    LEADER_KINDS,
     N_FEATURES,
     TORQUE_KINDS,
     check_eps,
     check_inputs,
+    check_wake_scales,
     feature_map,
+    wake_scales,
 )
 from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
 
@@ -89,7 +108,10 @@ class Predictor:
         self.spec = spec
         self.kind = spec.kind
         self.has_torque = spec.kind in TORQUE_KINDS
+        self.needs_wake_scales = spec.kind in LEADER_KINDS
         self.meta = dict(meta or {})
+        self.default_wake_scales = _recorded_wake_scales(self.meta)
+        self.rotor_geometry = _recorded_rotor_geometry(self.meta)
         if spec.kind == "zero":
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
@@ -141,15 +163,60 @@ class Predictor:
         except (ValueError, TypeError, OverflowError) as err:
             raise ModelFileError(f"{where}: {' '.join(str(err).split())}") from None
 
+    def set_rotor_geometry(self, leader_rotor_radius_m: float, leader_n_rotors: int,
+                           follower_rotor_radius_m: float, follower_n_rotors: int) -> None:
+        """The vehicles' rotors :meth:`predict_bodies` builds a leader-aware model's wake scales
+        with (e.g. a config's ``[leader]`` and ``[vehicle]``), instead of the training
+        flights'."""
+        values = (leader_rotor_radius_m, leader_n_rotors, follower_rotor_radius_m,
+                  follower_n_rotors)
+        if not all(np.isfinite(float(v)) and float(v) > 0 for v in values):
+            raise ValueError(f"rotor geometry must be positive numbers, got {values}")
+        self.rotor_geometry = {
+            "leader": (float(leader_rotor_radius_m), int(leader_n_rotors)),
+            "follower": (float(follower_rotor_radius_m), int(follower_n_rotors))}
+
+    def _scales(self, wake_scales: np.ndarray | None, n: int) -> np.ndarray | None:
+        """The wake scales a prediction of ``n`` samples uses (None for other kinds)."""
+        if not self.needs_wake_scales:
+            return None
+        if wake_scales is None:
+            if self.default_wake_scales is None:
+                raise ValueError(f"a {self.kind!r} model needs wake_scales and its model file "
+                                 "records no default (training.wake_scales)")
+            wake_scales = self.default_wake_scales
+        return check_wake_scales(wake_scales, n)
+
+    def wake_scales_for_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
+        """The wake scales (n, 3) of two vehicles' batched states (see the module docstring).
+
+        Raises:
+            ValueError: no rotor geometry and no default scales.
+        """
+        n = np.reshape(np.asarray(leader.p, dtype=float), (-1, 3)).shape[0]
+        if self.rotor_geometry is None:
+            return self._scales(None, n)
+        (r_a, n_a), (r_b, n_b) = self.rotor_geometry["leader"], self.rotor_geometry["follower"]
+        thrust = np.broadcast_to(np.asarray(leader.thrust_n, float), (n,))
+        hover = np.broadcast_to(np.asarray(leader.mass_kg, float), (n,)) * GRAVITY_MPS2
+        thrust = np.where(np.isfinite(thrust) & (thrust > 0), thrust, hover)
+        mass_b = np.broadcast_to(np.asarray(follower.mass_kg, float), (n,))
+        return wake_scales(thrust, r_a, n_a, mass_b, r_b, n_b)
+
     # -- batched ---------------------------------------------------------------------------
-    def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    def predict(self, x: np.ndarray, leader_R: np.ndarray,
+                wake_scales: np.ndarray | None = None) -> np.ndarray:
         """Predicted downwash acceleration on the follower, (n, 3), m/s², NED.
 
         Args:
             x: (n, 9) ``[dp, v_A, v_B]`` (``dp = p_follower - p_leader``), NED, SI.
             leader_R: (n, 3, 3) leader attitude, body to world.
+            wake_scales: (n, 3) or (3,), a leader-aware model's third input (default:
+                :attr:`default_wake_scales`); ignored by other kinds.
         """
-        return self.predict_wrench(x, leader_R)[0]
+        if wake_scales is None:  # the call of every kind but the leader-aware ones, unchanged
+            return self.predict_wrench(x, leader_R)[0]
+        return self.predict_wrench(x, leader_R, wake_scales)[0]
 
     __call__ = predict
 
@@ -164,7 +231,8 @@ class Predictor:
             raise ValueError(f"a {self.kind!r} model predicts no torque (train 'so2-wrench')")
         return self.predict_wrench(x, leader_R)[1]
 
-    def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray
+    def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray,
+                       wake_scales: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray | None]:
         """(force (n, 3) m/s², torque (n, 3) N m or None without one), world NED."""
         x, leader_R = check_inputs(x, leader_R)
@@ -174,6 +242,7 @@ class Predictor:
             z, out_map = feature_map(
                 self.kind, x, leader_R,
                 eps_pos_m=self.spec.eps_pos_m, eps_vel_mps=self.spec.eps_vel_mps,
+                wake_scales=self._scales(wake_scales, x.shape[0]),
             )
         h = z
         for i, (wt, b) in enumerate(self._layers_t):
@@ -206,8 +275,14 @@ class Predictor:
             h = buf
         return h.tolist()
 
-    def predict_one(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
-        """One sample: ``x`` (9,), ``leader_R`` (3, 3) -> (3,) m/s², NED (see :meth:`predict`)."""
+    def predict_one(self, x: np.ndarray, leader_R: np.ndarray,
+                    wake_scales: np.ndarray | None = None) -> np.ndarray:
+        """One sample: ``x`` (9,), ``leader_R`` (3, 3) -> (3,) m/s², NED (see :meth:`predict`;
+        ``wake_scales`` (3,) a leader-aware model's, which runs through the batched path)."""
+        if self.needs_wake_scales:
+            return self.predict(np.reshape(x, (1, 9)), np.reshape(leader_R, (1, 3, 3)),
+                                None if wake_scales is None else np.reshape(wake_scales, (1, 3))
+                                )[0]
         dx, dy, dz, ax, ay, az, bx, by, bz = np.asarray(x, dtype=float).reshape(9).tolist()
         if self.kind == "mlp":
             return np.array(self._mlp_one((dx, dy, dz, ax, ay, az, bx, by, bz)))
@@ -255,6 +330,8 @@ class Predictor:
     def predict_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """Feed-forward ``f_ext`` (n, 3), m/s², NED, from the two vehicles' batched states."""
         x, rot = bodies_to_inputs(leader, follower)
+        if self.needs_wake_scales:
+            return self.predict(x, rot, self.wake_scales_for_bodies(leader, follower))
         if x.shape[0] == 1:
             return self.predict_one(x[0], rot[0])[None, :]
         return self.predict(x, rot)
@@ -267,9 +344,39 @@ class Predictor:
             ValueError: the model predicts no torque (see :attr:`has_torque`).
         """
         x, rot = bodies_to_inputs(leader, follower)
-        torque = self.predict_torque(x, rot)
+        torque = self.predict_torque(x, rot)  # no torque kind is leader-aware
         follower_rot = np.reshape(np.asarray(follower.R, dtype=float), (x.shape[0], 3, 3))
         return np.einsum("nji,nj->ni", follower_rot, torque)  # R^T tau
+
+
+def _recorded_wake_scales(meta: dict[str, Any]) -> np.ndarray | None:
+    """``training.wake_scales.default`` of a model document (3,), or None."""
+    training = meta.get("training")
+    record = training.get("wake_scales") if isinstance(training, dict) else None
+    default = record.get("default") if isinstance(record, dict) else None
+    try:
+        arr = np.asarray(default, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return arr if arr.shape == (3,) and np.all(np.isfinite(arr) & (arr > 0)) else None
+
+
+def _recorded_rotor_geometry(meta: dict[str, Any]) -> dict[str, tuple[float, int]] | None:
+    """The training vehicles' ``{"leader": (rotor_radius_m, n_rotors), "follower": ...}`` from a
+    model document's ``vehicles``, or None unless both are single known values."""
+    vehicles = meta.get("vehicles")
+    if not isinstance(vehicles, dict):
+        return None
+    out = {}
+    for role in ("leader", "follower"):
+        entry = vehicles.get(role)
+        if not isinstance(entry, dict):
+            return None
+        radius, count = entry.get("rotor_radius_m"), entry.get("n_rotors")
+        if not isinstance(radius, int | float) or not isinstance(count, int | float):
+            return None
+        out[role] = (float(radius), int(count))
+    return out
 
 
 class ZeroPredictor(Predictor):
@@ -279,14 +386,16 @@ class ZeroPredictor(Predictor):
         """A zero model (``meta`` is an optional ``model.json`` document)."""
         super().__init__(ModelSpec(kind="zero"), [], meta)
 
-    def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    def predict(self, x: np.ndarray, leader_R: np.ndarray,
+                wake_scales: np.ndarray | None = None) -> np.ndarray:
         """Zeros (n, 3)."""
         x, _ = check_inputs(x, leader_R)
         return np.zeros((x.shape[0], 3))
 
     __call__ = predict
 
-    def predict_one(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
+    def predict_one(self, x: np.ndarray, leader_R: np.ndarray,
+                    wake_scales: np.ndarray | None = None) -> np.ndarray:
         """Zeros (3,)."""
         return np.zeros(3)
 

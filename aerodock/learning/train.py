@@ -49,7 +49,14 @@ import torch
 from torch import nn
 
 from aerodock.learning.dataset import Dataset
-from aerodock.learning.features import TORQUE_KINDS, check_kind, feature_map, invariant_components
+from aerodock.learning.features import (
+    LEADER_KINDS,
+    TORQUE_KINDS,
+    WAKE_SCALE_NAMES,
+    check_kind,
+    feature_map,
+    invariant_components,
+)
 from aerodock.learning.modelfile import save_model_dir
 from aerodock.learning.models import (
     DEFAULT_ACTIVATION,
@@ -95,12 +102,17 @@ class TrainedModel:
                          {"kind": self.kind, "training": self.info})
 
     @torch.no_grad()
-    def predict(self, x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
-        """Torch prediction (n, 3), m/s², NED, as float64 NumPy."""
+    def predict(self, x: np.ndarray, leader_R: np.ndarray,
+                wake_scales: np.ndarray | None = None) -> np.ndarray:
+        """Torch prediction (n, 3), m/s², NED, as float64 NumPy (``wake_scales`` (n, 3): the
+        leader-aware kinds' third input)."""
         self.model.eval()
         xt = torch.as_tensor(np.asarray(x), dtype=torch.float32)
         rt = torch.as_tensor(np.asarray(leader_R), dtype=torch.float32)
-        return self.model(xt, rt).double().numpy()
+        st = None if wake_scales is None else torch.as_tensor(
+            np.array(np.broadcast_to(np.asarray(wake_scales, float), (xt.shape[0], 3))),
+            dtype=torch.float32)
+        return self.model(xt, rt, st).double().numpy()
 
 
 SPLITS = ("auto", "flight", "time-blocks")
@@ -133,10 +145,25 @@ def check_trainable(ds: Dataset, min_samples: int = 20, kind: str | None = None)
         if arr.size and np.max(np.abs(arr)) > MAX_ABS_INPUT:
             raise ValueError(f"degenerate data: {name} reach {np.max(np.abs(arr)):.3g}, beyond "
                              f"{MAX_ABS_INPUT:g} (not SI units?)")
+    if kind in LEADER_KINDS:
+        ds.wake_scales()  # raises DataError (a ValueError) naming a flight without vehicles
     rot = np.asarray(ds.leader_R, dtype=float)
     gram = np.einsum("nji,njk->nik", rot, rot)
     if rot.size and np.max(np.abs(gram - np.eye(3))) > 1e-2:
         raise ValueError("degenerate data: leader_R holds matrices that are not rotations")
+
+
+def training_wake_scales(ds: Dataset) -> dict[str, Any]:
+    """What a leader-aware model records of its training data's wake scales: the median of each
+    (:data:`~aerodock.learning.features.WAKE_SCALE_NAMES`, m/s and m), the default the runtime
+    uses when it is given no leader (``default``), and each one's range (``min``, ``max``)."""
+    scales = ds.wake_scales()
+    return {
+        "names": list(WAKE_SCALE_NAMES),
+        "default": [float(f"{v:.6g}") for v in np.median(scales, axis=0)],
+        "min": [float(f"{v:.6g}") for v in scales.min(axis=0)],
+        "max": [float(f"{v:.6g}") for v in scales.max(axis=0)],
+    }
 
 
 def _check_trained(model: nn.Module, train_mse: float) -> None:
@@ -204,7 +231,8 @@ def _features_tensors(
     kind: str, ds: Dataset, idx: np.ndarray
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None]:
     """Features, output map, force labels and (wrench kinds) torque labels of samples ``idx``."""
-    z, out_map = feature_map(kind, ds.x[idx], ds.leader_R[idx])
+    scales = ds.wake_scales()[idx] if kind in LEADER_KINDS else None
+    z, out_map = feature_map(kind, ds.x[idx], ds.leader_R[idx], wake_scales=scales)
     torque = (torch.as_tensor(ds.torque_labels()[idx], dtype=torch.float32)
               if kind in TORQUE_KINDS else None)
     return (torch.as_tensor(z, dtype=torch.float32),
@@ -325,6 +353,8 @@ def train_model(
                      "scale squared" if wrench else "MSE (m^2/s^4, world NED)"),
         },
     }
+    if kind in LEADER_KINDS:
+        info["wake_scales"] = training_wake_scales(train)
     if kind == "zero":
         return TrainedModel("zero", build_model("zero"), {**info, "train_time_s": 0.0}, {})
     t_start = time.perf_counter()
@@ -345,7 +375,8 @@ def train_model(
         model.set_normalisation(
             z_tr.double().numpy(),
             invariant_components(kind, train.x[tr_idx], train.leader_R[tr_idx], train.y[tr_idx],
-                                 None if tau_tr is None else tau_tr.double().numpy()),
+                                 None if tau_tr is None else tau_tr.double().numpy(),
+                                 train.wake_scales()[tr_idx] if kind in LEADER_KINDS else None),
         )
         loss_fn = _loss_fn(model)
         has_val = len(va_idx) > 0

@@ -17,6 +17,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 from aerodock.config import Config
 from aerodock.control.compensation import Compensation
 from aerodock.mission.faults import Fault, FaultFileError, check_fault
@@ -61,6 +63,30 @@ def check_number(name: str, value: Any, low: float, high: float) -> float:
     if not low <= value <= high:
         raise MissionSpecError(f"{name} must be between {low:g} and {high:g}, got {value!r}")
     return float(value)
+
+
+def check_positive(name: str, value: Any, high: float) -> float:
+    """``value`` as a float, refused unless it is a finite number with ``0 < value <= high``.
+
+    Raises:
+        MissionSpecError: not a number, not finite, not positive, or above ``high``.
+    """
+    number = check_number(name, value, -math.inf, math.inf)
+    if not number > 0:
+        raise MissionSpecError(f"{name} must be > 0, got {value!r}")
+    return check_number(name, number, 0.0, high)
+
+
+def check_seed(value: Any, name: str = "seed") -> int:
+    """A campaign seed: an integer >= 0 (the per-trial streams of :class:`aerodock.rng.TrialRNG`
+    are seeded with it).
+
+    Raises:
+        MissionSpecError: not an integer, or negative.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+        raise MissionSpecError(f"{name} must be an integer >= 0, got {value!r}")
+    return int(value)
 
 
 def check_leader_speed(value: Any, name: str = "leader_speed_mps") -> float:

@@ -11,18 +11,27 @@ the ROS graph or in the bag):
   ``velocity`` in the frame ``velocity_frame`` names (1 NED, 2 FRD world, 3 body FRD).
 
 Every state becomes a :class:`VehicleState` (NED world, FRD body, SI) stamped with the time it
-was *received* on the node's monotonic clock: staleness is judged on receive times, which do
-not depend on the sender's clock being in step with the node's.
+was *received* on the node's monotonic clock, and keeps the message's own stamp. Age is judged
+on receive times (they do not depend on the sender's clock being in step with the node's);
+whether the data is new is judged on the data itself:
 
-The rule for stale or missing inputs (:func:`prediction_step`): if either vehicle's newest state
-is older than ``max_age_s`` (or missing, or not finite), the node publishes **zero** and sets the
-stale flag. It never repeats an old prediction.
+- :class:`InputMonitor` (one per vehicle) compares each message with the one before it: a
+  stamp of zero, a stamp that goes backwards, a stamp that does not move (frozen) and a message
+  identical to the previous one (a relay repeating it, a stuck publisher) make that vehicle's
+  input unusable until a good message arrives;
+- :func:`stale_reasons` adds the stateless rules: missing, older than ``max_age_s``, not finite,
+  or beyond the plausible range (:data:`MAX_POSITION_M`, :data:`MAX_SPEED_MPS`).
+
+The rule for unusable inputs (:func:`prediction_step`): the node publishes **zero**, sets the
+stale flag and says why (``StepResult.reason``, the diagnostics' ``stale_reason``). It never
+repeats an old prediction. The converters raise no NumPy warnings for NaN or zero quaternions:
+such a state is simply not finite, hence stale.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,6 +49,20 @@ PX4_VELOCITY_NED, PX4_VELOCITY_FRD, PX4_VELOCITY_BODY_FRD = 1, 2, 3
 
 DEFAULT_RATE_HZ = 100.0
 DEFAULT_MAX_AGE_S = 0.05
+
+MAX_POSITION_M = 1.0e4
+"""Largest accepted |coordinate| of a position, m. A docking happens within a few metres of a
+local (motion-capture or EKF) origin; 10 km is far beyond any such volume yet well below where
+float64 differences of positions lose centimetres (1e4 m keeps ~1e-12 m resolution). A larger
+value is a units, frame or origin error (or a garbage 1e300), not a vehicle."""
+MAX_SPEED_MPS = 100.0
+"""Largest accepted |component| of a velocity, m/s: about 4 times the fastest multirotor this
+model is meant for and 100 times a docking approach; faster is a units error or garbage, and
+the model was never trained anywhere near it."""
+
+_QUIET = {"divide": "ignore", "invalid": "ignore", "over": "ignore"}
+"""``np.errstate`` settings of the converters: a NaN or zero quaternion gives a non-finite state
+(stale, with a reason), not a NumPy warning on stderr."""
 
 
 @dataclass(frozen=True)
@@ -92,14 +115,15 @@ def odometry_state(position: Sequence[float], quat_wxyz: Sequence[float],
         stamp_s: ``header.stamp`` in s.
     """
     world, body = frames_for(frame)
-    rot_src = quat_to_rotmat(np.asarray(quat_wxyz, dtype=float))
-    lin = np.asarray(linear, dtype=float)
-    if twist == "body":
-        lin = rot_src @ lin
-    elif twist != "world":
+    if twist not in ("body", "world"):
         raise ValueError(f"twist {twist!r}: use 'body' or 'world'")
-    return VehicleState(world @ np.asarray(position, dtype=float), world @ lin,
-                        world @ rot_src @ body.T, received_s, stamp_s)
+    with np.errstate(**_QUIET):
+        rot_src = quat_to_rotmat(np.asarray(quat_wxyz, dtype=float))
+        lin = np.asarray(linear, dtype=float)
+        if twist == "body":
+            lin = rot_src @ lin
+        return VehicleState(world @ np.asarray(position, dtype=float), world @ lin,
+                            world @ rot_src @ body.T, received_s, stamp_s)
 
 
 def current_state(state_vector: Sequence[float], *, received_s: float,
@@ -108,8 +132,9 @@ def current_state(state_vector: Sequence[float], *, received_s: float,
     sv = np.asarray(state_vector, dtype=float)
     if sv.shape[0] < 9:
         raise ValueError(f"state_vector has {sv.shape[0]} values, expected at least 9")
-    return VehicleState(sv[0:3].copy(), sv[3:6].copy(), euler_to_rotmat(sv[6], sv[7], sv[8]),
-                        received_s, stamp_s)
+    with np.errstate(**_QUIET):
+        rot = euler_to_rotmat(sv[6], sv[7], sv[8])
+    return VehicleState(sv[0:3].copy(), sv[3:6].copy(), rot, received_s, stamp_s)
 
 
 def px4_odometry_state(position: Sequence[float], q_wxyz: Sequence[float],
@@ -120,12 +145,13 @@ def px4_odometry_state(position: Sequence[float], q_wxyz: Sequence[float],
     Raises:
         ValueError: a ``velocity_frame`` other than NED (1), FRD (2) or body FRD (3).
     """
-    rot = quat_to_rotmat(np.asarray(q_wxyz, dtype=float))
-    vel = np.asarray(velocity, dtype=float)
-    if velocity_frame == PX4_VELOCITY_BODY_FRD:
-        vel = rot @ vel
-    elif velocity_frame not in (PX4_VELOCITY_NED, PX4_VELOCITY_FRD):
+    if velocity_frame not in (PX4_VELOCITY_NED, PX4_VELOCITY_FRD, PX4_VELOCITY_BODY_FRD):
         raise ValueError(f"VehicleOdometry velocity_frame {velocity_frame}: unknown frame")
+    with np.errstate(**_QUIET):
+        rot = quat_to_rotmat(np.asarray(q_wxyz, dtype=float))
+        vel = np.asarray(velocity, dtype=float)
+        if velocity_frame == PX4_VELOCITY_BODY_FRD:
+            vel = rot @ vel
     stamp = None if timestamp_us is None else timestamp_us * 1e-6
     return VehicleState(np.asarray(position, dtype=float), vel, rot, received_s, stamp)
 
@@ -135,13 +161,120 @@ def input_age_s(state: VehicleState | None, now_s: float) -> float:
     return math.inf if state is None else max(now_s - state.received_s, 0.0)
 
 
+def implausible(state: VehicleState) -> str | None:
+    """Why ``state``'s data cannot be a vehicle's (not finite, out of range), or None.
+
+    Components are compared, not norms: a norm of 1e300 would overflow (and warn).
+    """
+    if not state.is_finite():
+        return "not finite"
+    p_max, v_max = float(np.abs(state.p_m).max()), float(np.abs(state.v_mps).max())
+    if p_max > MAX_POSITION_M:
+        return f"position {p_max:.3g} m beyond {MAX_POSITION_M:g} m"
+    if v_max > MAX_SPEED_MPS:
+        return f"velocity {v_max:.3g} m/s beyond {MAX_SPEED_MPS:g} m/s"
+    return None
+
+
+class InputMonitor:
+    """Judges one vehicle's messages by their data: is each newer than the one before it?
+
+    :meth:`receive` compares a state with the previous one received (accepted or not):
+
+    - a stamp of exactly zero (an unset ``header.stamp``, PX4's ``timestamp`` 0);
+    - a stamp earlier than the previous one (``went backwards``);
+    - the same stamp as the previous one with other values (``frozen``);
+    - the same stamp and the same position, velocity and attitude, bit for bit (``repeated``:
+      a relay or bridge re-sending one message, a stuck publisher). Without stamps, identical
+      values alone: a real estimator's velocity never repeats to the last bit.
+
+    Each verdict holds until the next message: one bad message makes the vehicle's input unusable
+    (zero output, stale) until a good one arrives. The comparison is with the *previous* message,
+    so after a sender restart (stamps jump back once) the next message is accepted again.
+    """
+
+    def __init__(self) -> None:
+        self.previous: VehicleState | None = None
+        self.verdict: str | None = None
+
+    def receive(self, state: VehicleState) -> str | None:
+        """Record ``state``; why it is unusable (see the class), or None when it is fine."""
+        prev, self.previous = self.previous, state
+        self.verdict = sequence_fault(prev, state)
+        return self.verdict
+
+
+def sequence_fault(prev: VehicleState | None, state: VehicleState) -> str | None:
+    """The :class:`InputMonitor` rule for ``state`` following ``prev`` (None: first message)."""
+    stamp = state.stamp_s
+    if stamp is not None and stamp == 0.0:
+        return "stamp is zero"
+    if prev is None:
+        return None
+    same_values = (np.array_equal(state.p_m, prev.p_m) and np.array_equal(state.v_mps, prev.v_mps)
+                   and np.array_equal(state.R, prev.R))
+    if stamp is None or prev.stamp_s is None:
+        return "repeated message (same values)" if same_values else None
+    if stamp == prev.stamp_s:
+        if same_values:
+            return f"repeated message (stamp {stamp!r} and values unchanged)"
+        return f"stamp frozen at {stamp!r}"
+    if stamp < prev.stamp_s:
+        return f"stamp went backwards ({prev.stamp_s!r} -> {stamp!r})"
+    return None
+
+
+def stale_reasons(leader: VehicleState | None, follower: VehicleState | None, now_s: float,
+                  max_age_s: float, faults: Mapping[str, str | None] | None = None) -> list[str]:
+    """Why the inputs cannot be used (empty: they can), one ``"role: why"`` per problem.
+
+    Args:
+        leader: newest leader state (None: none yet).
+        follower: newest follower state.
+        now_s: the node's monotonic time, s.
+        max_age_s: the oldest accepted input, s.
+        faults: role -> the :class:`InputMonitor` verdict on its newest message.
+    """
+    reasons = []
+    for role, state in (("leader", leader), ("follower", follower)):
+        if state is None:
+            reasons.append(f"{role}: missing")
+            continue
+        age = input_age_s(state, now_s)
+        if age > max_age_s:
+            reasons.append(f"{role}: {age * 1e3:.0f} ms old (max {max_age_s * 1e3:g} ms)")
+        why = (faults or {}).get(role) or implausible(state)
+        if why:
+            reasons.append(f"{role}: {why}")
+    return reasons
+
+
 def is_stale(leader: VehicleState | None, follower: VehicleState | None, now_s: float,
              max_age_s: float) -> bool:
-    """True when either state is missing, older than ``max_age_s`` or not finite."""
-    for state in (leader, follower):
-        if state is None or input_age_s(state, now_s) > max_age_s or not state.is_finite():
-            return True
-    return False
+    """True when either state is missing, too old, not finite or implausible."""
+    return bool(stale_reasons(leader, follower, now_s, max_age_s))
+
+
+def resolve_output_frame(requested: str | None, mapping_frame: str, *, frame_set: bool,
+                         follower_type: str | None = None) -> str:
+    """The output world frame, decided once at start (never changed by type discovery).
+
+    Args:
+        requested: ``--output-frame`` (``"ned"``/``"enu"``), or None for automatic.
+        mapping_frame: the mapping's ``frame``.
+        frame_set: the mapping file sets ``frame`` itself (not the default's ``"enu"``).
+        follower_type: the follower's state type when given up front (``--state-type``).
+
+    Automatic: a known follower type decides (Odometry: the mapping's frame; Freyja and PX4:
+    NED); else the mapping's ``frame`` when the file sets it; else NED (the default mapping is
+    Freyja's, whose states are NED).
+    """
+    if requested is not None:
+        frames_for(requested)  # checks the name
+        return requested
+    if follower_type is not None:
+        return mapping_frame if follower_type == ODOMETRY else "ned"
+    return mapping_frame if frame_set else "ned"
 
 
 def model_inputs(leader: VehicleState, follower: VehicleState) -> tuple[np.ndarray, np.ndarray]:
@@ -168,6 +301,7 @@ class StepResult:
         compute_s: time spent in the predictor, s (0 when stale).
         leader_stamp_s: the leader state's own stamp (None: none or no state).
         follower_stamp_s: the follower state's.
+        reason: why the output is stale (``"; "``-joined ``"role: why"``), ``""`` when fresh.
     """
 
     f_ext_mps2: np.ndarray
@@ -177,11 +311,14 @@ class StepResult:
     compute_s: float
     leader_stamp_s: float | None
     follower_stamp_s: float | None
+    reason: str = ""
 
 
 def prediction_step(predictor: Any, leader: VehicleState | None,
                     follower: VehicleState | None, now_s: float, *, max_age_s: float,
-                    output_frame: str = "ned", clock: Any = None) -> StepResult:
+                    output_frame: str = "ned", clock: Any = None,
+                    faults: Mapping[str, str | None] | None = None,
+                    wake_scales: np.ndarray | None = None) -> StepResult:
     """One tick: the prediction for the newest states, or zero (flagged stale).
 
     Args:
@@ -193,6 +330,12 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
         output_frame: ``"ned"`` or ``"enu"``.
         clock: a ``() -> float`` seconds clock timing the prediction (default
             ``time.perf_counter``).
+        faults: role -> the :class:`InputMonitor` verdict on its newest message (None: fine).
+        wake_scales: (3,) a leader-aware model's wake scales (leader_vh_mps, leader_size_m,
+            follower_vh_mps; :func:`aerodock.learning.features.wake_scales`). The state
+            messages carry no thrust, so the node passes None: the model file's recorded
+            training scales (``Predictor.default_wake_scales``). Ignored by other kinds, which
+            run exactly as before.
 
     A prediction that is not finite is also replaced by zero and flagged stale.
     """
@@ -202,15 +345,20 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
     ages = input_age_s(leader, now_s), input_age_s(follower, now_s)
     stamps = (None if leader is None else leader.stamp_s,
               None if follower is None else follower.stamp_s)
-    if is_stale(leader, follower, now_s, max_age_s):
-        return StepResult(np.zeros(3), True, *ages, 0.0, *stamps)
+    reasons = stale_reasons(leader, follower, now_s, max_age_s, faults)
+    if reasons:
+        return StepResult(np.zeros(3), True, *ages, 0.0, *stamps, "; ".join(reasons))
     assert leader is not None and follower is not None
     x, rot = model_inputs(leader, follower)
     t0 = clock()
-    f_ned = predictor.predict_one(x, rot)
+    if getattr(predictor, "needs_wake_scales", False):
+        f_ned = predictor.predict_one(x, rot, wake_scales)
+    else:
+        f_ned = predictor.predict_one(x, rot)
     compute = clock() - t0
     if not np.all(np.isfinite(f_ned)):
-        return StepResult(np.zeros(3), True, *ages, compute, *stamps)
+        return StepResult(np.zeros(3), True, *ages, compute, *stamps,
+                          "prediction not finite")
     return StepResult(to_output_frame(f_ned, output_frame), False, *ages, compute, *stamps)
 
 

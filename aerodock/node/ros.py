@@ -11,8 +11,14 @@ and at a fixed rate publishes:
 - diagnostics (``diagnostic_msgs/msg/DiagnosticArray``, one status named ``aerodock f_ext``):
   ``latency_ms`` (tick start to publish), ``compute_ms`` (predictor), ``leader_age_ms``,
   ``follower_age_ms`` (since each state was received), ``stale`` (``true``/``false``),
-  ``leader_stamp``, ``follower_stamp`` (the states' own stamps, s) and ``tick``. The level is
-  OK, or STALE when the output is zero for stale inputs.
+  ``stale_reason`` (why, ``""`` when fresh), ``leader_stamp``, ``follower_stamp`` (the states'
+  own stamps, s), ``tick`` and ``output_frame``. The level is OK, or STALE when the output is
+  zero for unusable inputs (the status message is then the reason).
+
+Each vehicle's messages pass an :class:`aerodock.node.core.InputMonitor` (stamps that are zero,
+go backwards or freeze; a message repeated by a relay). The output frame and its ``frame_id``
+are decided once at start (:func:`aerodock.node.core.resolve_output_frame`): discovering the
+follower's type later never changes them.
 """
 
 from __future__ import annotations
@@ -30,12 +36,14 @@ from aerodock.node.core import (
     ODOMETRY,
     PX4_ODOMETRY,
     STATE_TYPES,
+    InputMonitor,
     StepResult,
     VehicleState,
     current_state,
     odometry_state,
     prediction_step,
     px4_odometry_state,
+    resolve_output_frame,
 )
 
 STATUS_NAME = "aerodock f_ext"
@@ -51,7 +59,9 @@ class NodeSettings:
         max_age_s: oldest accepted input (older: zero output, stale flag).
         output_topic: f_ext topic.
         diagnostics_topic: diagnostics topic.
-        output_frame: ``"ned"``, ``"enu"``, or ``None`` (from the follower's state type).
+        output_frame: ``"ned"``, ``"enu"``, or ``None``: automatic, decided once at start by
+            :func:`aerodock.node.core.resolve_output_frame`.
+        frame_set: the mapping file sets ``frame`` (the automatic output frame follows it).
         state_types: topic -> ROS type name, for topics whose type is not to be discovered.
         frame_ids: output ``header.frame_id`` per output frame.
     """
@@ -62,6 +72,7 @@ class NodeSettings:
     output_topic: str = "/aerodock/f_ext"
     diagnostics_topic: str = "/aerodock/diagnostics"
     output_frame: str | None = None
+    frame_set: bool = False
     state_types: dict[str, str] = field(default_factory=dict)
     frame_ids: dict[str, str] = field(default_factory=lambda: {"ned": "map_ned", "enu": "map"})
 
@@ -127,7 +138,11 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             self.topics = {role: settings.mapping[role]["state"]
                            for role in ("leader", "follower")}
             self.types: dict[str, str] = {}
-            self.output_frame = settings.output_frame
+            self.monitors = {role: InputMonitor() for role in self.topics}
+            self.output_frame = resolve_output_frame(
+                settings.output_frame, settings.mapping["frame"], frame_set=settings.frame_set,
+                follower_type=settings.state_types.get(self.topics["follower"]))
+            self.frame_id = settings.frame_ids[self.output_frame]
             self.tick = 0
             self.errors: list[str] = []
             self.pub = self.create_publisher(Vector3Stamped, settings.output_topic, 10)
@@ -157,10 +172,15 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
                 self.types[role] = type_name
                 self._subs.append(self.create_subscription(
                     cls, topic, self._callback(role, type_name), self._qos))
-                if role == "follower" and self.output_frame is None:
-                    self.output_frame = ("ned" if type_name != ODOMETRY
-                                         else self.settings.mapping["frame"])
                 self.get_logger().info(f"{role} state: {topic} ({type_name})")
+                if role == "follower" and self.settings.output_frame is None:
+                    natural = resolve_output_frame(None, self.settings.mapping["frame"],
+                                                   frame_set=True, follower_type=type_name)
+                    if natural != self.output_frame:
+                        self.get_logger().warning(
+                            f"f_ext is published in {self.output_frame.upper()} "
+                            f"({self.frame_id}) as decided at start; {type_name} suggests "
+                            f"{natural.upper()}: set --output-frame or the mapping's frame")
             if len(self.types) == 2 and hasattr(self, "graph_timer"):
                 self.graph_timer.cancel()
 
@@ -169,10 +189,13 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
 
             def on_state(msg: Any) -> None:
                 try:
-                    self.states[role] = state_from_message(type_name, msg, mapping,
-                                                           time.monotonic())
+                    state = state_from_message(type_name, msg, mapping, time.monotonic())
                 except ValueError as err:  # a message we cannot use: the input goes stale
                     self.errors.append(str(err))
+                    self.monitors[role].verdict = f"unusable message ({err})"
+                    return
+                self.monitors[role].receive(state)
+                self.states[role] = state
 
             return on_state
 
@@ -181,11 +204,12 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             result = prediction_step(self.predictor, self.states["leader"],
                                      self.states["follower"], start,
                                      max_age_s=self.settings.max_age_s,
-                                     output_frame=self.output_frame or "ned")
+                                     output_frame=self.output_frame,
+                                     faults={r: m.verdict for r, m in self.monitors.items()})
             stamp = self.get_clock().now().to_msg()
             out = Vector3Stamped()
             out.header.stamp = stamp
-            out.header.frame_id = self.settings.frame_ids[self.output_frame or "ned"]
+            out.header.frame_id = self.frame_id
             out.vector.x, out.vector.y, out.vector.z = (float(v) for v in result.f_ext_mps2)
             latency_ms = (time.monotonic() - start) * 1e3
             self.pub.publish(out)
@@ -200,18 +224,18 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             status.name = STATUS_NAME
             status.hardware_id = node_name
             status.level = DiagnosticStatus.STALE if result.stale else DiagnosticStatus.OK
-            status.message = ("stale or missing input: publishing zero" if result.stale
-                              else "ok")
+            status.message = (f"publishing zero: {result.reason}" if result.stale else "ok")
             values = {
                 "latency_ms": f"{latency_ms:.4f}",
                 "compute_ms": ms(result.compute_s),
                 "leader_age_ms": ms(result.leader_age_s),
                 "follower_age_ms": ms(result.follower_age_s),
                 "stale": "true" if result.stale else "false",
+                "stale_reason": result.reason,
                 "leader_stamp": repr(result.leader_stamp_s),
                 "follower_stamp": repr(result.follower_stamp_s),
                 "tick": str(self.tick),
-                "output_frame": self.output_frame or "ned",
+                "output_frame": self.output_frame,
             }
             status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
             array = DiagnosticArray()

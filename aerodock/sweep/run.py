@@ -151,30 +151,53 @@ def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | 
 
 def _run_ray(args: list[tuple], jobs: int | None, address: str | None,
              progress: Progress | None) -> dict[int, list[dict[str, Any]]]:
+    """The cells as Ray tasks: ``{cell index: rows}``.
+
+    A Ray instance started here (no ``address``, Ray not yet initialised) is watched by
+    :class:`aerodock.sweep.raycleanup.RayReaper` (no Ray process outlives a killed driver), and
+    ``SIGTERM`` stops the sweep with ``ray.shutdown()`` and exit status 143
+    (:func:`aerodock.sweep.raycleanup.sigterm_exits_cleanly`).
+    """
     try:
         import ray
     except ImportError:
         raise ValueError("--backend ray needs Ray: pip install 'aerodock[ray]'") from None
+    from aerodock.sweep.raycleanup import RayReaper, reinstall_sigterm, sigterm_exits_cleanly
+
     started_here = not ray.is_initialized()
-    if started_here:
-        if address is not None:
-            ray.init(address=address, log_to_driver=False)
-        else:
-            ray.init(num_cpus=jobs, include_dashboard=False, log_to_driver=False)
-    try:
-        job = ray.remote(num_cpus=1)(_cell_job)
-        pending = [job.remote(*a) for a in args]
-        results: dict[int, list[dict[str, Any]]] = {}
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            idx, rows = ray.get(done[0])
+    with contextlib.ExitStack() as stack:
+        if started_here:
+            stack.enter_context(sigterm_exits_cleanly())
+            if address is None:
+                stack.enter_context(RayReaper())
+        try:
+            if started_here:
+                if address is not None:
+                    ray.init(address=address, log_to_driver=False)
+                else:
+                    ray.init(num_cpus=jobs, include_dashboard=False, log_to_driver=False)
+                reinstall_sigterm()  # ray.init put its C++ failure handler on SIGTERM
+            return _ray_cells(ray, args, progress)
+        finally:
+            if started_here:
+                ray.shutdown()
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _ray_cells(ray: Any, args: list[tuple], progress: Progress | None
+               ) -> dict[int, list[dict[str, Any]]]:
+    """Submit every cell and collect the rows (waits in short slices: signals get through)."""
+    job = ray.remote(num_cpus=1)(_cell_job)
+    pending = [job.remote(*a) for a in args]
+    results: dict[int, list[dict[str, Any]]] = {}
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+        for ref in done:
+            idx, rows = ray.get(ref)
             results[idx] = rows
             if progress:
                 progress(len(results), len(args))
-        return results
-    finally:
-        if started_here:
-            ray.shutdown()
+    return results
 
 
 def columns(rows: list[dict[str, Any]]) -> list[str]:

@@ -3,11 +3,13 @@
 from aerodock.view.render import (
     FrameDrawer,
     Track,
+    approach_direction,
     frame_indices,
+    gif_durations_ms,
     render_animation,
     track_from_flightlog,
     track_from_trace,
 )
 
-__all__ = ["FrameDrawer", "Track", "frame_indices", "render_animation", "track_from_flightlog",
-           "track_from_trace"]
+__all__ = ["FrameDrawer", "Track", "approach_direction", "frame_indices", "gif_durations_ms",
+           "render_animation", "track_from_flightlog", "track_from_trace"]

@@ -2,13 +2,16 @@
 
 A :class:`Track` holds what is drawn, from a FlightLog (:func:`track_from_flightlog`: simulated
 with ``dock --save-logs`` or ingested from real logs) or from a campaign trace
-(:func:`track_from_trace`). Each frame has a side view (north against altitude) and a top view
-(east against north): both vehicles with their arms (attitude from the log), the bar and its two
-cables, the gate's state (colour of the follower's gripper) and the predicted-force arrow.
-What a log lacks is left out and said on the frame (a real log has no bar, gate or prediction).
+(:func:`track_from_trace`). Each frame has a side view along the approach (the horizontal
+direction from the follower's start to the bar, :func:`approach_direction`, against altitude) and
+a top view (east against north): both vehicles with their arms (attitude from the log), the bar
+and its two cables, the gate's state (colour of the follower's gripper) and the predicted-force
+arrow, with a legend naming each of them. What a log lacks is left out and said on the frame (a
+real log has no bar, gate or prediction).
 
-GIFs are written with matplotlib's PillowWriter (always available with matplotlib); ``.mp4``
-needs ffmpeg on PATH.
+GIFs are written with Pillow (always available with matplotlib), each frame shown for
+``1000 / fps`` ms on average (GIF delays are whole centiseconds: :func:`gif_durations_ms`);
+``.mp4`` needs ffmpeg on PATH.
 """
 
 from __future__ import annotations
@@ -33,6 +36,12 @@ GATE_COLOURS = {GateState.OPEN: "tab:green", GateState.CLOSING: "tab:orange",
 FORCE_SCALE_M_PER_MPS2 = 0.05  # a 10 m/s² predicted force is drawn 0.5 m long
 CRAZYFLIE_DIAGONAL_M = 0.092  # motor-to-motor (real Crazyflie logs carry no size)
 SIM_DIAGONAL_M = 0.27
+FIGSIZE_IN = (10.0, 5.6)
+"""Size of an animation's frame, inches (800 x 448 pixels at the default 80 dpi)."""
+LEADER_COLOUR, FOLLOWER_COLOUR, BAR_COLOUR, CABLE_COLOUR, FORCE_COLOUR = (
+    "black", "tab:purple", "tab:brown", "0.5", "tab:red")
+COMPASS = ("north", "north-east", "east", "south-east", "south", "south-west", "west",
+           "north-west")
 
 
 @dataclass
@@ -126,45 +135,86 @@ def _arms(p: np.ndarray, R: np.ndarray | None, diagonal_m: float) -> np.ndarray:
     return p + body @ rot.T
 
 
-def _limits(track: Track) -> tuple[np.ndarray, np.ndarray]:
-    pts = [track.leader_p, track.follower_p] + ([track.bar_p] if track.bar_p is not None else [])
-    allp = np.concatenate(pts)
+def approach_direction(track: Track) -> np.ndarray:
+    """(2,) unit horizontal direction (north, east) from the follower's first position to the
+    bar's (the leader's when the log has no bar): the side view looks across it, so the approach
+    runs left to right. North when the two start stacked (closer than 1 cm horizontally)."""
+    target = track.bar_p if track.bar_p is not None else track.leader_p
+    d = np.asarray(target[0][:2] - track.follower_p[0][:2], dtype=float)
+    dist = float(np.hypot(d[0], d[1]))
+    return d / dist if dist > 0.01 else np.array([1.0, 0.0])
+
+
+def heading_name(direction: np.ndarray) -> str:
+    """``direction`` (north, east) as a compass heading: ``"90° (east)"``."""
+    deg = float(np.degrees(np.arctan2(direction[1], direction[0]))) % 360.0
+    return f"{deg:.0f}° ({COMPASS[int(round(deg / 45.0)) % 8]})"
+
+
+def _limits(pts: np.ndarray, diagonal_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centre and half-span of every point in ``pts`` (..., d), padded for the vehicles."""
+    allp = pts.reshape(-1, pts.shape[-1])
     lo, hi = allp.min(0), allp.max(0)
-    pad = 0.15 + 0.6 * track.diagonal_m
-    centre, half = (lo + hi) / 2, (hi - lo) / 2 + pad
-    return centre, half
+    pad = 0.15 + 0.6 * diagonal_m
+    return (lo + hi) / 2, (hi - lo) / 2 + pad
+
+
+def _legend_handles(track: Track, gate: GateState | None) -> tuple[list[Any], list[str]]:
+    """Legend entries for what a frame of ``track`` draws (the gripper's entry in the colour
+    and with the name of the gate's state ``gate``)."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=LEADER_COLOUR, lw=2.5, marker="o", ms=4),
+               Line2D([], [], color=FOLLOWER_COLOUR, lw=2.5, marker="o", ms=4),
+               Line2D([], [], color=FOLLOWER_COLOUR, lw=0.8, alpha=0.6)]
+    labels = ["leader", "follower", "follower's path"]
+    if track.bar_p is not None:
+        handles += [Line2D([], [], color=BAR_COLOUR, lw=3),
+                    Line2D([], [], color=CABLE_COLOUR, lw=0.8)]
+        labels += ["bar", "bar's cables"]
+    if gate is not None:
+        handles.append(Line2D([], [], color=GATE_COLOURS[gate], lw=2, marker="s", ms=6))
+        labels.append(f"gripper (gate {gate.name.lower()})")
+    if track.force_mps2 is not None:
+        handles.append(Line2D([], [], color=FORCE_COLOUR, lw=1.5, marker=">", ms=6))
+        labels.append("predicted wake force (0.5 m = 10 m/s²)")
+    return handles, labels
 
 
 class FrameDrawer:
     """Draws frame ``k`` of a Track on a side and a top axis (artists re-created per frame)."""
 
-    def __init__(self, track: Track, figsize: tuple[float, float] = (9.0, 4.4), dpi: int = 80):
+    def __init__(self, track: Track, figsize: tuple[float, float] = FIGSIZE_IN, dpi: int = 80):
         plt = _plt()
         self.track = track
+        self.direction = approach_direction(track)
         self.fig, (self.ax_side, self.ax_top) = plt.subplots(1, 2, figsize=figsize, dpi=dpi)
-        centre, half = _limits(track)
-        span_side = max(half[0], half[2])
+        pts = np.concatenate([track.leader_p, track.follower_p]
+                             + ([track.bar_p] if track.bar_p is not None else []))
+        centre, half = _limits(np.stack(self._side(pts), axis=-1), track.diagonal_m)
+        span_side = half.max()
         self.ax_side.set_xlim(centre[0] - span_side, centre[0] + span_side)
-        self.ax_side.set_ylim(-centre[2] - span_side, -centre[2] + span_side)
-        span_top = max(half[0], half[1])
+        self.ax_side.set_ylim(centre[1] - span_side, centre[1] + span_side)
+        centre, half = _limits(pts[:, :2], track.diagonal_m)
+        span_top = half.max()
         self.ax_top.set_xlim(centre[1] - span_top, centre[1] + span_top)
         self.ax_top.set_ylim(centre[0] - span_top, centre[0] + span_top)
-        self.ax_side.set_xlabel("north [m]")
+        self.ax_side.set_xlabel(f"along the approach, heading {heading_name(self.direction)} [m]")
         self.ax_side.set_ylabel("altitude [m]")
         self.ax_top.set_xlabel("east [m]")
         self.ax_top.set_ylabel("north [m]")
         for ax in (self.ax_side, self.ax_top):
             ax.set_aspect("equal")
             ax.grid(alpha=0.3)
-        self.ax_side.set_title("side view")
+        self.ax_side.set_title("side view (the approach runs left to right)")
         self.ax_top.set_title("top view")
         self._artists: list[Any] = []
-        self.fig.tight_layout(rect=(0, 0, 1, 0.9))
+        self.fig.tight_layout(rect=(0, 0.15, 1, 0.88))
 
-    # Views: side (north, up), top (east, north).
-    @staticmethod
-    def _side(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return p[..., 0], -p[..., 2]
+    # Views: side (along the approach, up), top (east, north).
+    def _side(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Points ``p`` (..., 3) NED in the side view: distance along the approach, altitude."""
+        return p[..., 0] * self.direction[0] + p[..., 1] * self.direction[1], -p[..., 2]
 
     @staticmethod
     def _top(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -182,8 +232,8 @@ class FrameDrawer:
         gate = None if tr.gate is None else GateState(int(tr.gate[k]))
         for ax, view in ((self.ax_side, self._side), (self.ax_top, self._top)):
             add = self._artists.extend
-            add(ax.plot(*view(tr.follower_p[:k + 1]), color="tab:purple", lw=0.8, alpha=0.6))
-            for p, R, colour in ((lp, lR, "black"), (fp, fR, "tab:purple")):
+            add(ax.plot(*view(tr.follower_p[:k + 1]), color=FOLLOWER_COLOUR, lw=0.8, alpha=0.6))
+            for p, R, colour in ((lp, lR, LEADER_COLOUR), (fp, fR, FOLLOWER_COLOUR)):
                 for seg in _arms(p, R, tr.diagonal_m):
                     add(ax.plot(*view(seg), color=colour, lw=2.5, solid_capstyle="round"))
                 add(ax.plot(*view(p), "o", color=colour, ms=4))
@@ -198,7 +248,7 @@ class FrameDrawer:
                 f = tr.force_mps2[k] * FORCE_SCALE_M_PER_MPS2
                 (x0, y0), (dx, dy) = view(fp), view(f)
                 if np.hypot(dx, dy) > 1e-4:
-                    self._artists.append(ax.arrow(x0, y0, dx, dy, color="tab:red", width=0.004,
+                    self._artists.append(ax.arrow(x0, y0, dx, dy, color=FORCE_COLOUR, width=0.004,
                                                   head_width=0.025, length_includes_head=True))
         status = [f"t = {tr.t_s[k]:5.2f} s"]
         if gate is not None:
@@ -206,12 +256,18 @@ class FrameDrawer:
         sep = np.linalg.norm(fp - lp)
         status.append(f"separation {sep:.2f} m")
         lines = [tr.title, "   ".join(status)]
-        if tr.force_mps2 is not None:
-            lines[-1] += "   red: predicted force (0.5 m = 10 m/s²)"
         if tr.notes:
             lines[-1] += "   (" + "; ".join(tr.notes) + ")"
         self._artists.append(self.fig.text(0.5, 0.97, "\n".join(lines), ha="center", va="top",
-                                           fontsize=8))
+                                           fontsize=9))
+        handles, labels = _legend_handles(tr, gate)
+        self._artists.append(self.fig.legend(handles, labels, loc="lower center", ncol=4,
+                                             fontsize=8, frameon=False,
+                                             bbox_to_anchor=(0.5, 0.03)))
+        if gate is not None:
+            self._artists.append(self.fig.text(
+                0.5, 0.01, "gripper colour: green open, orange closing, blue captured, red missed",
+                ha="center", va="bottom", fontsize=8))
 
     def _draw_bar(self, ax, view, lp, lR, bar_p) -> None:
         tr = self.track
@@ -221,9 +277,10 @@ class FrameDrawer:
         ends = np.stack([bar_p - along, bar_p + along])
         add = self._artists.extend
         for sign, end in zip((-1, 1), ends, strict=True):
-            add(ax.plot(*view(np.stack([anchor + sign * along, end])), color="0.5", lw=0.8))
-        add(ax.plot(*view(ends), color="tab:brown", lw=3, zorder=4))
-        add(ax.plot(*view(bar_p), "o", color="tab:brown", ms=4, zorder=4))  # seen end-on too
+            add(ax.plot(*view(np.stack([anchor + sign * along, end])), color=CABLE_COLOUR,
+                        lw=0.8))
+        add(ax.plot(*view(ends), color=BAR_COLOUR, lw=3, zorder=4))
+        add(ax.plot(*view(bar_p), "o", color=BAR_COLOUR, ms=4, zorder=4))  # seen end-on too
 
     def rgb(self) -> np.ndarray:
         """The current frame as an (H, W, 3) uint8 array."""
@@ -247,6 +304,27 @@ def frame_indices(t_s: np.ndarray, fps: float, speed: float = 1.0,
     return idx
 
 
+def gif_durations_ms(n_frames: int, fps: float) -> list[int]:
+    """How long each of ``n_frames`` GIF frames shows, ms, so that frame ``j`` starts at
+    ``j * 1000 / fps`` ms rounded to the GIF's centiseconds: every delay is within 10 ms of
+    ``1000 / fps`` and the whole animation lasts ``n_frames * 1000 / fps`` ms (to 5 ms)."""
+    starts_cs = np.round(np.arange(n_frames + 1) * 100.0 / fps).astype(int)
+    return [int(d) * 10 for d in np.maximum(np.diff(starts_cs), 1)]
+
+
+def _gif_writer(fps: float) -> Any:
+    """matplotlib's PillowWriter, writing each frame's delay from :func:`gif_durations_ms`
+    (matplotlib writes ``int(1000 / fps)`` ms, which the GIF truncates: 60 ms at 15 fps)."""
+    from matplotlib.animation import PillowWriter
+
+    class ExactRateGifWriter(PillowWriter):
+        def finish(self) -> None:
+            self._frames[0].save(self.outfile, save_all=True, append_images=self._frames[1:],
+                                 duration=gif_durations_ms(len(self._frames), self.fps), loop=0)
+
+    return ExactRateGifWriter(fps=fps)
+
+
 def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: float = 1.0,
                      max_frames: int | None = 300, dpi: int = 80,
                      progress: Any = None) -> Path:
@@ -258,13 +336,13 @@ def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: fl
         fps: frames per second of the video.
         speed: seconds of flight per second of video.
         max_frames: cap on the number of frames (evenly spread over the flight).
-        dpi: resolution.
+        dpi: resolution (the frame is :data:`FIGSIZE_IN` inches: 800 px wide at 80 dpi).
         progress: called as ``progress(done, total)`` after every frame.
 
     Raises:
         ValueError: unknown suffix, or ``.mp4`` without ffmpeg.
     """
-    from matplotlib.animation import FFMpegWriter, PillowWriter
+    from matplotlib.animation import FFMpegWriter
 
     out = Path(out)
     suffix = out.suffix.lower()
@@ -276,7 +354,7 @@ def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: fl
         raise ValueError("fps and speed must be > 0")
     idx = frame_indices(track.t_s, fps, speed, max_frames)
     drawer = FrameDrawer(track, dpi=dpi)
-    writer = PillowWriter(fps=fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
+    writer = _gif_writer(fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.stem}.partial{suffix}")
     try:
@@ -309,7 +387,7 @@ def render_env_frame(history: list[dict[str, Any]], cfg: Any) -> np.ndarray:
                   diagonal_m=cfg.vehicle.diagonal_m,
                   anchor_below_leader_m=cfg.platform.anchor_below_leader_m,
                   cable_spacing_m=cfg.platform.cable_spacing_m, title="aerodock/Docking-v0")
-    drawer = FrameDrawer(track, figsize=(6.4, 3.2), dpi=60)
+    drawer = FrameDrawer(track, dpi=64)
     try:
         drawer.draw(len(history) - 1)
         return drawer.rgb()

@@ -14,7 +14,8 @@ from gymnasium.vector import SyncVectorEnv  # noqa: E402
 
 from aerodock.envs import ENV_ID, DockingEnv, DockingVectorEnv  # noqa: E402
 from aerodock.envs.check import check_vector_env  # noqa: E402
-from aerodock.mission import MissionSpec, run_campaign  # noqa: E402
+from aerodock.mission import AbortReason, MissionSpec, run_campaign  # noqa: E402
+from aerodock.mission.checks import MissionSpecError  # noqa: E402
 
 
 def test_single_env_passes_gymnasium_check_env():
@@ -55,8 +56,10 @@ def test_zero_residual_flies_run_campaigns_mission(cfg):
         aborted |= info["aborted"]
         if term.any() or trunc.any():
             break
-    assert term.all() and not trunc.any()
     res = run_campaign(cfg, MissionSpec(trials=n, seed=seed, compensation="oracle"))
+    # Every trial ends on this step: truncated if its docking window closed, else terminated.
+    np.testing.assert_array_equal(trunc, res.abort_reason == AbortReason.TIMEOUT)
+    np.testing.assert_array_equal(term, ~trunc)
     np.testing.assert_array_equal(docked, res.success)
     np.testing.assert_array_equal(missed, res.missed)
     np.testing.assert_array_equal(aborted, res.aborted)
@@ -106,6 +109,82 @@ def test_residual_changes_the_flight_and_leader_dropout_aborts():
         if term or trunc:
             break
     assert term and info["abort_reason"] == 2  # AbortReason.LEADER_LOST
+
+
+def run_episode(env, policy, seed):
+    """Reset ``env`` with ``seed`` and step ``policy()`` until the episode ends."""
+    env.reset(seed=seed)
+    for k in range(env.batch.max_steps + 1):
+        _, _, term, trunc, info = env.step(policy())
+        if term or trunc:
+            return k + 1, term, trunc, info
+    raise AssertionError("the episode did not end")
+
+
+def test_time_out_is_truncated_and_a_dock_terminated():
+    """An approach whose docking window closes undocked is a time-out: truncated, not
+    terminated (the mission's timeout abort); a docked trial is terminated."""
+    env = DockingEnv(campaign_seed=0)
+    rng = np.random.default_rng(0)
+    steps, term, trunc, info = run_episode(
+        env, lambda: rng.uniform(-1, 1, 3).astype(np.float32), 0)
+    assert trunc and not term
+    assert info["abort_reason"] == AbortReason.TIMEOUT and info["aborted"]
+    # It ends on the step the docking window closes.
+    assert steps * env.batch.dt_s == pytest.approx(env.batch.mission.timing.timeout_s)
+    env = DockingEnv(campaign_seed=0, compensation="oracle")
+    _, term, trunc, info = run_episode(env, lambda: np.zeros(3, np.float32), 0)
+    assert term and not trunc and info["docked"]
+
+
+def test_non_finite_actions_raise():
+    env = DockingEnv()
+    env.reset(seed=0)
+    for bad in (np.nan, np.inf, -np.inf):
+        with pytest.raises(ValueError, match="NaN or infinite"):
+            env.step(np.array([0.0, bad, 0.0], dtype=np.float32))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(4, np.float32))
+    venv = DockingVectorEnv(num_envs=2)
+    venv.reset(seed=0)
+    act = np.zeros((2, 3), np.float32)
+    act[1, 2] = np.nan
+    with pytest.raises(ValueError, match=r"NaN or infinite values \(rows \[1\]\)"):
+        venv.step(act)
+    # A refused action flies nothing: the next finite step is the first period.
+    _, _, _, _, info = env.step(np.zeros(3, np.float32))
+    assert info["t_s"] == pytest.approx(env.batch.dt_s)
+
+
+def test_step_before_reset_raises_a_clear_error():
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        DockingEnv().step(np.zeros(3, np.float32))
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        DockingVectorEnv(num_envs=2).step(np.zeros((2, 3), np.float32))
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"leader_speed_mps": 1e9}, "leader_speed_mps must be between -100 and 100"),
+    ({"leader_speed_mps": float("nan")}, "leader_speed_mps must be a finite number"),
+    ({"leader_speed_mps": "fast"}, "leader_speed_mps must be a number"),
+    ({"residual_max_mps2": float("inf")}, "residual_max_mps2 must be a finite number"),
+    ({"residual_max_mps2": float("nan")}, "residual_max_mps2 must be a finite number"),
+    ({"residual_max_mps2": 0.0}, "residual_max_mps2 must be > 0"),
+    ({"residual_max_mps2": -2.0}, "residual_max_mps2 must be > 0"),
+    ({"residual_max_mps2": 1e6}, "residual_max_mps2 must be between 0 and 50"),
+    ({"campaign_seed": -1}, "campaign_seed must be an integer >= 0"),
+    ({"campaign_seed": 1.5}, "campaign_seed must be an integer >= 0"),
+    ({"leader_fixed": "yes"}, "leader_fixed must be True or False"),
+    ({"compensation": "magic"}, "compensation must be one of"),
+    ({"offset_m": float("inf")}, "offset_m must be a finite number"),
+    ({"leader_dropout_s": (1.0, -2.0)}, "leader_dropout_s"),
+    ({"reward_weights": {"dock": float("nan")}}, "reward_weights.dock must be a finite"),
+    ({"reward_weights": {"bonus": 1.0}}, "reward_weights: unknown fields"),
+])
+def test_env_parameters_are_checked_like_the_command_line(kwargs, message):
+    for make in (lambda: DockingEnv(**kwargs), lambda: DockingVectorEnv(num_envs=2, **kwargs)):
+        with pytest.raises(MissionSpecError, match=message):
+            make()
 
 
 def test_bad_arguments_are_refused():

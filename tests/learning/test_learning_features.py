@@ -1,4 +1,4 @@
-"""Feature maps and SO(2) equivariance of the so2 / so2-ext models (hypothesis properties)."""
+"""Feature maps and SO(2) equivariance of the so2, so2-ext and so2-leader models (hypothesis)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from aerodock.geometry import euler_to_rotmat, rot_z, wrap_angle
 from aerodock.learning.features import (
     EPS_POS_M,
     N_FEATURES,
+    N_OUTPUTS,
     feature_map,
     feature_map_torch,
     phi_rad,
@@ -37,13 +38,16 @@ def _random_model(kind: str, seed: int = 3) -> tuple[torch.nn.Module, Predictor]
     model = build_model(kind)
     rng = np.random.default_rng(seed)
     n_f = N_FEATURES[kind]
-    n_out = 2 if kind == "so2" else 3
+    n_out = N_OUTPUTS[kind]
     model.set_normalisation(rng.normal(0, 0.5, (50, n_f)), rng.normal(0, 2.0, (50, n_out)))
     model.eval()
     return model.double(), Predictor(model.spec(), model.weights())
 
 
-MODELS = {kind: _random_model(kind) for kind in ("so2", "so2-ext", "mlp")}
+MODELS = {kind: _random_model(kind) for kind in ("so2", "so2-ext", "so2-leader", "mlp")}
+# The leader-aware kind's wake scales (a Crazyflie-like leader and follower): invariant inputs,
+# the same before and after a rotation; the other kinds ignore them.
+SCALES = np.array([[4.5, 0.045, 4.4]])
 
 
 def _scene(s) -> tuple[np.ndarray, np.ndarray]:
@@ -64,10 +68,10 @@ def _rotate_x(x: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 def _torch_predict(model: torch.nn.Module, x: np.ndarray, rot: np.ndarray) -> np.ndarray:
     with torch.no_grad():
-        return model(torch.as_tensor(x), torch.as_tensor(rot)).numpy()
+        return model(torch.as_tensor(x), torch.as_tensor(rot), torch.as_tensor(SCALES)).numpy()
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
 @settings(max_examples=60, deadline=None)
 @given(s=scene, theta=angle)
 def test_rotating_whole_scene_about_leader_axis(kind, s, theta):
@@ -75,16 +79,16 @@ def test_rotating_whole_scene_about_leader_axis(kind, s, theta):
     x, rot = _scene(s)
     q = _about_axis(rot, theta)
     x2, rot2 = _rotate_x(x, q), (q @ rot[0])[None]
-    z1, _ = feature_map(kind, x, rot)
-    z2, _ = feature_map(kind, x2, rot2)
+    z1, _ = feature_map(kind, x, rot, wake_scales=SCALES)
+    z2, _ = feature_map(kind, x2, rot2, wake_scales=SCALES)
     np.testing.assert_allclose(z2, z1, atol=1e-9)
     model, pred = MODELS[kind]
-    f1, f2 = pred.predict(x, rot), pred.predict(x2, rot2)
+    f1, f2 = pred.predict(x, rot, SCALES), pred.predict(x2, rot2, SCALES)
     np.testing.assert_allclose(f2, f1 @ q.T, atol=1e-9)
     np.testing.assert_allclose(_torch_predict(model, x2, rot2), f1 @ q.T, atol=1e-9)
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
 @settings(max_examples=60, deadline=None)
 @given(s=scene, theta=angle)
 def test_rotating_vectors_about_fixed_leader_axis(kind, s, theta):
@@ -92,27 +96,31 @@ def test_rotating_vectors_about_fixed_leader_axis(kind, s, theta):
     x, rot = _scene(s)
     q = _about_axis(rot, theta)
     x2 = _rotate_x(x, q)
-    np.testing.assert_allclose(feature_map(kind, x2, rot)[0], feature_map(kind, x, rot)[0],
+    np.testing.assert_allclose(feature_map(kind, x2, rot, wake_scales=SCALES)[0],
+                               feature_map(kind, x, rot, wake_scales=SCALES)[0],
                                atol=1e-9)
     _, pred = MODELS[kind]
-    np.testing.assert_allclose(pred.predict(x2, rot), pred.predict(x, rot) @ q.T, atol=1e-9)
+    np.testing.assert_allclose(pred.predict(x2, rot, SCALES), pred.predict(x, rot, SCALES) @ q.T,
+                               atol=1e-9)
     rho = np.hypot(*(rot[0].T @ x[0, :3])[:2])
     if rho > 1e-6:
         dphi = wrap_angle(phi_rad(x2, rot) - phi_rad(x, rot) - theta)
         assert abs(float(dphi[0])) < 1e-6
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
 @settings(max_examples=40, deadline=None)
 @given(s=scene, theta=angle)
 def test_leader_yaw_about_own_axis_changes_nothing(kind, s, theta):
     """Yawing the leader about its own axis (scene fixed) leaves h and the prediction unchanged."""
     x, rot = _scene(s)
     rot2 = rot @ rot_z(np.array(theta))
-    np.testing.assert_allclose(feature_map(kind, x, rot2)[0], feature_map(kind, x, rot)[0],
+    np.testing.assert_allclose(feature_map(kind, x, rot2, wake_scales=SCALES)[0],
+                               feature_map(kind, x, rot, wake_scales=SCALES)[0],
                                atol=1e-9)
     _, pred = MODELS[kind]
-    np.testing.assert_allclose(pred.predict(x, rot2), pred.predict(x, rot), atol=1e-9)
+    np.testing.assert_allclose(pred.predict(x, rot2, SCALES), pred.predict(x, rot, SCALES),
+                               atol=1e-9)
 
 
 def test_mlp_baseline_is_not_equivariant():

@@ -9,14 +9,23 @@ from node_helpers import random_model
 from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.runtime import Predictor
 from aerodock.node.core import (
+    CURRENT_STATE,
+    MAX_POSITION_M,
+    MAX_SPEED_MPS,
+    ODOMETRY,
+    PX4_ODOMETRY,
+    InputMonitor,
     VehicleState,
     current_state,
+    implausible,
     is_stale,
     model_inputs,
     odometry_fields,
     odometry_state,
     prediction_step,
     px4_odometry_state,
+    resolve_output_frame,
+    stale_reasons,
     to_output_frame,
 )
 
@@ -132,3 +141,172 @@ def test_node_core_imports_without_ros():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 0, proc.stderr
+
+
+# --- freshness judged by the data ------------------------------------------------------------
+
+
+def _fresh_pair(t: float = 1.0) -> tuple[VehicleState, VehicleState]:
+    return _state(t, rot=euler_to_rotmat(0.05, -0.03, 0.7)), _state(t, p=(0.2, -0.1, -1.4),
+                                                                      v=(0.0, 0.3, 0.1))
+
+
+def _step(pred, lead, fol, faults=None, now=1.01):
+    return prediction_step(pred, lead, fol, now, max_age_s=0.05, faults=faults)
+
+
+def _with(state: VehicleState, **changes) -> VehicleState:
+    from dataclasses import replace
+
+    return replace(state, **changes)
+
+
+def test_monitor_accepts_a_normal_stream():
+    mon = InputMonitor()
+    for i in range(5):
+        assert mon.receive(_state(1.0 + 0.01 * i, p=(0.001 * i, 0.0, -2.0))) is None
+    assert mon.verdict is None
+
+
+@pytest.mark.parametrize(("stamps", "values_change", "want"), [
+    ((2.0, 1.99), True, "stamp went backwards (2.0 -> 1.99)"),
+    ((2.0, 2.0), True, "stamp frozen at 2.0"),
+    ((2.0, 2.0), False, "repeated message (stamp 2.0 and values unchanged)"),
+    ((2.0, 0.0), True, "stamp is zero"),
+    ((None, None), False, "repeated message (same values)"),
+])
+def test_monitor_flags_bad_sequences(stamps, values_change, want):
+    mon = InputMonitor()
+    first = VehicleState(np.array([0.0, 0.0, -2.0]), np.array([0.1, 0.0, 0.0]), np.eye(3),
+                         received_s=1.0, stamp_s=stamps[0])
+    assert mon.receive(first) is None
+    second = _with(first, received_s=1.01, stamp_s=stamps[1])
+    if values_change:
+        second = _with(second, p_m=first.p_m + 0.001)
+    assert mon.receive(second) == want
+    assert mon.verdict == want
+    # the verdict holds until a good message arrives, then clears
+    good = _with(first, received_s=1.02, stamp_s=None if stamps[0] is None else 2.01,
+                 p_m=first.p_m + 0.002)
+    assert mon.receive(good) is None and mon.verdict is None
+
+
+def test_a_zero_stamp_is_refused_even_first():
+    assert InputMonitor().receive(_state(0.0)) == "stamp is zero"  # _state stamps t: here 0
+
+
+def test_monitor_verdict_makes_the_output_zero_with_the_reason(tmp_path):
+    pred = _Counting(Predictor.load(random_model(tmp_path / "m")))
+    lead, fol = _fresh_pair()
+    assert not _step(pred, lead, fol).stale and pred.calls == 1
+    # a relay repeats the follower's message: received 5 ms ago (fresh by receive time)
+    mon = InputMonitor()
+    mon.receive(_with(fol, received_s=0.99))
+    verdict = mon.receive(_with(fol, received_s=1.005))
+    out = _step(pred, lead, fol, faults={"leader": None, "follower": verdict})
+    assert out.stale and pred.calls == 1
+    np.testing.assert_array_equal(out.f_ext_mps2, np.zeros(3))
+    assert out.reason == f"follower: {verdict}" and "repeated message" in out.reason
+
+
+@pytest.mark.parametrize(("p", "v", "want"), [
+    ((1e300, 0.0, 0.0), (0.1, 0.0, 0.0), "follower: position 1e+300 m beyond 10000 m"),
+    ((0.0, 2e4, -2.0), (0.1, 0.0, 0.0), "follower: position 2e+04 m beyond 10000 m"),
+    ((0.0, 0.0, -2.0), (0.0, -150.0, 0.0), "follower: velocity 150 m/s beyond 100 m/s"),
+    ((0.0, np.nan, -2.0), (0.1, 0.0, 0.0), "follower: not finite"),
+    ((0.0, 0.0, -2.0), (np.inf, 0.0, 0.0), "follower: not finite"),
+])
+def test_implausible_states_are_stale_with_a_reason(p, v, want, tmp_path, recwarn):
+    pred = _Counting(Predictor.load(random_model(tmp_path / "m")))
+    lead, _ = _fresh_pair()
+    out = _step(pred, lead, _state(1.0, p=p, v=v))
+    assert out.stale and out.reason == want and pred.calls == 0
+    np.testing.assert_array_equal(out.f_ext_mps2, np.zeros(3))
+    assert not recwarn.list  # no overflow or invalid-value warnings
+
+
+def test_plausible_limits_are_accepted(tmp_path):
+    assert MAX_POSITION_M == 1e4 and MAX_SPEED_MPS == 100.0
+    edge = _state(1.0, p=(MAX_POSITION_M, -MAX_POSITION_M, -2.0), v=(MAX_SPEED_MPS, 0, 0))
+    assert implausible(edge) is None
+    assert implausible(_with(edge, v_mps=np.array([0.0, 0.0, -100.001]))) is not None
+
+
+def test_every_reason_is_listed():
+    lead, fol = _fresh_pair()
+    reasons = stale_reasons(None, _with(fol, received_s=0.9), 1.0, 0.05,
+                            faults={"follower": "stamp frozen at 1.0"})
+    assert reasons == ["leader: missing", "follower: 100 ms old (max 50 ms)",
+                       "follower: stamp frozen at 1.0"]
+    assert stale_reasons(lead, fol, 1.01, 0.05, faults={"leader": None}) == []
+    assert not is_stale(lead, fol, 1.01, 0.05)
+
+
+@pytest.mark.parametrize("quat", [(np.nan, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)])
+def test_nan_or_zero_quaternions_give_stale_without_numpy_warnings(quat):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any NumPy RuntimeWarning fails the test
+        with np.errstate(all="warn"):  # even when the caller's NumPy would warn
+            s = odometry_state((np.nan, 0, 0), quat, (0.1, 0, 0), frame="enu", twist="body",
+                               received_s=1.0, stamp_s=1.0)
+            px4 = px4_odometry_state((0, 0, 0), quat, (1, 0, 0), 3, received_s=1.0,
+                                     timestamp_us=1)
+            fr = current_state([np.nan] * 9, received_s=1.0, stamp_s=1.0)
+            reasons = [implausible(x) for x in (s, px4, fr)]
+    assert reasons == ["not finite"] * 3
+
+
+def test_nan_poses_in_the_cli_process_print_nothing(tmp_path):
+    # A fresh interpreter with NumPy's default error state (warn): the converters and the step
+    # for NaN, zero-quaternion and 1e300 inputs write nothing to stdout or stderr.
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np\n"
+        "from aerodock.node.core import odometry_state, prediction_step, px4_odometry_state\n"
+        "class P:\n"
+        "    def predict_one(self, x, r):\n"
+        "        return np.tanh(x[:3] @ r * 1e300)\n"
+        "lead = odometry_state((0, 0, 2), (1, 0, 0, 0), (0, 0, 0), frame='enu', twist='body',\n"
+        "                      received_s=1.0, stamp_s=1.0)\n"
+        "for q, p in (((0, 0, 0, 0), (0, 0, 1)), ((np.nan,) * 4, (0, 0, 1)),\n"
+        "             ((1, 0, 0, 0), (np.nan, 0, 1)), ((1, 0, 0, 0), (1e300, 1e300, 1))):\n"
+        "    fol = odometry_state(p, q, (1, 0, 0), frame='enu', twist='body', received_s=1.0,\n"
+        "                         stamp_s=1.0)\n"
+        "    fol2 = px4_odometry_state(p, q, (1, 0, 0), 3, received_s=1.0, timestamp_us=5)\n"
+        "    for f in (fol, fol2):\n"
+        "        out = prediction_step(P(), lead, f, 1.0, max_age_s=0.05)\n"
+        "        assert out.stale and not out.f_ext_mps2.any(), out\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert (proc.stdout, proc.stderr) == ("", "")
+
+
+@pytest.mark.parametrize(("requested", "frame", "frame_set", "follower_type", "want"), [
+    ("enu", "ned", True, CURRENT_STATE, "enu"),  # --output-frame wins
+    (None, "enu", False, ODOMETRY, "enu"),  # a given Odometry follower: the mapping's frame
+    (None, "enu", True, CURRENT_STATE, "ned"),  # Freyja states are NED
+    (None, "enu", True, PX4_ODOMETRY, "ned"),
+    (None, "enu", True, None, "enu"),  # type unknown at start: the mapping file's frame
+    (None, "ned", True, None, "ned"),
+    (None, "enu", False, None, "ned"),  # the default (Freyja) mapping: NED
+])
+def test_output_frame_is_decided_from_the_configuration(requested, frame, frame_set,
+                                                        follower_type, want):
+    assert resolve_output_frame(requested, frame, frame_set=frame_set,
+                                follower_type=follower_type) == want
+
+
+def test_mapping_reports_an_explicit_frame(tmp_path):
+    from aerodock.ingest.rosbag import load_mapping
+
+    path = tmp_path / "m.toml"
+    path.write_text('frame = "enu"\n[leader]\nstate = "/a"\n')
+    merged, explicit = load_mapping(path)
+    assert "frame" in explicit and "leader.state" in explicit
+    assert "frame" not in load_mapping(None)[1]

@@ -68,6 +68,10 @@ def test_output_equals_the_offline_predictor(run):
         errors.append(np.abs(np.asarray(row[2:]) - want).max())
         assert values["output_frame"] == "enu"
     assert max(errors) < 1e-9
+    # one frame_id from the first message on: decided at start from the mapping (frame =
+    # "enu"), not switched from map_ned to map when the follower's type is discovered
+    assert rec.frame_ids == {"map"}
+    assert all(v["stale_reason"] == "" for _, v in fresh)
     assert np.median([np.linalg.norm(row[2:]) for row, _ in fresh]) > 0.1  # not trivially 0
 
 
@@ -101,6 +105,8 @@ def test_missing_leader_gives_zero_and_the_stale_flag(run):
     assert len(in_gap) > 30
     assert all(v["stale"] == "true" for _, v in in_gap)
     assert all(float(v["leader_age_ms"]) > MAX_AGE_S * 1e3 for _, v in in_gap)
+    assert all(v["stale_reason"].startswith("leader: ") and " ms old (max 50 ms)"
+               in v["stale_reason"] for _, v in in_gap)
     after = [v for row, v in matched if GAP_S[1] + 0.1 < row[1] - t0 < 2.9]
     assert after and all(v["stale"] == "false" for v in after)
 
@@ -115,6 +121,7 @@ def test_node_warns_about_other_vehicles_and_rejects_bad_input(tmp_path):
                           capture_output=True, text=True, timeout=60, env=env)
     assert proc.returncode == 0, proc.stderr
     assert "warning: model trained with leader mass_kg = 0.7, configured 1.6" in proc.stderr
+    assert "RuntimeWarning" not in proc.stderr and proc.stdout == ""
     bad = subprocess.run([*cmd, str(tmp_path / "nope"), "--duration", "0.3"],
                          capture_output=True, text=True, timeout=60, env=env)
     assert bad.returncode == 2

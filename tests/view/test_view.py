@@ -11,7 +11,15 @@ from PIL import Image
 
 from aerodock.flightlog import load_flightlogs, save_flightlogs
 from aerodock.mission import MissionSpec, run_campaign
-from aerodock.view import frame_indices, render_animation, track_from_flightlog
+from aerodock.view import (
+    FrameDrawer,
+    Track,
+    approach_direction,
+    frame_indices,
+    gif_durations_ms,
+    render_animation,
+    track_from_flightlog,
+)
 
 BROWN = np.array([140, 86, 75])  # matplotlib tab:brown: the bar
 PURPLE = np.array([148, 103, 189])  # tab:purple: the follower
@@ -128,4 +136,80 @@ def test_report_embeds_an_animated_docking(cfg, tmp_path):
     path = fig_docking_animation(tr, tmp_path, cfg)
     imgs = frames(path)
     assert path.name == "hover_docking.gif" and 10 <= len(imgs) <= 60
+    assert Image.open(path).size[0] >= 800  # readable in the report
     assert has_green(imgs[0]) and has_blue(imgs[-1])  # open, then captured
+
+
+def east_approach(n=40):
+    """A follower flying west at constant altitude onto a bar under a hovering leader."""
+    t = np.linspace(0.0, 3.9, n)
+    east = np.linspace(1.0, 0.0, n)
+    follower = np.stack([np.zeros(n), east, np.full(n, -1.6)], axis=1)
+    leader = np.tile([0.0, 0.0, -2.5], (n, 1))
+    bar = np.tile([0.0, 0.0, -2.1], (n, 1))
+    gate = np.full(n, 0)
+    return Track(t_s=t, leader_p=leader, follower_p=follower, bar_p=bar, gate=gate,
+                 force_mps2=np.tile([0.0, 0.0, 3.0], (n, 1)), title="east approach")
+
+
+def legend_texts(drawer):
+    return [t.get_text() for t in drawer.fig.legends[0].get_texts()]
+
+
+def test_frame_has_a_legend_of_what_it_draws():
+    track = east_approach()
+    drawer = FrameDrawer(track)
+    try:
+        drawer.draw(5)
+        texts = legend_texts(drawer)
+        assert texts[:3] == ["leader", "follower", "follower's path"]
+        assert "bar" in texts and "bar's cables" in texts
+        assert "gripper (gate open)" in texts
+        assert any(t.startswith("predicted wake force") for t in texts)
+        assert len(drawer.fig.legends) == 1  # redrawn, not stacked, frame after frame
+    finally:
+        drawer.close()
+    bare = Track(t_s=track.t_s, leader_p=track.leader_p, follower_p=track.follower_p)
+    drawer = FrameDrawer(bare)
+    try:
+        drawer.draw(0)
+        assert legend_texts(drawer) == ["leader", "follower", "follower's path"]
+    finally:
+        drawer.close()
+
+
+def test_side_view_looks_along_the_approach():
+    """An approach from the east is drawn left to right in the side view, not as a rise."""
+    track = east_approach()
+    np.testing.assert_allclose(approach_direction(track), [0.0, -1.0])
+    drawer = FrameDrawer(track)
+    try:
+        x, alt = drawer._side(track.follower_p)
+        np.testing.assert_allclose(x, np.linspace(-1.0, 0.0, len(x)), atol=1e-12)
+        np.testing.assert_allclose(alt, 1.6)
+        assert "(west)" in drawer.ax_side.get_xlabel()
+        lo, hi = drawer.ax_side.get_xlim()
+        assert lo < -1.0 and hi > 0.0  # the whole approach is in view
+    finally:
+        drawer.close()
+    # Stacked starts fall back to north.
+    stacked = Track(t_s=track.t_s, leader_p=track.leader_p, follower_p=track.leader_p + 0.5)
+    stacked.follower_p[:, :2] = track.leader_p[:, :2]
+    np.testing.assert_allclose(approach_direction(stacked), [1.0, 0.0])
+
+
+@pytest.mark.parametrize("fps", [15.0, 10.0, 7.0])
+def test_gif_frames_play_at_the_stated_rate(tmp_path, fps):
+    track = east_approach()
+    path = render_animation(track, tmp_path / "v.gif", fps=fps, max_frames=12, dpi=40)
+    im = Image.open(path)
+    durations = []
+    for k in range(im.n_frames):
+        im.seek(k)
+        durations.append(im.info["duration"])
+    assert im.n_frames == 12 and durations == gif_durations_ms(12, fps)
+    period = 1000.0 / fps
+    assert all(abs(d - period) <= 10 for d in durations)
+    assert sum(durations) == pytest.approx(12 * period, abs=5)
+    if fps == 10.0:
+        assert set(durations) == {100}

@@ -76,7 +76,8 @@ def load_mapping(
     """The default mapping overridden by ``mapping`` (a dict or a TOML file).
 
     Returns:
-        ``(mapping, explicit)``: the merged mapping, and the ``"role.key"`` names the user set.
+        ``(mapping, explicit)``: the merged mapping, and the names the user set: ``"role.key"``
+        for a role's keys, the bare name for a top-level option (``"frame"``).
 
     Raises:
         IngestError: unreadable TOML, unknown keys, or values of the wrong kind.
@@ -132,6 +133,7 @@ def _merge(user: dict[str, Any], where: str) -> tuple[dict[str, Any], set[str]]:
                 explicit.add(f"{key}.{sub}")
         else:
             merged[key] = value
+            explicit.add(key)
     return merged, explicit
 
 
@@ -216,7 +218,8 @@ class TopicMapping:
         max_gap_s: samples where the leader or the command has a longer gap are dropped.
         leader: the leader's topics.
         follower: the follower's topics.
-        explicit: the ``"role.key"`` names the user set (their topics must be in the bag).
+        explicit: the ``"role.key"`` names the user set (their topics must be in the bag), and
+            the top-level options the user set (``"frame"``).
     """
 
     frame: str
