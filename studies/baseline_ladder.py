@@ -19,11 +19,13 @@ from aerodock.control.profiles import PAPER_Q_DIAG, PAPER_R_DIAG
 from aerodock.learning.runtime import Predictor
 from aerodock.mission import MissionSpec, run_campaign
 
+SPREADS = ("mass_sd", "inertia_sd", "torque_coeff_sd", "motor_tau_sd")
 OLD_PAPER = {"control": {"q_diag": list(PAPER_Q_DIAG), "r_diag": list(PAPER_R_DIAG),
                          "terminal_q_diag": list(PAPER_Q_DIAG),
                          "terminal_r_diag": list(PAPER_R_DIAG), "observer_bias_tau_s": 4.0,
                          "rejection": "bias-observer", "torque_feedforward": False},
-             "imu": {"chain": "ideal"}, "mission": {"gate_state_from": "truth"}}
+             "imu": {"chain": "ideal"}, "mission": {"gate_state_from": "truth"},
+             "vehicle": dict.fromkeys(SPREADS, 0.0)}
 STEPS = [
     ("old reproduction: 4 s time-constant observer, 100 Hz, full reference feed-forward", {}),
     ("+ Freyja's bias estimator (20 Hz propagation)", {"control": {"bias_estimator": "freyja"}}),
@@ -33,6 +35,9 @@ STEPS = [
      {"control": {"reference_ff_factor": 0.0}}),
     ("+ IMU chain and attitude estimate", {"imu": {"chain": "filtered"}}),
     ("+ gate known by its sensors", {"mission": {"gate_state_from": "sensors"}}),
+    ("+ each vehicle apart from its nominal constants (the default world)", "spreads"),
+    ("then: the estimator told of the learnt feed-forward (unstated; not the default)",
+     {"control": {"freyja_estimator_input": "command-without-feedforward"}}),
 ]
 
 
@@ -55,6 +60,8 @@ def main() -> int:
     predictor = Predictor.load(args.model)
     overrides, rows = OLD_PAPER, []
     for name, step in STEPS:
+        if step == "spreads":  # the configuration's own spreads (the defaults: a real fleet's)
+            step = {"vehicle": {k: getattr(base.vehicle, k) for k in SPREADS}}
         overrides = _merge(overrides, step)
         cfg = base.with_overrides(overrides)
         row = {"step": name}

@@ -225,6 +225,7 @@ class ControlSection:
     observer_vel_noise_mps: float = number(0, 100)
     freyja_estimator_rate_hz: float = number(0.5, 1000)
     freyja_estimator_coeffs: list[float] = numbers(5, 1e-6, 1e4)
+    freyja_estimator_input: str = choice("command", "command-without-feedforward")
     state_filter: str = choice("freyja", "none")
     freyja_state_filter_rate_hz: float = number(1, 10000)
     freyja_state_filter_params: list[float] = numbers(4, 1e-9, 1e4)

@@ -86,6 +86,8 @@ class PositionController:
         elif use_observer:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
                                          c.observer_pos_noise_m, c.observer_vel_noise_mps)
+        self.estimator_input_without_ff = (
+            c.freyja_estimator_input == "command-without-feedforward")
         # Freyja's state manager filters motion capture's position into position and velocity.
         self.state_filter = None
         if c.state_filter == "freyja":
@@ -183,7 +185,9 @@ class PositionController:
         applied = attitude_thrust_to_accel(roll, pitch, rpy_meas[:, 2], thrust, p.mass_kg,
                                            p.gravity_mps2)
         if freyja:  # Freyja hands its estimator the command itself: after both corrections
-            self.observer.set_input(desired)
+            # (or, with freyja_estimator_input = "command-without-feedforward", without the
+            # learnt feed-forward, which the estimator then counts as known)
+            self.observer.set_input(desired + ff if self.estimator_input_without_ff else desired)
         # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat
         # (and - r_hat: the bias observer then takes out what the accelerometer cannot see).
         self._last_input = applied + ff if residual is None else applied + ff + residual

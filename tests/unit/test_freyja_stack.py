@@ -72,3 +72,24 @@ def test_state_filter_lags_and_overshoots_a_ramp():
     assert 0.08 <= t90 <= 0.3
     assert 1.1 < vel.max() < 1.5
     assert vel[-1] == pytest.approx(1.0, abs=0.02)
+
+
+@pytest.mark.parametrize("setting", ["command", "command-without-feedforward"])
+def test_estimator_input_with_or_without_the_learnt_feedforward(cfg, setting):
+    """Freyja's estimator is handed the controller's command, the learnt feed-forward subtracted
+    ("command") or not ("command-without-feedforward": the feed-forward counted as known)."""
+    from aerodock.control.controller import PositionController, Reference
+    from aerodock.control.profiles import controller_config
+
+    c = controller_config(cfg, "paper").with_overrides(
+        {"control": {"freyja_estimator_input": setting}})
+    ctl = PositionController(c, 2, use_observer=True)
+    zero = np.zeros((2, 3))
+    ctl.reset(zero, zero)
+    ff = np.array([[0.0, 0.0, 3.0], [0.5, 0.0, 2.0]])
+    ref = Reference(zero, zero, zero, np.zeros(2), np.zeros(2))
+    out = ctl.step(zero, zero, zero, ref, feedforward_mps2=ff)
+    told = ctl.observer.input_mps2
+    desired = out.applied_accel_mps2  # no saturation here: applied is the desired command
+    expected = desired + ff if setting == "command-without-feedforward" else desired
+    np.testing.assert_allclose(told, expected, atol=1e-12)
