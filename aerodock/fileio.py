@@ -199,8 +199,13 @@ def _exchange(a: Path, b: Path) -> bool:
 
 
 def _fsync_dir(path: Path) -> None:
+    _fsync(path, os.O_RDONLY)
+
+
+def _fsync(path: Path, flags: int) -> None:
+    """Sync ``path`` (a folder, or a file opened with ``flags``); a failure is ignored."""
     try:
-        fd = os.open(path, os.O_RDONLY)
+        fd = os.open(path, flags)
     except OSError:
         return
     try:
@@ -743,16 +748,7 @@ def _fsync_tree(root: Path) -> None:
     """Sync every file and folder under ``root`` (files first, then their folders)."""
     for folder, _, names in os.walk(root, topdown=False):
         for name in names:
-            try:
-                fd = os.open(os.path.join(folder, name), os.O_RDONLY | os.O_NONBLOCK)
-            except OSError:
-                continue
-            try:
-                os.fsync(fd)
-            except OSError:
-                pass
-            finally:
-                os.close(fd)
+            _fsync(Path(folder, name), os.O_RDONLY | os.O_NONBLOCK)
         _fsync_dir(Path(folder))
 
 

@@ -7,6 +7,8 @@ and the problem. The checks live here so every reader words them the same way.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -414,6 +416,20 @@ def estimate_lag_s(t_a: np.ndarray, x_a: np.ndarray, t_b: np.ndarray, x_b: np.nd
 BAG_SUFFIXES = (".db3", ".mcap")
 
 
+@contextmanager
+def _input_errors(where: str | Path, unreadable: str) -> Iterator[None]:
+    """Turn the input reader's errors into one-line :class:`IngestError` s naming ``where``
+    (``unreadable``: the words before the system's reason for an unreadable file)."""
+    try:
+        yield
+    except FileNotFoundError:
+        raise IngestError(where, "file not found") from None
+    except InputError as err:
+        raise IngestError(where, err.reason) from None
+    except OSError as err:
+        raise IngestError(where, f"{unreadable} ({err.strerror or err})") from None
+
+
 def check_regular_input(path: Path, what: str = "log file") -> None:
     """Refuse an input that is not a regular file, before any reader opens it: a FIFO would
     block its reader for ever and a device such as ``/dev/zero`` never ends.
@@ -421,14 +437,8 @@ def check_regular_input(path: Path, what: str = "log file") -> None:
     Raises:
         IngestError: ``path`` is missing, a FIFO, a device, a socket or a folder.
     """
-    try:
+    with _input_errors(path, "cannot read"):
         check_input_file(path, what)
-    except FileNotFoundError:
-        raise IngestError(path, "file not found") from None
-    except InputError as err:
-        raise IngestError(path, err.reason) from None
-    except OSError as err:
-        raise IngestError(path, f"cannot read ({err.strerror or err})") from None
 
 
 def check_bag_folder(path: Path) -> None:
@@ -482,15 +492,9 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
     import csv
 
     where = str(path)
-    try:
+    with _input_errors(where, "cannot read file"):
         text = read_input_text(path, "CSV file", MAX_CSV_BYTES, encoding="utf-8-sig",
                                errors="replace")
-    except FileNotFoundError:
-        raise IngestError(where, "file not found") from None
-    except InputError as err:
-        raise IngestError(where, err.reason) from None
-    except OSError as err:
-        raise IngestError(where, f"cannot read file ({err.strerror or err})") from None
     if not text.strip():
         raise IngestError(where, "empty file")
 
