@@ -36,8 +36,9 @@ STEPS = [
     ("+ IMU chain and attitude estimate", {"imu": {"chain": "filtered"}}),
     ("+ gate known by its sensors", {"mission": {"gate_state_from": "sensors"}}),
     ("+ each vehicle apart from its nominal constants (the default world)", "spreads"),
-    ("then: the estimator told of the learnt feed-forward (unstated; not the default)",
-     {"control": {"freyja_estimator_input": "command-without-feedforward"}}),
+    ("then: the estimator handed the whole command, the learnt feed-forward included "
+     "(the other reading of the unstated patch)",
+     {"control": {"freyja_estimator_input": "command"}}),
 ]
 
 

@@ -41,8 +41,9 @@ def dock(
         Compensation.OBSERVER),
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
     controller: Annotated[str, typer.Option(
-        help="paper: Freyja's weights in every phase and the 4 s observer; tuned: the config's "
-             "weights (stiffer terminal phase by default); ours: tuned + the accelerometer "
+        help="paper: as its flight stack (Freyja) publishes it: its LQR weights in every phase, "
+             "its bias estimator and state filter, 50 Hz, no reference feed-forward; tuned: the "
+             "config's weights (stiffer terminal phase by default); ours: tuned + the accelerometer "
              "observer.")] = "tuned",
     faults: Annotated[Path | None, typer.Option(
         help="TOML file of [[fault]] entries injected into every trial (see examples/).")] = None,

@@ -184,9 +184,9 @@ class PositionController:
         )
         applied = attitude_thrust_to_accel(roll, pitch, rpy_meas[:, 2], thrust, p.mass_kg,
                                            p.gravity_mps2)
-        if freyja:  # Freyja hands its estimator the command itself: after both corrections
-            # (or, with freyja_estimator_input = "command-without-feedforward", without the
-            # learnt feed-forward, which the estimator then counts as known)
+        if freyja:  # Freyja hands its estimator the command: by default the learnt
+            # feed-forward is counted as known (the estimator sees what the model left); with
+            # freyja_estimator_input = "command", the whole command (see docs/control.md)
             self.observer.set_input(desired + ff if self.estimator_input_without_ff else desired)
         # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat
         # (and - r_hat: the bias observer then takes out what the accelerometer cannot see).
