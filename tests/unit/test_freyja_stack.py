@@ -121,7 +121,7 @@ def _hold_under_a_sustained_wake(cfg, setting: str) -> np.ndarray:
 
 
 def test_only_an_estimator_told_of_the_feedforward_holds_station_with_a_perfect_model(cfg):
-    """The paper's Fig. 7: with the model, the follower holds formation under the leader within
+    """The paper's Fig. 5: with the model, the follower holds formation under the leader within
     5 cm. Told the learnt feed-forward was part of the command ("command"), Freyja's estimator
     converges on the whole wake and the model's compensation is applied twice: the follower
     climbs towards the clip's limit (3 m/s^2 over the gains: about a metre). Told it is known
