@@ -108,12 +108,21 @@ def evaluate_compensation_command(
                if m["trained_here"] else f"from {m['model_dir']}")
     console.print(f"model {m['kind']} {trained}; held out: swap_ss 05-06, swap_sl 08-11, each "
                   "vehicle as the follower")
+    st = result["settings"]
+    console.print(f"freyja: Freyja's bias estimator (the paper's stack; propagated at "
+                  f"{st['freyja_propagation_rate_hz']:g} Hz); accel: our accelerometer observer "
+                  f"(tau {st['accel_tau_s']:g} s, axes {st['accel_axes']}); model: the learnt "
+                  f"model; a+b: both; the first {st['warmup_s']:g} s of each segment unscored")
+    rates = ", ".join(f"{name} {c['rate_hz']:g} Hz" for name, c in
+                      result["compensations"].items() if c["rate_hz"] is not None)
     for region in ("interaction", "all"):
         for axis in ("vertical", "planar"):
-            header, rows = table_rows(result, region, axis)
-            table = Table(title=table_title(result, region, axis), title_justify="left")
+            header, rows = table_rows(result, region, axis, short=True)
+            table = Table(title=table_title(result, region, axis), title_justify="left",
+                          caption=f"follower/leader: S small, L large; rates: {rates}",
+                          caption_justify="left")
             for i, col in enumerate(header):
-                table.add_column(col, justify="left" if i == 0 else "right")
+                table.add_column(col, justify="left" if i == 0 else "right", no_wrap=True)
             for row in rows:
                 table.add_row(*row)
             console.print(table)

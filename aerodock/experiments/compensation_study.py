@@ -58,6 +58,9 @@ LABELS = {
     "model+freyja": "model + bias observer (Freyja)",
 }
 """How each compensation is named in tables and figures."""
+SHORT_PAIRINGS = {"small-under-small": "S/S", "small-under-large": "S/L",
+                  "large-under-small": "L/S"}
+"""Follower/leader, for narrow tables."""
 QUICK_MAX_EPOCHS = 30
 PAIRING_ORDER = ("small-under-small", "small-under-large", "large-under-small")
 
@@ -212,23 +215,30 @@ def _num(x: float | None) -> str:
     return "-" if x is None else f"{x:.3f}"
 
 
-def table_rows(result: dict[str, Any], region: str = "interaction", axis: str = "vertical"
-               ) -> tuple[list[str], list[list[str]]]:
+def table_rows(result: dict[str, Any], region: str = "interaction", axis: str = "vertical",
+               short: bool = False) -> tuple[list[str], list[list[str]]]:
     """Header and rows of the ``axis`` (``"vertical"`` or ``"planar"``) RMS each compensation
     leaves in ``region`` (``"interaction"`` or ``"all"``) per pairing, as ``"rms (removed)"``
-    with the RMS in m/s² and the share of the zero compensation's RMS removed."""
+    with the RMS in m/s² and the share of the zero compensation's RMS removed. ``short``: the
+    compensations' keys, ``S/L`` for small under large and no rate column (for a terminal)."""
     scores = result["scores"]
     groups = [g for g in PAIRING_ORDER if g in scores] + [
         g for g in scores if g not in PAIRING_ORDER and g != "all"] + ["all"]
-    header = ["compensation", "rate", *groups]
+    if short:
+        header = ["compensation", *(SHORT_PAIRINGS.get(g, g) for g in groups)]
+    else:
+        header = ["compensation", "rate", *groups]
     rows = []
     for name in COMPENSATIONS:
         rate = result["compensations"][name]["rate_hz"]
-        row = [LABELS[name], "-" if rate is None else f"{rate:g} Hz"]
+        row = [name] if short else [LABELS[name], "-" if rate is None else f"{rate:g} Hz"]
         for g in groups:
             rec = scores[g][region]["compensations"][name]
             cell = _num(rec[f"{axis}_rms_mps2"])
-            row.append(cell if name == "none" else f"{cell} ({_pct(rec[f'{axis}_removed'])})")
+            if name != "none":
+                removed = _pct(rec[f"{axis}_removed"])
+                cell += f" ({removed.replace(' ', '') if short else removed})"
+            row.append(cell)
         rows.append(row)
     return header, rows
 

@@ -11,6 +11,7 @@ import pytest
 
 from aerodock.cli.app import run
 from aerodock.config import load_config
+from aerodock.experiments.compensation_study import compensation_markdown
 from aerodock.flightlog import FlightLog
 from aerodock.learning import compensation_replay as cr
 from aerodock.learning.dataset import build_dataset
@@ -177,6 +178,9 @@ def test_real_flights_quick(tmp_path, shared_data, capsys):
     assert (scores["all"]["interaction"]["compensations"]["freyja"]["vertical_rms_mps2"]
             < scores["all"]["interaction"]["compensations"]["none"]["vertical_rms_mps2"])
     assert out["settings"]["paper_rate_hz"] == 50.0 and out["settings"]["ours_rate_hz"] == 100.0
+    lines = compensation_markdown(out)  # what reproduce's report shows
+    assert sum(line.startswith("| learnt model | 100 Hz |") for line in lines) == 4
+    assert "not scored" in compensation_markdown(None)[0]
 
 
 @pytest.mark.parametrize("args, message", [
