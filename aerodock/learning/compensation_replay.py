@@ -220,7 +220,8 @@ def replay_flights(
         max_gap_s: a longer gap between two samples splits a flight into segments.
 
     Raises:
-        ValueError: ``ds`` does not hold exactly the samples of ``logs``, or a bad argument.
+        ValueError: ``ds`` does not hold exactly the samples of ``logs``, flights that disagree
+            on gravity or lack the follower's mass, or a bad argument.
     """
     logs = list(logs)
     if not logs:
@@ -238,6 +239,8 @@ def replay_flights(
     seg_flight: list[int] = []
     steps: list[np.ndarray] = []
     gravity = {float(lg.meta.get("gravity_mps2", 9.81)) for lg in logs}
+    if len(gravity) != 1:
+        raise ValueError(f"the flights disagree on gravity ({sorted(gravity)} m/s²)")
     for i, log in enumerate(logs):
         rows = np.flatnonzero(ds.flight_id == i)
         if not np.allclose(ds.t_s[rows], log.t_s):
@@ -281,7 +284,7 @@ def replay_flights(
         accel_mps2=pad("accel_mps2"), thrust_n=pad("thrust_n"), cmd_mps2=pad("cmd_mps2"),
         label_mps2=pad("label_mps2"), prediction_mps2=pad("prediction_mps2"),
         interaction=pad("interaction") & valid, free_air=pad("free_air") & valid,
-        mass_kg=pad("mass_kg")[:, 0], gravity_mps2=gravity.pop() if len(gravity) == 1 else 9.81,
+        mass_kg=pad("mass_kg")[:, 0], gravity_mps2=gravity.pop(),
         dt_s=dt, has_model=prediction_mps2 is not None,
     )
 
