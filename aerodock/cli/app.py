@@ -1,7 +1,8 @@
 """The ``aerodock`` app: every command registered in one place, and ``run``/``main`` around it.
 
 Each command area has its module in :mod:`aerodock.cli` (``field``, ``dock``, ``learning``,
-``experiments``, ``ingest``, ``node``, ``view``, ``sweep``, ``bench``) holding plain functions;
+``compensation``, ``experiments``, ``ingest``, ``node``, ``view``, ``sweep``, ``bench``) holding
+plain functions;
 nothing registers itself on import. The order below is the order of ``aerodock --help``. Heavy
 dependencies (PyTorch, rclpy, Ray, rerun) are imported inside the commands that need them, so
 ``aerodock --help`` stays fast and every other command works without those extras.
@@ -16,7 +17,18 @@ from typing import Any
 
 import typer
 
-from aerodock.cli import bench, dock, experiments, field, ingest, learning, node, sweep, view
+from aerodock.cli import (
+    bench,
+    compensation,
+    dock,
+    experiments,
+    field,
+    ingest,
+    learning,
+    node,
+    sweep,
+    view,
+)
 from aerodock.fileio import one_line
 
 app = typer.Typer(
@@ -32,6 +44,7 @@ app.command("bench")(bench.bench_command)
 app.command("ingest")(ingest.ingest_command)
 app.command("train")(learning.train_command)
 app.command("evaluate")(learning.evaluate_command)
+app.command("evaluate-compensation")(compensation.evaluate_compensation_command)
 app.command("export")(learning.export_command)
 app.command("node")(node.node_command)
 app.command("view")(view.view_command)

@@ -79,10 +79,8 @@ class PositionController:
         self.dt_s = 1.0 / cfg.sim.control_rate_hz
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
         if use_observer and c.bias_estimator == "freyja":
-            q_p, q_v, q_b, r_p, r_v = c.freyja_estimator_coeffs
-            self.observer = FreyjaBiasEstimator(n, self.dt_s, FreyjaEstimatorParams(
-                propagation_rate_hz=c.freyja_estimator_rate_hz, process_noise=(q_p, q_v, q_b),
-                measurement_noise=(r_p, r_v)))
+            self.observer = FreyjaBiasEstimator(n, self.dt_s,
+                                                FreyjaEstimatorParams.from_control(c))
         elif use_observer:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
                                          c.observer_pos_noise_m, c.observer_vel_noise_mps)
@@ -91,10 +89,8 @@ class PositionController:
         # Freyja's state manager filters motion capture's position into position and velocity.
         self.state_filter = None
         if c.state_filter == "freyja":
-            r_p, q_p, q_v, q_a = c.freyja_state_filter_params
-            self.state_filter = FreyjaStateFilter(n, self.dt_s, FreyjaStateFilterParams(
-                propagation_rate_hz=c.freyja_state_filter_rate_hz, measurement_noise=r_p,
-                process_noise=(q_p, q_v, q_a)))
+            self.state_filter = FreyjaStateFilter(n, self.dt_s,
+                                                  FreyjaStateFilterParams.from_control(c))
         # The controller's own rate: a new command every hold_ticks state messages (held in
         # between, as Freyja's timer does); the reference acceleration's share fed forward.
         self.hold_ticks = int(round(cfg.sim.control_rate_hz / c.command_rate_hz))

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerodock.config.schema import ControlSection
+
 
 @dataclass(frozen=True)
 class FreyjaEstimatorParams:
@@ -44,6 +46,14 @@ class FreyjaEstimatorParams:
     bias_limit_mps2: tuple[float, float, float] = (2.0, 2.0, 3.0)
     output_ramp_s: float = 1.5  # estimator_tc_: the cubic ramp-in after enable
     stale_propagations: int = 3  # no propagation after this many without a measurement
+
+    @classmethod
+    def from_control(cls, control: ControlSection) -> FreyjaEstimatorParams:
+        """The constants a ``[control]`` section sets (``freyja_estimator_rate_hz``,
+        ``freyja_estimator_coeffs``: Q on p, v, b, then R on p, v); the others Freyja's."""
+        q_p, q_v, q_b, r_p, r_v = control.freyja_estimator_coeffs
+        return cls(propagation_rate_hz=control.freyja_estimator_rate_hz,
+                   process_noise=(q_p, q_v, q_b), measurement_noise=(r_p, r_v))
 
 
 class FreyjaBiasEstimator:

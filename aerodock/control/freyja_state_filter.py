@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerodock.config.schema import ControlSection
+
 
 @dataclass(frozen=True)
 class FreyjaStateFilterParams:
@@ -32,6 +34,14 @@ class FreyjaStateFilterParams:
     measurement_noise: float = 0.0594  # R on p
     process_noise: tuple[float, float, float] = (0.0051, 0.0147, 6.3836)  # Q on p, v, a
     initial_cov: float = 10.0
+
+    @classmethod
+    def from_control(cls, control: ControlSection) -> FreyjaStateFilterParams:
+        """The constants a ``[control]`` section sets (``freyja_state_filter_rate_hz``,
+        ``freyja_state_filter_params``: R on p, then Q on p, v, a)."""
+        r_p, q_p, q_v, q_a = control.freyja_state_filter_params
+        return cls(propagation_rate_hz=control.freyja_state_filter_rate_hz, measurement_noise=r_p,
+                   process_noise=(q_p, q_v, q_a))
 
 
 class FreyjaStateFilter:

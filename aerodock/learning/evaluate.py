@@ -105,6 +105,22 @@ def _torque_region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str,
     return out
 
 
+def predict_dataset(predictor: SupportsPredict, ds: Dataset) -> np.ndarray:
+    """``predictor``'s prediction (n, 3), m/s², NED, at every sample of ``ds`` (a leader-aware
+    model gets the data's wake scales, :meth:`Dataset.wake_scales`).
+
+    Raises:
+        ValueError: the predictor returned another shape.
+    """
+    if getattr(predictor, "needs_wake_scales", False):
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales()), dtype=float)
+    else:
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
+    if pred.shape != ds.y.shape:
+        raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
+    return pred
+
+
 def evaluate(
     predictor: SupportsPredict, ds: Dataset, *, lateral_radius_m: float = INTERACTION_RADIUS_M
 ) -> dict[str, Any]:
@@ -124,12 +140,7 @@ def evaluate(
         ``interaction`` torque regions, see the module docstring) when the predictor has a
         torque and the data torque labels.
     """
-    if getattr(predictor, "needs_wake_scales", False):  # a leader-aware model: the data's
-        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales()), dtype=float)
-    else:
-        pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
-    if pred.shape != ds.y.shape:
-        raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
+    pred = predict_dataset(predictor, ds)
     out = {
         "model": getattr(predictor, "kind", type(predictor).__name__),
         "n_samples": ds.n,

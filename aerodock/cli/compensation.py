@@ -1,0 +1,130 @@
+"""``aerodock evaluate-compensation``: the compensations a follower can fly, replayed causally
+over real flights, and the disturbance each leaves (:mod:`aerodock.experiments.compensation_study`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aerodock.cli.common import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    bar_callback,
+    check_number,
+    err_console,
+    fail,
+    print_json,
+    progress_bar,
+)
+from aerodock.fileio import one_line
+
+KINDS = ("so2", "so2-ext", "so2-leader", "mlp")
+"""Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
+
+
+def default_data_root() -> Path:
+    """``../shared/data/neural-swarm`` beside the working folder, else beside the repository."""
+    here = Path.cwd().parent / "shared" / "data" / "neural-swarm"
+    repo = Path(__file__).resolve().parents[3] / "shared" / "data" / "neural-swarm"
+    return here if here.is_dir() else repo
+
+
+def evaluate_compensation_command(
+    data: Annotated[Path | None, typer.Option(
+        "--data", help="Neural-Swarm folder holding swap_ss and swap_sl_2020-06-19 (default: "
+                       "../shared/data/neural-swarm).")] = None,
+    model: Annotated[Path | None, typer.Option(
+        "--model", help="A trained model DIR to fly (default: train one on swap_ss 00-04 and "
+                        "swap_sl 00-07).")] = None,
+    kind: Annotated[str, typer.Option(
+        "--kind", help=f"Model kind to train without --model: {', '.join(KINDS)}.")] = "so2",
+    quick: Annotated[bool, typer.Option(
+        "--quick", help="Train for at most 30 epochs (without --model).")] = False,
+    warmup: Annotated[float, typer.Option(
+        "--warmup", help="Seconds at the start of each replayed segment not scored (the "
+                         "observers start from nothing).")] = 2.0,
+    lateral_radius: Annotated[float, typer.Option(
+        "--lateral-radius", help="Interaction region radius, m.")] = 0.2,
+    figure: Annotated[Path | None, typer.Option(
+        "--figure", help="Also draw the residual against each compensation along a held-out "
+                         "pass to this PNG file.")] = None,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Score the compensations on real flights: none, the paper's bias observer (Freyja's, at
+    the paper's rates), our accelerometer observer, the learnt model, and each observer with the
+    model, replayed causally over held-out flights (swap_ss 05-06, swap_sl 08-11)."""
+    from aerodock.config import load_config
+    from aerodock.experiments.compensation_study import (
+        compensation_study,
+        table_rows,
+        table_title,
+    )
+    from aerodock.ingest.errors import IngestError
+    from aerodock.learning.modelfile import ModelFileError
+
+    check_number("--warmup", warmup, 0.0, 10.0)
+    check_number("--lateral-radius", lateral_radius, 1e-3, 10.0)
+    if model is None and kind not in KINDS:
+        fail(f"--kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    if figure is not None and figure.is_dir():
+        fail(f"{figure}: is a directory; give a file name such as compensation.png")
+    root = data if data is not None else default_data_root()
+    if not root.is_dir():
+        fail(f"{root}: no such folder (give --data, the Neural-Swarm folder holding swap_ss and "
+             "swap_sl_2020-06-19)")
+    if model is not None and not model.is_dir():
+        fail(f"--model {model}: no such model directory")
+    cfg = load_config(config)
+
+    def say(msg: str) -> None:
+        err_console.print(f"[dim]{msg}[/dim]")
+
+    with progress_bar() as bar:
+        update = bar_callback(bar)
+        try:
+            result = compensation_study(
+                root, cfg=cfg, model_dir=model, kind=kind, seed=seed, quick=quick,
+                warmup_s=warmup, lateral_radius_m=lateral_radius, figure=figure, say=say,
+                train_progress=lambda e, n, *_: update("training epochs", e, n))
+        except ImportError:
+            fail("training a model needs PyTorch: pip install 'aerodock[learn]' (or give --model)")
+        except (FileNotFoundError, IngestError, ModelFileError) as err:
+            fail(one_line(err, first_line=True))
+    if as_json:
+        print_json(result)
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    m = result["model"]
+    trained = (f"trained here on swap_ss 00-04 and swap_sl 00-07 ({m['epochs']} epochs)"
+               if m["trained_here"] else f"from {m['model_dir']}")
+    console.print(f"model {m['kind']} {trained}; held out: swap_ss 05-06, swap_sl 08-11, each "
+                  "vehicle as the follower")
+    st = result["settings"]
+    console.print(f"freyja: Freyja's bias estimator (the paper's stack; propagated at "
+                  f"{st['freyja_propagation_rate_hz']:g} Hz); accel: our accelerometer observer "
+                  f"(tau {st['accel_tau_s']:g} s, axes {st['accel_axes']}); model: the learnt "
+                  f"model; a+b: both; the first {st['warmup_s']:g} s of each segment unscored")
+    rates = ", ".join(f"{name} {c['rate_hz']:g} Hz" for name, c in
+                      result["compensations"].items() if c["rate_hz"] is not None)
+    for region in ("interaction", "all"):
+        for axis in ("vertical", "planar"):
+            header, rows = table_rows(result, region, axis, short=True)
+            table = Table(title=table_title(result, region, axis), title_justify="left",
+                          caption=f"follower/leader: S small, L large; rates: {rates}",
+                          caption_justify="left")
+            for i, col in enumerate(header):
+                table.add_column(col, justify="left" if i == 0 else "right", no_wrap=True)
+            for row in rows:
+                table.add_row(*row)
+            console.print(table)
+    if result["figure"]:
+        typer.echo(f"wrote {result['figure']}")
