@@ -43,8 +43,8 @@ def dock(
     controller: Annotated[str, typer.Option(
         help="paper: as its flight stack (Freyja) publishes it: its LQR weights in every phase, "
              "its bias estimator and state filter, 50 Hz, no reference feed-forward; tuned: the "
-             "config's weights (stiffer terminal phase by default); ours: tuned + the accelerometer "
-             "observer.")] = "tuned",
+             "config's weights (stiffer terminal phase by default); ours: tuned + the "
+             "accelerometer observer.")] = "tuned",
     faults: Annotated[Path | None, typer.Option(
         help="TOML file of [[fault]] entries injected into every trial (see examples/).")] = None,
     seed: SeedOpt = 0,

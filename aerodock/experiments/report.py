@@ -395,5 +395,13 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
                   "below the other vehicle within 0.2 m laterally).", ""]
         if rd.get("sample_efficiency"):
             lines += _se_table(rd["sample_efficiency"], "Sample efficiency, real data")
+    if "compensation" in r:
+        from aerodock.experiments.compensation_study import compensation_markdown
+
+        lines += ["## The compensations scored on real flights", "",
+                  "Each compensation replayed causally over held-out real swap flights at its "
+                  "own rate, one control period late: the disturbance it leaves (m/s²) and the "
+                  "share of the uncompensated RMS it removes.", ""]
+        lines += compensation_markdown(r["compensation"])
     lines += ["## Figures", ""] + [f"- ![{Path(f).stem}]({f})" for f in figs] + [""]
     return "\n".join(lines)

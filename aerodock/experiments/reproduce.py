@@ -371,10 +371,19 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         from aerodock.experiments.real_data import real_data_study
 
         results["real_data"] = real_data_study(real_dir, fig_dir, quick=quick, seed=seed)
+        from aerodock.experiments.compensation_study import FOLDERS, compensation_section
+
+        if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
+            say("    the compensations scored on real flights (held-out swap flights)")
+            results["compensation"] = compensation_section(shared_data, fig_dir, quick=quick,
+                                                           seed=seed, cfg=cfg)
+        else:
+            say("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)")
+            results["compensation"] = None
     else:
         why = "not asked for" if shared_data is None else "../shared/data/neural-swarm not found"
         say(f"5/5 real-data study skipped ({why})")
-        results["real_data"] = None
+        results["real_data"] = results["compensation"] = None
     timings["real_data_s"] = time.perf_counter() - t0
 
     results["timings_s"] = timings
