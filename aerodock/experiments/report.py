@@ -229,7 +229,7 @@ def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
     if bandwidth is not None:
         figs.append(bandwidth)
     for extra in ("sample_efficiency.png", "real_sample_efficiency.png",
-                  "real_heldout_vertical.png"):
+                  "real_heldout_vertical.png", "compensation_replay.png"):
         if (fig_dir / extra).exists():
             figs.append(fig_dir / extra)
     rel = [str(p.relative_to(out_dir)) for p in figs]

@@ -19,7 +19,7 @@ import os
 import platform
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -61,6 +61,10 @@ class RunSize:
     costs: CostSize  # the sweeps of the levers the paper leaves unstated
     target_trials: int
     target_all_rows: bool  # every controller + model row (quick: the paper's and ours only)
+    # [curriculum] keys changed for this size ({}: the configuration's curriculum) and the
+    # training epochs of each stage's model (None: train's own stopping rule)
+    curriculum: dict[str, Any] = field(default_factory=dict)
+    train_max_epochs: int | None = None
 
 
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
@@ -78,7 +82,12 @@ SMOKE = RunSize(cable_reps=1, cable_offsets_m=(0.36,), hover_trials=4, moving_tr
                 se_max_time_s=3.0,
                 costs=CostSize(trials=2, taus_s=(), mixes=(0.0,), cable_offsets_m=(0.36,),
                                cable_reps=1, gate_heights_m=()),
-                target_trials=2, target_all_rows=False)
+                target_trials=2, target_all_rows=False,
+                # two paper stages and one deep stage of two flights each (the configuration's
+                # curriculum flies seven stages of five to ten): every step, at its smallest
+                curriculum={"stage_step_m": 0.65, "deep_depths_m": [0.27],
+                            "flights_per_stage": 2, "deep_flights_per_stage": 2},
+                train_max_epochs=20)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
                test_flights_per_stage=4, se_max_time_s=None,
@@ -244,16 +253,22 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     t0 = time.perf_counter()
     say("1/5 curriculum data collection and training")
     data_dir = out_dir / "data"
-    epochs = None if bar is None else {"progress": lambda e, n, *_: bar("training epochs", e, n)}
-    curriculum = run_curriculum(cfg, data_dir, seed=seed, progress=lambda m: say("    " + m),
-                                train_kwargs=epochs, name_as=named / "data")
+    epochs: dict[str, Any] = {}
+    if bar is not None:
+        epochs["progress"] = lambda e, n, *_: bar("training epochs", e, n)
+    if size.train_max_epochs is not None:
+        epochs["max_epochs"] = size.train_max_epochs
+    learn_cfg = cfg.with_overrides({"curriculum": size.curriculum}) if size.curriculum else cfg
+    curriculum = run_curriculum(learn_cfg, data_dir, seed=seed,
+                                progress=lambda m: say("    " + m),
+                                train_kwargs=epochs or None, name_as=named / "data")
     # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
     # trained before the deep stages: the reproduction flies the paper's.
     deep_predictor = Predictor.load(data_dir / "models" / "final")
     predictor = (Predictor.load(data_dir / "models" / "paper")
                  if "paper_model" in curriculum else deep_predictor)
     test_logs = []
-    for st in curriculum_stages(cfg):
+    for st in curriculum_stages(learn_cfg):
         test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
                                         st.depth_max_m, seed + 7919 + st.index,
                                         name=f"test{st.index}")
@@ -261,11 +276,11 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     save_dataset(data_dir / "heldout.npz", test_ds)
     from aerodock.flightlog import load_flightlogs
 
-    train_logs = [lg for st in curriculum_stages(cfg)
+    train_logs = [lg for st in curriculum_stages(learn_cfg)
                   for lg in load_flightlogs(data_dir / f"stage{st.index}.npz")]
     if size.se_pool_flights:
         # More flights (nominal controller + final model) so that 10 minutes exist to draw from.
-        for st in curriculum_stages(cfg):
+        for st in curriculum_stages(learn_cfg):
             train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
                                              st.depth_max_m, seed + 4241 + st.index, predictor,
                                              name=f"pool{st.index}")
@@ -343,7 +358,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         wrench_curriculum = run_curriculum(wrench_cfg, out_dir / "data-wrench", seed=seed,
                                            model_kind="so2-wrench",
                                            progress=lambda m: say("    " + m),
-                                           train_kwargs=epochs, name_as=named / "data-wrench")
+                                           train_kwargs=epochs or None,
+                                           name_as=named / "data-wrench")
         results["learning"]["wrench_curriculum"] = wrench_curriculum
         wrench_predictor = Predictor.load(out_dir / "data-wrench" / "models" / "final")
         rows[WRENCH_ROW] = (ours_tff_cfg, wrench_predictor)

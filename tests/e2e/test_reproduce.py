@@ -1,20 +1,30 @@
-"""Issue 5: `aerodock reproduce --quick` end to end, as `make demo` runs it."""
+"""Issue 5: `aerodock reproduce` end to end, as `make demo` runs it.
+
+In the suite the run is ``--smoke`` (every step at its smallest, the real-data steps included
+when ``../shared`` is there: about a minute). ``AERODOCK_E2E=quick`` runs ``--quick``, the run
+``make demo`` makes (about 10 minutes on one core), and checks its sizes and that the model helps
+the paper's controller; ``make test-e2e`` does that.
+"""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
 import pytest
 
+QUICK = os.environ.get("AERODOCK_E2E", "smoke") == "quick"
+
 
 @pytest.mark.slow
-def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
+def test_reproduce_writes_results_report_and_figures(tmp_path):
     out = tmp_path / "run"
     proc = subprocess.run(
-        [sys.executable, "-c", "from aerodock.cli import main; main()", "reproduce", "--quick",
-         "--out", str(out)], capture_output=True, text=True, timeout=1800)
+        [sys.executable, "-c", "from aerodock.cli import main; main()", "reproduce",
+         "--quick" if QUICK else "--smoke", "--out", str(out)],
+        capture_output=True, text=True, timeout=1800)
     assert proc.returncode == 0, proc.stderr
     assert "report.md" in proc.stdout
     res = json.loads((out / "results.json").read_text())
@@ -22,18 +32,19 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
                 "sample_efficiency"):
         assert key in res
     cs = res["cable_study"]
-    assert [r["offset_m"] for r in cs["with_model"]] == [0.36, 0.87, 1.35]  # quick: 3 of 6
-    assert len(cs["without_model"]) == 3
+    offsets = [0.36, 0.87, 1.35] if QUICK else [0.36]  # quick: 3 of 6; smoke: 1
+    assert [r["offset_m"] for r in cs["with_model"]] == offsets
+    assert len(cs["without_model"]) == len(offsets)
     for exp in ("hover_docking", "moving_leader"):
         for mode in ("with_model", "without_model"):
             d = res[exp][mode]
             assert 0.0 <= d["success_rate"] <= 1.0
             lo, hi = d["success_wilson95"]
             assert lo <= d["success_rate"] <= hi
-    # the learnt model helps where the paper says it does (measured, not assumed: the
-    # baseline's slow observer cannot cancel the wake within the docking window)
-    assert (res["hover_docking"]["with_model"]["success_rate"]
-            > res["hover_docking"]["without_model"]["success_rate"])
+    if QUICK:  # the learnt model helps where the paper says it does (measured, not assumed;
+        # tests/integration/test_mission.py checks the same with the exact wake fed forward)
+        assert (res["hover_docking"]["with_model"]["success_rate"]
+                > res["hover_docking"]["without_model"]["success_rate"])
     # the reproduction flies the paper's controller; ours is a separate, named row
     ctl = res["controllers"]
     assert ctl["paper"]["terminal_q_diag"] == ctl["paper"]["q_diag"]
@@ -61,9 +72,11 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     assert res["learning"]["curriculum"]["paper_model"].endswith("paper")
     costs = res["controller_costs"]
     bandwidth = costs["observer_bandwidth"]
-    assert [p["observer"] for p in bandwidth] == ["freyja", "time-constant"]
-    assert bandwidth[1]["observer_bias_tau_s"] == 4.0
-    assert bandwidth[1]["rise_63_s"] > bandwidth[0]["rise_63_s"]  # 4 s: slower than Freyja's
+    assert [p["observer"] for p in bandwidth] == (["freyja", "time-constant"] if QUICK
+                                                  else ["freyja"])
+    if QUICK:
+        assert bandwidth[1]["observer_bias_tau_s"] == 4.0
+        assert bandwidth[1]["rise_63_s"] > bandwidth[0]["rise_63_s"]  # 4 s: slower than Freyja's
     for point in bandwidth:
         counts = point["paper_counts"]
         rate = point["hover_with_model"]["success_rate"]
@@ -72,11 +85,18 @@ def test_reproduce_quick_writes_results_report_and_figures(tmp_path):
     pc = res["paper_counts"]
     assert set(pc) == {"hover_with_model", "hover_without_model", "cable_with_model",
                        "cable_without_model", "all_consistent"}
-    assert {(p["gate_height_m"], p["controller"]) for p in costs["gripper_window"]} == {
-        (0.10, "paper")}
+    assert {(p["gate_height_m"], p["controller"]) for p in costs["gripper_window"]} == (
+        {(0.10, "paper")} if QUICK else set())
     assert {p["compensation"] for p in costs["terminal_gains"]} == {"observer", "model"}
+    # the jet has its own mean field: the error floor is exact and the ratio a number
+    assert res["learning"]["error_floor_source"].startswith("the field's own mean_acceleration")
+    assert res["learning"]["rmse_ratio_to_floor"]["all"] > 0
     report = (out / "report.md").read_text()
     assert "figures/hover_docking.gif" in res["figures"]
+    if res["real_data"] is not None:  # ../shared/data present (CI): the real-flight steps ran
+        assert res["compensation"]["scores"]
+        assert "figures/compensation_replay.png" in res["figures"]
+        assert "The compensations scored on real flights" in report
     assert "Cable-length study" in report and "8/10" in report
     assert "The paper's controller and ours, side by side" in report
     assert "What each lever costs" in report
