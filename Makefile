@@ -10,7 +10,7 @@ TORCH_INDEX_URL ?=
 TORCH_PIP_ARGS := $(if $(TORCH_INDEX_URL),--index-url $(TORCH_INDEX_URL))
 EXTRAS := learn,export,ingest,ros,gym,ray,parquet,viz,dev
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test test-e2e lint bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,11 @@ PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder --durations=15
 test: $(STAMP)
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q $(PYTEST_XDIST)
+
+# The end-to-end run at the size `make demo` makes (`reproduce --quick`, about 10 minutes on one
+# core) with its checks of the figures; `make test` runs it as `reproduce --smoke`.
+test-e2e: $(STAMP)
+	AERODOCK_E2E=quick $(BIN)/python -m pytest -q tests/e2e
 
 lint: $(STAMP)
 	$(BIN)/ruff check aerodock tests studies
