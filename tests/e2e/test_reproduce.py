@@ -51,8 +51,11 @@ def test_reproduce_writes_results_report_and_figures(tmp_path):
     assert ctl["paper"]["bias_estimator"] == "freyja"  # as the paper's flight stack publishes
     assert ctl["paper"]["command_rate_hz"] == 50.0 and ctl["paper"]["reference_ff_factor"] == 0
     assert 0.3 < ctl["paper"]["observer_rise_63_s"] < 0.7
-    for exp in ("cable_study", "hover_docking", "moving_leader"):
-        assert exp in ctl["tuned"]
+    if QUICK:  # (a smoke run leaves the tuned controller out: ours is it plus one term)
+        for exp in ("cable_study", "hover_docking", "moving_leader"):
+            assert exp in ctl["tuned"]
+    else:
+        assert "tuned" not in ctl
     # ours (accelerometer observer, deep curriculum's model) and the targets beyond the paper
     assert ctl["ours"]["accel_observer_tau_s"] > 0
     for exp in ("cable_study", "hover_docking", "moving_leader"):
