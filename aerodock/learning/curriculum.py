@@ -51,7 +51,7 @@ class Stage:
 
 
 def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
-    """Stages from ``[curriculum]``: 0.3 m closer each time, down to ``min_depth_m`` (the
+    """Stages from ``[curriculum]``: ``stage_step_m`` closer each time, down to ``min_depth_m`` (the
     paper's curriculum), then, with ``deep``, one stage down to each of ``deep_depths_m`` (each
     flown with the model of the stage before it)."""
     c = cfg.curriculum

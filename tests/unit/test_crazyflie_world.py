@@ -139,3 +139,20 @@ def test_the_crazyflie_worlds_fly_a_campaign(path):
     assert s["trials"] == 2 and s["nan_trials"] == 0
     assert s["docked"] + s["aborts"] + s["missed"] + s["slip_throughs"] >= 1
     assert s["min_clearance_m"] > 0
+
+
+def test_the_jet_at_the_centre_of_mass_is_the_jet_without_its_torque(cf):
+    from aerodock.downwash import follower_wrench, quad_rotor_offsets_body_m
+
+    at_centre = cf.with_overrides(
+        {"downwash": {"field": "aerodock.downwash.at_centre:RoundJetAtCentre",
+                      "params": dict(cf.data["downwash"]["params"])}})
+    jet, centre = build_field(cf), build_field(at_centre)
+    lead, fol = probe_bodies(np.full(3, 0.15), np.array([0.0, 0.02, 0.04]), 0.0, 0.032, 9.81)
+    offsets = quad_rotor_offsets_body_m(cf.vehicle.diagonal_m)
+    for field in (jet, centre):
+        field.reset(3, np.random.default_rng(1))
+    force_jet, torque_jet = follower_wrench(jet, lead, fol, offsets, 0.002)
+    force_c, torque_c = follower_wrench(centre, lead, fol, offsets, 0.002)
+    np.testing.assert_allclose(force_c, force_jet)
+    assert np.all(torque_c == 0.0) and np.abs(torque_jet[1:]).max() > 0  # off axis: a torque
