@@ -174,7 +174,8 @@ def _mean_z(pred: np.ndarray, mask: np.ndarray) -> float:
 
 def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
                      kind: str = "so2", quick: bool = False, seed: int = 0,
-                     progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                     progress: Callable[[str], None] | None = None,
+                     smoke: bool = False) -> dict[str, Any]:
     """One pairing: train ``kind`` on the world ``cfg``'s simulated flights and on the real
     training flights, judge both and the zero model on the real test flights.
 
@@ -187,6 +188,8 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
             size), instead of the curriculum's flights and 200 epochs.
         seed: flights, split and weights.
         progress: called with a line per step.
+        smoke: the smallest run that crosses every step (1 flight per band, 8 epochs: the
+            suite's size; no figure worth quoting).
 
     Returns:
         A JSON-ready dict: the flights used, the interaction region's vertical RMSE of the zero,
@@ -210,9 +213,9 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     drift_mps = round(leader_speed_p95_mps(train_real), 2)
     say(f"{pair.name}: simulated flights in {cfg.source} (leaders drifting up to "
         f"{drift_mps:g} m/s)")
-    sim_logs = simulated_flights(cfg, flights_per_band=2 if quick else None,
+    sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
                                  leader_drift_max_mps=drift_mps, seed=seed, progress=progress)
-    epochs = 40 if quick else 200
+    epochs = 8 if smoke else 40 if quick else 200
     sim_ds = build_dataset(sim_logs)
     test_ds = build_dataset(test_real, free_air_radius_m=FREE_AIR_RADIUS_M)
     real_ds = build_dataset(train_real, free_air_radius_m=FREE_AIR_RADIUS_M)
@@ -257,14 +260,15 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
 
 def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str = "so2",
                       quick: bool = False, seed: int = 0,
-                      progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                      progress: Callable[[str], None] | None = None,
+                      smoke: bool = False) -> dict[str, Any]:
     """The sim-to-real check for each pairing of :data:`PAIRS` that ``worlds`` gives a world.
 
     Args:
         worlds: the Crazyflie world of each pairing, by its key in :data:`PAIRS`
             (``"small_under_small"``, ``"small_under_large"``).
         data_dir: the Neural-Swarm folder (holding ``swap_ss`` and ``swap_sl_2020-06-19``).
-        kind, quick, seed, progress: as :func:`sim_to_real_pair`.
+        kind, quick, seed, progress, smoke: as :func:`sim_to_real_pair`.
 
     Returns:
         ``{"pairs": {key: sim_to_real_pair(...)}, "target_reduction", "all_met"}``.
@@ -282,6 +286,6 @@ def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str
         pair = PAIRS[key]
         logs = read_logs("neural-swarm", [Path(data_dir) / pair.folder], vehicle=pair.vehicle)
         out["pairs"][key] = sim_to_real_pair(cfg, logs, pair, kind=kind, quick=quick, seed=seed,
-                                             progress=progress)
+                                             progress=progress, smoke=smoke)
     out["all_met"] = all(p["met"] for p in out["pairs"].values())
     return out
