@@ -38,13 +38,15 @@ def field_probe(
     check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
     cfg = load_config(config)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
+    lead_mass = cfg.leader.mass_kg
     dt = 1.0 / cfg.sim.physics_rate_hz
     if bar:
         if model is not None or leader_speed != 0.0:
             fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
         area = cfg.platform.bar_length_m * cfg.platform.bar_diameter_m
         result = probe_bar(build_field(cfg), separation, radial, samples, dt,
-                           np.random.default_rng(seed), area, mass, g)
+                           np.random.default_rng(seed), area, mass, g,
+                           leader_mass_kg=lead_mass)
         if result is None:
             result = {"separation_m": separation, "radial_m": radial, "mean_n": None,
                       "sd_n": None, "lateral_sd_over_vertical_mean": None,
@@ -69,7 +71,8 @@ def field_probe(
         from aerodock.learning.runtime import Predictor
 
         predictor = Predictor.load(model)
-        leader, follower = probe_bodies(separation, radial, leader_speed, mass, g)
+        leader, follower = probe_bodies(separation, radial, leader_speed, mass, g,
+                                        leader_mass_kg=lead_mass)
         mean = predictor.predict_bodies(leader, follower)[0]
         result = {
             "separation_m": separation, "radial_m": radial, "leader_speed_mps": leader_speed,
@@ -78,7 +81,7 @@ def field_probe(
         }
     else:
         result = probe_field(build_field(cfg), separation, radial, leader_speed, samples, dt,
-                             np.random.default_rng(seed), mass, g)
+                             np.random.default_rng(seed), mass, g, leader_mass_kg=lead_mass)
         result["source"] = cfg.downwash.field
     if as_json:
         print_json(result)

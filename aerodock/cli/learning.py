@@ -342,7 +342,8 @@ def collect(
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Curriculum data collection: each stage trains, deploys and flies 0.3 m closer."""
+    """Curriculum data collection: each stage trains, deploys and flies curriculum.stage_step_m
+    closer (0.3 m by default)."""
     from aerodock.learning.curriculum import run_curriculum
 
     cfg = load_config(config)

@@ -58,7 +58,10 @@ class RoundJetField:
             mean (DESIGN.md's vertical 20-25 %; default the follower's).
         bar_turb_lateral: sd of the bar's drag across the wake axis, as a fraction of its local
             mean axial drag (DESIGN.md's lateral 5-10 %; default the follower's).
-        rotor_radius_m, n_rotors, air_density_kgpm3: vehicle and air constants (both vehicles).
+        rotor_radius_m, n_rotors, air_density_kgpm3: the follower's rotors (the disks that
+            ingest the wake) and the air; the leader's too unless given apart.
+        leader_rotor_radius_m, leader_n_rotors: the leader's rotors, whose disk area sets the
+            wake's speed ``w0 = 2 v_h`` (None: the follower's, a pair of one vehicle type).
     """
 
     def __init__(
@@ -77,10 +80,14 @@ class RoundJetField:
         rotor_radius_m: float = 0.0635,
         n_rotors: int = 4,
         air_density_kgpm3: float = 1.225,
+        leader_rotor_radius_m: float | None = None,
+        leader_n_rotors: int | None = None,
     ):
+        lead_radius_m = rotor_radius_m if leader_rotor_radius_m is None else leader_rotor_radius_m
         for name, value in (("core_length_m", core_length_m), ("half_width0_m", half_width0_m),
                             ("turb_corr_time_s", turb_corr_time_s),
-                            ("rotor_radius_m", rotor_radius_m)):
+                            ("rotor_radius_m", rotor_radius_m),
+                            ("leader_rotor_radius_m", lead_radius_m)):
             if not value > 0:
                 raise ValueError(f"RoundJetField: {name} must be > 0, got {value!r}")
         self.core_length_m = core_length_m
@@ -95,6 +102,8 @@ class RoundJetField:
         self.bar_turb_vertical = bar_turb_vertical
         self.bar_turb_lateral = bar_turb_lateral
         self.disk_area_m2 = n_rotors * np.pi * rotor_radius_m**2
+        self.leader_disk_area_m2 = (
+            (n_rotors if leader_n_rotors is None else leader_n_rotors) * np.pi * lead_radius_m**2)
         self.air_density_kgpm3 = air_density_kgpm3
         # Turbulence states, component-major (3, n) like the hot loop's work arrays.
         self._noise = np.zeros((3, 0))
@@ -250,7 +259,7 @@ class RoundJetField:
         # body z (down when level): the wake's direction
         axis = np.array(leader.R[:, :, 2].T, dtype=float, order="C")
         thrust = np.maximum(leader.thrust_n, 0.0)
-        w0 = 2.0 * np.sqrt(thrust / (2.0 * self.air_density_kgpm3 * self.disk_area_m2))
+        w0 = 2.0 * np.sqrt(thrust / (2.0 * self.air_density_kgpm3 * self.leader_disk_area_m2))
         lv = np.ascontiguousarray(np.asarray(leader.v, dtype=float).T)
         prod = lv * axis
         along = prod[0] + prod[1]

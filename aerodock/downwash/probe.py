@@ -15,12 +15,14 @@ from aerodock.downwash.wrench import bar_wake_force_n
 
 
 def probe_bodies(separation_m: np.ndarray, radial_m: np.ndarray, leader_speed_mps: float,
-                 mass_kg: float, gravity_mps2: float,
-                 azimuth_rad: float = 0.0) -> tuple[BodyState, BodyState]:
+                 mass_kg: float, gravity_mps2: float, azimuth_rad: float = 0.0,
+                 leader_mass_kg: float | None = None) -> tuple[BodyState, BodyState]:
     """A hovering (or north-moving) leader at the origin and followers at the given points.
 
     The follower is ``separation_m`` below and ``radial_m`` to the side (direction ``azimuth_rad``
-    from north) and moves with the leader, so only the geometry changes between points.
+    from north) and moves with the leader, so only the geometry changes between points. Both
+    hover at their weight: the follower's ``mass_kg``, the leader's ``leader_mass_kg`` (None:
+    the follower's).
     """
     sep = np.atleast_1d(np.asarray(separation_m, float))
     rad = np.atleast_1d(np.asarray(radial_m, float))
@@ -30,7 +32,8 @@ def probe_bodies(separation_m: np.ndarray, radial_m: np.ndarray, leader_speed_mp
     vel = np.zeros((n, 3))
     vel[:, 0] = leader_speed_mps
     mass = np.full(n, mass_kg)
-    leader = BodyState(np.zeros((n, 3)), vel, eye, mass * gravity_mps2, mass)
+    lead_mass = mass.copy() if leader_mass_kg is None else np.full(n, leader_mass_kg)
+    leader = BodyState(np.zeros((n, 3)), vel, eye, lead_mass * gravity_mps2, lead_mass)
     pos = np.stack([rad * np.cos(azimuth_rad), rad * np.sin(azimuth_rad), sep], axis=1)
     follower = BodyState(pos, vel.copy(), eye.copy(), mass * gravity_mps2, mass.copy())
     return leader, follower
@@ -38,18 +41,20 @@ def probe_bodies(separation_m: np.ndarray, radial_m: np.ndarray, leader_speed_mp
 
 def probe_field(field: DownwashField, separation_m: float, radial_m: float,
                 leader_speed_mps: float, samples: int, dt_s: float, rng: np.random.Generator,
-                mass_kg: float, gravity_mps2: float, azimuth_rad: float = 0.0) -> dict[str, Any]:
+                mass_kg: float, gravity_mps2: float, azimuth_rad: float = 0.0,
+                leader_mass_kg: float | None = None) -> dict[str, Any]:
     """Mean and standard deviation of the acceleration (m/s², NED) a field exerts at a point.
 
     Draws ``samples`` consecutive values of the field at the physics step ``dt_s`` (so turbulence
     is time-correlated, as in flight) and also reports the field's noise-free mean
     (``field_mean_mps2``): its own ``mean_acceleration`` or, without one, an estimate on a copy
-    of the field (``field_mean_source`` says which).
+    of the field (``field_mean_source`` says which). The leader hovers at ``leader_mass_kg``'s
+    weight (None: the follower's).
     """
     if samples < 2:
         raise ValueError(f"--samples must be >= 2, got {samples}")
     leader, follower = probe_bodies(separation_m, radial_m, leader_speed_mps, mass_kg,
-                                    gravity_mps2, azimuth_rad)
+                                    gravity_mps2, azimuth_rad, leader_mass_kg)
     mean_fn = mean_acceleration_fn(field, samples=samples, dt_s=dt_s)  # copies it before reset
     field.reset(1, rng)
     draws = np.empty((samples, 3))
@@ -67,7 +72,8 @@ def probe_field(field: DownwashField, separation_m: float, radial_m: float,
 
 def probe_bar(field: DownwashField, separation_m: float, radial_m: float, samples: int,
               dt_s: float, rng: np.random.Generator, bar_area_m2: float, mass_kg: float,
-              gravity_mps2: float, bar_yaw_rad: float = 0.0) -> dict[str, Any] | None:
+              gravity_mps2: float, bar_yaw_rad: float = 0.0,
+              leader_mass_kg: float | None = None) -> dict[str, Any] | None:
     """Mean and sd of the wake's force on a bar held still at a point below a hovering leader.
 
     Draws ``samples`` consecutive values at the physics step ``dt_s``, as the world calls the
@@ -76,13 +82,15 @@ def probe_bar(field: DownwashField, separation_m: float, radial_m: float, sample
     ``lateral_sd_over_vertical_mean`` is the sd of the horizontal force across the bar (the
     direction that pushes it through a gripper's gate; along its length a cylinder feels no
     drag) over the mean vertical drag.
+    The leader hovers at ``leader_mass_kg``'s weight (None: ``mass_kg``'s).
     Returns None if the field has no ``bar_force_n``.
     """
     if getattr(field, "bar_force_n", None) is None:
         return None
     if samples < 2:
         raise ValueError(f"--samples must be >= 2, got {samples}")
-    leader, follower = probe_bodies(1.0, 1.0, 0.0, mass_kg, gravity_mps2)
+    leader, follower = probe_bodies(1.0, 1.0, 0.0, mass_kg, gravity_mps2,
+                                    leader_mass_kg=leader_mass_kg)
     bar_p = np.array([[radial_m, 0.0, separation_m]])
     still = np.zeros((1, 3))
     axis = np.array([[np.cos(bar_yaw_rad), np.sin(bar_yaw_rad), 0.0]])

@@ -51,7 +51,7 @@ class Stage:
 
 
 def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
-    """Stages from ``[curriculum]``: 0.3 m closer each time, down to ``min_depth_m`` (the
+    """Stages from ``[curriculum]``: ``stage_step_m`` closer each time, down to ``min_depth_m`` (the
     paper's curriculum), then, with ``deep``, one stage down to each of ``deep_depths_m`` (each
     flown with the model of the stage before it)."""
     c = cfg.curriculum
@@ -70,13 +70,32 @@ def curriculum_stages(cfg: Config, deep: bool = True) -> list[Stage]:
     return stages
 
 
+# Lengths of the flights' pattern, in proportion to ``curriculum.free_air_m`` (so a world of
+# smaller vehicles, whose free-air waypoints are nearer, flies the same pattern scaled): written
+# as the default world's figure times ``free_air_m / 0.9`` (exactly the figure there).
+_DEFAULT_FREE_AIR_M = 0.9
+_HOLD_RADIUS_M = 0.2  # near-axis holds within this radius of the leader's axis
+_LABEL_FREE_AIR_M = 0.6  # labels' free air beyond this (learning.labels.FREE_AIR_RADIUS_M)
+
+
+def _scaled(length_m: float, cfg: Config) -> float:
+    """``length_m`` of the default world's pattern in this world's (see above)."""
+    return length_m * (cfg.curriculum.free_air_m / _DEFAULT_FREE_AIR_M)
+
+
+def label_free_air_radius_m(cfg: Config) -> float:
+    """The free-air radius the curriculum's flights record for their labels' bias, m: 0.6 m in
+    the default world (its free-air waypoints at 0.9 m), in proportion to ``free_air_m`` else."""
+    return _scaled(_LABEL_FREE_AIR_M, cfg)
+
+
 def _waypoints(n: int, rng: TrialRNG, depth_min: float, depth_max: float,
-               free_air_m: float) -> np.ndarray:
+               free_air_m: float, hold_radius_m: float) -> np.ndarray:
     """(5, n, 3) waypoints relative to the leader: free air, sweep across, near-axis hold at two
-    depths, exit to free air."""
+    depths (within ``hold_radius_m`` of the axis), exit to free air."""
     theta = rng.uniform(0.0, 2 * np.pi, size=n)
     depths = rng.uniform(depth_min, depth_max, size=(n, 3))
-    r_hold = rng.uniform(0.0, 0.2, size=n)
+    r_hold = rng.uniform(0.0, hold_radius_m, size=n)
     phi = rng.uniform(0.0, 2 * np.pi, size=n)
 
     def at(r, ang, depth):
@@ -93,7 +112,10 @@ def _waypoints(n: int, rng: TrialRNG, depth_min: float, depth_max: float,
 
 # Gap kept between the hanging bar and the top of the follower's gate in the curriculum flights.
 _BAR_GAP_M = 0.0
+# Shortest cable the curriculum hangs the bar on: a third of the bifilar spacing (0.05 m on the
+# default platform's 0.15 m), written so that it is exactly that there.
 _MIN_CABLE_M = 0.05
+_DEFAULT_CABLE_SPACING_M = 0.15
 
 
 def _bar_out_of_the_way(cfg: Config, depth_min_m: float) -> Config:
@@ -105,7 +127,8 @@ def _bar_out_of_the_way(cfg: Config, depth_min_m: float) -> Config:
             - p.bar_diameter_m / 2 - _BAR_GAP_M)
     if p.cable_length_m <= room:
         return cfg
-    return cfg.with_overrides({"platform": {"cable_length_m": max(_MIN_CABLE_M, room)}},
+    min_cable_m = _MIN_CABLE_M * (p.cable_spacing_m / _DEFAULT_CABLE_SPACING_M)
+    return cfg.with_overrides({"platform": {"cable_length_m": max(min_cable_m, room)}},
                               source=f"{cfg.source} + cables shortened for the curriculum")
 
 
@@ -128,7 +151,8 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     rng = TrialRNG(seed, n, first_trial)
     c = cfg.curriculum
     world = World(cfg, n, rng, field=build_field(cfg))
-    wps = _waypoints(n, rng, depth_min_m, depth_max_m, c.free_air_m)
+    wps = _waypoints(n, rng, depth_min_m, depth_max_m, c.free_air_m,
+                     _scaled(_HOLD_RADIUS_M, cfg))
     drifting = rng.random(n) < c.drift_fraction
     speed = np.where(drifting, rng.uniform(0.0, c.leader_drift_max_mps, size=n), 0.0)
     heading = rng.uniform(0.0, 2 * np.pi, size=n)
@@ -138,7 +162,8 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     world.reset(lead_p0 - lead_v * settle_s, lead_p0 + wps[0] - lead_v * settle_s)
     world.set_velocities(lead_v, lead_v)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
-    lead_ctl = PositionController(cfg, n, use_observer=True)
+    lead_mass = cfg.leader.mass_kg  # the follower's unless [leader] says otherwise
+    lead_ctl = PositionController(cfg, n, use_observer=True, vehicle=cfg.leader)
     fol_ctl = PositionController(cfg, n, use_observer=True, has_accelerometer=True)
     z = np.zeros((n, 3))
     zero_n = np.zeros(n)
@@ -147,7 +172,8 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         if predictor is None:
             return None
         return predictor.predict_bodies(
-            BodyState(obs_l.p, obs_l.v, obs_l.R, np.full(n, mass * g), np.full(n, mass)),
+            BodyState(obs_l.p, obs_l.v, obs_l.R, np.full(n, lead_mass * g),
+                      np.full(n, lead_mass)),
             BodyState(obs_f.p, obs_f.v, obs_f.R, np.full(n, mass * g), np.full(n, mass)))
 
     # Settled start: leader (drifting if it drifts) and follower in formation at the first
@@ -185,8 +211,9 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         recorder.after_step(world)
     return recorder.flightlogs(lambda i: {
         "name": f"{name}-{first_trial + i:03d}", "source": "aerodock-sim", "frame": "NED",
-        "label_basis": recorder.label_basis, "leader_mass_kg": mass, "follower_mass_kg": mass,
-        **vehicle_meta(cfg),
+        "label_basis": recorder.label_basis, "leader_mass_kg": lead_mass,
+        "follower_mass_kg": mass, **vehicle_meta(cfg),
+        "free_air_radius_m": label_free_air_radius_m(cfg),
         "depth_band_m": [depth_min_m, depth_max_m], "leader_speed_mps": float(speed[i]),
         "cable_length_m": cfg.platform.cable_length_m,
         "compensation": "observer" if predictor is None else "observer+model", "seed": seed,

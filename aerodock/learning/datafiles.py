@@ -35,7 +35,6 @@ from aerodock.learning.dataset import (
     build_dataset,
     concat_datasets,
 )
-from aerodock.learning.labels import FREE_AIR_RADIUS_M
 
 DATASET_FORMAT = "aerodock-dataset"
 DATASET_VERSION = 1
@@ -124,7 +123,7 @@ def load_dataset(path: str | Path) -> Dataset:
 def load_data_paths(
     paths: Sequence[str | Path],
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
 ) -> Dataset:
     """One Dataset from FlightLog files, dataset files and folders of them.

@@ -28,8 +28,8 @@ from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
 from aerodock.learning.features import AIR_DENSITY_KGPM3, GRAVITY_MPS2, wake_scales
 from aerodock.learning.labels import (
-    FREE_AIR_RADIUS_M,
     BiasEstimate,
+    free_air_radius_of,
     has_torque,
     labels_from_logs,
     torque_labels_from_logs,
@@ -279,17 +279,24 @@ class _FlightSamples:
     leader_thrust_n: np.ndarray | None = None
 
 
+def _radii_used(logs: Sequence[FlightLog], free_air_radius_m: float | None) -> float | list[float]:
+    """The free-air radius the labels used, m: one number, or each distinct one sorted."""
+    radii = sorted({free_air_radius_of(log, free_air_radius_m) for log in logs})
+    return radii[0] if len(radii) == 1 else radii
+
+
 def build_dataset(
     logs: Sequence[FlightLog],
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
 ) -> Dataset:
     """Labels and model inputs for a list of flights (biases estimated together).
 
     Args:
         logs: flights (time-aligned FlightLogs).
-        free_air_radius_m: free-air radius for the bias estimate (see labels).
+        free_air_radius_m: free-air radius for the bias estimate, m (None: each flight's own,
+            else the default; see :func:`aerodock.learning.labels.free_air_radius_of`).
         lowpass_hz: optional low-pass cut-off for the labels (off by default).
 
     Raises:
@@ -323,7 +330,7 @@ def build_dataset(
         "labels": {
             "definition": "a_obs - u_1:3 - per-flight free-air median bias",
             "units": "m/s^2 NED",
-            "free_air_radius_m": free_air_radius_m,
+            "free_air_radius_m": _radii_used(logs, free_air_radius_m),
             "lowpass_hz": lowpass_hz,
             **({"torque_definition": "obs_torque - rotor_torque - per-flight free-air median "
                                      "bias, rotated to the world frame",

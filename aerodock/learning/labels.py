@@ -8,8 +8,11 @@ This module removes that bias per flight:
 * raw label ``a_obs - u_1:3`` (m/s², NED), optionally low-pass filtered (zero-phase Butterworth,
   off by default: the network already averages turbulence out, and filtering blurs the wake's edge);
 * *free-air* samples are those where the follower cannot be in the leader's wake: its horizontal
-  distance from the leader exceeds ``free_air_radius_m`` (0.6 m by default, several wake radii at
-  the curriculum's separations) or it is above the leader (``dp_z < 0``, NED);
+  distance from the leader exceeds a free-air radius or it is above the leader (``dp_z < 0``,
+  NED). The radius is the caller's, else the flight's own (``meta["free_air_radius_m"]``: the
+  simulated curriculum records one in proportion to its free-air waypoints, so a Crazyflie
+  world's flights carry theirs), else 0.6 m (several wake radii at the default curriculum's
+  separations);
 * a flight's bias is the per-axis median of its free-air raw labels; a flight with no free-air
   samples borrows the median over the other flights' free-air samples of the same call; if there
   are none at all, the bias is 0 and a warning is recorded.
@@ -36,6 +39,7 @@ import numpy as np
 from aerodock.flightlog import FlightLog
 
 FREE_AIR_RADIUS_M = 0.6
+FREE_AIR_META_KEY = "free_air_radius_m"
 VALID_KEY = "label_valid"
 OBS_TORQUE_KEY = "follower_obs_torque_nm"
 ROTOR_TORQUE_KEY = "follower_rotor_torque_nm"
@@ -77,16 +81,26 @@ def valid_mask(log: FlightLog) -> np.ndarray:
     return mask.astype(bool)
 
 
-def free_air_mask(log: FlightLog, free_air_radius_m: float = FREE_AIR_RADIUS_M) -> np.ndarray:
+def free_air_radius_of(log: FlightLog, free_air_radius_m: float | None = None) -> float:
+    """The free-air radius for ``log``, m: ``free_air_radius_m`` when given, else the flight's
+    own (``meta["free_air_radius_m"]``), else :data:`FREE_AIR_RADIUS_M`."""
+    if free_air_radius_m is not None:
+        return float(free_air_radius_m)
+    own = log.meta.get(FREE_AIR_META_KEY)
+    return FREE_AIR_RADIUS_M if own is None else float(own)
+
+
+def free_air_mask(log: FlightLog, free_air_radius_m: float | None = None) -> np.ndarray:
     """Boolean (T,) mask of samples where the follower is out of the leader's wake.
 
-    Out of the wake: horizontal distance (world north-east plane) greater than
-    ``free_air_radius_m``, or the follower above the leader (``dp_z < 0`` in NED).
+    Out of the wake: horizontal distance (world north-east plane) greater than the free-air
+    radius (:func:`free_air_radius_of`), or the follower above the leader (``dp_z < 0`` in NED).
     Samples marked invalid (``extra["label_valid"]``) are never free-air samples.
     """
     dp = log.follower_pos_m - log.leader_pos_m
     horizontal = np.hypot(dp[:, 0], dp[:, 1])
-    return ((horizontal > free_air_radius_m) | (dp[:, 2] < 0.0)) & valid_mask(log)
+    radius = free_air_radius_of(log, free_air_radius_m)
+    return ((horizontal > radius) | (dp[:, 2] < 0.0)) & valid_mask(log)
 
 
 def raw_labels(
@@ -170,7 +184,7 @@ def lowpass(
 def estimate_biases(
     logs: list[FlightLog],
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
     raw: list[np.ndarray] | None = None,
 ) -> tuple[list[BiasEstimate], list[str]]:
@@ -201,7 +215,8 @@ def estimate_biases(
         if len(pooled):
             out.append(BiasEstimate(np.median(pooled, axis=0), "pooled", 0))
             notes.append(
-                f"{log.name}: no free-air samples (horizontal distance > {free_air_radius_m} m or "
+                f"{log.name}: no free-air samples (horizontal distance > "
+                f"{free_air_radius_of(log, free_air_radius_m)} m or "
                 "above the leader); used the median of the other flights' free-air samples"
             )
         else:
@@ -216,7 +231,7 @@ def estimate_biases(
 def labels_from_logs(
     logs: list[FlightLog],
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
 ) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
     """De-biased labels for several flights at once (biases pooled as described above).
@@ -232,7 +247,7 @@ def labels_from_logs(
 def torque_labels_from_logs(
     logs: list[FlightLog],
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
 ) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
     """De-biased torque labels ``obs - rotor - bias`` (T_i, 3), N m, body FRD, of several
@@ -246,7 +261,7 @@ def torque_labels_from_logs(
 
 
 def debias(
-    logs: list[FlightLog], raw: list[np.ndarray], *, free_air_radius_m: float = FREE_AIR_RADIUS_M
+    logs: list[FlightLog], raw: list[np.ndarray], *, free_air_radius_m: float | None = None
 ) -> tuple[list[np.ndarray], list[BiasEstimate], list[str]]:
     """Raw labels (one (T_i, 3) array per log, any quantity) minus each flight's bias
     (:func:`estimate_biases`): ``(labels, biases, warnings)``."""
@@ -257,7 +272,7 @@ def debias(
 def labels_from_log(
     log: FlightLog,
     *,
-    free_air_radius_m: float = FREE_AIR_RADIUS_M,
+    free_air_radius_m: float | None = None,
     lowpass_hz: float | None = None,
     bias_mps2: np.ndarray | None = None,
 ) -> np.ndarray:

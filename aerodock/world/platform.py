@@ -175,17 +175,27 @@ def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: Bar
     return np.stack([end_1, top_1, top_2], axis=1), np.stack([end_2, end_1, end_2], axis=1)
 
 
+# Half the thickness of a rotor's swept disk (blade pitch and flapping): 1 cm on the paper's
+# 0.0635 m rotors, in proportion to the rotor radius otherwise (a propeller's sweep scales with
+# its size; written so that it is exactly 1 cm there).
+DISK_HALF_THICKNESS_M = 0.01
+PAPER_ROTOR_RADIUS_M = 0.0635
+
+
 def rotor_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
                  rotor_offsets_body_m: np.ndarray, rotor_radius_m: float,
                  seg_a: np.ndarray, seg_b: np.ndarray, bar_radius_m: float,
-                 disk_half_thickness_m: float = 0.01) -> np.ndarray:
+                 disk_half_thickness_m: float | None = None) -> np.ndarray:
     """(n,) bool: the bar or a cable passes through one of the follower's rotor disks.
 
     Each rotor disk is a thin cylinder (radius ``rotor_radius_m``, ``2 disk_half_thickness_m``
-    thick, the blades' sweep) about its centre; a segment (bar or cable, radius
+    thick, the blades' sweep; None: :data:`DISK_HALF_THICKNESS_M` scaled to the radius)
+    about its centre; a segment (bar or cable, radius
     ``bar_radius_m``) strikes it when the segment's point closest to the disk centre lies inside
     that cylinder grown by the segment's radius.
     """
+    if disk_half_thickness_m is None:
+        disk_half_thickness_m = DISK_HALF_THICKNESS_M * (rotor_radius_m / PAPER_ROTOR_RADIUS_M)
     centres = follower_p[:, None, :] + np.matmul(follower_R[:, None], rotor_offsets_body_m[
         None, :, :, None])[..., 0]  # (n, k, 3)
     axis = follower_R[:, :, 2][:, None, None, :]  # rotor axis, (n, 1, 1, 3)

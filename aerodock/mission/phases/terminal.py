@@ -10,8 +10,11 @@ from aerodock.mission.spec import Phase
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import Observation
 
-# The reference keeps the follower's top this far beyond the clearance below the leader, m.
+# The reference keeps the follower's top a margin beyond the clearance below the leader: 0.05 m
+# at the default clearance of 0.12 m, in proportion to the clearance otherwise (so it scales with
+# the vehicle; written so that it is exactly 0.05 m at the default).
 CLEARANCE_MARGIN_M = 0.05
+DEFAULT_CLEARANCE_M = 0.12
 
 
 def enter_terminal(phase: np.ndarray, t_s: float, arrival_s: float,
@@ -36,10 +39,12 @@ def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], le
 
 def keep_clear(params: MissionParams, p_ref: np.ndarray, leader: Observation,
                active: np.ndarray, mount_height_m: float) -> np.ndarray:
-    """``p_ref`` with the approaching trials' reference kept ``clearance_m`` plus a margin below
-    the leader (the follower's top is its contact arm, ``mount_height_m`` above its centre)."""
-    top_limit = (leader.p[:, 2] + params.mission.clearance_m + CLEARANCE_MARGIN_M
-                 + mount_height_m)
+    """``p_ref`` with the approaching trials' reference kept ``clearance_m`` plus a margin
+    (:data:`CLEARANCE_MARGIN_M` per :data:`DEFAULT_CLEARANCE_M` of it) below the leader (the
+    follower's top is its contact arm, ``mount_height_m`` above its centre)."""
+    clearance_m = params.mission.clearance_m
+    margin_m = CLEARANCE_MARGIN_M * (clearance_m / DEFAULT_CLEARANCE_M)
+    top_limit = leader.p[:, 2] + clearance_m + margin_m + mount_height_m
     p_ref = p_ref.copy()
     p_ref[:, 2] = np.where(active, np.maximum(p_ref[:, 2], top_limit), p_ref[:, 2])
     return p_ref

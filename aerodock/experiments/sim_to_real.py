@@ -1,0 +1,291 @@
+"""The sim-to-real check: how far to trust the simulator, measured on real flights.
+
+A downwash model is trained only on simulated flights of a Crazyflie world (``examples/
+crazyflie.toml``, ``examples/crazyflie_small_under_large.toml``) and judged on the real
+Crazyflie flights of the same pair (Neural-Swarm, ``data/neural-swarm``), beside the zero model
+and a model of the same kind trained on real flights of that pair:
+
+- small under small: the ``swap_ss`` flights, real model trained on 00-04, all judged on 05-06
+  (both vehicles in turn the follower);
+- small under large: the ``swap_sl_2020-06-19`` flights with the small ``cf51`` following, real
+  model trained on 00-07, all judged on 08-11.
+
+The measure is the interaction region's vertical RMSE (follower below the other vehicle, within
+0.2 m horizontally; :func:`aerodock.learning.evaluate.evaluate`) and its reduction against the
+zero model; the issue's target is a cut of at least half by the simulation-trained model (a model
+trained on real flights does about 70 %).
+
+The simulated flights are the curriculum's wake-excitation flights
+(:func:`aerodock.learning.curriculum.excitation_flights`) over the world's curriculum depth
+bands (:func:`aerodock.learning.curriculum.curriculum_stages`, the deep ones included), flown by
+the nominal controller (bias observer, no model: the curriculum deploys models to fly closer
+safely, not to make other labels). In the real swaps the upper vehicle moves as fast as the lower
+one (0.27 m/s median, 0.53 m/s at the 95th percentile below the other vehicle), faster than the
+curriculum's drifting leader (``curriculum.leader_drift_max_mps``); so that the simulated flights
+cover the real flights' envelope, the drifting leaders' top speed is the 95th percentile of the
+leader's speed in the real *training* flights (never the test flights). The labels are taken
+in the real logs' basis: the real logs have no commanded acceleration, so the Neural-Swarm
+reader makes the label the thrust-based residual ``a_obs - (g e3 - R e3 T / m)``; the simulated
+flights record the same
+(``curriculum.label_basis = "thrust"``). Both are NED (z down), m/s²: the reader converts the
+logs' z-up frame (``aerodock/ingest/neural_swarm.py``), so a downward push on the follower is a
+positive vertical label in both. Each flight's constant bias is removed from its free-air
+samples (the real flights' free air starts at :data:`aerodock.experiments.real_data.
+FREE_AIR_RADIUS_M`; the simulated flights record theirs).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from aerodock.config import Config
+from aerodock.experiments.real_data import FREE_AIR_RADIUS_M
+from aerodock.flightlog import FlightLog
+
+TARGET_REDUCTION = 0.5
+"""The issue's target: the simulation-trained model cuts the zero model's real interaction-region
+vertical RMSE by at least this fraction."""
+
+
+@dataclass(frozen=True)
+class RealPair:
+    """Real flights of one vehicle pairing and how they are split.
+
+    Attributes:
+        name: what the pairing is (``"small under small"``).
+        folder: the Neural-Swarm folder under the data directory.
+        vehicle: the reader's ``vehicle`` option (None: both small).
+        train_flights, test_flights: flight numbers (``"00"``) of each part.
+        follower: keep only the flights with this vehicle following (None: every flight).
+    """
+
+    name: str
+    folder: str
+    vehicle: str | None
+    train_flights: tuple[str, ...]
+    test_flights: tuple[str, ...]
+    follower: str | None = None
+
+
+PAIRS: dict[str, RealPair] = {
+    "small_under_small": RealPair(
+        "small under small", "swap_ss", None,
+        ("00", "01", "02", "03", "04"), ("05", "06")),
+    "small_under_large": RealPair(
+        "small under large", "swap_sl_2020-06-19", "cf51=small,cf101=large",
+        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf51"),
+}
+"""The pairings the study judges, each with its world in ``examples/`` (see the module doc)."""
+
+_NAME = re.compile(r"_(?P<flight>\d\d)_(?P<follower>cf\d+)$")
+
+
+def _split(logs: list[FlightLog], pair: RealPair, flights: tuple[str, ...]) -> list[FlightLog]:
+    """The logs of ``flights`` (with ``pair``'s follower, if it names one)."""
+    out = []
+    for log in logs:
+        m = _NAME.search(log.name)
+        if m and m["flight"] in flights and pair.follower in (None, m["follower"]):
+            out.append(log)
+    return out
+
+
+def leader_speed_p95_mps(logs: list[FlightLog]) -> float:
+    """The 95th percentile of the leader's speed over ``logs``' samples, m/s."""
+    speeds = np.concatenate([np.linalg.norm(lg.leader_vel_mps, axis=1) for lg in logs])
+    return float(np.percentile(speeds, 95))
+
+
+def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
+                      leader_drift_max_mps: float | None = None, seed: int = 0,
+                      progress: Callable[[str], None] | None = None) -> list[FlightLog]:
+    """Wake-excitation flights of the world ``cfg`` over its curriculum depth bands, flown by
+    the nominal controller, their labels in the thrust basis (see the module doc).
+
+    Args:
+        cfg: the world.
+        flights_per_band: flights per depth band (None: the curriculum's, ``flights_per_stage``
+            and ``deep_flights_per_stage``).
+        leader_drift_max_mps: top speed of the drifting leaders (None: the config's).
+        seed: random seed (band ``k`` flies seed ``seed + 1000 k``, as the curriculum does).
+        progress: called with a line per band.
+    """
+    from aerodock.learning.curriculum import curriculum_stages, excitation_flights
+
+    overrides: dict[str, Any] = {"label_basis": "thrust"}
+    if leader_drift_max_mps is not None:
+        overrides["leader_drift_max_mps"] = float(leader_drift_max_mps)
+    cfg = cfg.with_overrides({"curriculum": overrides},
+                             source=f"{cfg.source} + thrust-basis labels")
+    c = cfg.curriculum
+    logs: list[FlightLog] = []
+    for stage in curriculum_stages(cfg):
+        n = flights_per_band or int(c.deep_flights_per_stage if stage.deep
+                                    else c.flights_per_stage)
+        if progress:
+            progress(f"  flying {n} flights at {stage.depth_min_m:.2f}-{stage.depth_max_m:.2f} m")
+        logs.extend(excitation_flights(cfg, n, stage.depth_min_m, stage.depth_max_m,
+                                       seed + 1000 * stage.index, None,
+                                       name=f"sim-band{stage.index}"))
+    return logs
+
+
+def field_on_logs(cfg: Config, logs: list[FlightLog]) -> np.ndarray:
+    """The world ``cfg``'s mean wake (its field's turbulence-free acceleration) on the followers
+    of ``logs`` (real flights), (sum of samples, 3), m/s², NED, in the order of
+    :func:`aerodock.learning.dataset.build_dataset` (every sample of each flight in turn).
+
+    Each sample's leader and follower are the log's (position, velocity, attitude); the leader's
+    thrust is its logged thrust (``extra["leader_thrust_n"]``) or else its weight in the world.
+    This is the simulator's own answer at the real flights' geometry: what a model trained on
+    the world would learn at best.
+    """
+    from aerodock.downwash import BodyState, build_field, mean_acceleration_fn
+    from aerodock.geometry import quat_to_rotmat
+
+    mean = mean_acceleration_fn(build_field(cfg))
+    g, lead_kg, fol_kg = cfg.sim.gravity_mps2, cfg.leader.mass_kg, cfg.vehicle.mass_kg
+    out = []
+    for log in logs:
+        n = log.n_samples
+        thrust = np.asarray(log.extra.get("leader_thrust_n", np.full(n, lead_kg * g)), float)
+        leader = BodyState(log.leader_pos_m, log.leader_vel_mps, quat_to_rotmat(log.leader_quat),
+                           thrust, np.full(n, lead_kg))
+        follower = BodyState(log.follower_pos_m, log.follower_vel_mps,
+                             quat_to_rotmat(log.follower_quat), log.follower_thrust_n,
+                             np.full(n, fol_kg))
+        out.append(np.asarray(mean(leader, follower), float))
+    return np.concatenate(out)
+
+
+def _vertical(ev: dict[str, Any]) -> float:
+    return float(ev["interaction"]["model"]["rmse_mps2"]["z"])
+
+
+def _mean_z(pred: np.ndarray, mask: np.ndarray) -> float:
+    return float(np.mean(pred[mask, 2])) if mask.any() else float("nan")
+
+
+def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
+                     kind: str = "so2", quick: bool = False, seed: int = 0,
+                     progress: Callable[[str], None] | None = None,
+                     smoke: bool = False) -> dict[str, Any]:
+    """One pairing: train ``kind`` on the world ``cfg``'s simulated flights and on the real
+    training flights, judge both and the zero model on the real test flights.
+
+    Args:
+        cfg: the Crazyflie world of this pairing.
+        real_logs: the pairing's real flights (``read_logs("neural-swarm", [folder])``).
+        pair: how they are split.
+        kind: model kind trained on both.
+        quick: 2 simulated flights per depth band and at most 40 training epochs (a test's
+            size), instead of the curriculum's flights and 200 epochs.
+        seed: flights, split and weights.
+        progress: called with a line per step.
+        smoke: the smallest run that crosses every step (1 flight per band, 8 epochs: the
+            suite's size; no figure worth quoting).
+
+    Returns:
+        A JSON-ready dict: the flights used, the interaction region's vertical RMSE of the zero,
+        simulation-trained and real-trained models and of the world's own mean wake
+        (``rmse_vertical_mps2``: ``zero``, ``sim``, ``real``, ``field``; see
+        :func:`field_on_logs`), their reductions against the zero model, the mean vertical label
+        and predictions there, and whether the target (:data:`TARGET_REDUCTION`) is met by the
+        simulation-trained model.
+    """
+    from aerodock.learning.dataset import build_dataset
+    from aerodock.learning.evaluate import evaluate
+    from aerodock.learning.runtime import ZeroPredictor
+    from aerodock.learning.train import train_model
+
+    say = progress or (lambda _msg: None)
+    train_real = _split(real_logs, pair, pair.train_flights)
+    test_real = _split(real_logs, pair, pair.test_flights)
+    if not train_real or not test_real:
+        raise ValueError(f"{pair.folder}: no flights {pair.train_flights} or "
+                         f"{pair.test_flights} (follower {pair.follower or 'any'})")
+    drift_mps = round(leader_speed_p95_mps(train_real), 2)
+    say(f"{pair.name}: simulated flights in {cfg.source} (leaders drifting up to "
+        f"{drift_mps:g} m/s)")
+    sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
+                                 leader_drift_max_mps=drift_mps, seed=seed, progress=progress)
+    epochs = 8 if smoke else 40 if quick else 200
+    sim_ds = build_dataset(sim_logs)
+    test_ds = build_dataset(test_real, free_air_radius_m=FREE_AIR_RADIUS_M)
+    real_ds = build_dataset(train_real, free_air_radius_m=FREE_AIR_RADIUS_M)
+    say(f"{pair.name}: training {kind} on {len(sim_logs)} simulated flights "
+        f"({sim_ds.minutes:.1f} min)")
+    sim_model = train_model(kind, sim_ds, seed=seed, max_epochs=epochs)
+    say(f"{pair.name}: training {kind} on {len(train_real)} real flights "
+        f"({real_ds.minutes:.1f} min)")
+    real_model = train_model(kind, real_ds, seed=seed, max_epochs=epochs)
+    predictors = {"zero": ZeroPredictor(), "sim": sim_model.predictor(),
+                  "real": real_model.predictor()}
+    mask = test_ds.interaction_mask()
+    rmse, mean_z = {}, {"label": _mean_z(test_ds.y, mask)}
+    for name, pred in predictors.items():
+        rmse[name] = _vertical(evaluate(pred, test_ds))
+        if name != "zero":
+            mean_z[name] = _mean_z(pred.predict(test_ds.x, test_ds.leader_R), mask)
+    field = field_on_logs(cfg, test_real)
+    if field.shape != test_ds.y.shape:
+        raise ValueError(f"{pair.folder}: the test flights' samples changed in the dataset "
+                         f"({field.shape[0]} against {test_ds.n})")
+    rmse["field"] = float(np.sqrt(np.mean((field[mask, 2] - test_ds.y[mask, 2]) ** 2)))
+    mean_z["field"] = _mean_z(field, mask)
+    reduction = {name: 1.0 - rmse[name] / rmse["zero"] for name in ("sim", "real", "field")}
+    return {
+        "pair": pair.name, "real_folder": pair.folder, "follower": pair.follower,
+        "model": kind, "seed": seed, "quick": quick,
+        "real_train_flights": [lg.name for lg in train_real],
+        "real_test_flights": [lg.name for lg in test_real],
+        "real_train_minutes": real_ds.minutes, "interaction_samples": int(mask.sum()),
+        "sim": {"config": cfg.source, "flights": len(sim_logs), "minutes": sim_ds.minutes,
+                "label_basis": "thrust", "leader_drift_max_mps": drift_mps,
+                "free_air_radius_m": sim_ds.meta["labels"]["free_air_radius_m"],
+                "val_rmse_mps2": sim_model.info.get("val_rmse_mps2")},
+        "rmse_vertical_mps2": rmse,
+        "reduction_vs_zero": reduction,
+        "mean_vertical_mps2": mean_z,
+        "target_reduction": TARGET_REDUCTION,
+        "met": bool(reduction["sim"] >= TARGET_REDUCTION),
+    }
+
+
+def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str = "so2",
+                      quick: bool = False, seed: int = 0,
+                      progress: Callable[[str], None] | None = None,
+                      smoke: bool = False) -> dict[str, Any]:
+    """The sim-to-real check for each pairing of :data:`PAIRS` that ``worlds`` gives a world.
+
+    Args:
+        worlds: the Crazyflie world of each pairing, by its key in :data:`PAIRS`
+            (``"small_under_small"``, ``"small_under_large"``).
+        data_dir: the Neural-Swarm folder (holding ``swap_ss`` and ``swap_sl_2020-06-19``).
+        kind, quick, seed, progress, smoke: as :func:`sim_to_real_pair`.
+
+    Returns:
+        ``{"pairs": {key: sim_to_real_pair(...)}, "target_reduction", "all_met"}``.
+
+    Raises:
+        ValueError: a key not in :data:`PAIRS`, or a folder without the split's flights.
+    """
+    from aerodock.ingest import read_logs
+
+    unknown = sorted(set(worlds) - set(PAIRS))
+    if unknown:
+        raise ValueError(f"unknown pairing(s) {unknown}; known: {sorted(PAIRS)}")
+    out: dict[str, Any] = {"pairs": {}, "target_reduction": TARGET_REDUCTION}
+    for key, cfg in worlds.items():
+        pair = PAIRS[key]
+        logs = read_logs("neural-swarm", [Path(data_dir) / pair.folder], vehicle=pair.vehicle)
+        out["pairs"][key] = sim_to_real_pair(cfg, logs, pair, kind=kind, quick=quick, seed=seed,
+                                             progress=progress, smoke=smoke)
+    out["all_met"] = all(p["met"] for p in out["pairs"].values())
+    return out

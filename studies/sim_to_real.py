@@ -1,0 +1,65 @@
+"""The sim-to-real check: a downwash model trained only on simulated flights of the Crazyflie
+worlds, judged on the real Neural-Swarm flights beside the zero model and a model trained on real
+flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judged).
+
+    .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
+        [--pair small_under_small|small_under_large] [--data ../shared/data/neural-swarm]
+        [--out sim_to_real.json] [--json]
+
+The worlds are examples/crazyflie.toml (small under small) and
+examples/crazyflie_small_under_large.toml (small under large).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from aerodock.config import load_config
+from aerodock.experiments.sim_to_real import PAIRS, sim_to_real_study
+from aerodock.fileio import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+WORLDS = {"small_under_small": ROOT / "examples" / "crazyflie.toml",
+          "small_under_large": ROOT / "examples" / "crazyflie_small_under_large.toml"}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path,
+                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+    parser.add_argument("--pair", choices=sorted(PAIRS), action="append",
+                        help="a pairing to judge (repeatable; default: both)")
+    parser.add_argument("--model", default="so2", choices=("so2", "so2-ext", "mlp"))
+    parser.add_argument("--quick", action="store_true", help="2 flights per band, 40 epochs")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, help="write the results as JSON here")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    args = parser.parse_args()
+    if not args.data.is_dir():
+        print(f"error: {args.data}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
+        return 2
+    worlds = {key: load_config(WORLDS[key]) for key in (args.pair or sorted(PAIRS))}
+    result = sim_to_real_study(worlds, args.data, kind=args.model, quick=args.quick,
+                               seed=args.seed,
+                               progress=None if args.json else lambda m: print(m, flush=True))
+    if args.out is not None:
+        write_json(args.out, result, final_newline=True)
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    for key, r in result["pairs"].items():
+        rm, red = r["rmse_vertical_mps2"], r["reduction_vs_zero"]
+        print(f"{r['pair']}: interaction vertical RMSE zero {rm['zero']:.3f}, "
+              f"simulation-trained {rm['sim']:.3f} ({red['sim']:.1%}), "
+              f"real-trained {rm['real']:.3f} ({red['real']:.1%}), the world's own mean wake "
+              f"{rm['field']:.3f} ({red['field']:.1%}) m/s^2, "
+              f"{r['interaction_samples']} samples; target >= {r['target_reduction']:.0%}: "
+              f"{'met' if r['met'] else 'not met'} [{key}]")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
