@@ -44,7 +44,6 @@ def controllers_markdown(r: dict[str, Any]) -> list[str]:
                       "same world and seeds.")
     if "ours" in ctl:
         cols.append(("ours", ctl["ours"]))
-    if "ours" in ctl:
         lines[-1] += (f" **Ours** is {ctl['ours']['source']} (low-pass "
                       f"{ctl['ours']['accel_observer_tau_s']:g} s).")
     lines[-1] += " Docked trials with a Wilson 95 % interval."
