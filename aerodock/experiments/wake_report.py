@@ -67,65 +67,56 @@ def write_figures(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, An
     pairs = sorted(set(scores["pairs"]) | set(fit_scores["pairs"]))
     sets = (("held out", scores, "o", "C3"), ("fitted on", fit_scores, "s", "C0"))
 
-    fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.8), squeeze=False)
-    for ax, pair in zip(axes[0], pairs, strict=True):
-        for label, sc, marker, colour in sets:
-            entry = sc["pairs"].get(pair)
-            if not entry or not entry["separation_bins"]:
-                continue
-            bins = entry["separation_bins"]
-            x = [np.mean(b["separation_m"]) for b in bins]
-            ax.errorbar(x, [b["real_mps2"] for b in bins], [b["real_sd_mps2"] for b in bins],
-                        fmt=marker, color=colour, mfc="none" if label == "fitted on" else colour,
-                        capsize=3, label=f"real, {label} (mean ± sd)")
-            ax.plot(x, [b["fitted_mps2"] for b in bins], "-", color=colour,
-                    label=f"fitted jet, {label}")
-        ax.set_title(f"{pair}: directly below")
-        ax.set_xlabel("separation below the leader [m]")
-        ax.set_ylabel("downward acceleration [m/s²]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(_save(fig, folder / "mean_vs_separation.png"))
+    def separation_curve(entry: dict[str, Any]) -> tuple | None:
+        bins = entry["separation_bins"]
+        if not bins:
+            return None
+        return ([np.mean(b["separation_m"]) for b in bins], [b["real_mps2"] for b in bins],
+                [b["real_sd_mps2"] for b in bins], [b["fitted_mps2"] for b in bins])
 
-    fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.8), squeeze=False)
-    for ax, pair in zip(axes[0], pairs, strict=True):
-        for label, sc, marker, colour in sets:
-            entry = sc["pairs"].get(pair)
-            if not entry:
-                continue
-            prof = entry["lateral_profile"]
-            ax.errorbar(prof["offset_m"], prof["real_mps2"], prof["real_sd_mps2"], fmt=marker,
-                        color=colour, mfc="none" if label == "fitted on" else colour, capsize=3,
-                        label=f"real, {label} (mean ± sd)")
-            ax.plot(prof["offset_m"], prof["fitted_mps2"], "-", color=colour,
-                    label=f"fitted jet, {label}")
-        ax.set_title(f"{pair}: all separations")
-        ax.set_xlabel("lateral offset from the leader's axis [m]")
-        ax.set_ylabel("downward acceleration [m/s²]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(_save(fig, folder / "mean_vs_offset.png"))
+    def offset_curve(entry: dict[str, Any]) -> tuple:
+        prof = entry["lateral_profile"]
+        return prof["offset_m"], prof["real_mps2"], prof["real_sd_mps2"], prof["fitted_mps2"]
 
-    fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.6), squeeze=False)
-    for ax, pair in zip(axes[0], pairs, strict=True):
-        for label, sc, marker, colour in sets:
-            curve = sc["pairs"].get(pair, {}).get("autocorrelation_curve")
-            if not curve:
-                continue
-            lags = 1000 * np.asarray(curve["lag_s"])
-            ax.plot(lags, curve["real"], marker, color=colour,
-                    mfc="none" if label == "fitted on" else colour, label=f"real, {label}")
-            ax.plot(lags, curve["model"], "-", color=colour, label=f"fitted jet, {label}")
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_title(f"{pair}: vertical, near the axis")
-        ax.set_xlabel("lag [ms]")
-        ax.set_ylabel("autocorrelation")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(_save(fig, folder / "autocorrelation.png"))
+    def autocorrelation_curve(entry: dict[str, Any]) -> tuple | None:
+        curve = entry.get("autocorrelation_curve")
+        if not curve:
+            return None
+        return 1000 * np.asarray(curve["lag_s"]), curve["real"], None, curve["model"]
+
+    panels = (
+        (separation_curve, "{pair}: directly below", "separation below the leader [m]",
+         "downward acceleration [m/s²]", "mean_vs_separation.png"),
+        (offset_curve, "{pair}: all separations", "lateral offset from the leader's axis [m]",
+         "downward acceleration [m/s²]", "mean_vs_offset.png"),
+        (autocorrelation_curve, "{pair}: vertical, near the axis", "lag [ms]", "autocorrelation",
+         "autocorrelation.png"),
+    )
+    for curve_of, title, xlabel, ylabel, name in panels:
+        fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.8), squeeze=False)
+        for ax, pair in zip(axes[0], pairs, strict=True):
+            for label, sc, marker, colour in sets:
+                entry = sc["pairs"].get(pair)
+                curve = curve_of(entry) if entry else None
+                if curve is None:
+                    continue
+                x, real, real_sd, fitted = curve
+                fill = "none" if label == "fitted on" else colour
+                if real_sd is None:
+                    ax.plot(x, real, marker, color=colour, mfc=fill, label=f"real, {label}")
+                else:
+                    ax.errorbar(x, real, real_sd, fmt=marker, color=colour, mfc=fill, capsize=3,
+                                label=f"real, {label} (mean ± sd)")
+                ax.plot(x, fitted, "-", color=colour, label=f"fitted jet, {label}")
+            if name == "autocorrelation.png":
+                ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_title(title.format(pair=pair))
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.tight_layout()
+        paths.append(_save(fig, folder / name))
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for ax, key, title in ((axes[0], "vertical_sd", "vertical"),
