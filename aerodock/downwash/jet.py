@@ -186,6 +186,8 @@ class RoundJetField:
         self._own = np.zeros((0, 0))
         self._offsets_obj: np.ndarray | None = None
         self._points: dict[int, tuple] = {}  # the disks' and the body's centres, by offsets
+        self._planar_key: tuple | None = None  # what _planar_scale_col was computed for
+        self._planar_scale_col = np.zeros((0, 1))
         self._bar_noise = np.zeros((3, 0))
         self._rng: np.random.Generator = np.random.default_rng(0)
         self._last_dt: float | None = None
@@ -570,10 +572,7 @@ class RoundJetField:
         planar = None
         if self.planar_ratio:
             # planar_ratio / peak * F * r / r_half along r / |r|, r_half = b / sqrt(p)
-            scale = np.full((k + 1, 1), np.sqrt(self.ingest_exponent))
-            scale[k] = np.sqrt(2.0)
-            scale *= self.planar_ratio / _PLANAR_PEAK
-            planar = axial * scale
+            planar = axial * self._planar_scale(k)
             planar /= geo["half_width"]
         gust = None
         if noise is not None and self.turb_lateral:
@@ -619,6 +618,17 @@ class RoundJetField:
             torque[:, 0] -= (oz * fb[1]).sum(axis=0)
             torque[:, 1] += (oz * fb[0]).sum(axis=0)
         return disks, torque, body
+
+    def _planar_scale(self, k: int) -> np.ndarray:
+        """(k + 1, 1) ``planar_ratio / peak * sqrt(p)`` per disk, ``sqrt(2)`` for the body
+        (cached: the same for every step of a field's parameters)."""
+        key = (k, self.ingest_exponent, self.planar_ratio)
+        if self._planar_key != key:
+            scale = np.full((k + 1, 1), np.sqrt(self.ingest_exponent))
+            scale[k] = np.sqrt(2.0)
+            scale *= self.planar_ratio / _PLANAR_PEAK
+            self._planar_key, self._planar_scale_col = key, scale
+        return self._planar_scale_col
 
     def _ou_step(self, state: np.ndarray, dt: float, tau: np.ndarray) -> np.ndarray:
         """One Ornstein-Uhlenbeck step of unit-variance states (m, n) with correlation times

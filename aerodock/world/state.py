@@ -32,6 +32,7 @@ class BatchConstants:
     gravity_mps2: np.ndarray  # (3,) g e3
     rotor_offsets_m: np.ndarray  # (k, 3) the follower's rotor disks, body FRD ((1, 3) zeros for
     # a point mass, which takes the field's whole force from ``acceleration``)
+    hover_thrust_n: np.ndarray  # (2n,) each vehicle type's nominal hover thrust, leaders first
 
 
 @dataclass

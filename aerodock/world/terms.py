@@ -133,7 +133,8 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     chain = params.imu.chain
     # The rates: truth and noise, clipped to the range, low-passed, delayed.
     rates = both.w.T if frame.gyro_noise_radps is None else both.w.T + frame.gyro_noise_radps.T
-    np.clip(rates, -chain.gyro_range_radps, chain.gyro_range_radps, out=rates)
+    np.maximum(rates, -chain.gyro_range_radps, out=rates)  # np.clip's values, without its
+    np.minimum(rates, chain.gyro_range_radps, out=rates)  # wrapper's cost
     gyro_t = filter_sample(ims.gyro, rates, ims.gyro_filter)
     # The specific force R^T (a - g e3) of the last step's acceleration, bias, white noise and
     # the motors' vibration (its sd grows with the thrust), clipped, low-passed, delayed.
@@ -141,19 +142,18 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     accel[:, 2] -= params.vehicle.gravity_mps2
     force = np.matmul(accel[:, None, :], frame.rot)[:, 0]
     force += ims.bias_body_mps2
-    hover = np.concatenate([np.full(n, params.leader_vehicle.hover_thrust_n),
-                            np.full(n, params.vehicle.hover_thrust_n)])
-    load = both.thrust_n / hover
+    load = both.thrust_n / state.constants.hover_thrust_n
     sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
                  + (params.imu.accel_vibration_mps2 * load) ** 2)
     draw = standard_normal_t(state.rng, n, 6)
     force_t = force.T.copy()
     force_t[:, :n] += draw[:3] * sd[:n]
     force_t[:, n:] += draw[3:] * sd[n:]
-    np.clip(force_t, -chain.accel_range_mps2, chain.accel_range_mps2, out=force_t)
+    np.maximum(force_t, -chain.accel_range_mps2, out=force_t)
+    np.minimum(force_t, chain.accel_range_mps2, out=force_t)
     ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
     # The navigation's acceleration: the mean over one control period, motion-capture late.
-    ims.accel_ring.append(accel + np.array([0.0, 0.0, params.vehicle.gravity_mps2]))
+    ims.accel_ring.append(accel + state.constants.gravity_mps2)
     ims.accel_ring.pop(0)
     if state.step_index % params.substeps == 0:
         ims.nav_accel_mps2 = np.mean(ims.accel_ring[:params.substeps], axis=0)
