@@ -603,12 +603,11 @@ class RoundJetField:
             return disks, None, body
         # R^T F_k per disk (3, k, n), then sum_k r_k x (R^T F_k).
         rt = geo["rt"]
-        fk = force[:, :k]
-        fb = np.empty_like(fk)
-        for i in range(3):
-            np.multiply(rt[i, 0], fk[0], out=fb[i])
-            fb[i] += rt[i, 1] * fk[1]
-            fb[i] += rt[i, 2] * fk[2]
+        # All nine products in one broadcast (3, 3, k, n), then summed over j in order.
+        prod = np.multiply(rt[:, :, None, :], force[None, :, :k])
+        fb = prod[:, 0]
+        fb += prod[:, 1]
+        fb += prod[:, 2]
         ox, oy, oz = (offsets[:, c:c + 1] for c in range(3))  # (k, 1)
         torque = np.empty((axis.shape[1], 3))
         torque[:, 0] = (oy * fb[2]).sum(axis=0)
