@@ -483,7 +483,7 @@ class RoundJetField:
         d2 = r2[0] + r2[1]
         d2 += r2[2]
         return {"depth": depth, "half_width": half_width, "centre": centre, "radial": radial,
-                "d2": d2, "k": k, "rt": rt}
+                "d2": d2, "k": k, "rt": rt, "flat": pz is None}
 
     def _axial(self, geo: dict, follower: BodyState, lead: tuple) -> tuple[np.ndarray, ...]:
         """Mean axial force (N) on each disk (k, n) and on the body (n,)."""
@@ -613,7 +613,7 @@ class RoundJetField:
         torque[:, 0] = (oy * fb[2]).sum(axis=0)
         torque[:, 1] = -(ox * fb[2]).sum(axis=0)
         torque[:, 2] = (ox * fb[1] - oy * fb[0]).sum(axis=0)
-        if oz.any():
+        if not geo["flat"]:  # disks out of the centre of mass's plane
             torque[:, 0] -= (oz * fb[1]).sum(axis=0)
             torque[:, 1] += (oz * fb[0]).sum(axis=0)
         return disks, torque, body
