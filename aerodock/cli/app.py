@@ -54,6 +54,7 @@ app.command("reproduce")(experiments.reproduce)
 app.command("targets")(experiments.targets_command)
 field_app.command("probe")(field.field_probe)
 field_app.command("plot")(field.field_plot)
+field_app.command("fit")(field.field_fit)
 
 
 def _click_exceptions() -> Any:

@@ -1,4 +1,5 @@
-"""``aerodock field probe`` and ``aerodock field plot``: a downwash field or a learnt model."""
+"""``aerodock field probe``, ``field plot`` and ``field fit``: a downwash field or a learnt model,
+and the default jet fitted to real flights."""
 
 from __future__ import annotations
 
@@ -8,7 +9,15 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from aerodock.cli.common import ConfigOpt, JsonOpt, SeedOpt, check_number, fail, print_json
+from aerodock.cli.common import (
+    ConfigOpt,
+    JsonOpt,
+    SeedOpt,
+    check_number,
+    err_console,
+    fail,
+    print_json,
+)
 from aerodock.config import load_config
 
 
@@ -127,3 +136,129 @@ def field_plot(
     path = plot_field_slice(mean_fn, out, cfg.vehicle.mass_kg, cfg.sim.gravity_mps2,
                             leader_speed, title)
     typer.echo(f"wrote {path}")
+
+
+FIT_OUTPUTS = ("report.md", "fit.json", "wake.toml", "figures")
+
+
+def field_fit(
+    data: Annotated[list[Path], typer.Argument(
+        help="FlightLog files (.npz, from `aerodock ingest` or `collect`) with the follower "
+             "below the leader; their meta must give both vehicles' masses and rotors and the "
+             "follower's diagonal.", show_default=False)],
+    holdout: Annotated[list[str] | None, typer.Option(
+        "--holdout", help="Flights to score but not fit: a shell pattern on the flight name "
+                          "(e.g. 'swap_ss_0[56]'; a log's name less its follower id). "
+                          "Repeatable.")] = None,
+    estimate_rotor: Annotated[list[str] | None, typer.Option(
+        "--estimate-rotor", help="A vehicle id (the logs' leader_id/follower_id) whose rotor "
+                                 "radius the logs do not know: fitted too. Repeatable.")] = None,
+    bootstrap: Annotated[int, typer.Option(
+        help="Refits on flights resampled with replacement, for the uncertainty (0: none).")]
+        = 20,
+    out: Annotated[Path, typer.Option(
+        "--out", help="Folder for report.md, fit.json, wake.toml and figures/ (replaced as a "
+                      "whole).")] = Path("out/wake_fit"),
+    config_out: Annotated[Path | None, typer.Option(
+        "--config-out", help="Also write the fitted TOML fragment here (a world loads it with "
+                             "--config).")] = None,
+    config: ConfigOpt = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Fit the default jet's parameters (width and growth, ingest law, planar part, per-disk
+    turbulence and its time scale) to real flights; score held-out flights against the targets;
+    write a report, figures and the TOML a world loads. The table of the report's last section
+    is the fitted wake on the vehicles of --config (the paper's by default)."""
+    import shlex
+
+    from aerodock.experiments.wake_report import config_fragment, report_markdown, write_figures
+    from aerodock.fileio import (
+        atomic_open,
+        building_dir,
+        check_output_dir,
+        check_writable_target,
+        json_ready,
+        one_line,
+        write_json,
+    )
+    from aerodock.flightlog import FlightLogError, load_flightlogs
+    from aerodock.learning import wake_fit as wf
+
+    if not 0 <= bootstrap <= 1000:
+        fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
+    cfg = load_config(config)
+    check_output_dir(out, FIT_OUTPUTS)
+    if config_out is not None:
+        check_writable_target(config_out)
+    logs = []
+    for path in data:
+        try:
+            logs += load_flightlogs(path)
+        except (FlightLogError, OSError) as err:
+            fail(one_line(err))
+    try:
+        flights = wf.prepare_flights(logs)
+        fitted, held = wf.select_flights(flights, holdout or [])
+        if holdout and not held:
+            fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "
+                 f"(flights: {', '.join(sorted({f.flight for f in flights}))})")
+        if not fitted:
+            fail("--holdout leaves no flight to fit")
+
+        def say(done: int, total: int) -> None:
+            if not as_json:
+                err_console.print(f"[dim]bootstrap {done}/{total}[/dim]")
+
+        fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor or [], bootstrap=bootstrap,
+                          seed=seed, progress=say)
+    except wf.WakeFitError as err:
+        fail(one_line(err))
+    scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
+    fit_scores = wf.score_wake(fit.params, fitted, fit.rotor_radii_m)
+    rows = wf.wake_at_separations(fit.params, cfg)
+    if fit.bootstrap_draws:
+        tables = [wf.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
+        for i, row in enumerate(rows):
+            row["bootstrap"] = {k: [float(np.percentile([t[i][k] for t in tables], q))
+                                    for q in (2.5, 97.5)]
+                                for k in row if k != "separation_m"}
+    paper = {"config": cfg.source, "rows": rows}
+    words = [str(p) for p in data]
+    words += [w for pattern in holdout or [] for w in ("--holdout", pattern)]
+    words += [w for vid in estimate_rotor or [] for w in ("--estimate-rotor", vid)]
+    words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
+    words += ["--config", str(config)] if config is not None else []
+    command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
+    held_names = sorted({f.flight for f in held})
+    toml_text = config_fragment(fit, held_names, command)
+    result = {
+        "params": fit.field_params(), "rotor_radii_m": fit.rotor_radii_m,
+        "bootstrap": fit.bootstrap, "bootstrap_runs": fit.bootstrap_runs,
+        "fitted_flights": fit.flights, "held_out_flights": held_names,
+        "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
+        "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
+        "world": paper, "command": command,
+    }
+    with building_dir(out, FIT_OUTPUTS) as work:
+        figures = write_figures(fit, scores, fit_scores, work / "figures")
+        (work / "report.md").write_text(report_markdown(
+            fit, scores, fit_scores, paper, command, [str(p) for p in figures]))
+        (work / "wake.toml").write_text(toml_text)
+        write_json(work / "fit.json", json_ready(result))
+    if config_out is not None:
+        with atomic_open(config_out, "w") as fh:
+            fh.write(toml_text)
+    if as_json:
+        print_json(json_ready(result))
+        return
+    typer.echo(f"fitted on {len(fit.flights)} flights, held out {len(held_names)}:")
+    for key, value in fit.field_params().items():
+        typer.echo(f"  {key} = {value:.4g}")
+    for vid, radius in fit.rotor_radii_m.items():
+        typer.echo(f"  rotor radius of {vid} = {radius:.4g} m")
+    for pair, entry in scores["pairs"].items():
+        met = [k for k in ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
+               if entry[k]["met"]]
+        typer.echo(f"  held out, {pair}: targets met: {', '.join(met) or 'none'}")
+    typer.echo(f"wrote {out / 'report.md'}" + (f" and {config_out}" if config_out else ""))

@@ -164,14 +164,17 @@ class JetParams:
     """``[downwash.params]`` of the default field (:class:`aerodock.downwash.jet.RoundJetField`);
     a plug-in field's parameters are its own (checked when it is built)."""
 
-    core_length_m: float = number(0.001, 100)
-    half_width0_m: float = number(0.001, 100)
+    width0_ratio: float = number(0.01, 100)
     spread_rate: float = number(0, 10)
     ingest_coeff: float = number(0, 10)
-    planar_ratio: float = number(0, 10)
+    ingest_exponent: float = number(0.1, 5)
+    planar_ratio: float = number(-10, 10)
+    body_area_ratio: float = number(0, 100)
+    body_drag_coeff: float = number(0, 100)
     turb_vertical: float = number(0, 10)
     turb_lateral: float = number(0, 10)
-    turb_corr_time_s: float = number(0.001, 100)
+    turb_length_ratio: float = number(0.001, 1000)
+    turb_time_ratio: float = number(0.001, 10000)
     bar_drag_coeff: float = number(0, 100)
     bar_turb_vertical: float = number(0, 1e6)
     bar_turb_lateral: float = number(0, 1e6)

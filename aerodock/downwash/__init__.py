@@ -10,16 +10,23 @@ from typing import Any
 from aerodock.config import Config, ConfigError, resolve_factory
 from aerodock.downwash.base import BodyState, DownwashField
 from aerodock.downwash.mean import mean_acceleration_fn
-from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench, quad_rotor_offsets_body_m
+from aerodock.downwash.wrench import (
+    bar_wake_force_n,
+    follower_body_force_n,
+    follower_wrench,
+    quad_rotor_offsets_body_m,
+)
 
-__all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "follower_wrench",
-           "mean_acceleration_fn", "quad_rotor_offsets_body_m"]
+__all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field",
+           "follower_body_force_n", "follower_wrench", "mean_acceleration_fn",
+           "quad_rotor_offsets_body_m"]
 
 # World constants a field factory may accept; passed only when its signature names them. The
 # plain names are the follower's (both vehicles', for a field that does not tell them apart).
-_WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3", "leader_rotor_radius_m",
-                 "leader_n_rotors", "leader_mass_kg", "follower_rotor_radius_m",
-                 "follower_n_rotors", "follower_mass_kg")
+_WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3", "gravity_mps2",
+                 "leader_rotor_radius_m", "leader_n_rotors", "leader_mass_kg",
+                 "leader_diagonal_m", "follower_rotor_radius_m", "follower_n_rotors",
+                 "follower_mass_kg", "follower_diagonal_m")
 
 
 def build_field(cfg: Config) -> DownwashField:
@@ -41,10 +48,11 @@ def build_field(cfg: Config) -> DownwashField:
         accepted = {}
     lead, fol = cfg.leader, cfg.vehicle
     world = {"rotor_radius_m": fol.rotor_radius_m, "n_rotors": fol.n_rotors,
-             "air_density_kgpm3": cfg.sim.air_density_kgpm3,
+             "air_density_kgpm3": cfg.sim.air_density_kgpm3, "gravity_mps2": cfg.sim.gravity_mps2,
              "leader_rotor_radius_m": lead.rotor_radius_m, "leader_n_rotors": lead.n_rotors,
-             "leader_mass_kg": lead.mass_kg, "follower_rotor_radius_m": fol.rotor_radius_m,
-             "follower_n_rotors": fol.n_rotors, "follower_mass_kg": fol.mass_kg}
+             "leader_mass_kg": lead.mass_kg, "leader_diagonal_m": lead.diagonal_m,
+             "follower_rotor_radius_m": fol.rotor_radius_m, "follower_n_rotors": fol.n_rotors,
+             "follower_mass_kg": fol.mass_kg, "follower_diagonal_m": fol.diagonal_m}
     for key in _WORLD_KWARGS:
         if key in accepted and key not in params:
             params[key] = world[key]

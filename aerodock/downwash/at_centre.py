@@ -1,13 +1,13 @@
 """The default jet with its whole force at the follower's centre of mass: no wake torque.
 
-A bracket, not a world. :class:`aerodock.downwash.jet.RoundJetField` shares its calibrated force
-among the follower's rotor disks in proportion to the wake's dynamic pressure at each, so a
-follower off the wake's axis feels a torque. At a Crazyflie's scale that torque tilts a follower
-holding station 0.3 m below a leader by 13.3 deg RMS, where the real swap flights measure 2.9 deg
-below the other vehicle (2.0 in free air); with the force at the centre of mass the same
-follower tilts 1.7 deg (``studies/crazyflie_tilt.py``, ``docs/crazyflie.md``). The truth about
-the torque lies between the two fields, much nearer this one, until the wake is fitted to the
-real flights (issue 23). Use it as ``[downwash] field =
+A bracket, not a world. :class:`aerodock.downwash.jet.RoundJetField` puts its force on the
+follower's rotor disks (and body), so a follower off the wake's axis feels a torque. Measured
+with the previous, hand-calibrated jet, which put its whole force on the disks: at a Crazyflie's
+scale that torque tilted a follower holding station 0.3 m below a leader by 13.3 deg RMS, where
+the real swap flights measure 2.9 deg below the other vehicle (2.0 in free air); with the force
+at the centre of mass the same follower tilted 1.7 deg (``studies/crazyflie_tilt.py``,
+``docs/crazyflie.md``). The jet fitted to the real flights has about a third of that torque; the
+Crazyflie figures are to be re-measured with it. Use it as ``[downwash] field =
 "aerodock.downwash.at_centre:RoundJetAtCentre"`` with the jet's ``[downwash.params]`` (a new
 ``field`` takes only the parameters given with it).
 """

@@ -5,7 +5,7 @@ from the config by import path (``[downwash] field = "package.module:factory"``)
 ``[downwash.params]`` passed to the factory as keyword arguments. See
 ``aerodock/downwash/template.py`` for a minimal example.
 
-Three methods are optional; every command works without them:
+Four methods are optional; every command works without them:
 
 - ``mean_acceleration(leader, follower) -> (n, 3)`` (:class:`SupportsMean`): the turbulence-free
   mean. Without it, whoever needs the mean estimates it (:mod:`aerodock.downwash.mean`).
@@ -13,6 +13,10 @@ Three methods are optional; every command works without them:
   (:class:`SupportsWrench`): force and torque sampled per rotor disk. Without it, the world
   applies ``acceleration * mass`` at the centre of mass (:func:`aerodock.downwash.wrench.
   follower_wrench`).
+- ``body_force_n(leader, follower) -> (n, 3)`` (:class:`SupportsBodyForce`): with ``wrench``,
+  the part of the force that lands on the follower's body rather than its rotor disks, at the
+  centre of mass, of the same step's turbulence (``acceleration`` is then both parts over the
+  mass). Without it, ``wrench`` (or ``acceleration``) is the whole force.
 - ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2[, dt][, bar_axis]) -> (n, 3)``
   (:class:`SupportsBarForce`): the wake's force on the docking bar. Without it, the bar feels no
   wake (:func:`aerodock.downwash.wrench.bar_wake_force_n`).
@@ -79,6 +83,15 @@ class SupportsWrench(Protocol):
         the follower's body frame (FRD) about its centre of mass; ``rotor_offsets_body_m`` is
         (k, 3) rotor-disk centres in the body frame. Advances time by ``dt`` exactly as
         ``acceleration`` does (the world calls one of the two per physics step)."""
+
+
+@runtime_checkable
+class SupportsBodyForce(Protocol):
+    """Optional: the force on the follower's body (with ``wrench``: what lands off the disks)."""
+
+    def body_force_n(self, leader: BodyState, follower: BodyState) -> np.ndarray:
+        """(n, 3) force in N on the follower's body, world NED, at its centre of mass, with the
+        turbulence of the same step's ``wrench`` (or ``acceleration``) call; no time advance."""
 
 
 @runtime_checkable

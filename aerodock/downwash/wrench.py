@@ -1,16 +1,21 @@
-"""Where the world meets the field: the follower's wrench and the bar's force, for any field.
+"""Where the world meets the field: the follower's wrench, its body's force and the bar's force,
+for any field.
 
-The world step calls these two functions, never a field's optional methods directly, so a
-plug-in with only ``reset`` and ``acceleration`` keeps working:
+The world step calls these functions, never a field's optional methods directly, so a plug-in
+with only ``reset`` and ``acceleration`` keeps working:
 
 - :func:`follower_wrench`: the field's ``wrench`` (force and torque, sampled per rotor disk) when
   it has one, else ``acceleration * mass`` at the centre of mass with zero torque;
+- :func:`follower_body_force_n`: the field's ``body_force_n`` (what lands on the follower's body
+  rather than its rotor disks, at the centre of mass), None without one (a field without it puts
+  its whole force in ``wrench`` or ``acceleration``);
 - :func:`bar_wake_force_n`: the field's ``bar_force_n`` (None without one), passing ``dt`` (and
   the bar's long axis) only to implementations that accept them, so plug-ins written for the
   older four-argument signature keep working.
 
-Either call advances the field's turbulence by ``dt``: the world calls ``follower_wrench`` once
-per physics step (not also ``acceleration``) and ``bar_wake_force_n`` once per step.
+``follower_wrench`` and ``bar_wake_force_n`` advance the field's turbulence by ``dt``: the world
+calls each once per physics step (not also ``acceleration``), then ``follower_body_force_n``,
+which reads the same step's turbulence.
 """
 
 from __future__ import annotations
@@ -68,6 +73,25 @@ def follower_wrench(field: Any, leader: BodyState, follower: BodyState,
         raise ValueError(f"{type(field).__name__}.wrench returned shapes {force.shape} and "
                          f"{torque.shape}, expected ({n}, 3) and ({n}, 3)")
     return force, torque
+
+
+def follower_body_force_n(field: Any, leader: BodyState,
+                          follower: BodyState) -> np.ndarray | None:
+    """(n, 3) the field's force on the follower's body (not its rotor disks), N, world NED, at
+    the centre of mass, with the turbulence of this step's :func:`follower_wrench`; None if the
+    field has no ``body_force_n``.
+
+    Raises:
+        ValueError: the field's ``body_force_n`` returned an array of the wrong shape.
+    """
+    method = getattr(field, "body_force_n", None)
+    if method is None:
+        return None
+    force = np.asarray(method(leader, follower), dtype=float)
+    if force.shape != (follower.n, 3):
+        raise ValueError(f"{type(field).__name__}.body_force_n returned shape {force.shape}, "
+                         f"expected ({follower.n}, 3)")
+    return force
 
 
 def bar_wake_force_n(field: Any, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,

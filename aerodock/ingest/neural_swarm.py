@@ -20,7 +20,8 @@ Conversion (checked on hover samples of the real data, see ``tests/ingest``):
 - Masses: both vehicles from :data:`VEHICLE_MASSES_KG` by ``vehicle`` (``"small"``, ``"large"``
   or per vehicle ``"cf50=small,cf51=large"``), or ``mass_kg`` for both. With a vehicle type
   (not ``mass_kg``) the rotor radius and count of :data:`VEHICLE_ROTORS` go into the meta too
-  (``{leader,follower}_{rotor_radius_m,n_rotors}``), which the leader-aware models need; the
+  (``{leader,follower}_{rotor_radius_m,n_rotors}``), which the leader-aware models need, and the
+  diagonal of :data:`VEHICLE_DIAGONALS_M` (``{role}_diagonal_m``, for ``aerodock field fit``); the
   leader's logged thrust (``u1+u2+u3+u4``) is ``extra["leader_thrust_n"]``.
 """
 
@@ -66,6 +67,11 @@ VEHICLE_MASSES_KG: dict[str, float] = {"small": 0.032, "large": 0.067}
 # 0.0325 m (65 mm propellers, about sqrt(0.067 / 0.032) = 1.45x the small one's, i.e. the same
 # disc loading) is our assumption, not a measurement. Both are quadrotors.
 VEHICLE_ROTORS: dict[str, tuple[float, int]] = {"small": (0.0225, 4), "large": (0.0325, 4)}
+# Motor-to-motor diagonal (m) of each type: the small one's 92 mm is Bitcraze's specification of
+# the Crazyflie 2.x; the large one's 0.120 m is read from the logs' own torque mixer (``torquex =
+# (l / sqrt 2) (-u1 - u2 + u3 + u4)``: l / sqrt 2 = 0.04243 m for cf101, 0.03253 m for the small
+# ones, i.e. 92 mm, as specified).
+VEHICLE_DIAGONALS_M: dict[str, float] = {"small": 0.092, "large": 0.120}
 EXPECTED_DT_S = 0.01  # about 100 Hz on board
 FILE_PATTERN = re.compile(r"^(?P<vehicle>cf\d+)_(?P<flight>\d+)\.csv$", re.IGNORECASE)
 
@@ -245,16 +251,17 @@ def vehicle_masses(vehicle: str, mass_kg: float | None, ids: list[str],
     return masses
 
 
-def vehicle_rotors(vehicle: str, ids: list[str]) -> dict[str, tuple[float, int]]:
-    """``(rotor_radius_m, n_rotors)`` of each vehicle id from :data:`VEHICLE_ROTORS` by its
-    type in ``vehicle`` (as :func:`vehicle_masses`, which has already checked it)."""
+def vehicle_rotors(vehicle: str, ids: list[str]) -> dict[str, tuple[float, int, float]]:
+    """``(rotor_radius_m, n_rotors, diagonal_m)`` of each vehicle id from :data:`VEHICLE_ROTORS`
+    and :data:`VEHICLE_DIAGONALS_M` by its type in ``vehicle`` (as :func:`vehicle_masses`, which
+    has already checked it)."""
     spec = (vehicle or "small").strip().lower()
     if "=" in spec:
         kinds = {key.strip(): kind.strip() for key, _, kind in
                  (item.partition("=") for item in spec.split(","))}
     else:
         kinds = dict.fromkeys(ids, spec)
-    return {vid: VEHICLE_ROTORS[kinds[vid]] for vid in ids}
+    return {vid: (*VEHICLE_ROTORS[kinds[vid]], VEHICLE_DIAGONALS_M[kinds[vid]]) for vid in ids}
 
 
 def pair_files(paths: list[Path]) -> list[tuple[Path, Path]]:
@@ -295,11 +302,12 @@ def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_ma
                     leader_mass_kg: float, max_start_offset_s: float = 0.5,
                     min_overlap_fraction: float = 0.8, max_gap_s: float = 0.05,
                     max_lag_s: float = 0.1,
-                    rotors: dict[str, tuple[float, int]] | None = None) -> FlightLog:
+                    rotors: dict[str, tuple[float, ...]] | None = None) -> FlightLog:
     """One FlightLog of ``follower`` with ``leader``, on the follower's time stamps.
 
-    ``rotors`` (``{"leader": (rotor_radius_m, n_rotors), "follower": ...}``), when given, go
-    into the meta as ``{role}_rotor_radius_m`` and ``{role}_n_rotors``.
+    ``rotors`` (``{"leader": (rotor_radius_m, n_rotors[, diagonal_m]), "follower": ...}``), when
+    given, go into the meta as ``{role}_rotor_radius_m``, ``{role}_n_rotors`` (and
+    ``{role}_diagonal_m``).
 
     The leader is interpolated onto the follower's samples over the common time window; samples
     where the leader's log has a gap longer than ``max_gap_s`` are dropped (counted in the meta).
@@ -338,8 +346,8 @@ def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_ma
         "label_basis": "thrust",
         "leader_mass_kg": leader_mass_kg,
         "follower_mass_kg": follower_mass_kg,
-        **{f"{role}_{key}": value for role, (radius, count) in (rotors or {}).items()
-           for key, value in (("rotor_radius_m", radius), ("n_rotors", count))},
+        **{f"{role}_{key}": value for role, values in (rotors or {}).items()
+           for key, value in zip(("rotor_radius_m", "n_rotors", "diagonal_m"), values)},
         "leader_id": leader.vehicle_id,
         "follower_id": follower.vehicle_id,
         "flight_id": follower.flight_id,

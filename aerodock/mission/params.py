@@ -66,4 +66,5 @@ def vehicle_meta(cfg: Config) -> dict[str, Any]:
     return {"leader_rotor_radius_m": lead.rotor_radius_m,
             "follower_rotor_radius_m": fol.rotor_radius_m,
             "leader_n_rotors": int(lead.n_rotors), "follower_n_rotors": int(fol.n_rotors),
+            "leader_diagonal_m": lead.diagonal_m, "follower_diagonal_m": fol.diagonal_m,
             "vehicle_model": fol.model}

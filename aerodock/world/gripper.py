@@ -140,16 +140,15 @@ def bar_in_gripper(
     horizontal = rel - height[:, None] * up
     # The bar's axis is horizontal: (cos yaw, sin yaw, 0).
     c, s = (np.cos(bar_yaw_rad), np.sin(bar_yaw_rad)) if cos_sin is None else cos_sin
+    # (The axis has no z: the terms of h2 with its zero component add nothing but a zero.)
     h0, h1, h2 = horizontal[:, 0], horizontal[:, 1], horizontal[:, 2]
     along = h0 * c
     along += h1 * s
-    along += h2 * 0.0
     d0 = h0 - along * c
     d1 = h1 - along * s
-    d2 = h2 - along * 0.0
     perp = d0 * d0
     perp += d1 * d1
-    perp += d2 * d2
+    perp += h2 * h2
     np.sqrt(perp, out=perp)
     # The bar (radius r) fits through the mouth only with its whole section: centre within
     # aperture/2 - r of the axis; the closed gate holds it between the arm (a bar pressed more

@@ -11,6 +11,7 @@ the follower hangs from the bar and the same constraint carries its weight to th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -49,7 +50,7 @@ class PlatformParams:
         """Frontal area of the bar to a vertical flow."""
         return self.bar_length_m * self.bar_diameter_m
 
-    @property
+    @cached_property
     def yaw_omega2(self) -> float:
         """Squared natural frequency of the bifilar yaw mode, 1/s²."""
         k2 = self.bar_length_m**2 / 12.0

@@ -30,8 +30,9 @@ class BatchConstants:
     bar_mass_kg: np.ndarray  # (n,)
     no_close: np.ndarray  # (n,) bool, all False: no active trigger command
     gravity_mps2: np.ndarray  # (3,) g e3
-    rotor_offsets_m: np.ndarray  # (4, 3) the follower's rotor disks, body FRD ((1, 3) zeros for
-    # a point mass, which feels the wake at its centre)
+    rotor_offsets_m: np.ndarray  # (k, 3) the follower's rotor disks, body FRD ((1, 3) zeros for
+    # a point mass, which takes the field's whole force from ``acceleration``)
+    hover_thrust_n: np.ndarray  # (2n,) each vehicle type's nominal hover thrust, leaders first
 
 
 @dataclass
@@ -166,6 +167,7 @@ class StepFrame:
             for point masses).
         bar_force_n: (n, 3) forces on the hanging mass besides gravity and the cables
             (accumulator).
+        wake_force_n: (n, 3) the wake's force on the followers' rotor disks (None: none yet).
         wake_torque_nm: (n, 3) the wake's torque on the followers (None: none).
         contact_n, inside: (n,) the gripper's contact force and bar-inside-the-gate flag.
         gyro_noise_radps: (2n, 3) this step's gyro noise (None: a noiseless gyro).
@@ -190,6 +192,7 @@ class StepFrame:
     force_n: np.ndarray
     torque_t: np.ndarray | None
     bar_force_n: np.ndarray
+    wake_force_n: np.ndarray | None = None
     wake_torque_nm: np.ndarray | None = None
     contact_n: np.ndarray | None = None
     inside: np.ndarray | None = None

@@ -33,7 +33,8 @@ class Term(NamedTuple):
 
 WORLD_STEP: tuple[Term, ...] = (
     # forces on the vehicles and the bar
-    Term("wake on the follower", terms.wake_on_follower),
+    Term("wake on the rotor disks", terms.wake_on_rotor_disks),
+    Term("wake on the body", terms.wake_on_body),
     Term("wake on the bar", terms.wake_on_bar),
     Term("gripper contact", terms.gripper_contact),
     Term("cable on the leader", terms.cable_on_leader),

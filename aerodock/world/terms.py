@@ -5,15 +5,14 @@ A term reads the batch state (:class:`~aerodock.world.state.WorldState`) and the
 accumulators (forces, torques, the force on the hanging mass) or advances a part of the state, and
 returns nothing. Terms never copy the batch; they write in place into arrays the frame made for
 this step. :mod:`aerodock.world.step` names them in the order they run; a new effect (an IMU
-chain, turbulence per rotor disk, ground effect) is one more function here and one more name
-there.
+chain, ground effect) is one more function here and one more name there.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from aerodock.downwash.wrench import bar_wake_force_n, follower_wrench
+from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
 from aerodock.world.gripper import bar_in_gripper, step_gripper
@@ -24,22 +23,36 @@ from aerodock.world.state import StepFrame, WorldState
 
 
 # -- forces ----------------------------------------------------------------------------------
-def wake_on_follower(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
-    """The leader's wake on the follower: sampled at each rotor disk of a rigid body (a force and
-    a torque), at the centre of a point mass (a force). Random draws: the field's turbulence."""
+def wake_on_rotor_disks(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The leader's wake on a rigid follower's rotor disks: each disk takes the wake air it
+    ingests, with its own (partly shared) turbulence, a force and a torque. A point mass takes
+    the field's whole force (disks and body) at its centre here, and no torque. A field without
+    ``wrench`` gives its whole force here. Random draws: the field's turbulence."""
     n = state.n
-    mass_rows = frame.mass_rows_kg[n:]
     if params.rigid:
         force, torque = follower_wrench(state.field, frame.lead, frame.fol,
                                         state.constants.rotor_offsets_m, params.dt_s)
-    else:
-        force = state.field.acceleration(frame.lead, frame.fol, params.dt_s) * mass_rows
-        torque = None
-    state.last_downwash_mps2 = force / mass_rows
-    frame.force_n[n:] += force
-    frame.wake_torque_nm = torque
-    if torque is not None:
+        frame.wake_torque_nm = torque
         frame.torque_t[:, n:] += torque.T
+    else:
+        force = state.field.acceleration(frame.lead, frame.fol, params.dt_s)
+        force *= frame.mass_rows_kg[n:]
+    frame.wake_force_n = force
+    frame.force_n[n:] += force
+
+
+def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
+    """The leader's wake on a rigid follower's body (its drag, at the centre of mass), of the
+    same step's turbulence (fields without a body force give none: their whole force is on the
+    disks; a point mass took it with the disks'). No random draws."""
+    n = state.n
+    force = (follower_body_force_n(state.field, frame.lead, frame.fol) if params.rigid
+             else None)
+    total = frame.wake_force_n
+    if force is not None:
+        frame.force_n[n:] += force
+        total = total + force
+    state.last_downwash_mps2 = total / frame.mass_rows_kg[n:]
 
 
 def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -120,7 +133,8 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     chain = params.imu.chain
     # The rates: truth and noise, clipped to the range, low-passed, delayed.
     rates = both.w.T if frame.gyro_noise_radps is None else both.w.T + frame.gyro_noise_radps.T
-    np.clip(rates, -chain.gyro_range_radps, chain.gyro_range_radps, out=rates)
+    np.maximum(rates, -chain.gyro_range_radps, out=rates)  # np.clip's values, without its
+    np.minimum(rates, chain.gyro_range_radps, out=rates)  # wrapper's cost
     gyro_t = filter_sample(ims.gyro, rates, ims.gyro_filter)
     # The specific force R^T (a - g e3) of the last step's acceleration, bias, white noise and
     # the motors' vibration (its sd grows with the thrust), clipped, low-passed, delayed.
@@ -128,19 +142,18 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     accel[:, 2] -= params.vehicle.gravity_mps2
     force = np.matmul(accel[:, None, :], frame.rot)[:, 0]
     force += ims.bias_body_mps2
-    hover = np.concatenate([np.full(n, params.leader_vehicle.hover_thrust_n),
-                            np.full(n, params.vehicle.hover_thrust_n)])
-    load = both.thrust_n / hover
+    load = both.thrust_n / state.constants.hover_thrust_n
     sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
                  + (params.imu.accel_vibration_mps2 * load) ** 2)
     draw = standard_normal_t(state.rng, n, 6)
     force_t = force.T.copy()
     force_t[:, :n] += draw[:3] * sd[:n]
     force_t[:, n:] += draw[3:] * sd[n:]
-    np.clip(force_t, -chain.accel_range_mps2, chain.accel_range_mps2, out=force_t)
+    np.maximum(force_t, -chain.accel_range_mps2, out=force_t)
+    np.minimum(force_t, chain.accel_range_mps2, out=force_t)
     ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
     # The navigation's acceleration: the mean over one control period, motion-capture late.
-    ims.accel_ring.append(accel + np.array([0.0, 0.0, params.vehicle.gravity_mps2]))
+    ims.accel_ring.append(accel + state.constants.gravity_mps2)
     ims.accel_ring.pop(0)
     if state.step_index % params.substeps == 0:
         ims.nav_accel_mps2 = np.mean(ims.accel_ring[:params.substeps], axis=0)

@@ -83,6 +83,8 @@ class World:
             gravity_mps2=np.array([0.0, 0.0, params.vehicle.gravity_mps2]),
             rotor_offsets_m=(params.follower_fleet.params.rotor_offsets_m if rigid
                              else np.zeros((1, 3))),
+            hover_thrust_n=np.concatenate([np.full(n, params.leader_vehicle.hover_thrust_n),
+                                           np.full(n, params.vehicle.hover_thrust_n)]),
         )
         self._mean_fn: Any = None  # built on first use (estimating a mean copies the field)
         self.state: WorldState | None = None

@@ -120,10 +120,13 @@ def _radial_means(logs) -> tuple[float, float]:
 def test_thrust_basis_labels_are_the_force_on_the_body():
     """Off the axis the wake pushes the follower outwards, and its torque tilts it inwards. The
     paper's labels (``a_obs - u``) count the thrust that tilt redirects as wake force and read the
-    outward push as an inward one; along the measured thrust axis the labels find the push."""
+    outward push as an inward one; along the measured thrust axis the labels find the push. (The
+    jet fitted to real flights has almost no planar part, so the wake here is given DESIGN.md's
+    outward 15 %: the label bases are what is tested.)"""
     from aerodock.learning.curriculum import excitation_flights
 
-    base = load_config(None)
+    base = load_config(None).with_overrides({"downwash": {"params": {"planar_ratio": 0.15}}},
+                                            source="test")
     means = {}
     for basis in ("command", "thrust"):
         cfg = base.with_overrides({"curriculum": {"label_basis": basis}}, source="test")

@@ -250,11 +250,12 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.nd
     broadcast would call the inner loop once per vehicle)."""
     f = omega * omega  # rotor_thrusts_n, rotor-major
     f *= params.thrust_coeff * thrust_gain
-    tmap = params.rotor_torque_map[:, :, None]
-    torque = tmap[0] * f[0]
-    torque += tmap[1] * f[1]
-    torque += tmap[2] * f[2]
-    torque += tmap[3] * f[3]
+    # Each rotor's share in one broadcast (4, 3, n), then summed over the rotors in order.
+    share = np.multiply(params.rotor_torque_map[:, :, None], f[:, None, :])
+    torque = share[0]
+    torque += share[1]
+    torque += share[2]
+    torque += share[3]
     if torque_gain is not None:  # each vehicle's true yaw reaction coefficient
         torque[2] *= torque_gain
     force = np.empty_like(torque)
@@ -264,11 +265,11 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.nd
     np.negative(thrust, out=force[2])
     kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
     if kd or kz:
-        g = params.rotor_drag_sums[:, :, None]
-        sums = g[0] * omega[0]
-        sums += g[1] * omega[1]
-        sums += g[2] * omega[2]
-        sums += g[3] * omega[3]
+        terms = np.multiply(params.rotor_drag_sums[:, :, None], omega[:, None, :])
+        sums = terms[0]
+        sums += terms[1]
+        sums += terms[2]
+        sums += terms[3]
         s, sx, sy, sxx, syy, sxy = sums
         vx, vy, vz = v_body_mps.T
         wx, wy, wz = w_radps.T

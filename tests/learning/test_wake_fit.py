@@ -1,0 +1,191 @@
+"""`aerodock field fit`: the jet identified from flight logs (aerodock/learning/wake_fit.py).
+
+- synthetic flights made by the simulator's wake with known parameters: the fit recovers them;
+- the shared real Crazyflie flights: the fit reproduces examples/crazyflie_wake_fitted.toml and
+  meets the held-out targets it meets (docs/world.md says which it does not);
+- the command: its outputs, and bad input as one-line errors.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+from wake_synth import synthetic_flights
+
+from aerodock.flightlog import save_flightlogs
+from aerodock.learning import wake_fit as wf
+
+FITTED = Path(__file__).resolve().parents[2] / "examples" / "crazyflie_wake_fitted.toml"
+HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01]")
+
+
+@pytest.fixture(scope="module")
+def truth():
+    """The default world's wake (the fit to the real flights) as the known parameters."""
+    from aerodock.config import load_config
+
+    params = load_config().downwash.params
+    return {k: float(params[k]) for k in wf.FITTED_PARAMS}
+
+
+@pytest.fixture(scope="module")
+def synthetic(truth):
+    return synthetic_flights(truth, flights_per_pair=4, seed=1)
+
+
+def test_fit_recovers_the_simulators_wake(truth, synthetic):
+    """Known parameters in, the same parameters out: the mean's within a few percent, the
+    turbulence's within its estimate's spread; the labels' bias and white noise are removed."""
+    flights = wf.prepare_flights(synthetic)
+    fit = wf.fit_wake(flights)
+    got = fit.params
+    print({k: (round(truth[k], 4), round(got[k], 4)) for k in wf.FITTED_PARAMS})
+    for key, rel in (("width0_ratio", 0.1), ("ingest_coeff", 0.1), ("ingest_exponent", 0.1),
+                     ("turb_vertical", 0.15), ("turb_lateral", 0.2), ("turb_time_ratio", 0.35)):
+        assert got[key] == pytest.approx(truth[key], rel=rel), key
+    assert got["spread_rate"] == pytest.approx(truth["spread_rate"], abs=0.02)
+    assert got["planar_ratio"] == pytest.approx(truth["planar_ratio"], abs=0.03)
+    # the disks' shared share is what the two follower sizes tell apart: loosely identified
+    assert 0.25 * truth["turb_length_ratio"] < got["turb_length_ratio"] \
+        < 4 * truth["turb_length_ratio"]
+    scores = wf.score_wake(got, flights)
+    for pair, entry in scores["pairs"].items():
+        assert entry["mean_vertical"]["met"], pair
+        assert entry["half_width"]["met"], pair
+        assert entry["vertical_sd"]["met"], pair
+
+
+def test_fit_estimates_a_rotor_radius_the_logs_get_wrong(truth, synthetic):
+    """The large vehicle's rotor radius, logged wrong (0.0325 m instead of the 0.024 m its wake
+    was made with) and estimated with the rest, comes back."""
+    wrong = []
+    for log in synthetic:
+        meta = dict(log.meta)
+        for role in ("leader", "follower"):
+            if meta[f"{role}_id"] == "cf9":
+                meta[f"{role}_rotor_radius_m"] = 0.0325
+        wrong.append(type(log)(**{**log.__dict__, "meta": meta}))
+    flights = wf.prepare_flights(wrong)
+    params, radii, _ = wf.fit_mean(flights, estimate_rotor_for=["cf9"])
+    assert radii["cf9"] == pytest.approx(0.024, rel=0.1)
+    assert params["ingest_exponent"] == pytest.approx(truth["ingest_exponent"], rel=0.1)
+
+
+def test_bootstrap_brackets_the_estimate(synthetic):
+    flights = wf.prepare_flights(synthetic)
+    fit = wf.fit_wake(flights, bootstrap=3, seed=2)
+    assert fit.bootstrap_runs == 3
+    for key in ("width0_ratio", "ingest_coeff", "turb_vertical"):
+        spread = fit.bootstrap[key]
+        assert spread["sd"] > 0
+        assert spread["p2_5"] <= spread["p97_5"]
+
+
+def test_prepare_refuses_logs_without_geometry(synthetic):
+    log = synthetic[0]
+    meta = {k: v for k, v in log.meta.items() if k != "follower_diagonal_m"}
+    bare = type(log)(**{**log.__dict__, "meta": meta})
+    with pytest.raises(wf.WakeFitError, match="follower_diagonal_m"):
+        wf.prepare_flights([bare])
+
+
+def test_real_fit_on_the_shared_flights(shared_data):
+    """Fitted on swap_ss 00-04 and swap_sl 00-07 (the large vehicle's rotor radius estimated):
+    the fit is examples/crazyflie_wake_fitted.toml (the command's output; bootstrap aside, the
+    fit is deterministic); on the held-out flights (swap_ss 05-06, swap_sl 08-11) the mean is
+    within 15 % in every separation bin and the half-width within 20 % for every pair, and the
+    vertical turbulence within 20 % for the two small/large pairs. (Not met, docs/world.md: the
+    lateral turbulence of the equal pair and of the large follower, and the vertical turbulence
+    of the equal pair.)"""
+    import warnings
+
+    from aerodock.ingest import read_logs
+
+    folders = [shared_data("neural-swarm", "swap_ss"),
+               shared_data("neural-swarm", "swap_sl_2020-06-19")]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
+    fitted, held = wf.select_flights(wf.prepare_flights(logs), HOLDOUT)
+    assert len({f.flight for f in held}) == 6
+    fit = wf.fit_wake(fitted, estimate_rotor_for=["cf101"])
+    shipped = tomllib.loads(FITTED.read_text())["downwash"]["params"]
+    for key in wf.FITTED_PARAMS:
+        assert fit.params[key] == pytest.approx(shipped[key], rel=2e-3, abs=2e-4), key
+    scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
+    pairs = scores["pairs"]
+    assert set(pairs) == {"32 g under 32 g", "32 g under 67 g", "67 g under 32 g"}
+    for pair, entry in pairs.items():
+        assert entry["mean_vertical"]["met"], (pair, entry["separation_bins"])
+        assert entry["half_width"]["met"], (pair, entry["half_width"])
+        # the wake explains most of the residual in the region (measured: 33-58 % of the zero
+        # model's RMSE left, the rest turbulence and the labels' noise)
+        assert entry["rmse_mps2"] < 0.7 * entry["zero_model_rmse_mps2"]
+    for pair in ("32 g under 67 g", "67 g under 32 g"):
+        assert pairs[pair]["vertical_sd"]["met"], (pair, pairs[pair]["vertical_sd"])
+    # the large vehicle's rotors are not the 0.0325 m the reader assumes
+    assert 0.018 < fit.rotor_radii_m["cf101"] < 0.03
+
+
+# -- the command ------------------------------------------------------------------------------
+def aerodock(*args, check=True):
+    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
+                          capture_output=True, text=True, timeout=600)
+    if check and proc.returncode != 0:
+        raise AssertionError(proc.stderr)
+    return proc
+
+
+def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
+    data = tmp_path / "synth.npz"
+    save_flightlogs(data, synthetic)
+    out, toml = tmp_path / "fit", tmp_path / "wake.toml"
+    proc = aerodock("field", "fit", str(data), "--holdout", "synth_ss_03", "--bootstrap", "2",
+                    "--out", str(out), "--config-out", str(toml), "--json")
+    result = json.loads(proc.stdout)
+    assert set(result["params"]) == set(wf.FITTED_PARAMS)
+    assert result["held_out_flights"] == ["synth_ss_03"]
+    assert result["bootstrap_runs"] == 2
+    assert [r["separation_m"] for r in result["world"]["rows"]] == [0.36, 0.64, 1.35]
+    for name in ("report.md", "fit.json", "wake.toml", "figures/mean_vs_separation.png",
+                 "figures/mean_vs_offset.png", "figures/autocorrelation.png",
+                 "figures/turbulence.png"):
+        assert (out / name).is_file(), name
+    assert toml.read_text() == (out / "wake.toml").read_text()
+    # the fragment loads as a world's config, with the fitted values
+    from aerodock.config import load_config
+
+    cfg = load_config(toml)
+    for key, value in result["params"].items():
+        assert cfg.downwash.params[key] == pytest.approx(value, rel=1e-3)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["missing.npz"], "missing.npz"),
+    (["DATA", "--holdout", "nothing_like_it"], "--holdout nothing_like_it matches no flight"),
+    (["DATA", "--holdout", "synth_*"], "--holdout leaves no flight to fit"),
+    (["DATA", "--bootstrap", "-1"], "--bootstrap must be between 0 and 1000"),
+    (["DATA", "--estimate-rotor", "cf77"], "--estimate-rotor cf77: no log has a vehicle"),
+    (["NOTLOG"], "NOTLOG"),
+])
+def test_field_fit_bad_input_is_one_line(tmp_path, synthetic, args, message):
+    data = tmp_path / "synth.npz"
+    save_flightlogs(data, synthetic[:2] + synthetic[4:6])
+    notlog = tmp_path / "notlog.npz"
+    notlog.write_bytes(b"not a flight log")
+    args = [str(data) if a == "DATA" else str(notlog) if a == "NOTLOG" else a for a in args]
+    message = message.replace("NOTLOG", str(notlog))
+    if "--bootstrap" not in args:
+        args += ["--bootstrap", "0"]
+    proc = aerodock("field", "fit", *args, "--out", str(tmp_path / "o"), check=False)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
+    assert message in lines[0]
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,91 @@
+"""Synthetic two-vehicle flights made by the simulator's wake (the default jet, stepped at the
+physics rate with its own turbulence), logged at 100 Hz as real logs are: the follower passes
+under a hovering leader at several depths and offsets and spends time in free air; its label
+carries white noise and a constant per-flight bias, as the Neural-Swarm residuals do."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from aerodock.downwash.base import BodyState
+from aerodock.downwash.jet import RoundJetField
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import GRAVITY_MPS2, rotmat_to_quat
+
+# Crazyflie-like vehicles: mass, rotor radius, diagonal.
+SMALL = (0.032, 0.0225, 0.092)
+LARGE = (0.067, 0.024, 0.120)
+PAIRS = {"ss": (SMALL, SMALL), "sl": (LARGE, SMALL), "ls": (SMALL, LARGE)}  # (leader, follower)
+
+
+def pass_path(depths_m, t_pass_s: float, rate_hz: float, rng: np.random.Generator,
+              reach_m: float) -> np.ndarray:
+    """Follower offsets (T, 3) from the leader: straight passes under it at each depth, each
+    with a random heading and a small lateral miss, then a stretch in free air."""
+    out = []
+    for depth in depths_m:
+        n = int(t_pass_s * rate_hz)
+        heading = rng.uniform(0, 2 * np.pi)
+        miss = rng.uniform(-0.5, 0.5) * reach_m / 4
+        s = np.linspace(-reach_m, reach_m, n)
+        d = np.array([np.cos(heading), np.sin(heading)])
+        perp = np.array([-d[1], d[0]])
+        xy = s[:, None] * d + miss * perp
+        out.append(np.column_stack([xy, np.full(n, depth)]))
+        far = int(1.0 * rate_hz)  # a second in free air, beside the leader
+        out.append(np.column_stack([np.full(far, 3.0), np.zeros(far), np.full(far, depth)]))
+    return np.concatenate(out)
+
+
+def synthetic_flight(pair: str, flight: int, params: dict, *, seed: int, depths_m,
+                     noise_mps2: float = 0.15, t_pass_s: float = 3.0) -> FlightLog:
+    """One flight of ``pair`` ("ss", "sl", "ls") in the wake of a jet with ``params``."""
+    (m_l, r_l, d_l), (m_f, r_f, d_f) = PAIRS[pair]
+    rng = np.random.default_rng(seed)
+    rate, substeps = 100.0, 5
+    dt = 1.0 / (rate * substeps)
+    field = RoundJetField(**params, leader_rotor_radius_m=r_l, follower_rotor_radius_m=r_f,
+                          follower_diagonal_m=d_f)
+    offsets = pass_path(depths_m, t_pass_s, rate, rng, reach_m=0.25)
+    n = offsets.shape[0]
+    speed = np.gradient(offsets, 1.0 / rate, axis=0)
+    eye = np.eye(3)[None]
+    leader = BodyState(np.zeros((1, 3)), np.zeros((1, 3)), eye, np.array([m_l * GRAVITY_MPS2]),
+                       np.array([m_l]))
+    field.reset(1, rng)
+    accel = np.empty((n, 3))
+    for i in range(n):
+        follower = BodyState(offsets[i:i + 1], speed[i:i + 1], eye,
+                             np.array([m_f * GRAVITY_MPS2]), np.array([m_f]))
+        # what an accelerometer logs: the mean over the logging period
+        accel[i] = np.mean([field.acceleration(leader, follower, dt)[0]
+                            for _ in range(substeps)], axis=0)
+    bias = rng.normal(0.0, 0.3, 3)
+    obs = accel + bias + rng.normal(0.0, noise_mps2, (n, 3))
+    quat = np.tile(rotmat_to_quat(np.eye(3)), (n, 1))
+    ids = {"ss": ("cf1", "cf2"), "sl": ("cf9", "cf2"), "ls": ("cf1", "cf9")}[pair]
+    name = f"synth_{pair}_{flight:02d}"
+    return FlightLog(
+        t_s=np.arange(n) / rate, leader_pos_m=np.zeros((n, 3)), leader_vel_mps=np.zeros((n, 3)),
+        leader_quat=quat, follower_pos_m=offsets, follower_vel_mps=speed, follower_quat=quat,
+        follower_cmd_accel_mps2=np.zeros((n, 3)),
+        follower_thrust_n=np.full(n, m_f * GRAVITY_MPS2), follower_obs_accel_mps2=obs,
+        meta={"name": f"{name}_{ids[1]}", "source": "synthetic", "frame": "NED",
+              "label_basis": "command", "leader_mass_kg": m_l, "follower_mass_kg": m_f,
+              "leader_rotor_radius_m": r_l, "follower_rotor_radius_m": r_f,
+              "leader_n_rotors": 4, "follower_n_rotors": 4, "leader_diagonal_m": d_l,
+              "follower_diagonal_m": d_f, "leader_id": ids[0], "follower_id": ids[1]},
+        extra={"leader_thrust_n": np.full(n, m_l * GRAVITY_MPS2)},
+    )
+
+
+def synthetic_flights(params: dict, flights_per_pair: int = 4, seed: int = 0) -> list[FlightLog]:
+    """Flights of all three pairs at Crazyflie-like depths (small leader 0.15-0.45 m, large
+    leader 0.4-0.6 m)."""
+    depths = {"ss": (0.2, 0.3, 0.4), "sl": (0.15, 0.25, 0.35), "ls": (0.4, 0.5, 0.6)}
+    logs = []
+    for k, pair in enumerate(PAIRS):
+        for j in range(flights_per_pair):
+            logs.append(synthetic_flight(pair, j, params, seed=seed + 100 * k + j,
+                                         depths_m=depths[pair]))
+    return logs
