@@ -78,8 +78,10 @@ def field_probe(
         return
     if model is not None:
         from aerodock.learning.runtime import Predictor
+        from aerodock.mission.params import fly_on_configured_rotors
 
         predictor = Predictor.load(model)
+        fly_on_configured_rotors(predictor, cfg)  # a leader-aware model: this world's rotors
         leader, follower = probe_bodies(separation, radial, leader_speed, mass, g,
                                         leader_mass_kg=lead_mass)
         mean = predictor.predict_bodies(leader, follower)[0]
@@ -124,8 +126,10 @@ def field_plot(
     cfg = load_config(config)
     if model is not None:
         from aerodock.learning.runtime import Predictor
+        from aerodock.mission.params import fly_on_configured_rotors
 
         predictor = Predictor.load(model)
+        fly_on_configured_rotors(predictor, cfg)
         mean_fn, title = predictor.predict_bodies, f"learnt model {model.name}"
     else:
         field = build_field(cfg)

@@ -32,6 +32,8 @@ from aerodock.config import load_config
 from aerodock.fileio import one_line
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
+# The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
+COLLECTABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp")
 SPLITS = ("auto", "flight", "time-blocks")
 """``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
@@ -347,8 +349,8 @@ def collect(
     from aerodock.learning.curriculum import run_curriculum
 
     cfg = load_config(config)
-    if model is not None and model not in ("so2", "so2-ext", "so2-wrench", "mlp"):
-        fail(f"--model must be so2, so2-ext, so2-wrench or mlp, got {model!r}")
+    if model is not None and model not in COLLECTABLE:
+        fail(f"--model must be {', '.join(COLLECTABLE[:-1])} or {COLLECTABLE[-1]}, got {model!r}")
 
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")

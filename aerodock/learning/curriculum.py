@@ -26,7 +26,7 @@ from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import BodyState, build_field
 from aerodock.fileio import building_dir, check_output_dir
 from aerodock.flightlog import FlightLog, save_flightlogs
-from aerodock.mission.params import vehicle_meta
+from aerodock.mission.params import fly_on_configured_rotors, vehicle_meta
 from aerodock.mission.recorder import FlightRecorder
 from aerodock.mission.settle import settle
 from aerodock.planning.minjerk import minjerk
@@ -163,6 +163,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
     world.set_velocities(lead_v, lead_v)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_mass = cfg.leader.mass_kg  # the follower's unless [leader] says otherwise
+    fly_on_configured_rotors(predictor, cfg)
     lead_ctl = PositionController(cfg, n, use_observer=True, vehicle=cfg.leader)
     fol_ctl = PositionController(cfg, n, use_observer=True, has_accelerometer=True)
     z = np.zeros((n, 3))

@@ -29,7 +29,7 @@ from aerodock.mission.checks import DOCK_NAMES, check_mission
 from aerodock.mission.faults import Fault, FaultRuntime, draw_faults
 from aerodock.mission.metrics import MissionMetrics
 from aerodock.mission.outcome import CampaignResult
-from aerodock.mission.params import MissionParams
+from aerodock.mission.params import MissionParams, fly_on_configured_rotors
 from aerodock.mission.phases import (
     aborts,
     approach,
@@ -186,6 +186,7 @@ class MissionBatch:
             predictor = OraclePredictor(world.field, dt_s=world.dt_s)
         elif comp != Compensation.MODEL:
             predictor = None  # a model given alongside 'none' or 'observer' is not flown
+        fly_on_configured_rotors(predictor, cfg)
         self.predictor = predictor
         # Torque feed-forward from the learnt model (rigid bodies, with the model flown).
         self.torque_ff = bool(params.torque_feedforward and comp == Compensation.MODEL

@@ -68,3 +68,16 @@ def vehicle_meta(cfg: Config) -> dict[str, Any]:
             "leader_n_rotors": int(lead.n_rotors), "follower_n_rotors": int(fol.n_rotors),
             "leader_diagonal_m": lead.diagonal_m, "follower_diagonal_m": fol.diagonal_m,
             "vehicle_model": fol.model}
+
+
+def fly_on_configured_rotors(predictor: Any, cfg: Config) -> None:
+    """Give a leader-aware model (``needs_wake_scales``) the configured vehicles' rotors.
+
+    Its wake scales come from the leader's thrust and rotors; without this it would build them
+    with the training flights' rotors, and a model trained under one leader would be handed
+    another leader's thrust with the first one's rotor size. Other predictors are left alone.
+    """
+    if getattr(predictor, "needs_wake_scales", False):
+        lead, fol = cfg.leader, cfg.vehicle
+        predictor.set_rotor_geometry(lead.rotor_radius_m, int(lead.n_rotors),
+                                     fol.rotor_radius_m, int(fol.n_rotors))
