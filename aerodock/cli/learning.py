@@ -33,7 +33,7 @@ from aerodock.fileio import one_line
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
 # The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
-COLLECTABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp")
+COLLECTABLE = tuple(kind for kind in TRAINABLE if kind != "zero")
 SPLITS = ("auto", "flight", "time-blocks")
 """``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
