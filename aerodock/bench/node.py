@@ -30,6 +30,13 @@ from aerodock.flightlog import FlightLog
 from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.features import N_FEATURES, N_OUTPUTS
 from aerodock.learning.modelfile import ModelSpec, save_model_dir
+from aerodock.node.core import (
+    DEFAULT_PUBLISH_MODE,
+    TRIGGER_FOLLOWER,
+    TRIGGER_TIMER,
+    TRIGGER_WATCHDOG,
+    PublishMode,
+)
 
 
 def random_model(path: Path, kind: str = "so2", seed: int = 3,
@@ -96,42 +103,108 @@ def predictor_latency(model: Path, calls: int = 20000) -> dict[str, Any]:
     return {"kind": pred.kind, "per_call_us": _stats(times * 1e6, 2)}
 
 
-def node_latency(model: Path, *, seconds: float = 10.0, rate_hz: float = 100.0) -> dict[str, Any]:
-    """``aerodock node`` at ``rate_hz`` fed by a 100 Hz replay (see the module docstring)."""
+PATH_SEGMENTS = {
+    "replay_send": "the replay builds and publishes the leader's, then the follower's message "
+                   "(follower stamp to the follower's publish call returning)",
+    "to_trigger": "DDS into the node and the node's wait for its callback (on-follower), or for "
+                  "the next tick (timer)",
+    "node_queue": "of to_trigger: the follower message's wait in the node, from its DDS reception "
+                  "to its callback (on-follower only)",
+    "node": "the node's trigger (callback or tick) to the output's stamp: conversion, checks, "
+            "predictor",
+    "dds_out": "the node's publish call and DDS to the replay's DDS layer (output stamp to DDS "
+               "reception)",
+    "replay_wait": "the replay's executor: the f_ext's DDS reception to its callback",
+}
+"""The end-to-end path cut in consecutive pieces (they sum to ``end_to_end_ms``), ms, all on the
+wall clock of this machine (the stamps, the node's ROS clock and DDS's source and reception
+times are all system time)."""
+
+
+def node_latency(model: Path, *, seconds: float = 10.0, rate_hz: float = 100.0,
+                 publish: str = DEFAULT_PUBLISH_MODE.value) -> dict[str, Any]:
+    """``aerodock node --publish publish`` fed by a 100 Hz replay (see the module docstring)."""
     from aerodock.node.replay import free_domain_id, replay, start_node, write_mapping
 
     with tempfile.TemporaryDirectory() as tmp:
         mapping = write_mapping(Path(tmp) / "mapping.toml", "/alpha/odom", "/bravo/odom")
         domain = free_domain_id()
-        proc = start_node(model, mapping, domain, rate_hz=rate_hz, duration_s=seconds + 60)
+        proc = start_node(model, mapping, domain, rate_hz=rate_hz, publish=publish,
+                          duration_s=seconds + 60)
         try:
             rec = replay(orbit_log(seconds), domain, leader_topic="/alpha/odom",
                          follower_topic="/bravo/odom")
         finally:
             proc.kill()
             proc.communicate(timeout=30)
+    return {"publish": publish, "rate_hz_set": rate_hz, **replay_figures(rec, publish),
+            "seconds": seconds}
+
+
+def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
+    """The figures of one replay (a :class:`aerodock.node.replay.ReplayRecord`) against a node
+    publishing in mode ``publish``.
+
+    Each output is paired with its diagnostics by stamp, and with the follower state it was
+    computed from by the diagnostics' ``follower_stamp``: ``end_to_end_ms`` is that state's send
+    stamp to the output's receipt, over the fresh outputs of the mode's own trigger (follower
+    messages in ``on-follower``, ticks in ``timer``; watchdog outputs are counted, not timed).
+    """
     outputs = {row[1]: row for row in rec.outputs}
     t0, t1 = rec.send_times_s[0], rec.send_times_s[-1]
     during = [(outputs[s], v) for _, s, v in rec.diagnostics
               if s in outputs and t0 <= s <= t1]
-    fresh = [(row, v) for row, v in during if v["stale"] == "false"]
+    own = TRIGGER_FOLLOWER if publish == PublishMode.ON_FOLLOWER else TRIGGER_TIMER
+    timed = [(row, v) for row, v in during if v["stale"] == "false" and v["trigger"] == own]
     stamps = np.array(sorted(row[1] for row, _ in during))
+    triggers = {t: sum(v["trigger"] == t for _, v in during)
+                for t in (TRIGGER_FOLLOWER, TRIGGER_TIMER, TRIGGER_WATCHDOG)}
+    sent = [s for s in rec.send_times_s if t0 <= s <= t1]
+    answered = [float(v["follower_stamp"]) for _, v in during
+                if v["trigger"] == TRIGGER_FOLLOWER]
+    e2e, pieces = path_ms(rec, timed)
+    tail = e2e >= np.percentile(e2e, 99) if e2e.size else np.zeros(0, bool)
     return {
-        "rate_hz_set": rate_hz,
         "rate_hz": round(float((len(stamps) - 1) / (stamps[-1] - stamps[0])), 2),
-        "ticks": len(during),
-        "stale_fraction": round(1 - len(fresh) / max(len(during), 1), 4),
-        "tick_ms": _stats([float(v["latency_ms"]) for _, v in fresh]),
-        "predictor_in_node_ms": _stats([float(v["compute_ms"]) for _, v in fresh], 4),
-        "end_to_end_ms": _stats([(row[0] - float(v["follower_stamp"])) * 1e3
-                                 for row, v in fresh]),
-        "seconds": seconds,
+        "outputs": len(during),
+        "outputs_by_trigger": triggers,
+        "follower_messages": len(sent),
+        "follower_messages_answered": len(set(answered) & set(sent)),
+        "follower_messages_answered_twice": len(answered) - len(set(answered)),
+        "stale_fraction": round(1 - sum(v["stale"] == "false" for _, v in during)
+                                / max(len(during), 1), 4),
+        "node_ms": _stats([float(v["latency_ms"]) for _, v in timed]),
+        "predictor_in_node_ms": _stats([float(v["compute_ms"]) for _, v in timed], 4),
+        "end_to_end_ms": _stats(e2e),
+        "path_ms": {name: _stats(values) for name, values in pieces.items()},
+        "path_ms_in_the_worst_1pct": {name: (round(float(np.nanmean(values[tail])), 3)
+                                             if tail.any() else None)
+                                      for name, values in pieces.items()},
     }
 
 
+def path_ms(rec: Any, timed: list[tuple[Any, dict[str, str]]]
+            ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """End to end and its :data:`PATH_SEGMENTS`, ms, one value per timed output (NaN: unknown)."""
+    rows = []
+    for row, v in timed:
+        received, stamp = row[0], row[1]
+        follower = float(v["follower_stamp"])
+        published = rec.published_s.get(follower, np.nan)
+        node_s = float(v["latency_ms"]) * 1e-3
+        trigger_s = stamp - node_s
+        dds_received = rec.output_dds_s.get(stamp, (np.nan, np.nan))[1]
+        rows.append((received - follower, published - follower, trigger_s - published,
+                     float(v["queue_ms"]) * 1e-3, node_s, dds_received - stamp,
+                     received - dds_received))
+    values = np.asarray(rows, dtype=float).reshape(-1, 7) * 1e3
+    return values[:, 0], dict(zip(PATH_SEGMENTS, values[:, 1:].T, strict=True))
+
+
 def run(model: Path | None = None, *, seconds: float = 10.0, rate_hz: float = 100.0,
-        node: bool = True) -> dict[str, Any]:
-    """Both measurements as one JSON-ready document."""
+        node: bool = True, publish: tuple[str, ...] = (DEFAULT_PUBLISH_MODE.value,)
+        ) -> dict[str, Any]:
+    """Both measurements as one JSON-ready document (the node once per ``publish`` mode)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = model or random_model(Path(tmp) / "model")
         doc: dict[str, Any] = {
@@ -142,29 +215,41 @@ def run(model: Path | None = None, *, seconds: float = 10.0, rate_hz: float = 10
             "predictor": predictor_latency(path),
         }
         if node:
-            doc["node"] = node_latency(path, seconds=seconds, rate_hz=rate_hz)
+            doc["node"] = {}
+            for mode in publish:
+                doc["node"][mode] = node_latency(path, seconds=seconds, rate_hz=rate_hz,
+                                                 publish=mode)
+                doc["node"][mode]["load_average_1min_after"] = round(os.getloadavg()[0], 2)
     return doc
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m aerodock.bench.node [--model DIR] [--seconds S] [--rate HZ] [--json]``."""
+    """``python -m aerodock.bench.node [--model DIR] [--seconds S] [--rate HZ] [--publish MODE]
+    [--json]``."""
     parser = argparse.ArgumentParser(prog="python -m aerodock.bench.node",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--model", type=Path, default=None, help="model directory")
     parser.add_argument("--seconds", type=float, default=10.0, help="replay length, s")
     parser.add_argument("--rate", type=float, default=100.0, help="node rate, Hz")
+    parser.add_argument("--publish", default=DEFAULT_PUBLISH_MODE.value,
+                        choices=[*(m.value for m in PublishMode), "both"],
+                        help="the node's publish mode(s) to measure")
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
-    doc = run(args.model, seconds=args.seconds, rate_hz=args.rate)
+    modes = (tuple(m.value for m in PublishMode) if args.publish == "both"
+             else (args.publish,))
+    doc = run(args.model, seconds=args.seconds, rate_hz=args.rate, publish=modes)
     if args.json:
         print(dumps_json(json_ready(doc)))  # a statistic of no sample is null
         return
-    p, n = doc["predictor"]["per_call_us"], doc["node"]
+    p = doc["predictor"]["per_call_us"]
     print(f"predictor ({doc['predictor']['kind']}): {p['median']} us per call (p99 {p['p99']})")
-    print(f"node at {n['rate_hz_set']:g} Hz: measured {n['rate_hz']} Hz, tick "
-          f"{n['tick_ms']['median']} ms (p99 {n['tick_ms']['p99']}), end to end "
-          f"{n['end_to_end_ms']['median']} ms (p95 {n['end_to_end_ms']['p95']}, p99 "
-          f"{n['end_to_end_ms']['p99']}), stale {100 * n['stale_fraction']:.1f}%")
+    for mode, n in doc["node"].items():
+        e2e = n["end_to_end_ms"]
+        print(f"node --publish {mode} ({n['rate_hz_set']:g} Hz): {n['rate_hz']} Hz out, "
+              f"{n['outputs_by_trigger']}, node {n['node_ms']['median']} ms "
+              f"(p99 {n['node_ms']['p99']}), end to end {e2e['median']} ms (p95 {e2e['p95']}, "
+              f"p99 {e2e['p99']}), stale {100 * n['stale_fraction']:.1f}%")
 
 
 if __name__ == "__main__":

@@ -2,9 +2,13 @@
 
 Used by the end-to-end test and :mod:`aerodock.bench.node` (needs the ``aerodock[ros]`` extra).
 The node runs in its own process (``aerodock node``, started by :func:`start_node`); this side
-publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame, stamped with
-the wall clock when sent, and records every f_ext and diagnostics message it gets back with its
-receive time. Everything stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``)
+publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame (the leader's
+first, then the follower's), stamped with the wall clock when sent, and records every f_ext and
+diagnostics message it gets back with its receive time, and the f_ext messages' DDS source and
+reception times (where a latency tail comes from: :mod:`aerodock.bench.node`). One executor
+with this side's node added once serves the whole replay (``rclpy.spin_once(node)`` would add
+and remove the node on every call, costing this side time inside the measurement).
+Everything stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``)
 and on a ROS domain of its own (:func:`free_domain_id`).
 """
 
@@ -48,15 +52,20 @@ def write_mapping(path: Path, leader_topic: str, follower_topic: str, *, frame: 
 
 
 def start_node(model: Path, mapping: Path, domain_id: int, *, rate_hz: float = 100.0,
-               max_age_s: float = 0.05, duration_s: float = 30.0,
+               publish: str | None = None, max_age_s: float = 0.05, duration_s: float = 30.0,
                output_topic: str = "/aerodock/f_ext",
                diagnostics_topic: str = "/aerodock/diagnostics") -> subprocess.Popen:
-    """Start ``aerodock node`` in a subprocess (it stops by itself after ``duration_s``)."""
+    """Start ``aerodock node`` in a subprocess (it stops by itself after ``duration_s``).
+
+    ``publish``: its ``--publish`` mode (None: the node's default).
+    """
     cmd = [sys.executable, "-c", "from aerodock.cli import main; main()", "node", "--model",
            str(model), "--mapping",
            str(mapping), "--rate", str(rate_hz), "--max-age", str(max_age_s), "--duration",
            str(duration_s), "--output-topic", output_topic, "--diagnostics-topic",
            diagnostics_topic]
+    if publish is not None:
+        cmd += ["--publish", publish]
     return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 
@@ -72,6 +81,10 @@ class ReplayRecord:
         diagnostics: ``(receive_s, stamp_s, values)`` of the diagnostics messages.
         frame_ids: the f_ext messages' ``header.frame_id`` values.
         send_times_s: wall times of the follower messages sent.
+        output_dds_s: f_ext stamp -> ``(source, reception)``: the DDS source time (the node's
+            write) and reception time (this side's DDS layer) of that f_ext message, wall s
+            (NaN when the middleware does not give them).
+        published_s: follower stamp -> wall time when its ``publish`` call returned.
     """
 
     sent: dict[str, dict[float, VehicleState]] = field(
@@ -80,6 +93,8 @@ class ReplayRecord:
     diagnostics: list[tuple[float, float, dict[str, str]]] = field(default_factory=list)
     frame_ids: set[str] = field(default_factory=set)
     send_times_s: list[float] = field(default_factory=list)
+    output_dds_s: dict[float, tuple[float, float]] = field(default_factory=dict)
+    published_s: dict[float, float] = field(default_factory=dict)
 
     def output_array(self) -> np.ndarray:
         """Outputs as an ``(n, 5)`` array (receive, stamp, fx, fy, fz)."""
@@ -121,18 +136,23 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Vector3Stamped
     from nav_msgs.msg import Odometry
+    from rclpy.executors import SingleThreadedExecutor
 
     rec = ReplayRecord()
     rclpy.init()
     node = rclpy.create_node("aerodock_replay")
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
     try:
         pubs = {"leader": node.create_publisher(Odometry, leader_topic, 10),
                 "follower": node.create_publisher(Odometry, follower_topic, 10)}
 
-        def on_output(msg: Any) -> None:
-            rec.outputs.append((time.time(), _stamp(msg), msg.vector.x, msg.vector.y,
-                                msg.vector.z))
+        def on_output(msg: Any, info: Any) -> None:
+            stamp = _stamp(msg)
+            rec.outputs.append((time.time(), stamp, msg.vector.x, msg.vector.y, msg.vector.z))
             rec.frame_ids.add(msg.header.frame_id)
+            rec.output_dds_s[stamp] = (_dds_time_s(info, "source_timestamp"),
+                                       _dds_time_s(info, "received_timestamp"))
 
         def on_diag(msg: Any) -> None:
             for status in msg.status:
@@ -146,16 +166,17 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"aerodock node did not subscribe to {leader_topic} and "
                                    f"{follower_topic} within {wait_for_node_s:g} s")
-            rclpy.spin_once(node, timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
         rec.outputs.clear()
         rec.diagnostics.clear()
+        rec.output_dds_s.clear()
         period = 1.0 / rate_hz if rate_hz else float(np.median(np.diff(log.t_s)))
         rot_l, rot_f = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
         start = time.monotonic()
         for i in range(log.n_samples):
             target = start + i * period
             while (now := time.monotonic()) < target:
-                rclpy.spin_once(node, timeout_sec=max(min(target - now, 0.002), 0.0))
+                executor.spin_once(timeout_sec=max(min(target - now, 0.002), 0.0))
             stamp = stamp_of(time.time())
             t_log = float(log.t_s[i] - log.t_s[0])
             states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
@@ -165,15 +186,25 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
                     continue
                 state = VehicleState(np.array(p, float), np.array(v, float), rot, 0.0, stamp)
                 pubs[role].publish(_odometry(Odometry, state, stamp, frame, twist))
+                if role == "follower":
+                    rec.published_s[stamp] = time.time()
                 rec.sent[role][stamp] = state
             rec.send_times_s.append(stamp)
         end = time.monotonic() + tail_s
         while time.monotonic() < end:
-            rclpy.spin_once(node, timeout_sec=0.01)
+            executor.spin_once(timeout_sec=0.01)
     finally:
+        executor.remove_node(node)
+        executor.shutdown()
         node.destroy_node()
         rclpy.shutdown()
     return rec
+
+
+def _dds_time_s(info: Any, key: str) -> float:
+    """A message info's DDS time (ns since the epoch) in s; NaN when the middleware gives 0."""
+    ns = (info or {}).get(key, 0)
+    return ns * 1e-9 if ns else float("nan")
 
 
 def _odometry(cls: Any, state: VehicleState, stamp_s: float, frame: str, twist: str) -> Any:
