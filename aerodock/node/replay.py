@@ -185,7 +185,7 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
                 if role == "leader" and leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
                     continue
                 state = VehicleState(np.array(p, float), np.array(v, float), rot, 0.0, stamp)
-                pubs[role].publish(_odometry(Odometry, state, stamp, frame, twist))
+                pubs[role].publish(odometry_message(Odometry, state, stamp, frame, twist))
                 if role == "follower":
                     rec.published_s[stamp] = time.time()
                 rec.sent[role][stamp] = state
@@ -207,7 +207,9 @@ def _dds_time_s(info: Any, key: str) -> float:
     return ns * 1e-9 if ns else float("nan")
 
 
-def _odometry(cls: Any, state: VehicleState, stamp_s: float, frame: str, twist: str) -> Any:
+def odometry_message(cls: Any, state: VehicleState, stamp_s: float, frame: str,
+                     twist: str) -> Any:
+    """A NED ``state`` as a ``cls`` (``nav_msgs/msg/Odometry``) in the mapping's frame."""
     pos, quat, lin = odometry_fields(state, frame=frame, twist=twist)
     msg = cls()
     msg.header.stamp.sec = int(stamp_s)
