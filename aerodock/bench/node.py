@@ -1,16 +1,21 @@
 """Latency of the learnt model next to a flight stack: the predictor alone, and ``aerodock node``
-at its rate, end to end over ROS 2 on this machine (``python -m aerodock.bench.node``).
+end to end over ROS 2 on this machine, per publish mode (``python -m aerodock.bench.node``).
 
-- ``predictor``: one ``Predictor.predict_one`` call (the node's per-tick work), µs: median and
-  99th percentile over many calls after a warm-up.
-- ``node``: ``aerodock node`` in its own process at ``rate_hz`` (100 Hz), fed by a replay of a
-  flight (both vehicles' nav_msgs/Odometry at 100 Hz, localhost, a ROS domain of its own):
-  ``rate_hz`` measured from the output stamps; ``tick_ms`` (tick start to publish, from the
-  node's diagnostics); ``end_to_end_ms`` (state stamped and sent -> f_ext received: both
-  transports plus the wait for the next tick, up to one period); the share of stale ticks.
+- ``predictor``: one ``Predictor.predict_one`` call (the node's per-output work), µs: median
+  and 99th percentile over many calls after a warm-up.
+- ``node``: ``aerodock node --publish MODE`` in its own process (``--publish both``: one run
+  per mode, one after the other), fed by a replay of a flight (both vehicles'
+  nav_msgs/Odometry at 100 Hz, localhost, a ROS domain of its own): the output rate measured
+  from the output stamps; how many outputs each trigger made (follower message, timer,
+  watchdog) and how many follower messages were answered; ``node_ms`` (trigger to the output's
+  stamp, from the node's diagnostics); ``end_to_end_ms``: the follower state's send stamp to
+  the receipt of the output computed from it (paired by the diagnostics' ``follower_stamp``);
+  in ``timer`` mode it includes the wait for the next tick, up to one period. ``path_ms``
+  cuts it into consecutive pieces (:data:`PATH_SEGMENTS`), and ``path_ms_in_the_worst_1pct``
+  says which pieces make the tail.
 
 The model is a given model directory, or random weights in the default architecture (same cost
-as a trained one). The numbers in the README's "Deploy" section come from this module.
+as a trained one). The numbers in docs/deploy.md's "Latency" section come from this module.
 """
 
 from __future__ import annotations
@@ -72,8 +77,12 @@ def orbit_log(duration_s: float = 3.0, rate_hz: float = 100.0) -> FlightLog:
                      follower_obs_accel_mps2=zeros, meta={"name": "orbit", "frame": "NED"})
 
 
-def _stats(values: np.ndarray, digits: int = 3) -> dict[str, float]:
+def _stats(values: np.ndarray, digits: int = 3) -> dict[str, float | None]:
+    """Median, p95, p99 and count of the known (finite) values; None without any."""
     v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return {"median": None, "p95": None, "p99": None, "n": 0}
     return {"median": round(float(np.median(v)), digits),
             "p95": round(float(np.percentile(v, 95)), digits),
             "p99": round(float(np.percentile(v, 99)), digits),
@@ -151,15 +160,19 @@ def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
     messages in ``on-follower``, ticks in ``timer``; watchdog outputs are counted, not timed).
     """
     outputs = {row[1]: row for row in rec.outputs}
+    paired = [(outputs[s], v) for _, s, v in rec.diagnostics if s in outputs]
+    sent = set(rec.send_times_s)
     t0, t1 = rec.send_times_s[0], rec.send_times_s[-1]
-    during = [(outputs[s], v) for _, s, v in rec.diagnostics
-              if s in outputs and t0 <= s <= t1]
+    # the outputs while the replay sends, and every answer to one of its follower messages
+    # (the answer to the last one is stamped after it)
+    during = [(row, v) for row, v in paired if t0 <= row[1] <= t1 or (
+        v["trigger"] == TRIGGER_FOLLOWER and _stamp_or_nan(v["follower_stamp"]) in sent)]
     own = TRIGGER_FOLLOWER if publish == PublishMode.ON_FOLLOWER else TRIGGER_TIMER
-    timed = [(row, v) for row, v in during if v["stale"] == "false" and v["trigger"] == own]
+    timed = [(row, v) for row, v in during if v["stale"] == "false" and v["trigger"] == own
+             and _stamp_or_nan(v["follower_stamp"]) in sent]
     stamps = np.array(sorted(row[1] for row, _ in during))
     triggers = {t: sum(v["trigger"] == t for _, v in during)
                 for t in (TRIGGER_FOLLOWER, TRIGGER_TIMER, TRIGGER_WATCHDOG)}
-    sent = [s for s in rec.send_times_s if t0 <= s <= t1]
     answered = [float(v["follower_stamp"]) for _, v in during
                 if v["trigger"] == TRIGGER_FOLLOWER]
     e2e, pieces = path_ms(rec, timed)
@@ -169,7 +182,7 @@ def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
         "outputs": len(during),
         "outputs_by_trigger": triggers,
         "follower_messages": len(sent),
-        "follower_messages_answered": len(set(answered) & set(sent)),
+        "follower_messages_answered": len(set(answered) & sent),
         "follower_messages_answered_twice": len(answered) - len(set(answered)),
         "stale_fraction": round(1 - sum(v["stale"] == "false" for _, v in during)
                                 / max(len(during), 1), 4),
@@ -178,9 +191,14 @@ def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
         "end_to_end_ms": _stats(e2e),
         "path_ms": {name: _stats(values) for name, values in pieces.items()},
         "path_ms_in_the_worst_1pct": {name: (round(float(np.nanmean(values[tail])), 3)
-                                             if tail.any() else None)
+                                             if np.isfinite(values[tail]).any() else None)
                                       for name, values in pieces.items()},
     }
+
+
+def _stamp_or_nan(text: str) -> float:
+    """A diagnostics stamp (``repr`` of a float, ``"None"`` before any state) as a number."""
+    return float("nan") if text == "None" else float(text)
 
 
 def path_ms(rec: Any, timed: list[tuple[Any, dict[str, str]]]
