@@ -12,7 +12,9 @@ end to end over ROS 2 on this machine, per publish mode (``python -m aerodock.be
   the receipt of the output computed from it (paired by the diagnostics' ``follower_stamp``);
   in ``timer`` mode it includes the wait for the next tick, up to one period. ``path_ms``
   cuts it into consecutive pieces (:data:`PATH_SEGMENTS`), and ``path_ms_in_the_worst_1pct``
-  says which pieces make the tail.
+  says which pieces make the tail; ``cpu`` says, for the node's process and the replay's, how
+  long they ran and how long they waited for a CPU while the replay sent (Linux scheduler
+  statistics): whether a tail is work or the machine's load.
 
 The model is a given model directory, or random weights in the default architecture (same cost
 as a trained one). The numbers in docs/deploy.md's "Latency" section come from this module.
@@ -113,8 +115,8 @@ def predictor_latency(model: Path, calls: int = 20000) -> dict[str, Any]:
 
 
 PATH_SEGMENTS = {
-    "replay_send": "the replay builds and publishes the leader's, then the follower's message "
-                   "(follower stamp to the follower's publish call returning)",
+    "replay_send": "the replay publishes the leader's, then the follower's message (the "
+                   "follower's stamp to its publish call returning)",
     "to_trigger": "DDS into the node and the node's wait for its callback (on-follower), or for "
                   "the next tick (timer)",
     "node_queue": "of to_trigger: the follower message's wait in the node, from its DDS reception "
@@ -140,14 +142,52 @@ def node_latency(model: Path, *, seconds: float = 10.0, rate_hz: float = 100.0,
         domain = free_domain_id()
         proc = start_node(model, mapping, domain, rate_hz=rate_hz, publish=publish,
                           duration_s=seconds + 60)
+        pids = {"node": proc.pid, "replay": os.getpid()}
+        marks: dict[str, dict[str, np.ndarray | None]] = {}
+
+        def on_send(when: str) -> None:
+            marks[when] = {name: scheduler_s(pid) for name, pid in pids.items()}
+
         try:
             rec = replay(orbit_log(seconds), domain, leader_topic="/alpha/odom",
-                         follower_topic="/bravo/odom")
+                         follower_topic="/bravo/odom", on_send=on_send)
         finally:
             proc.kill()
-            proc.communicate(timeout=30)
+            _, stderr = proc.communicate(timeout=30)
+    if len(rec.outputs) < 2:
+        last = (stderr.strip().splitlines() or ["nothing on stderr"])[-1]
+        raise RuntimeError(f"aerodock node --publish {publish} published {len(rec.outputs)} "
+                           f"outputs during the replay; its last words: {last}")
     return {"publish": publish, "rate_hz_set": rate_hz, **replay_figures(rec, publish),
+            "cpu": {name: cpu_figures(marks["start"][name], marks["end"][name])
+                    for name in pids},
             "seconds": seconds}
+
+
+def scheduler_s(pid: int) -> np.ndarray | None:
+    """``(on CPU s, waiting for a CPU s, times scheduled)`` summed over the threads of process
+    ``pid`` (Linux ``/proc/PID/task/*/schedstat``); None where there is no such file."""
+    total = np.zeros(3)
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return None
+    for task in tasks:
+        try:
+            total += [float(x) for x in (task / "schedstat").read_text().split()[:3]]
+        except (OSError, ValueError):  # a thread that ended meanwhile
+            continue
+    return total * (1e-9, 1e-9, 1.0)
+
+
+def cpu_figures(start: np.ndarray | None, end: np.ndarray | None) -> dict[str, float] | None:
+    """Over the replay, one process: CPU time, time runnable but waiting for a CPU (the run
+    queue: the machine's load, not the process's work), and that wait per time scheduled."""
+    if start is None or end is None:
+        return None
+    run_s, wait_s, slices = end - start
+    return {"on_cpu_s": round(float(run_s), 3), "waiting_for_cpu_s": round(float(wait_s), 3),
+            "wait_per_wakeup_ms": round(float(wait_s / max(slices, 1) * 1e3), 3)}
 
 
 def replay_figures(rec: Any, publish: str) -> dict[str, Any]:

@@ -18,7 +18,8 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -110,7 +111,8 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
            leader_gap_s: tuple[float, float] | None = None,
            output_topic: str = "/aerodock/f_ext",
            diagnostics_topic: str = "/aerodock/diagnostics",
-           wait_for_node_s: float = 30.0, tail_s: float = 0.3) -> ReplayRecord:
+           wait_for_node_s: float = 30.0, tail_s: float = 0.3,
+           on_send: Callable[[str], None] | None = None) -> ReplayRecord:
     """Publish ``log``'s states at its own rate (or ``rate_hz``) and record the node's output.
 
     Args:
@@ -126,6 +128,8 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
         diagnostics_topic: the node's diagnostics topic.
         wait_for_node_s: how long to wait for the node to subscribe and publish.
         tail_s: how long to keep listening after the last message.
+        on_send: called with ``"start"`` just before the first message and ``"end"`` just
+            after the last (the benchmark reads CPU accounting there).
 
     Raises:
         TimeoutError: the node did not show up on the graph in time.
@@ -172,24 +176,34 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
         rec.output_dds_s.clear()
         period = 1.0 / rate_hz if rate_hz else float(np.median(np.diff(log.t_s)))
         rot_l, rot_f = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
+        if on_send:
+            on_send("start")
         start = time.monotonic()
         for i in range(log.n_samples):
+            t_log = float(log.t_s[i] - log.t_s[0])
+            states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
+                      "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
+            if leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
+                del states["leader"]
+            # built before the send time and stamped at it: the stamp is when the state is
+            # sent, not when this side's Python began building the messages
+            sample = {role: VehicleState(np.array(p, float), np.array(v, float), rot, 0.0)
+                      for role, (p, v, rot) in states.items()}
+            msgs = {role: odometry_message(Odometry, state, 0.0, frame, twist)
+                    for role, state in sample.items()}
             target = start + i * period
             while (now := time.monotonic()) < target:
                 executor.spin_once(timeout_sec=max(min(target - now, 0.002), 0.0))
             stamp = stamp_of(time.time())
-            t_log = float(log.t_s[i] - log.t_s[0])
-            states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
-                      "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
-            for role, (p, v, rot) in states.items():
-                if role == "leader" and leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
-                    continue
-                state = VehicleState(np.array(p, float), np.array(v, float), rot, 0.0, stamp)
-                pubs[role].publish(odometry_message(Odometry, state, stamp, frame, twist))
+            for role, msg in msgs.items():
+                set_stamp(msg.header, stamp)
+                pubs[role].publish(msg)
                 if role == "follower":
                     rec.published_s[stamp] = time.time()
-                rec.sent[role][stamp] = state
+                rec.sent[role][stamp] = replace(sample[role], stamp_s=stamp)
             rec.send_times_s.append(stamp)
+        if on_send:
+            on_send("end")
         end = time.monotonic() + tail_s
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.01)
@@ -212,8 +226,7 @@ def odometry_message(cls: Any, state: VehicleState, stamp_s: float, frame: str,
     """A NED ``state`` as a ``cls`` (``nav_msgs/msg/Odometry``) in the mapping's frame."""
     pos, quat, lin = odometry_fields(state, frame=frame, twist=twist)
     msg = cls()
-    msg.header.stamp.sec = int(stamp_s)
-    msg.header.stamp.nanosec = int(round((stamp_s - int(stamp_s)) * 1e9)) % 1_000_000_000
+    set_stamp(msg.header, stamp_s)
     msg.header.frame_id = "map" if frame == "enu" else "map_ned"
     msg.child_frame_id = "base_link"
     p = msg.pose.pose
@@ -222,6 +235,12 @@ def odometry_message(cls: Any, state: VehicleState, stamp_s: float, frame: str,
     t = msg.twist.twist.linear
     t.x, t.y, t.z = (float(v) for v in lin)
     return msg
+
+
+def set_stamp(header: Any, stamp_s: float) -> None:
+    """Set a ``std_msgs/Header``'s stamp to ``stamp_s`` (wall s), as :func:`stamp_of` reads it."""
+    header.stamp.sec = int(stamp_s)
+    header.stamp.nanosec = int(round((stamp_s - int(stamp_s)) * 1e9)) % 1_000_000_000
 
 
 def stamp_of(msg_stamp_s: float) -> float:
