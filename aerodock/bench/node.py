@@ -11,10 +11,11 @@ end to end over ROS 2 on this machine, per publish mode (``python -m aerodock.be
   stamp, from the node's diagnostics); ``end_to_end_ms``: the follower state's send stamp to
   the receipt of the output computed from it (paired by the diagnostics' ``follower_stamp``);
   in ``timer`` mode it includes the wait for the next tick, up to one period. ``path_ms``
-  cuts it into consecutive pieces (:data:`PATH_SEGMENTS`), and ``path_ms_in_the_worst_1pct``
-  says which pieces make the tail; ``cpu`` says, for the node's process and the replay's, how
-  long they ran and how long they waited for a CPU while the replay sent (Linux scheduler
-  statistics): whether a tail is work or the machine's load.
+  cuts it into consecutive pieces (:data:`PATH_SEGMENTS`; ``node_side_ms``: the node's share,
+  :data:`NODE_SIDE`), and ``path_ms_in_the_worst_1pct`` says which pieces make the tail;
+  ``cpu`` says, for the node's process and the replay's, how long they ran and how long they
+  waited for a CPU while the replay sent (Linux scheduler statistics): whether a tail is work
+  or the machine's load.
 
 The model is a given model directory, or random weights in the default architecture (same cost
 as a trained one). The numbers in docs/deploy.md's "Latency" section come from this module.
@@ -123,13 +124,21 @@ PATH_SEGMENTS = {
                   "to its callback (on-follower only)",
     "node": "the node's trigger (callback or tick) to the output's stamp: conversion, checks, "
             "predictor",
-    "dds_out": "the node's publish call and DDS to the replay's DDS layer (output stamp to DDS "
-               "reception)",
+    "node_publish": "the node's publish call, to its DDS write (output stamp to the DDS source "
+                    "time)",
+    "dds_out": "DDS to the replay's DDS layer (source time to reception time; includes the "
+               "wake-up of the replay's DDS receive thread)",
     "replay_wait": "the replay's executor: the f_ext's DDS reception to its callback",
 }
 """The end-to-end path cut in consecutive pieces (they sum to ``end_to_end_ms``), ms, all on the
 wall clock of this machine (the stamps, the node's ROS clock and DDS's source and reception
 times are all system time)."""
+
+
+NODE_SIDE = ("to_trigger", "node", "node_publish")
+"""The pieces in the node's process (and DDS into it): the follower message leaving the replay
+(its publish call returned) to the f_ext leaving the node (its DDS write). ``node_side_ms`` is
+their sum: end to end without the measuring client's own send, receive thread and executor."""
 
 
 def node_latency(model: Path, *, seconds: float = 10.0, rate_hz: float = 100.0,
@@ -229,6 +238,7 @@ def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
         "node_ms": _stats([float(v["latency_ms"]) for _, v in timed]),
         "predictor_in_node_ms": _stats([float(v["compute_ms"]) for _, v in timed], 4),
         "end_to_end_ms": _stats(e2e),
+        "node_side_ms": _stats(sum(pieces[k] for k in NODE_SIDE) if e2e.size else e2e),
         "path_ms": {name: _stats(values) for name, values in pieces.items()},
         "path_ms_in_the_worst_1pct": {name: (round(float(np.nanmean(values[tail])), 3)
                                              if np.isfinite(values[tail]).any() else None)
@@ -251,11 +261,11 @@ def path_ms(rec: Any, timed: list[tuple[Any, dict[str, str]]]
         published = rec.published_s.get(follower, np.nan)
         node_s = float(v["latency_ms"]) * 1e-3
         trigger_s = stamp - node_s
-        dds_received = rec.output_dds_s.get(stamp, (np.nan, np.nan))[1]
+        dds_source, dds_received = rec.output_dds_s.get(stamp, (np.nan, np.nan))
         rows.append((received - follower, published - follower, trigger_s - published,
-                     float(v["queue_ms"]) * 1e-3, node_s, dds_received - stamp,
-                     received - dds_received))
-    values = np.asarray(rows, dtype=float).reshape(-1, 7) * 1e3
+                     float(v["queue_ms"]) * 1e-3, node_s, dds_source - stamp,
+                     dds_received - dds_source, received - dds_received))
+    values = np.asarray(rows, dtype=float).reshape(-1, 1 + len(PATH_SEGMENTS)) * 1e3
     return values[:, 0], dict(zip(PATH_SEGMENTS, values[:, 1:].T, strict=True))
 
 

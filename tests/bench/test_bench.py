@@ -236,8 +236,11 @@ def test_node_figures_pair_each_output_with_its_follower_state():
     assert e2e["n"] == 5 and e2e["median"] == pytest.approx(2.2)
     assert figures["path_ms"]["replay_send"]["median"] == pytest.approx(0.5)
     assert figures["path_ms"]["node_queue"]["median"] == pytest.approx(0.3)
-    assert figures["path_ms"]["dds_out"]["median"] == pytest.approx(0.3)
+    assert figures["path_ms"]["node_publish"]["median"] == pytest.approx(0.1)
+    assert figures["path_ms"]["dds_out"]["median"] == pytest.approx(0.2)
     assert figures["path_ms"]["replay_wait"]["median"] == pytest.approx(0.2)
+    # the node's side: publish returned (+0.5 ms) to its DDS write (stamp + 0.1 ms)
+    assert figures["node_side_ms"]["median"] == pytest.approx(1.3)
     # the consecutive pieces (node_queue is part of to_trigger) add up to end to end
     pieces = [k for k in PATH_SEGMENTS if k != "node_queue"]
     worst = figures["path_ms_in_the_worst_1pct"]
