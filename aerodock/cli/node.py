@@ -41,8 +41,8 @@ def node_command(
     )] = DEFAULT_RATE_HZ,
     publish: Annotated[PublishMode, typer.Option(
         "--publish", help="on-follower: publish on each follower state message, the --rate "
-                          "timer publishing only when none went out within its last period; "
-                          "timer: publish at --rate only.",
+                          "timer publishing only when none went out within its last 1.5 "
+                          "periods (a watchdog); timer: publish at --rate only.",
     )] = DEFAULT_PUBLISH_MODE,
     max_age: Annotated[float, typer.Option(
         "--max-age", help="Oldest accepted input, s; older: publish zero, flag stale.",

@@ -30,8 +30,8 @@ such a state is simply not finite, hence stale.
 When the node publishes (:class:`PublishMode`, :func:`output_trigger`): on each follower state
 message (the prediction is for that state, out as soon as it is in), with the fixed-rate timer
 as a watchdog that publishes only when no message-triggered output went out within the last
-period; or on the timer alone. Every output, whatever triggered it, is one
-:func:`prediction_step` on the newest states.
+period and a half (:data:`WATCHDOG_PERIODS`); or on the timer alone. Every output, whatever
+triggered it, is one :func:`prediction_step` on the newest states.
 """
 
 from __future__ import annotations
@@ -63,8 +63,8 @@ class PublishMode(StrEnum):
 
     - ``on-follower``: each follower state message (the follower's state is what the
       prediction is for), with the ``rate_hz`` timer as a watchdog: a tick publishes only when
-      no message-triggered output went out within the last period, so a consumer still gets
-      output at ``rate_hz`` or more when the follower's messages stop.
+      no message-triggered output went out within the last :data:`WATCHDOG_PERIODS` periods,
+      so a consumer still gets output at ``rate_hz`` when the follower's messages stop.
     - ``timer``: the ``rate_hz`` timer alone, from the newest states (the wait for the next
       tick, up to one period, adds to the latency).
     """
@@ -77,12 +77,21 @@ DEFAULT_PUBLISH_MODE = PublishMode.ON_FOLLOWER
 """A controller (Freyja's LQR, a PX4 offboard loop) acts on the follower's state as it arrives:
 the f_ext for that state is wanted then, not up to a timer period later (docs/deploy.md)."""
 
+WATCHDOG_PERIODS = 1.5
+"""How many timer periods without a message-triggered output make a tick publish
+(``on-follower``). More than one: the follower's messages usually come at about the timer's
+rate, and with the strict one period a message a little late (jitter of a fraction of a
+millisecond) made the tick publish a duplicate of the last answer just before the message's
+own: a quarter of all outputs at 100 Hz on a loaded machine (docs/deploy.md). Half a period
+more leaves those out and still publishes within two and a half periods of the last answer,
+then once per period."""
+
 FOLLOWER_EVENT, TICK_EVENT = "follower message", "tick"
 """The events the node sees: a follower state message arrived; the ``rate_hz`` timer fired."""
 TRIGGER_FOLLOWER, TRIGGER_TIMER, TRIGGER_WATCHDOG = "follower", "timer", "watchdog"
 """What made an output (the diagnostics' ``trigger``): a follower message (``on-follower``), a
-tick (``timer``), a tick with no message-triggered output within the last period (``on-follower``'s
-watchdog)."""
+tick (``timer``), a tick with no message-triggered output within the last
+:data:`WATCHDOG_PERIODS` periods (``on-follower``'s watchdog)."""
 
 
 def output_trigger(mode: PublishMode | str, event: str, now_s: float,
@@ -100,8 +109,9 @@ def output_trigger(mode: PublishMode | str, event: str, now_s: float,
     Returns:
         :data:`TRIGGER_FOLLOWER`, :data:`TRIGGER_TIMER` or :data:`TRIGGER_WATCHDOG`, or None
         (no output). In ``on-follower`` mode the watchdog's own outputs do not count as recent
-        ones: once the follower's messages stop, every tick publishes (the first within two
-        periods of the last message-triggered output, the timer's phase being free).
+        ones: once the follower's messages stop, every tick publishes (the first within
+        :data:`WATCHDOG_PERIODS` + 1 periods of the last message-triggered output, the timer's
+        phase being free).
 
     Raises:
         ValueError: an unknown mode or event.
@@ -113,7 +123,8 @@ def output_trigger(mode: PublishMode | str, event: str, now_s: float,
         return TRIGGER_TIMER if event == TICK_EVENT else None
     if event == FOLLOWER_EVENT:
         return TRIGGER_FOLLOWER
-    if last_follower_output_s is None or now_s - last_follower_output_s >= period_s:
+    if (last_follower_output_s is None
+            or now_s - last_follower_output_s >= WATCHDOG_PERIODS * period_s):
         return TRIGGER_WATCHDOG
     return None
 

@@ -59,6 +59,10 @@ from aerodock.node.core import (
 )
 
 STATUS_NAME = "aerodock f_ext"
+STATE_QUEUE_DEPTH = 1
+"""State messages kept per topic while the node is busy: the newest only. Only the newest
+state matters to a controller; with the sensor-data default (5), a node kept off the CPU for
+tens of milliseconds answered each queued state in turn, the newest last (docs/deploy.md)."""
 
 
 @dataclass
@@ -139,7 +143,7 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from geometry_msgs.msg import Vector3Stamped
     from rclpy.node import Node
-    from rclpy.qos import qos_profile_sensor_data
+    from rclpy.qos import HistoryPolicy, QoSProfile, qos_profile_sensor_data
 
     class PredictorNode(Node):
         """Subscribes to both vehicles' states and publishes f_ext (see the module docstring)."""
@@ -164,7 +168,11 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             self.errors: list[str] = []
             self.pub = self.create_publisher(Vector3Stamped, settings.output_topic, 10)
             self.diag_pub = self.create_publisher(DiagnosticArray, settings.diagnostics_topic, 10)
-            self._qos = qos_profile_sensor_data
+            # best effort as sensor data (PX4 publishes so), keeping only the newest message:
+            # a state superseded while the node waited for a CPU is not worth answering
+            self._qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATE_QUEUE_DEPTH,
+                                   reliability=qos_profile_sensor_data.reliability,
+                                   durability=qos_profile_sensor_data.durability)
             self._subs: list[Any] = []
             for note in warnings_to_log or []:
                 self.get_logger().warning(note)

@@ -322,10 +322,11 @@ def test_mapping_reports_an_explicit_frame(tmp_path):
     ("on-follower", FOLLOWER_EVENT, 1.0, None, "follower"),
     ("on-follower", FOLLOWER_EVENT, 1.0, 0.999, "follower"),
     # the watchdog: a tick publishes only when no follower-triggered output went out within
-    # the last period (0.01 s here)
+    # the last 1.5 periods (the period: 0.01 s here)
     ("on-follower", TICK_EVENT, 1.0, None, "watchdog"),
     ("on-follower", TICK_EVENT, 1.0, 0.995, None),
-    ("on-follower", TICK_EVENT, 1.0, 0.99, "watchdog"),
+    ("on-follower", TICK_EVENT, 1.0, 0.99, None),  # one period: a message a little late
+    ("on-follower", TICK_EVENT, 1.0, 0.985, "watchdog"),
     ("on-follower", TICK_EVENT, 1.0, 0.5, "watchdog"),
     # timer: ticks only, follower messages never publish
     ("timer", TICK_EVENT, 1.0, None, "timer"),
