@@ -10,7 +10,9 @@ end to end over ROS 2 on this machine, per publish mode (``python -m aerodock.be
   watchdog) and how many follower messages were answered; ``node_ms`` (trigger to the output's
   stamp, from the node's diagnostics); ``end_to_end_ms``: the follower state's send stamp to
   the receipt of the output computed from it (paired by the diagnostics' ``follower_stamp``);
-  in ``timer`` mode it includes the wait for the next tick, up to one period. ``path_ms``
+  in ``timer`` mode it includes the wait for the next tick, up to one period;
+  ``state_to_prediction_ms``: each follower state sent to the receipt of the first output from
+  it or a newer one (states skipped count too). ``path_ms``
   cuts it into consecutive pieces (:data:`PATH_SEGMENTS`; ``node_side_ms``: the node's share,
   :data:`NODE_SIDE`), and ``path_ms_in_the_worst_1pct`` says which pieces make the tail;
   ``cpu`` says, for the node's process and the replay's, how long they ran and how long they
@@ -238,12 +240,37 @@ def replay_figures(rec: Any, publish: str) -> dict[str, Any]:
         "node_ms": _stats([float(v["latency_ms"]) for _, v in timed]),
         "predictor_in_node_ms": _stats([float(v["compute_ms"]) for _, v in timed], 4),
         "end_to_end_ms": _stats(e2e),
+        "state_to_prediction_ms": _stats(state_to_prediction_ms(rec, paired)),
         "node_side_ms": _stats(sum(pieces[k] for k in NODE_SIDE) if e2e.size else e2e),
         "path_ms": {name: _stats(values) for name, values in pieces.items()},
         "path_ms_in_the_worst_1pct": {name: (round(float(np.nanmean(values[tail])), 3)
                                              if np.isfinite(values[tail]).any() else None)
                                       for name, values in pieces.items()},
     }
+
+
+def state_to_prediction_ms(rec: Any, paired: list[tuple[Any, dict[str, str]]]) -> np.ndarray:
+    """Per follower state sent: until a fresh output computed from it *or a newer one* was
+    received, ms (NaN: none ever was).
+
+    ``end_to_end_ms`` times each output from its own state; this times each state until the
+    consumer holds a prediction at least as new, whatever the trigger: a state the node skipped
+    (superseded while it waited for a CPU, or between two ticks) counts, with the wait until a
+    newer one was answered. The figure that cannot improve by answering fewer states.
+    """
+    rows = np.array([(_stamp_or_nan(v["follower_stamp"]), row[0]) for row, v in paired
+                     if v["stale"] == "false"], dtype=float).reshape(-1, 2)
+    rows = rows[np.isfinite(rows[:, 0])]
+    sent = np.asarray(rec.send_times_s, dtype=float)
+    if not rows.size:
+        return np.full(sent.shape, np.nan)
+    rows = rows[np.argsort(rows[:, 0])]
+    earliest = np.minimum.accumulate(rows[::-1, 1])[::-1]  # over outputs from this state on
+    first = np.searchsorted(rows[:, 0], sent)  # the first output from a state >= each sent one
+    covered = first < len(rows)
+    out = np.full(sent.shape, np.nan)
+    out[covered] = (earliest[first[covered]] - sent[covered]) * 1e3
+    return out
 
 
 def _stamp_or_nan(text: str) -> float:

@@ -207,7 +207,7 @@ def test_bench_json_is_strict_with_a_missing_figure_as_null(monkeypatch):
 def test_node_figures_pair_each_output_with_its_follower_state():
     """``replay_figures``: end to end from the follower state each output was computed from,
     cut into pieces that sum to it; watchdog outputs counted, not timed (no ROS needed)."""
-    from aerodock.bench.node import PATH_SEGMENTS, replay_figures
+    from aerodock.bench.node import PATH_SEGMENTS, replay_figures, state_to_prediction_ms
     from aerodock.node.replay import ReplayRecord
 
     rec = ReplayRecord()
@@ -245,5 +245,19 @@ def test_node_figures_pair_each_output_with_its_follower_state():
     pieces = [k for k in PATH_SEGMENTS if k != "node_queue"]
     worst = figures["path_ms_in_the_worst_1pct"]
     assert sum(worst[k] for k in pieces) == pytest.approx(2.4, abs=1e-6)  # the slowest: i = 4
+    # each state until an output from it or a newer one: here its own answer
+    assert figures["state_to_prediction_ms"]["median"] == pytest.approx(2.2)
+    # a state the node skipped counts, until the answer to the next one (2.3 ms after it)
+    skipped = ReplayRecord(send_times_s=rec.send_times_s, published_s=rec.published_s,
+                           outputs=[o for o in rec.outputs if o[1] != sends[1] + 0.0016],
+                           diagnostics=rec.diagnostics, output_dds_s=rec.output_dds_s)
+    cover = replay_figures(skipped, "on-follower")
+    assert cover["follower_messages_answered"] == 4
+    assert cover["end_to_end_ms"]["n"] == 4
+    assert cover["state_to_prediction_ms"]["n"] == 5
+    by_stamp = {row[1]: row for row in skipped.outputs}
+    paired = [(by_stamp[st], v) for _, st, v in skipped.diagnostics if st in by_stamp]
+    np.testing.assert_allclose(state_to_prediction_ms(skipped, paired),
+                               [2.0, 10 + 2.2, 2.2, 2.3, 2.4], atol=1e-6)
     # the timer mode's own outputs are ticks: these follower answers are not timed there
     assert replay_figures(rec, "timer")["end_to_end_ms"]["n"] == 0
