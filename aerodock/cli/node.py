@@ -15,7 +15,12 @@ import typer
 
 from aerodock.cli.common import fail
 from aerodock.fileio import one_line
-from aerodock.node.core import DEFAULT_MAX_AGE_S, DEFAULT_RATE_HZ
+from aerodock.node.core import (
+    DEFAULT_MAX_AGE_S,
+    DEFAULT_PUBLISH_MODE,
+    DEFAULT_RATE_HZ,
+    PublishMode,
+)
 
 
 class OutputFrame(StrEnum):
@@ -31,7 +36,14 @@ def node_command(
     mapping: Annotated[Path | None, typer.Option(
         "--mapping", help="Topic mapping TOML (the bag reader's; default: Freyja's alpha/bravo).",
     )] = None,
-    rate: Annotated[float, typer.Option("--rate", help="Output rate, Hz.")] = DEFAULT_RATE_HZ,
+    rate: Annotated[float, typer.Option(
+        "--rate", help="Output rate, Hz (timer); the watchdog's rate (on-follower).",
+    )] = DEFAULT_RATE_HZ,
+    publish: Annotated[PublishMode, typer.Option(
+        "--publish", help="on-follower: publish on each follower state message, the --rate "
+                          "timer publishing only when none went out within its last 1.5 "
+                          "periods (a watchdog); timer: publish at --rate only.",
+    )] = DEFAULT_PUBLISH_MODE,
     max_age: Annotated[float, typer.Option(
         "--max-age", help="Oldest accepted input, s; older: publish zero, flag stale.",
     )] = DEFAULT_MAX_AGE_S,
@@ -95,16 +107,17 @@ def node_command(
     for note in notes:
         typer.echo(f"warning: {note}", err=True)
     settings = NodeSettings(
-        mapping=merged, rate_hz=rate, max_age_s=max_age, output_topic=output_topic,
+        mapping=merged, rate_hz=rate, publish=publish, max_age_s=max_age, output_topic=output_topic,
         diagnostics_topic=diagnostics_topic,
         output_frame=None if output_frame == OutputFrame.auto else output_frame.value,
         frame_set="frame" in explicit, state_types=types,
     )
-    typer.echo(f"aerodock node: {predictor.kind} model {model}, {rate:g} Hz, "
+    typer.echo(f"aerodock node: {predictor.kind} model {model}, publish {publish.value} "
+               f"({rate:g} Hz {'watchdog' if publish == PublishMode.ON_FOLLOWER else 'timer'}), "
                f"{merged['leader']['state']} + {merged['follower']['state']} -> {output_topic} "
                f"(ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')})", err=True)
     try:
-        ticks = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes)
+        outputs = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes)
     except RuntimeError as err:
         fail(one_line(str(err)))
-    typer.echo(f"aerodock node: stopped after {ticks} ticks", err=True)
+    typer.echo(f"aerodock node: stopped after {outputs} outputs", err=True)

@@ -26,6 +26,12 @@ The rule for unusable inputs (:func:`prediction_step`): the node publishes **zer
 stale flag and says why (``StepResult.reason``, the diagnostics' ``stale_reason``). It never
 repeats an old prediction. The converters raise no NumPy warnings for NaN or zero quaternions:
 such a state is simply not finite, hence stale.
+
+When the node publishes (:class:`PublishMode`, :func:`output_trigger`): on each follower state
+message (the prediction is for that state, out as soon as it is in), with the fixed-rate timer
+as a watchdog that publishes only when no message-triggered output went out within the last
+period and a half (:data:`WATCHDOG_PERIODS`); or on the timer alone. Every output, whatever
+triggered it, is one :func:`prediction_step` on the newest states.
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -49,6 +56,77 @@ PX4_VELOCITY_NED, PX4_VELOCITY_FRD, PX4_VELOCITY_BODY_FRD = 1, 2, 3
 
 DEFAULT_RATE_HZ = 100.0
 DEFAULT_MAX_AGE_S = 0.05
+
+
+class PublishMode(StrEnum):
+    """What makes the node publish f_ext.
+
+    - ``on-follower``: each follower state message (the follower's state is what the
+      prediction is for), with the ``rate_hz`` timer as a watchdog: a tick publishes only when
+      no message-triggered output went out within the last :data:`WATCHDOG_PERIODS` periods,
+      so a consumer still gets output at ``rate_hz`` when the follower's messages stop.
+    - ``timer``: the ``rate_hz`` timer alone, from the newest states (the wait for the next
+      tick, up to one period, adds to the latency).
+    """
+
+    ON_FOLLOWER = "on-follower"
+    TIMER = "timer"
+
+
+DEFAULT_PUBLISH_MODE = PublishMode.ON_FOLLOWER
+"""A controller (Freyja's LQR, a PX4 offboard loop) acts on the follower's state as it arrives:
+the f_ext for that state is wanted then, not up to a timer period later (docs/deploy.md)."""
+
+WATCHDOG_PERIODS = 1.5
+"""How many timer periods without a message-triggered output make a tick publish
+(``on-follower``). More than one: the follower's messages usually come at about the timer's
+rate, and with the strict one period a message a little late (jitter of a fraction of a
+millisecond) made the tick publish a duplicate of the last answer just before the message's
+own: a quarter of all outputs at 100 Hz on a loaded machine (docs/deploy.md). Half a period
+more leaves those out and still publishes within two and a half periods of the last answer,
+then once per period."""
+
+FOLLOWER_EVENT, TICK_EVENT = "follower message", "tick"
+"""The events the node sees: a follower state message arrived; the ``rate_hz`` timer fired."""
+TRIGGER_FOLLOWER, TRIGGER_TIMER, TRIGGER_WATCHDOG = "follower", "timer", "watchdog"
+"""What made an output (the diagnostics' ``trigger``): a follower message (``on-follower``), a
+tick (``timer``), a tick with no message-triggered output within the last
+:data:`WATCHDOG_PERIODS` periods (``on-follower``'s watchdog)."""
+
+
+def output_trigger(mode: PublishMode | str, event: str, now_s: float,
+                   last_follower_output_s: float | None, period_s: float) -> str | None:
+    """Whether ``event`` makes an output, and what the diagnostics call its trigger.
+
+    Args:
+        mode: the node's :class:`PublishMode`.
+        event: :data:`FOLLOWER_EVENT` or :data:`TICK_EVENT`.
+        now_s: the node's monotonic time of the event, s.
+        last_follower_output_s: when the last follower-triggered output went out (None: none
+            yet), s, same clock.
+        period_s: the timer's period, ``1 / rate_hz``, s.
+
+    Returns:
+        :data:`TRIGGER_FOLLOWER`, :data:`TRIGGER_TIMER` or :data:`TRIGGER_WATCHDOG`, or None
+        (no output). In ``on-follower`` mode the watchdog's own outputs do not count as recent
+        ones: once the follower's messages stop, every tick publishes (the first within
+        :data:`WATCHDOG_PERIODS` + 1 periods of the last message-triggered output, the timer's
+        phase being free).
+
+    Raises:
+        ValueError: an unknown mode or event.
+    """
+    mode = PublishMode(mode)
+    if event not in (FOLLOWER_EVENT, TICK_EVENT):
+        raise ValueError(f"event {event!r}: use {FOLLOWER_EVENT!r} or {TICK_EVENT!r}")
+    if mode is PublishMode.TIMER:
+        return TRIGGER_TIMER if event == TICK_EVENT else None
+    if event == FOLLOWER_EVENT:
+        return TRIGGER_FOLLOWER
+    if (last_follower_output_s is None
+            or now_s - last_follower_output_s >= WATCHDOG_PERIODS * period_s):
+        return TRIGGER_WATCHDOG
+    return None
 
 MAX_POSITION_M = 1.0e4
 """Largest accepted |coordinate| of a position, m. A docking happens within a few metres of a

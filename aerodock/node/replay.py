@@ -2,9 +2,13 @@
 
 Used by the end-to-end test and :mod:`aerodock.bench.node` (needs the ``aerodock[ros]`` extra).
 The node runs in its own process (``aerodock node``, started by :func:`start_node`); this side
-publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame, stamped with
-the wall clock when sent, and records every f_ext and diagnostics message it gets back with its
-receive time. Everything stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``)
+publishes both vehicles' states as ``nav_msgs/Odometry`` in the mapping's frame (the leader's
+first, then the follower's), stamped with the wall clock when sent, and records every f_ext and
+diagnostics message it gets back with its receive time, and the f_ext messages' DDS source and
+reception times (where a latency tail comes from: :mod:`aerodock.bench.node`). One executor
+with this side's node added once serves the whole replay (``rclpy.spin_once(node)`` would add
+and remove the node on every call, costing this side time inside the measurement).
+Everything stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``)
 and on a ROS domain of its own (:func:`free_domain_id`).
 """
 
@@ -14,7 +18,8 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -48,15 +53,20 @@ def write_mapping(path: Path, leader_topic: str, follower_topic: str, *, frame: 
 
 
 def start_node(model: Path, mapping: Path, domain_id: int, *, rate_hz: float = 100.0,
-               max_age_s: float = 0.05, duration_s: float = 30.0,
+               publish: str | None = None, max_age_s: float = 0.05, duration_s: float = 30.0,
                output_topic: str = "/aerodock/f_ext",
                diagnostics_topic: str = "/aerodock/diagnostics") -> subprocess.Popen:
-    """Start ``aerodock node`` in a subprocess (it stops by itself after ``duration_s``)."""
+    """Start ``aerodock node`` in a subprocess (it stops by itself after ``duration_s``).
+
+    ``publish``: its ``--publish`` mode (None: the node's default).
+    """
     cmd = [sys.executable, "-c", "from aerodock.cli import main; main()", "node", "--model",
            str(model), "--mapping",
            str(mapping), "--rate", str(rate_hz), "--max-age", str(max_age_s), "--duration",
            str(duration_s), "--output-topic", output_topic, "--diagnostics-topic",
            diagnostics_topic]
+    if publish is not None:
+        cmd += ["--publish", publish]
     return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 
@@ -72,6 +82,10 @@ class ReplayRecord:
         diagnostics: ``(receive_s, stamp_s, values)`` of the diagnostics messages.
         frame_ids: the f_ext messages' ``header.frame_id`` values.
         send_times_s: wall times of the follower messages sent.
+        output_dds_s: f_ext stamp -> ``(source, reception)``: the DDS source time (the node's
+            write) and reception time (this side's DDS layer) of that f_ext message, wall s
+            (NaN when the middleware does not give them).
+        published_s: follower stamp -> wall time when its ``publish`` call returned.
     """
 
     sent: dict[str, dict[float, VehicleState]] = field(
@@ -80,6 +94,8 @@ class ReplayRecord:
     diagnostics: list[tuple[float, float, dict[str, str]]] = field(default_factory=list)
     frame_ids: set[str] = field(default_factory=set)
     send_times_s: list[float] = field(default_factory=list)
+    output_dds_s: dict[float, tuple[float, float]] = field(default_factory=dict)
+    published_s: dict[float, float] = field(default_factory=dict)
 
     def output_array(self) -> np.ndarray:
         """Outputs as an ``(n, 5)`` array (receive, stamp, fx, fy, fz)."""
@@ -95,7 +111,8 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
            leader_gap_s: tuple[float, float] | None = None,
            output_topic: str = "/aerodock/f_ext",
            diagnostics_topic: str = "/aerodock/diagnostics",
-           wait_for_node_s: float = 30.0, tail_s: float = 0.3) -> ReplayRecord:
+           wait_for_node_s: float = 30.0, tail_s: float = 0.3,
+           on_send: Callable[[str], None] | None = None) -> ReplayRecord:
     """Publish ``log``'s states at its own rate (or ``rate_hz``) and record the node's output.
 
     Args:
@@ -111,6 +128,8 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
         diagnostics_topic: the node's diagnostics topic.
         wait_for_node_s: how long to wait for the node to subscribe and publish.
         tail_s: how long to keep listening after the last message.
+        on_send: called with ``"start"`` just before the first message and ``"end"`` just
+            after the last (the benchmark reads CPU accounting there).
 
     Raises:
         TimeoutError: the node did not show up on the graph in time.
@@ -121,18 +140,23 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Vector3Stamped
     from nav_msgs.msg import Odometry
+    from rclpy.executors import SingleThreadedExecutor
 
     rec = ReplayRecord()
     rclpy.init()
     node = rclpy.create_node("aerodock_replay")
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
     try:
         pubs = {"leader": node.create_publisher(Odometry, leader_topic, 10),
                 "follower": node.create_publisher(Odometry, follower_topic, 10)}
 
-        def on_output(msg: Any) -> None:
-            rec.outputs.append((time.time(), _stamp(msg), msg.vector.x, msg.vector.y,
-                                msg.vector.z))
+        def on_output(msg: Any, info: Any) -> None:
+            stamp = _stamp(msg)
+            rec.outputs.append((time.time(), stamp, msg.vector.x, msg.vector.y, msg.vector.z))
             rec.frame_ids.add(msg.header.frame_id)
+            rec.output_dds_s[stamp] = (_dds_time_s(info, "source_timestamp"),
+                                       _dds_time_s(info, "received_timestamp"))
 
         def on_diag(msg: Any) -> None:
             for status in msg.status:
@@ -146,41 +170,63 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"aerodock node did not subscribe to {leader_topic} and "
                                    f"{follower_topic} within {wait_for_node_s:g} s")
-            rclpy.spin_once(node, timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
         rec.outputs.clear()
         rec.diagnostics.clear()
+        rec.output_dds_s.clear()
         period = 1.0 / rate_hz if rate_hz else float(np.median(np.diff(log.t_s)))
         rot_l, rot_f = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
+        if on_send:
+            on_send("start")
         start = time.monotonic()
         for i in range(log.n_samples):
-            target = start + i * period
-            while (now := time.monotonic()) < target:
-                rclpy.spin_once(node, timeout_sec=max(min(target - now, 0.002), 0.0))
-            stamp = stamp_of(time.time())
             t_log = float(log.t_s[i] - log.t_s[0])
             states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
                       "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
-            for role, (p, v, rot) in states.items():
-                if role == "leader" and leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
-                    continue
-                state = VehicleState(np.array(p, float), np.array(v, float), rot, 0.0, stamp)
-                pubs[role].publish(_odometry(Odometry, state, stamp, frame, twist))
-                rec.sent[role][stamp] = state
+            if leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
+                del states["leader"]
+            # built before the send time and stamped at it: the stamp is when the state is
+            # sent, not when this side's Python began building the messages
+            sample = {role: VehicleState(np.array(p, float), np.array(v, float), rot, 0.0)
+                      for role, (p, v, rot) in states.items()}
+            msgs = {role: odometry_message(Odometry, state, 0.0, frame, twist)
+                    for role, state in sample.items()}
+            target = start + i * period
+            while (now := time.monotonic()) < target:
+                executor.spin_once(timeout_sec=target - now)  # returns early for a callback
+            stamp = stamp_of(time.time())
+            for role, msg in msgs.items():
+                set_stamp(msg.header, stamp)
+                pubs[role].publish(msg)
+                if role == "follower":
+                    rec.published_s[stamp] = time.time()
+                rec.sent[role][stamp] = replace(sample[role], stamp_s=stamp)
             rec.send_times_s.append(stamp)
+        if on_send:
+            on_send("end")
         end = time.monotonic() + tail_s
         while time.monotonic() < end:
-            rclpy.spin_once(node, timeout_sec=0.01)
+            executor.spin_once(timeout_sec=0.01)
     finally:
+        executor.remove_node(node)
+        executor.shutdown()
         node.destroy_node()
         rclpy.shutdown()
     return rec
 
 
-def _odometry(cls: Any, state: VehicleState, stamp_s: float, frame: str, twist: str) -> Any:
+def _dds_time_s(info: Any, key: str) -> float:
+    """A message info's DDS time (ns since the epoch) in s; NaN when the middleware gives 0."""
+    ns = (info or {}).get(key, 0)
+    return ns * 1e-9 if ns else float("nan")
+
+
+def odometry_message(cls: Any, state: VehicleState, stamp_s: float, frame: str,
+                     twist: str) -> Any:
+    """A NED ``state`` as a ``cls`` (``nav_msgs/msg/Odometry``) in the mapping's frame."""
     pos, quat, lin = odometry_fields(state, frame=frame, twist=twist)
     msg = cls()
-    msg.header.stamp.sec = int(stamp_s)
-    msg.header.stamp.nanosec = int(round((stamp_s - int(stamp_s)) * 1e9)) % 1_000_000_000
+    set_stamp(msg.header, stamp_s)
     msg.header.frame_id = "map" if frame == "enu" else "map_ned"
     msg.child_frame_id = "base_link"
     p = msg.pose.pose
@@ -189,6 +235,12 @@ def _odometry(cls: Any, state: VehicleState, stamp_s: float, frame: str, twist: 
     t = msg.twist.twist.linear
     t.x, t.y, t.z = (float(v) for v in lin)
     return msg
+
+
+def set_stamp(header: Any, stamp_s: float) -> None:
+    """Set a ``std_msgs/Header``'s stamp to ``stamp_s`` (wall s), as :func:`stamp_of` reads it."""
+    header.stamp.sec = int(stamp_s)
+    header.stamp.nanosec = int(round((stamp_s - int(stamp_s)) * 1e9)) % 1_000_000_000
 
 
 def stamp_of(msg_stamp_s: float) -> float:

@@ -3,17 +3,23 @@
 It subscribes to the leader's and the follower's state topics of the topic mapping (the same
 TOML as the bag reader, :mod:`aerodock.ingest.rosbag`), finds each topic's type on the ROS graph
 (``nav_msgs/msg/Odometry``, ``freyja_msgs/msg/CurrentState`` or ``px4_msgs/msg/VehicleOdometry``),
-and at a fixed rate publishes:
+and publishes, on each follower state message with a ``rate_hz`` watchdog (``on-follower``) or
+at ``rate_hz`` (``timer``; :class:`aerodock.node.core.PublishMode`):
 
 - ``f_ext`` (``geometry_msgs/msg/Vector3Stamped``): the predicted downwash acceleration on the
   follower, m/s², in the consumer's world frame (NED for Freyja and PX4, the mapping's frame for
-  Odometry), stamped with the node's clock at the tick; zero when the inputs are stale;
+  Odometry), stamped with the node's clock when published; zero when the inputs are stale;
 - diagnostics (``diagnostic_msgs/msg/DiagnosticArray``, one status named ``aerodock f_ext``):
-  ``latency_ms`` (tick start to publish), ``compute_ms`` (predictor), ``leader_age_ms``,
+  ``trigger`` (``follower``, ``timer`` or ``watchdog``: :func:`aerodock.node.core.output_trigger`),
+  ``latency_ms`` (the trigger, message callback or tick, to the output's stamp, taken just
+  before it is published), ``queue_ms`` (for a
+  follower-triggered output: the message's wait in the node, from its DDS reception to its
+  callback; ``nan`` otherwise), ``compute_ms`` (predictor), ``leader_age_ms``,
   ``follower_age_ms`` (since each state was received), ``stale`` (``true``/``false``),
   ``stale_reason`` (why, ``""`` when fresh), ``leader_stamp``, ``follower_stamp`` (the states'
-  own stamps, s), ``tick`` and ``output_frame``. The level is OK, or STALE when the output is
-  zero for unusable inputs (the status message is then the reason).
+  own stamps, s), ``tick`` (the output's sequence number) and ``output_frame``. The level is
+  OK, or STALE when the output is zero for unusable inputs (the status message is then the
+  reason).
 
 Each vehicle's messages pass an :class:`aerodock.node.core.InputMonitor` (stamps that are zero,
 go backwards or freeze; a message repeated by a relay). The output frame and its ``frame_id``
@@ -32,21 +38,31 @@ import numpy as np
 from aerodock.node.core import (
     CURRENT_STATE,
     DEFAULT_MAX_AGE_S,
+    DEFAULT_PUBLISH_MODE,
     DEFAULT_RATE_HZ,
+    FOLLOWER_EVENT,
     ODOMETRY,
     PX4_ODOMETRY,
     STATE_TYPES,
+    TICK_EVENT,
+    TRIGGER_FOLLOWER,
     InputMonitor,
+    PublishMode,
     StepResult,
     VehicleState,
     current_state,
     odometry_state,
+    output_trigger,
     prediction_step,
     px4_odometry_state,
     resolve_output_frame,
 )
 
 STATUS_NAME = "aerodock f_ext"
+STATE_QUEUE_DEPTH = 1
+"""State messages kept per topic while the node is busy: the newest only. Only the newest
+state matters to a controller; with the sensor-data default (5), a node kept off the CPU for
+tens of milliseconds answered each queued state in turn, the newest last (docs/deploy.md)."""
 
 
 @dataclass
@@ -55,7 +71,8 @@ class NodeSettings:
 
     Attributes:
         mapping: merged topic mapping (:func:`aerodock.ingest.rosbag.load_mapping`).
-        rate_hz: output rate.
+        rate_hz: output rate (``timer``), the watchdog's rate (``on-follower``).
+        publish: what triggers an output (:class:`aerodock.node.core.PublishMode`).
         max_age_s: oldest accepted input (older: zero output, stale flag).
         output_topic: f_ext topic.
         diagnostics_topic: diagnostics topic.
@@ -68,6 +85,7 @@ class NodeSettings:
 
     mapping: dict[str, Any]
     rate_hz: float = DEFAULT_RATE_HZ
+    publish: PublishMode = DEFAULT_PUBLISH_MODE
     max_age_s: float = DEFAULT_MAX_AGE_S
     output_topic: str = "/aerodock/f_ext"
     diagnostics_topic: str = "/aerodock/diagnostics"
@@ -125,10 +143,10 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from geometry_msgs.msg import Vector3Stamped
     from rclpy.node import Node
-    from rclpy.qos import qos_profile_sensor_data
+    from rclpy.qos import HistoryPolicy, QoSProfile, qos_profile_sensor_data
 
     class PredictorNode(Node):
-        """Subscribes to both vehicles' states and publishes f_ext at a fixed rate."""
+        """Subscribes to both vehicles' states and publishes f_ext (see the module docstring)."""
 
         def __init__(self) -> None:
             super().__init__(node_name)
@@ -143,11 +161,18 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
                 settings.output_frame, settings.mapping["frame"], frame_set=settings.frame_set,
                 follower_type=settings.state_types.get(self.topics["follower"]))
             self.frame_id = settings.frame_ids[self.output_frame]
-            self.tick = 0
+            self.publish_mode = PublishMode(settings.publish)
+            self.period_s = 1.0 / settings.rate_hz
+            self.last_follower_output_s: float | None = None
+            self.tick = 0  # outputs published
             self.errors: list[str] = []
             self.pub = self.create_publisher(Vector3Stamped, settings.output_topic, 10)
             self.diag_pub = self.create_publisher(DiagnosticArray, settings.diagnostics_topic, 10)
-            self._qos = qos_profile_sensor_data
+            # best effort as sensor data (PX4 publishes so), keeping only the newest message:
+            # a state superseded while the node waited for a CPU is not worth answering
+            self._qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATE_QUEUE_DEPTH,
+                                   reliability=qos_profile_sensor_data.reliability,
+                                   durability=qos_profile_sensor_data.durability)
             self._subs: list[Any] = []
             for note in warnings_to_log or []:
                 self.get_logger().warning(note)
@@ -187,36 +212,55 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
         def _callback(self, role: str, type_name: str) -> Any:
             mapping = self.settings.mapping
 
-            def on_state(msg: Any) -> None:
+            def on_state(msg: Any, info: Any) -> None:
+                received, received_wall = time.monotonic(), time.time()
                 try:
-                    state = state_from_message(type_name, msg, mapping, time.monotonic())
+                    state = state_from_message(type_name, msg, mapping, received)
                 except ValueError as err:  # a message we cannot use: the input goes stale
                     self.errors.append(str(err))
                     self.monitors[role].verdict = f"unusable message ({err})"
+                else:
+                    self.monitors[role].receive(state)
+                    self.states[role] = state
+                if role != "follower":
                     return
-                self.monitors[role].receive(state)
-                self.states[role] = state
+                trigger = output_trigger(self.publish_mode, FOLLOWER_EVENT, received,
+                                         self.last_follower_output_s, self.period_s)
+                if trigger is not None:
+                    dds_ns = info.get("received_timestamp", 0) if info else 0
+                    queue_s = received_wall - dds_ns * 1e-9 if dds_ns else float("nan")
+                    self._publish(trigger, received, queue_s)
 
             return on_state
 
         def _on_tick(self) -> None:
-            start = time.monotonic()
+            now = time.monotonic()
+            trigger = output_trigger(self.publish_mode, TICK_EVENT, now,
+                                     self.last_follower_output_s, self.period_s)
+            if trigger is not None:
+                self._publish(trigger, now, float("nan"))
+
+        def _publish(self, trigger: str, start: float, queue_s: float) -> None:
+            """One :func:`prediction_step` on the newest states, published with diagnostics."""
             result = prediction_step(self.predictor, self.states["leader"],
                                      self.states["follower"], start,
                                      max_age_s=self.settings.max_age_s,
                                      output_frame=self.output_frame,
                                      faults={r: m.verdict for r, m in self.monitors.items()})
             stamp = self.get_clock().now().to_msg()
+            latency_ms = (time.monotonic() - start) * 1e3  # trigger to the output's stamp
             out = Vector3Stamped()
             out.header.stamp = stamp
             out.header.frame_id = self.frame_id
             out.vector.x, out.vector.y, out.vector.z = (float(v) for v in result.f_ext_mps2)
-            latency_ms = (time.monotonic() - start) * 1e3
             self.pub.publish(out)
-            self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms))
+            if trigger == TRIGGER_FOLLOWER:
+                self.last_follower_output_s = time.monotonic()
+            self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger, queue_s))
             self.tick += 1
 
-        def _diagnostics(self, result: StepResult, stamp: Any, latency_ms: float) -> Any:
+        def _diagnostics(self, result: StepResult, stamp: Any, latency_ms: float, trigger: str,
+                         queue_s: float) -> Any:
             def ms(value: float) -> str:
                 return "inf" if not np.isfinite(value) else f"{value * 1e3:.4f}"
 
@@ -226,7 +270,9 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             status.level = DiagnosticStatus.STALE if result.stale else DiagnosticStatus.OK
             status.message = (f"publishing zero: {result.reason}" if result.stale else "ok")
             values = {
+                "trigger": trigger,
                 "latency_ms": f"{latency_ms:.4f}",
+                "queue_ms": f"{queue_s * 1e3:.4f}",
                 "compute_ms": ms(result.compute_s),
                 "leader_age_ms": ms(result.leader_age_s),
                 "follower_age_ms": ms(result.follower_age_s),
@@ -248,7 +294,7 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
 
 def run_node(predictor: Any, settings: NodeSettings, *, duration_s: float | None = None,
              warnings_to_log: list[str] | None = None) -> int:
-    """Run the node until interrupted (or for ``duration_s``); returns the number of ticks."""
+    """Run the node until interrupted (or for ``duration_s``); returns the number of outputs."""
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
@@ -263,9 +309,9 @@ def run_node(predictor: Any, settings: NodeSettings, *, duration_s: float | None
     except KeyboardInterrupt:
         pass
     finally:
-        ticks = node.tick
+        outputs = node.tick
         executor.remove_node(node)
         node.destroy_node()
         if rclpy.ok():
             rclpy.shutdown()
-    return ticks
+    return outputs

@@ -202,3 +202,62 @@ def test_bench_json_is_strict_with_a_missing_figure_as_null(monkeypatch):
     out = json.loads(result.stdout, parse_constant=refuse)  # no NaN or Infinity in the text
     assert out["ratio"] is None and out["spread"] == [None, 1.0]
     assert out["figures"]["docking"]["trial_1"]["value"] == 1.0
+
+
+def test_node_figures_pair_each_output_with_its_follower_state():
+    """``replay_figures``: end to end from the follower state each output was computed from,
+    cut into pieces that sum to it; watchdog outputs counted, not timed (no ROS needed)."""
+    from aerodock.bench.node import PATH_SEGMENTS, replay_figures, state_to_prediction_ms
+    from aerodock.node.replay import ReplayRecord
+
+    rec = ReplayRecord()
+    sends = [100.0 + 0.01 * i for i in range(5)]
+    rec.send_times_s = sends
+    for i, sent in enumerate(sends):
+        rec.published_s[sent] = sent + 0.0005
+        # the answer to message i is computed from message i, out 2 ms (+ i * 0.1 ms) later
+        stamp = sent + 0.0015 + 1e-4 * i
+        received = stamp + 0.0005
+        rec.outputs.append((received, stamp, 0.1, 0.2, 0.3))
+        rec.output_dds_s[stamp] = (stamp + 1e-4, stamp + 3e-4)
+        rec.diagnostics.append((received, stamp, {
+            "trigger": "follower", "stale": "false", "latency_ms": "0.2", "queue_ms": "0.3",
+            "compute_ms": "0.01", "follower_stamp": repr(sent)}))
+    # a watchdog output from the last state: not an answer, not timed
+    rec.outputs.append((sends[-1] + 0.012, sends[-1] + 0.011, 0.1, 0.2, 0.3))
+    rec.diagnostics.append((sends[-1] + 0.012, sends[-1] + 0.011, {
+        "trigger": "watchdog", "stale": "false", "latency_ms": "0.2", "queue_ms": "nan",
+        "compute_ms": "0.01", "follower_stamp": repr(sends[-1])}))
+    figures = replay_figures(rec, "on-follower")
+    assert figures["outputs_by_trigger"] == {"follower": 5, "timer": 0, "watchdog": 0}
+    assert figures["follower_messages_answered"] == 5
+    assert figures["follower_messages_answered_twice"] == 0
+    e2e = figures["end_to_end_ms"]
+    assert e2e["n"] == 5 and e2e["median"] == pytest.approx(2.2)
+    assert figures["path_ms"]["replay_send"]["median"] == pytest.approx(0.5)
+    assert figures["path_ms"]["node_queue"]["median"] == pytest.approx(0.3)
+    assert figures["path_ms"]["node_publish"]["median"] == pytest.approx(0.1)
+    assert figures["path_ms"]["dds_out"]["median"] == pytest.approx(0.2)
+    assert figures["path_ms"]["replay_wait"]["median"] == pytest.approx(0.2)
+    # the node's side: publish returned (+0.5 ms) to its DDS write (stamp + 0.1 ms)
+    assert figures["node_side_ms"]["median"] == pytest.approx(1.3)
+    # the consecutive pieces (node_queue is part of to_trigger) add up to end to end
+    pieces = [k for k in PATH_SEGMENTS if k != "node_queue"]
+    worst = figures["path_ms_in_the_worst_1pct"]
+    assert sum(worst[k] for k in pieces) == pytest.approx(2.4, abs=1e-6)  # the slowest: i = 4
+    # each state until an output from it or a newer one: here its own answer
+    assert figures["state_to_prediction_ms"]["median"] == pytest.approx(2.2)
+    # a state the node skipped counts, until the answer to the next one (2.3 ms after it)
+    skipped = ReplayRecord(send_times_s=rec.send_times_s, published_s=rec.published_s,
+                           outputs=[o for o in rec.outputs if o[1] != sends[1] + 0.0016],
+                           diagnostics=rec.diagnostics, output_dds_s=rec.output_dds_s)
+    cover = replay_figures(skipped, "on-follower")
+    assert cover["follower_messages_answered"] == 4
+    assert cover["end_to_end_ms"]["n"] == 4
+    assert cover["state_to_prediction_ms"]["n"] == 5
+    by_stamp = {row[1]: row for row in skipped.outputs}
+    paired = [(by_stamp[st], v) for _, st, v in skipped.diagnostics if st in by_stamp]
+    np.testing.assert_allclose(state_to_prediction_ms(skipped, paired),
+                               [2.0, 10 + 2.2, 2.2, 2.3, 2.4], atol=1e-6)
+    # the timer mode's own outputs are ticks: these follower answers are not timed there
+    assert replay_figures(rec, "timer")["end_to_end_ms"]["n"] == 0

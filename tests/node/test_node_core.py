@@ -10,11 +10,15 @@ from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.runtime import Predictor
 from aerodock.node.core import (
     CURRENT_STATE,
+    DEFAULT_PUBLISH_MODE,
+    FOLLOWER_EVENT,
     MAX_POSITION_M,
     MAX_SPEED_MPS,
     ODOMETRY,
     PX4_ODOMETRY,
+    TICK_EVENT,
     InputMonitor,
+    PublishMode,
     VehicleState,
     current_state,
     implausible,
@@ -22,6 +26,7 @@ from aerodock.node.core import (
     model_inputs,
     odometry_fields,
     odometry_state,
+    output_trigger,
     prediction_step,
     px4_odometry_state,
     resolve_output_frame,
@@ -310,3 +315,31 @@ def test_mapping_reports_an_explicit_frame(tmp_path):
     merged, explicit = load_mapping(path)
     assert "frame" in explicit and "leader.state" in explicit
     assert "frame" not in load_mapping(None)[1]
+
+
+@pytest.mark.parametrize(("mode", "event", "now", "last", "want"), [
+    # on-follower: every follower message publishes, whatever the timer did
+    ("on-follower", FOLLOWER_EVENT, 1.0, None, "follower"),
+    ("on-follower", FOLLOWER_EVENT, 1.0, 0.999, "follower"),
+    # the watchdog: a tick publishes only when no follower-triggered output went out within
+    # the last 1.5 periods (the period: 0.01 s here)
+    ("on-follower", TICK_EVENT, 1.0, None, "watchdog"),
+    ("on-follower", TICK_EVENT, 1.0, 0.995, None),
+    ("on-follower", TICK_EVENT, 1.0, 0.99, None),  # one period: a message a little late
+    ("on-follower", TICK_EVENT, 1.0, 0.985, "watchdog"),
+    ("on-follower", TICK_EVENT, 1.0, 0.5, "watchdog"),
+    # timer: ticks only, follower messages never publish
+    ("timer", TICK_EVENT, 1.0, None, "timer"),
+    ("timer", TICK_EVENT, 1.0, 0.999, "timer"),
+    ("timer", FOLLOWER_EVENT, 1.0, None, None),
+])
+def test_output_trigger(mode, event, now, last, want):
+    assert output_trigger(mode, event, now, last, 0.01) == want
+
+
+def test_output_trigger_refuses_unknown_modes_and_events():
+    with pytest.raises(ValueError):
+        output_trigger("sometimes", TICK_EVENT, 1.0, None, 0.01)
+    with pytest.raises(ValueError, match="event"):
+        output_trigger(PublishMode.TIMER, "leader message", 1.0, None, 0.01)
+    assert DEFAULT_PUBLISH_MODE is PublishMode.ON_FOLLOWER

@@ -1,9 +1,11 @@
 """``aerodock node`` end to end: a recorded flight replayed as ROS 2 messages on localhost.
 
-The node runs in its own process on a ROS domain of this test run; this side publishes both
-vehicles' states as nav_msgs/Odometry (ENU, REP-103) at 100 Hz and records the node's output.
-Checks: each output equals the offline NumPy predictor on the inputs the node reports it used;
-the rate; the latency; zero and the stale flag while the leader's state is missing.
+The node runs in its own process on a ROS domain of this test run, in its default publish mode
+(on each follower message, a 100 Hz watchdog); this side publishes both vehicles' states as
+nav_msgs/Odometry (ENU, REP-103) at 100 Hz and records the node's output. Checks: each output
+equals the offline NumPy predictor on the inputs the node reports it used; the rate; the
+latency; zero and the stale flag while the leader's state is missing. Which trigger publishes
+what is tested in lock step, without timing, by test_node_publish.py.
 """
 
 from __future__ import annotations
@@ -85,7 +87,8 @@ def test_rate_and_latency(run):
     fresh = [(row, v) for row, v in _matched(rec) if v["stale"] == "false"]
     tick_ms = np.array([float(v["latency_ms"]) for _, v in fresh])
     assert np.percentile(tick_ms, 95) < 5.0
-    # state sent -> f_ext received: transport both ways plus the wait for the next 10 ms tick
+    # state sent -> f_ext received: transport both ways and the node's work (loose bounds: the
+    # machine is shared; the figures are the benchmark's, docs/deploy.md)
     e2e_ms = np.array([(row[0] - float(v["follower_stamp"])) * 1e3 for row, v in fresh])
     assert np.all(e2e_ms > 0)
     assert np.median(e2e_ms) < 25.0
