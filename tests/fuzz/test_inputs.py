@@ -16,13 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fuzz_helpers import count
 
 ENTRY = "from aerodock.cli import main; main()"
 HANG_GUARD_S = 60  # generous on a loaded 2-core machine; a hang is for ever
 
 
-def cli(args: list, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    """Run the CLI in a subprocess; a run that does not end in time fails the test."""
+def cli(args: list, family: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    """Run the CLI in a subprocess, counted as a case of ``inputs-<family>`` in the fuzz tally;
+    a run that does not end in time fails the test."""
+    count(f"inputs-{family}")
     try:
         return subprocess.run([sys.executable, "-c", ENTRY, *map(str, args)], cwd=cwd,
                               capture_output=True, text=True, timeout=HANG_GUARD_S)
@@ -83,14 +86,14 @@ def _cases(bad: Path, log: Path, tmp: Path) -> dict[str, list]:
                                     "ingest rosbag", "--mapping", "view", "--faults", "faults",
                                     "sweep", "sweep config", "--model"])
 def test_dev_zero_is_refused_at_once(option, log_file, tmp_path):
-    refused(cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option]), "/dev/zero")
+    refused(cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option], "dev-zero"), "/dev/zero")
 
 
 @pytest.mark.parametrize("option", ["--config", "--data", "ingest csv", "ingest ulog",
                                     "ingest rosbag", "--mapping", "view", "--faults", "faults",
                                     "sweep", "sweep config"])
 def test_a_fifo_is_refused_not_waited_on(option, fifo, log_file, tmp_path):
-    refused(cli(_cases(fifo, log_file, tmp_path)[option]), "not a regular file")
+    refused(cli(_cases(fifo, log_file, tmp_path)[option], "fifo"), "not a regular file")
 
 
 def test_a_fifo_inside_a_model_directory_is_refused(fifo, tmp_path):
@@ -105,14 +108,15 @@ def test_a_fifo_inside_a_model_directory_is_refused(fifo, tmp_path):
         Predictor.load(model)
     (model / "model.json").unlink()
     os.mkfifo(model / "model.json")
-    refused(cli(["field", "probe", "--separation", "1", "--radial", "0", "--model", model]))
+    refused(cli(["field", "probe", "--separation", "1", "--radial", "0", "--model", model],
+                "fifo"))
 
 
 def test_view_rerun_to_a_fifo_or_a_device_is_refused(fifo, log_file, tmp_path):
     pytest.importorskip("rerun")
     for target in (fifo, Path("/dev/null")):
         refused(cli(["view", log_file, "--out", tmp_path / "v.gif", "--max-frames", "2",
-                     "--rerun", target]), str(target), "not a regular file")
+                     "--rerun", target], "fifo"), str(target), "not a regular file")
 
 
 def test_view_rerun_to_an_unwritable_path_exits_2(log_file, tmp_path):
@@ -120,7 +124,7 @@ def test_view_rerun_to_an_unwritable_path_exits_2(log_file, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")  # a file where a folder should be
     refused(cli(["view", log_file, "--out", tmp_path / "v.gif", "--max-frames", "2",
-                 "--rerun", blocker / "sub" / "x.rrd"]))
+                 "--rerun", blocker / "sub" / "x.rrd"], "unwritable-output"))
 
 
 def test_the_reader_refuses_big_and_odd_files_without_reading_them(tmp_path, fifo):
@@ -161,7 +165,7 @@ def test_huge_sweeps_are_refused_before_anything_runs(sweep, axes, needle, tmp_p
     grid = "[" + ", ".join(f"{0.3 + i * 1e-5:.5f}" for i in range(3000)) + "]"
     spec = tmp_path / "spec.toml"
     spec.write_text(f"[sweep]\n{sweep}\n[axes]\n{axes.format(grid=grid)}\n")
-    refused(cli(["sweep", spec, "--out", tmp_path / "out"]), needle)
+    refused(cli(["sweep", spec, "--out", tmp_path / "out"], "huge-sweep"), needle)
     assert not (tmp_path / "out").exists()
 
 
@@ -176,11 +180,11 @@ def test_huge_sweeps_are_refused_before_anything_runs(sweep, axes, needle, tmp_p
 def test_a_sweep_axis_value_is_checked_as_dock_checks_it(axes, needle, tmp_path):
     spec = tmp_path / "spec.toml"
     spec.write_text(f"[sweep]\ntrials = 1\n[axes]\n{axes}\n")
-    refused(cli(["sweep", spec, "--out", tmp_path / "out"]), needle)
+    refused(cli(["sweep", spec, "--out", tmp_path / "out"], "sweep-axis"), needle)
 
 
 def test_dock_refuses_the_leader_speed_the_sweep_refuses():
-    refused(cli(["dock", "--trials", "1", "--leader-speed", "1e6"]),
+    refused(cli(["dock", "--trials", "1", "--leader-speed", "1e6"], "sweep-axis"),
             "--leader-speed must be between -100 and 100")
 
 
@@ -193,7 +197,7 @@ def test_dock_refuses_the_leader_speed_the_sweep_refuses():
 def test_long_simulated_times_are_refused_even_for_two_trials(toml, tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(toml + "\n")
-    refused(cli(["dock", "--trials", "2", "--config", cfg]), "physics steps",
+    refused(cli(["dock", "--trials", "2", "--config", cfg], "long-sim-time"), "physics steps",
             "over the limit of 100000")
 
 
@@ -232,7 +236,7 @@ def test_integer_and_choice_keys(toml, needle, tmp_path):
     cfg.write_text(toml + "\n")
     with pytest.raises(ConfigError, match=needle.replace("(", r"\(")):
         load_config(cfg)
-    refused(cli(["field", "probe", "--separation", "1", "--radial", "0", "--config", cfg]),
+    refused(cli(["field", "probe", "--separation", "1", "--radial", "0", "--config", cfg], "keys"),
             needle)
 
 
@@ -249,7 +253,7 @@ def test_integer_and_choice_keys(toml, needle, tmp_path):
 def test_fault_values_outside_their_physical_range(entry, needle, tmp_path):
     path = tmp_path / "f.toml"
     path.write_text(f"[[fault]]\n{entry}\n")
-    refused(cli(["dock", "--trials", "1", "--faults", path]), needle)
+    refused(cli(["dock", "--trials", "1", "--faults", path], "fault-range"), needle)
 
 
 def test_faults_built_in_code_are_checked_by_the_mission(cfg):
@@ -291,7 +295,7 @@ def _csv_text(log_file: Path, meta_line: str) -> str:
 def test_a_deeply_nested_csv_meta_line_exits_2(log_file, tmp_path):
     path = tmp_path / "deep.csv"
     path.write_text(_csv_text(log_file, "# meta: " + "[" * 5000 + "]" * 5000))
-    refused(cli(["ingest", "--format", "csv", path, "--out", tmp_path / "o.npz"]),
+    refused(cli(["ingest", "--format", "csv", path, "--out", tmp_path / "o.npz"], "csv-meta"),
             "nested too deeply")
 
 
@@ -299,7 +303,7 @@ def test_a_csv_label_basis_outside_its_choices_is_refused(log_file, tmp_path):
     path = tmp_path / "banana.csv"
     path.write_text(_csv_text(log_file, '# meta: {"label_basis": "banana", '
                                         '"follower_mass_kg": 0.7}'))
-    refused(cli(["ingest", "--format", "csv", path, "--out", tmp_path / "o.npz"]),
+    refused(cli(["ingest", "--format", "csv", path, "--out", tmp_path / "o.npz"], "csv-meta"),
             "label_basis must be one of command|thrust")
     assert not (tmp_path / "o.npz").exists()
 
@@ -314,7 +318,7 @@ def test_view_of_a_flight_without_samples_exits_2(tmp_path):
                       follower_thrust_n=np.zeros(0), follower_obs_accel_mps2=np.zeros((0, 3)),
                       meta={"name": "empty"})
     path = save_flightlogs(tmp_path / "empty.npz", [empty])
-    refused(cli(["view", path, "--out", tmp_path / "v.gif"]), "0 samples")
+    refused(cli(["view", path, "--out", tmp_path / "v.gif"], "empty-flight"), "0 samples")
 
 
 def test_ingest_out_dev_null_or_a_fifo_is_refused(log_file, fifo, tmp_path):
@@ -323,7 +327,8 @@ def test_ingest_out_dev_null_or_a_fifo_is_refused(log_file, fifo, tmp_path):
 
     csv = write_csv(load_flightlogs(log_file)[0], tmp_path / "flight.csv")
     for target in (Path("/dev/null"), fifo):
-        refused(cli(["ingest", "--format", "csv", csv, "--out", target]), "not a regular file")
+        refused(cli(["ingest", "--format", "csv", csv, "--out", target], "fifo"),
+                "not a regular file")
     assert not Path("/dev/null.npz").exists()
     assert not Path(f"{fifo}.npz").exists()
 
@@ -332,10 +337,11 @@ def test_export_to_a_non_utf8_name_does_not_crash(log_file, tmp_path):
     pytest.importorskip("onnx")
     model = tmp_path / "model"
     res = cli(["train", "--data", log_file, "--out", model, "--model", "mlp",
-               "--max-epochs", "2"])
+               "--max-epochs", "2"], "setup")
     assert res.returncode == 0, res.stderr
     name = os.fsdecode(b"\xff\xfe.onnx")
-    res = cli(["export", "--model", model, "--out", name, "--json"], cwd=tmp_path)
+    res = cli(["export", "--model", model, "--out", name, "--json"], "odd-output-name",
+              cwd=tmp_path)
     assert res.returncode in (0, 2), res.stderr
     assert "Traceback" not in res.stderr
     if res.returncode == 0:

@@ -48,6 +48,9 @@ def _run(args: list) -> float:
 
 
 def _kill_at(args: list, delay_s: float) -> int | None:
+    from fuzz_helpers import count
+
+    count(f"kill-{args[0]}")
     proc = _start(args)
     try:
         proc.wait(timeout=delay_s)
@@ -69,6 +72,10 @@ def _temps(folder: Path) -> list[Path]:
 
 
 def _moments(duration_s: float, n: int, seed: int) -> list[float]:
+    """``n`` kill moments (scaled by AERODOCK_FUZZ_SCALE) spread over a run's duration."""
+    from fuzz_helpers import n_cases
+
+    n = n_cases(n)
     rng = random.Random(seed)
     return sorted(rng.uniform(0.05, 1.0) * duration_s for _ in range(n))
 
