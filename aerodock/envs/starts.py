@@ -40,7 +40,7 @@ DEFAULT_BLOCK_TRIALS = 32
 """Trials settled together when a reset asks for one outside the current block."""
 
 MAX_BLOCK_TRIALS = 1024
-"""Largest block a :class:`StartCache` accepts (its memory grows with it: about 70 kB a trial)."""
+"""Largest block a :class:`StartCache` accepts (its memory grows with it: about 40 kB a trial)."""
 
 
 class StartCache:

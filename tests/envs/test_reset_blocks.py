@@ -84,3 +84,20 @@ def test_blocks_are_off_where_a_trial_settled_in_a_block_could_differ(cfg):
 def test_settle_block_is_checked(bad):
     with pytest.raises(ValueError, match="settle_block must be an integer from 1 to"):
         DockingEnv(settle_block=bad)
+
+
+def test_bench_env_reset_figures(cfg, benchmark):
+    """The bench's reset figures exist and count what they timed (the cost is measured by
+    `aerodock bench --only gym` or `python -m aerodock.bench.env_reset`, not asserted here)."""
+    from aerodock import bench
+    from aerodock.bench.env_reset import bench_env_reset
+
+    figs = benchmark.pedantic(bench_env_reset, args=(cfg, 4, True), rounds=1, iterations=1)
+    counts = figs.pop("block_counts")
+    assert counts["resets"] == 2 * 8 == counts["blocks_settled"] + counts["served"]
+    assert counts["served"] >= counts["resets"] // 2
+    assert all(f["value"] > 0 and f["unit"] == "s" for f in figs.values())
+    rows = bench.table_rows({"figures": {"gym_env_reset": figs}})
+    assert [r[0] for r in rows] == [
+        "gym env reset, its trial settled alone", "gym env reset, settling a block",
+        "gym env reset, served from the block", "gym env reset, mean over a block"]
