@@ -109,3 +109,21 @@ def test_ppo_trains_a_few_hundred_steps_on_the_native_vector_env():
     assert np.isfinite(model.logger.name_to_value["train/value_loss"])
     action, _ = model.predict(env.reset(), deterministic=True)
     assert action.shape == (4, 3) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.parametrize("backend", ["native", "make-vec-env"])
+def test_ppo_example_quick_mode_trains_and_evaluates(backend):
+    """examples/ppo_sb3.py in quick mode, through the adapter and through make_vec_env."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "ppo_sb3.py"
+    spec = importlib.util.spec_from_file_location("ppo_sb3", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    result = mod.main(["--quick", "--backend", backend])
+    assert result["env_steps"] == 256 and result["env_steps_per_s"] > 0
+    for key in ("baseline_lqg", "ppo_policy"):
+        r = result[key]
+        assert r["trials"] == 4
+        assert r["docked_rate"] + r["missed_rate"] + r["aborted_rate"] == pytest.approx(1.0)
