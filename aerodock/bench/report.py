@@ -115,6 +115,8 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
         note = fig.get("note", "")
         if "per_cpu_s" in fig:
             note = f"{note}; {_fmt(fig['per_cpu_s'], unit)} per CPU-second".lstrip("; ")
+        if "cpu_s" in fig:
+            note = f"{note}; {_fmt(fig['cpu_s'], unit)} s of CPU".lstrip("; ")
         rows.append((name, _fmt(fig["value"], unit), spread, unit, note))
 
     figs = doc["figures"]

@@ -3,7 +3,7 @@
 An episode starts from the mission's settled start (``mission.settle_s`` of station keeping
 before t = 0, 1,500 physics steps by default): about 1 s for one trial, nearly all of it in the
 world's physics step, whose cost hardly grows with the batch (batch-first NumPy: 32 trials cost
-about 1.3 times one). So :class:`StartCache` settles the trial a reset asks for together with the
+about 1.2 times one). So :class:`StartCache` settles the trial a reset asks for together with the
 trials the next resets are expected to ask for, and serves each of those later resets from its
 row of the block (:meth:`aerodock.mission.settle.SettledStart.take_rows`: copies, a few
 milliseconds). A trial's settled start does not depend on the batch that settled it (per-trial
