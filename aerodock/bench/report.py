@@ -16,7 +16,7 @@ TARGETS = {
     "rotorpy_sequential_speedup": 20.0,
     "predictor_single_call_us": 50.0,
     "reproduce_quick_s": 300.0,
-    "env_reset_s": 0.5,  # DockingEnv.reset, mean over a block's resets (issue 25)
+    "env_reset_s": 0.5,  # DockingEnv.reset, mean over a training loop's resets (issue 25)
 }
 
 
@@ -77,7 +77,7 @@ def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
          _value(numpy_pred.get("single_call_us") if isinstance(numpy_pred, dict) else None)),
         ("aerodock reproduce --quick (s)", "<", TARGETS["reproduce_quick_s"],
          _value(figs.get("reproduce_quick_s"))),
-        ("DockingEnv.reset, mean over a block's resets (s)", "<", TARGETS["env_reset_s"],
+        ("DockingEnv.reset, mean over a training loop's resets (s)", "<", TARGETS["env_reset_s"],
          _value(figs.get("gym_env_reset", {}).get("block_mean_reset"))),
     ]
     out = []
@@ -132,7 +132,7 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
     for key, label in (("settle_alone", "its trial settled alone"),
                        ("block_first_reset", "settling a block"),
                        ("block_served_reset", "served from the block"),
-                       ("block_mean_reset", "mean over a block")):
+                       ("block_mean_reset", "mean over a training loop")):
         add(f"gym env reset, {label}", figs.get("gym_env_reset", {}).get(key))
     for key, label in (("trial_1", "docking trial (1)"),
                        ("campaign_100", "docking campaign (100)")):

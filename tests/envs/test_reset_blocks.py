@@ -100,4 +100,4 @@ def test_bench_env_reset_figures(cfg, benchmark):
     rows = bench.table_rows({"figures": {"gym_env_reset": figs}})
     assert [r[0] for r in rows] == [
         "gym env reset, its trial settled alone", "gym env reset, settling a block",
-        "gym env reset, served from the block", "gym env reset, mean over a block"]
+        "gym env reset, served from the block", "gym env reset, mean over a training loop"]
