@@ -9,6 +9,7 @@ pre-drawn in chunks (one short Python loop over trials per chunk, not per step).
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -43,6 +44,18 @@ class TrialRNG:
         # a block of draws is a contiguous (k, n) slice (fast to compute with, no copy).
         self._buf = {"normal": np.empty((0, n)), "uniform": np.empty((0, n))}
         self._pos = {"normal": 0, "uniform": 0}
+
+    def take_rows(self, rows: np.ndarray) -> TrialRNG:
+        """The streams of the trials at ``rows`` (indices into this batch), each where it stands
+        now: a batch of ``len(rows)`` that draws the numbers these trials would draw next."""
+        rows = np.asarray(rows, dtype=np.int64)
+        out = copy.copy(self)
+        out.n = int(rows.size)
+        out._gens = [copy.deepcopy(self._gens[i]) for i in rows]
+        out._shared = copy.deepcopy(self._shared)
+        out._buf = {kind: buf[:, rows] for kind, buf in self._buf.items()}
+        out._pos = dict(self._pos)
+        return out
 
     def _take(self, kind: str, per_trial: int) -> np.ndarray:
         """(per_trial, n): every trial's next ``per_trial`` draws, one row per draw (a view)."""

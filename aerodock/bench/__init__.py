@@ -28,6 +28,9 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``gym_vector_env``: env-steps per second of :class:`aerodock.envs.DockingVectorEnv` at 1 and
   256 environments (:func:`aerodock.bench.vector_env.bench_vector_env`; needs
   ``aerodock[gym]``).
+- ``gym_env_reset``: wall time of :meth:`aerodock.envs.DockingEnv.reset`: a trial settled alone,
+  a reset that settles a block of upcoming trials, one served from the block, and the mean over
+  a block's resets (:func:`aerodock.bench.env_reset.bench_env_reset`; needs ``aerodock[gym]``).
 - ``peer``: the RotorPy comparison of ``studies/compare_rotorpy.py`` (:func:`compare_rotorpy`).
 
 The same functions serve ``studies/compare_rotorpy.py`` and the pytest-benchmark tests.
@@ -37,6 +40,7 @@ Modules: :mod:`~aerodock.bench.timing` (how a figure is measured), :mod:`~aerodo
 :mod:`~aerodock.bench.docking` (with ``reproduce --quick``), :mod:`~aerodock.bench.learning`
 (training and the predictor), :mod:`~aerodock.bench.memory` (a campaign in a fresh process,
 ``python -m aerodock.bench.memory``), :mod:`~aerodock.bench.vector_env`,
+:mod:`~aerodock.bench.env_reset`,
 :mod:`~aerodock.bench.peer` (RotorPy), :mod:`~aerodock.bench.report` (machine, targets, the
 table's rows) and :mod:`~aerodock.bench.node` (the ROS 2 node's latency, on its own:
 ``python -m aerodock.bench.node``).
@@ -123,11 +127,14 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
             else unavailable("skipped with --quick (takes minutes)", "s"))
     if wanted("gym"):
         try:
+            from aerodock.bench.env_reset import bench_env_reset
             from aerodock.bench.vector_env import bench_vector_env
         except ImportError as err:  # gymnasium is an optional extra
             figs["gym_vector_env"] = {"1": unavailable(failure_reason(err), "env-steps/s")}
+            figs["gym_env_reset"] = {"block_mean_reset": unavailable(failure_reason(err), "s")}
         else:
             figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
+            figs["gym_env_reset"] = bench_env_reset(cfg, quick=quick, progress=progress)
     if include_peer and wanted("peer"):
         figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
     return {

@@ -29,6 +29,8 @@ includes this estimate) and takes out what the accelerometer cannot see: its own
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 
@@ -91,6 +93,16 @@ class AccelObserver:
         self._thrust_mean_n = self._thrust_n.copy()
         self._ff = np.zeros((self.n, 3))
         self._live = False
+
+    def take_rows(self, rows: np.ndarray) -> AccelObserver:
+        """The observers of the trials at ``rows`` (their estimates and motor models copied)."""
+        out = copy.copy(self)
+        out.n = len(rows)
+        out.residual_mps2 = self.residual_mps2[rows]
+        out._thrust_n = None if self._thrust_n is None else self._thrust_n[rows]
+        out._thrust_mean_n = self._thrust_mean_n[rows]
+        out._ff = self._ff[rows]
+        return out
 
     def measured_force_mps2(self, accel_mps2: np.ndarray, R: np.ndarray) -> np.ndarray:  # noqa: N803
         """(n, 3) the acceleration the commands do not explain over the period just flown."""

@@ -11,6 +11,7 @@ the stiffer terminal weights for the trials that are in their terminal phase.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,7 @@ from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
 from aerodock.geometry import rpy_to_rotmat
+from aerodock.rows import take_rows
 from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams
 
 REJECTIONS = ("bias-observer", "accelerometer")
@@ -105,6 +107,15 @@ class PositionController:
                                                 self.params.mass_kg, self.params.gravity_mps2,
                                                 c.accel_observer_axes)
         self._last_input = None  # what the observer should see as the applied acceleration
+
+    def take_rows(self, rows: np.ndarray) -> PositionController:
+        """The controllers of the trials at ``rows``, each where it stands (its estimators, its
+        last input and held command copied; the gains shared)."""
+        out = copy.copy(self)
+        out.n = len(rows)
+        for name in ("observer", "state_filter", "accel_observer", "_last_input", "_held"):
+            setattr(out, name, take_rows(getattr(self, name), rows))
+        return out
 
     @property
     def uses_accelerometer(self) -> bool:

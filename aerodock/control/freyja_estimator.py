@@ -27,6 +27,7 @@ of it (the input shaping).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,6 +94,15 @@ class FreyjaBiasEstimator:
         self.t_since_enable_s = 0.0
         self._t_to_propagation_s = self.prop_dt_s  # the thread's first wake-up
         self._propagations_since_measure = 0
+
+    def take_rows(self, rows: np.ndarray) -> FreyjaBiasEstimator:
+        """The estimators of the trials at ``rows`` (their estimates and inputs copied; the
+        shared covariance and clock as they stand)."""
+        out = copy.copy(self)
+        out.n = len(rows)
+        out.state = self.state[rows]
+        out.input_mps2 = self.input_mps2[rows]
+        return out
 
     def set_input(self, accel_cmd_mps2: np.ndarray) -> None:
         """The controller's latest command (n, 3): net acceleration, gravity excluded."""

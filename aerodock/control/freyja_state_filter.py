@@ -19,6 +19,7 @@ ramp by about a quarter: part of what the paper's controller flies.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +74,14 @@ class FreyjaStateFilter:
         self.state[:, :, 1] = v
         self.cov = self.params.initial_cov * np.eye(3)
         self._t_to_propagation_s = self.prop_dt_s
+
+    def take_rows(self, rows: np.ndarray) -> FreyjaStateFilter:
+        """The filters of the trials at ``rows`` (their states copied; the shared covariance and
+        clock as they stand)."""
+        out = copy.copy(self)
+        out.n = len(rows)
+        out.state = self.state[rows]
+        return out
 
     def measure(self, p_meas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One motion-capture position (n, 3): the propagations due, the update; returns the

@@ -21,6 +21,8 @@ default settings.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import scipy.linalg
 
@@ -118,6 +120,14 @@ class BiasObserver:
         self.state[:, :, 1] = v
         if bias_mps2 is not None:
             self.state[:, :, 2] = bias_mps2
+
+    def take_rows(self, rows: np.ndarray) -> BiasObserver:
+        """The filters of the trials at ``rows`` (their estimates copied; the gain and the
+        shared covariance as they stand)."""
+        out = copy.copy(self)
+        out.n = len(rows)
+        out.state = self.state[rows]
+        return out
 
     def update(self, p_meas: np.ndarray, v_meas: np.ndarray, u_applied_mps2: np.ndarray) -> None:
         """Predict over one period with the applied acceleration, then correct with measurements.

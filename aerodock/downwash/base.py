@@ -5,7 +5,7 @@ from the config by import path (``[downwash] field = "package.module:factory"``)
 ``[downwash.params]`` passed to the factory as keyword arguments. See
 ``aerodock/downwash/template.py`` for a minimal example.
 
-Four methods are optional; every command works without them:
+Five methods are optional; every command works without them:
 
 - ``mean_acceleration(leader, follower) -> (n, 3)`` (:class:`SupportsMean`): the turbulence-free
   mean. Without it, whoever needs the mean estimates it (:mod:`aerodock.downwash.mean`).
@@ -20,6 +20,9 @@ Four methods are optional; every command works without them:
 - ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2[, dt][, bar_axis]) -> (n, 3)``
   (:class:`SupportsBarForce`): the wake's force on the docking bar. Without it, the bar feels no
   wake (:func:`aerodock.downwash.wrench.bar_wake_force_n`).
+- ``take_rows(rows, rng) -> field`` (:class:`SupportsTakeRows`): the field of some trials only,
+  their turbulence where it stands. Without it, a Gymnasium environment settles each episode's
+  start on its own rather than a block of upcoming ones at once (:mod:`aerodock.envs.starts`).
 """
 
 from __future__ import annotations
@@ -105,3 +108,13 @@ class SupportsBarForce(Protocol):
     def bar_force_n(self, leader: BodyState, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
                     bar_area_m2: float) -> np.ndarray:
         """(n, 3) force in N on the bar at ``bar_p_m`` moving at ``bar_v_mps``, world NED."""
+
+
+@runtime_checkable
+class SupportsTakeRows(Protocol):
+    """Optional: the field of some of its trials, to carry on with in a batch of their own."""
+
+    def take_rows(self, rows: np.ndarray, rng: np.random.Generator) -> SupportsTakeRows:
+        """A field for the trials at ``rows`` (indices into the batch of the last ``reset``),
+        each trial's turbulence state where it stands, drawing from ``rng`` from now on (those
+        trials' own streams); the numbers it gives them are the ones this field would give."""

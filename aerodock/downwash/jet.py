@@ -49,6 +49,8 @@ under the leader feels drag of the wake air (:meth:`RoundJetField.bar_force_n`).
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from aerodock.downwash.base import BodyState
@@ -210,6 +212,19 @@ class RoundJetField:
         self._bar_noise = standard_normal_t(rng, n, 3)
         self._lead_key = self._lead_wake = None
         self._body_key = self._body_force = None
+
+    def take_rows(self, rows: np.ndarray, rng: np.random.Generator) -> RoundJetField:
+        """The field of the trials at ``rows``, their turbulence where it stands, drawing from
+        ``rng`` (:class:`~aerodock.downwash.base.SupportsTakeRows`)."""
+        out = copy.copy(self)  # the parameters and the geometry caches are shared
+        out._rng = rng
+        out._common = self._common[:, rows]
+        out._own = self._own[:, rows]
+        out._bar_noise = self._bar_noise[:, rows]
+        # Kept for the rest of one physics step only (keyed by the step's objects).
+        out._lead_key = out._lead_wake = None
+        out._body_key = out._body_force = None
+        return out
 
     def acceleration(self, leader: BodyState, follower: BodyState, dt: float) -> np.ndarray:
         """(n, 3) acceleration on the follower (its disks and its body), m/s², NED; advances the

@@ -9,7 +9,10 @@ Importing this package registers ``aerodock/Docking-v0``:
 Without importing it first, ``gymnasium.make("aerodock.envs:aerodock/Docking-v0")`` imports it.
 Spaces, reward, termination and seeding: :mod:`aerodock.envs.docking`; the lockstep autoreset of
 the vector environment: :mod:`aerodock.envs.vector`; checking the vector environment against
-Gymnasium's API: :func:`aerodock.envs.check.check_vector_env`.
+Gymnasium's API: :func:`aerodock.envs.check.check_vector_env`; how a reset's settled start is
+served from a block of upcoming trials: :mod:`aerodock.envs.starts`; Stable-Baselines3 on the
+vector environment: :class:`aerodock.envs.sb3.DockingSB3VecEnv` (import it from
+``aerodock.envs.sb3``: it needs stable-baselines3).
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
-from aerodock.mission import AbortReason, MissionBatch, MissionSpec, Phase
+from aerodock.mission import AbortReason, MissionBatch, MissionSpec, Phase, SettledStart
 from aerodock.mission.checks import MissionSpecError, check_mission, check_positive
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import World
@@ -136,9 +136,12 @@ class DockingBatch:
         self.arrival_s, self.dt_s, self.max_steps = timing.arrival_s, timing.dt_s, timing.steps
 
     # -- episode start -------------------------------------------------------------------------
-    def reset(self, first_trial: int, trials: np.ndarray | None = None) -> None:
+    def reset(self, first_trial: int, trials: np.ndarray | None = None,
+              settled: SettledStart | None = None) -> None:
         """Start trials ``first_trial .. first_trial + n - 1`` of campaign ``spec.seed`` (or the
-        explicit trial indices ``trials``, one per row, e.g. the same trial for several rows).
+        explicit trial indices ``trials``, one per row, e.g. the same trial for several rows),
+        from their settled start ``settled`` if it has been flown already (e.g. taken from a
+        block: :mod:`aerodock.envs.starts`), else flying it here.
 
         Trial ``k`` draws every random number from stream ``(spec.seed, k)``: the same numbers
         as in ``run_campaign`` and whatever the batch size.
@@ -147,7 +150,7 @@ class DockingBatch:
         self.trials = (self.first_trial + np.arange(self.n) if trials is None
                        else np.asarray(trials, dtype=np.int64).copy())
         self.mission = MissionBatch(self.cfg, self.spec, self.model_predictor,
-                                    trials=self.trials)
+                                    trials=self.trials, settled=settled)
         self.resolved = np.zeros(self.n, dtype=bool)
         self.timed_out = np.zeros(self.n, dtype=bool)
 

@@ -25,16 +25,22 @@ approaches; after the gate resolves or the mission aborts the episode ends.
   same as ``run_campaign(MissionSpec(seed=campaign_seed, first_trial=k))`` and the same as
   sub-environment ``k - s`` of a vector environment reset with ``seed=s``. ``reset()`` without a
   seed draws a trial index from ``np_random``; ``options={"trial": k}`` picks one explicitly.
+- Reset cost: a reset settles the trial it asks for together with the ``settle_block - 1`` trials
+  the next resets are expected to ask for (the draws ``np_random`` will make; after a seed, also
+  the next seeds), and serves those later resets from the block: the same numbers, a fraction
+  of the time (:mod:`aerodock.envs.starts`).
 """
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from aerodock.envs.spaces import action_space, make_batch, observation_space, step_info
+from aerodock.envs.starts import DEFAULT_BLOCK_TRIALS, StartCache
 
 MAX_TRIAL_INDEX = 2**31 - 1
 
@@ -55,16 +61,21 @@ class DockingEnv(gym.Env):
         residual_max_mps2: residual acceleration at a normalised action of 1, m/s² (finite,
             0 < value <= 50).
         reward_weights: :class:`aerodock.envs.batch.RewardWeights` or a dict of its fields.
+        settle_block: trials whose settled starts one reset flies together, the later resets
+            served from them (1: every reset settles its own trial; see the module docstring).
         render_mode: ``"rgb_array"`` draws the current state (matplotlib), or None.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 25}
 
-    def __init__(self, render_mode: str | None = None, **kwargs: Any):
+    def __init__(self, render_mode: str | None = None, settle_block: int = DEFAULT_BLOCK_TRIALS,
+                 **kwargs: Any):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
         self._batch = make_batch(1, **kwargs)
+        batch = self._batch
+        self._starts = StartCache(batch.cfg, batch.spec, batch.model_predictor, settle_block)
         self.observation_space = observation_space()
         self.action_space = action_space()
         self._history: list[dict[str, np.ndarray]] = []
@@ -79,17 +90,37 @@ class DockingEnv(gym.Env):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Start a trial (see the module docstring for which one)."""
         super().reset(seed=seed)
+        chosen = bool(options and "trial" in options) or seed is not None
         if options and "trial" in options:
             trial = int(options["trial"])
         elif seed is not None:
             trial = int(seed)
         else:
             trial = int(self.np_random.integers(0, MAX_TRIAL_INDEX))
-        self._batch.reset(trial)
+        settled = self._starts.take(trial, lambda k: self._upcoming(trial, chosen, k))
+        self._batch.reset(trial, settled=settled)
         self._started = True
         self._history = []
         self._remember()
         return self._batch.observation()[0], _scalars(step_info(self._batch))
+
+    @property
+    def starts(self) -> StartCache:
+        """Where this environment's episodes start from (:mod:`aerodock.envs.starts`): its
+        counters say how many blocks were settled and how many resets were served from them."""
+        return self._starts
+
+    def _upcoming(self, trial: int, chosen: bool, k: int) -> list[int]:
+        """Up to ``k`` trials the next resets are expected to ask for: the next draws of
+        ``np_random`` (the resets without a seed), alternating, after a trial chosen by seed or
+        option, with ``trial + 1, trial + 2, ...`` (consecutive seeds)."""
+        rng = copy.deepcopy(self.np_random)  # the draws the next resets will make
+        drawn = [int(rng.integers(0, MAX_TRIAL_INDEX)) for _ in range(k)]
+        if not chosen:
+            return drawn
+        following = [t for t in range(trial + 1, trial + 1 + k) if t <= MAX_TRIAL_INDEX]
+        mixed = [t for pair in zip(following, drawn) for t in pair]
+        return mixed + following[len(drawn):] + drawn[len(following):]
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Fly one control period (1 / ``sim.control_rate_hz`` s) with ``action``.

@@ -41,7 +41,7 @@ from aerodock.mission.phases import (
     triggers,
 )
 from aerodock.mission.recorder import FlightRecorder
-from aerodock.mission.settle import CruiseStart, settle
+from aerodock.mission.settle import CruiseStart, SettledStart, settle
 from aerodock.mission.setup import (
     MissionTiming,
     armed,
@@ -143,6 +143,90 @@ def run_campaign(
     return batch.result()
 
 
+def settle_trials(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
+                  trials: np.ndarray | None = None) -> SettledStart:
+    """Fly the settled start of ``spec``'s trials (or the explicit ``trials``): their world and
+    controllers at t = 0, as :class:`MissionBatch` starts from them.
+
+    Its rows serve single trials later (:meth:`SettledStart.take_rows`): a trial's start does not
+    depend on the batch that settled it. Arguments as for :class:`MissionBatch`.
+    """
+    cfg, comp, ids = _checked(cfg, spec, predictor, trials)
+    return _settle(cfg, spec, MissionParams.from_config(cfg), comp, predictor, ids)
+
+
+def _checked(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None,
+             trials: np.ndarray | None) -> tuple[Config, Compensation, np.ndarray]:
+    """The one validation of dock, sweep and the environments: (the configuration with the
+    cable length applied, the compensation, the trial ids)."""
+    cfg = check_mission(cfg, spec, DOCK_NAMES)
+    comp = Compensation(spec.compensation)
+    if comp == Compensation.MODEL and predictor is None:
+        raise ValueError("compensation 'model' needs a trained model (--model DIR)")
+    n = spec.trials
+    ids = (spec.first_trial + np.arange(n) if trials is None
+           else np.asarray(trials, dtype=np.int64).copy())
+    if ids.shape != (n,):
+        raise ValueError(f"{n} trials asked for, {ids.size} trial ids given")
+    return cfg, comp, ids
+
+
+def _settle(cfg: Config, spec: MissionSpec, params: MissionParams, comp: Compensation,
+            predictor: AccelPredictor | None, trials: np.ndarray) -> SettledStart:
+    """The settled start of ``trials`` (``cfg`` checked; the random draws in their order: the
+    starts' jitter, the world's, then the settled flight's)."""
+    n, m = trials.size, params.mission
+    rng = TrialRNG(spec.seed, n, trials=trials)
+    configured = GripperParams.from_config(cfg)
+    world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed,
+                  triggers=(armed(configured.passive, spec.passive_trigger, n),
+                            armed(configured.active, spec.active_trigger, n)))
+    if comp == Compensation.ORACLE:
+        predictor = OraclePredictor(world.field, dt_s=world.dt_s)
+    elif comp != Compensation.MODEL:
+        predictor = None  # a model given alongside 'none' or 'observer' is not flown
+    fly_on_configured_rotors(predictor, cfg)
+    # Initial conditions: leader hovering (or cruising north), follower below and away.
+    start = starts(params, spec, trials, rng)
+    lead_vel = start.leader_velocity_mps
+    lead_v = np.tile(lead_vel, (n, 1))
+    # Settled start: both fly for settle_s before t = 0 (observers converge); a moving
+    # leader then speeds up smoothly and cruises, the follower in formation below.
+    pre = CruiseStart(m.settle_s, m.leader_ramp_s if spec.moving else 0.0)
+    shift0 = pre.profile(-pre.preroll_s)[0]
+    world.reset(start.leader_p_m + lead_vel * shift0, start.follower_p_m + lead_vel * shift0)
+    if spec.moving and pre.start_velocity(lead_vel).any():
+        world.set_velocities(lead_v, lead_v)
+    leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed,
+                                    vehicle=cfg.leader)
+    follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE,
+                                      has_accelerometer=True)
+    settle(world, leader_ctl, follower_ctl,
+           pre.reference(start.leader_p_m, lead_v), pre.reference(start.follower_p_m, lead_v),
+           pre.preroll_s,
+           lambda obs_l, obs_f: _predict(params, comp, predictor, world, obs_l, obs_f))
+    return SettledStart(trials, rng, start, world, leader_ctl, follower_ctl, predictor)
+
+
+def _bodies(params: MissionParams, obs: Observation, leader: bool = False) -> BodyState:
+    """``obs`` as the predictor sees a vehicle: hovering at its nominal mass (the follower's,
+    or the leader's)."""
+    n = obs.p.shape[0]
+    mass = params.leader_mass_kg if leader else params.mass_kg
+    return BodyState(obs.p, obs.v, obs.R, np.full(n, mass * params.gravity_mps2),
+                     np.full(n, mass))
+
+
+def _predict(params: MissionParams, comp: Compensation, predictor: AccelPredictor | None,
+             world: World, obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
+    """The follower's feed-forward from what it observes (the oracle: from the truth)."""
+    if predictor is None:
+        return None
+    if comp == Compensation.ORACLE:
+        return predictor.predict_bodies(*world.body_states())
+    return predictor.predict_bodies(_bodies(params, obs_l, leader=True), _bodies(params, obs_f))
+
+
 class MissionBatch:
     """N docking trials flown one control period per :meth:`fly`: the mission's one
     implementation (``run_campaign`` loops over it; the Gymnasium environments act through it).
@@ -158,36 +242,27 @@ class MissionBatch:
         predictor: the feed-forward model for ``Compensation.MODEL``.
         record: ``"summary"``, ``"trace"`` or ``"full"`` (see :func:`run_campaign`).
         trials: explicit per-row trial indices (each row draws from stream ``(seed, index)``).
+        settled: these trials' settled start, if already flown (:func:`settle_trials` for the
+            same configuration and campaign, or rows of a larger one taken with
+            :meth:`SettledStart.take_rows`); by default it is flown here.
     """
 
     def __init__(self, cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
-                 record: str = "summary", trials: np.ndarray | None = None):
+                 record: str = "summary", trials: np.ndarray | None = None,
+                 settled: SettledStart | None = None):
         if record not in ("summary", "trace", "full"):
             raise ValueError(f"record must be summary, trace or full, got {record!r}")
-        # The one validation of dock, sweep and the environments (the cable length applied).
-        cfg = check_mission(cfg, spec, DOCK_NAMES)
-        comp = Compensation(spec.compensation)
-        if comp == Compensation.MODEL and predictor is None:
-            raise ValueError("compensation 'model' needs a trained model (--model DIR)")
+        cfg, comp, self.trials = _checked(cfg, spec, predictor, trials)
         n = spec.trials
-        self.trials = (spec.first_trial + np.arange(n) if trials is None
-                       else np.asarray(trials, dtype=np.int64).copy())
-        if self.trials.shape != (n,):
-            raise ValueError(f"{n} trials asked for, {self.trials.size} trial ids given")
-        rng = TrialRNG(spec.seed, n, trials=self.trials)
         self.params = params = MissionParams.from_config(cfg)
         self.spec, self.n, self.comp, self.record = spec, n, comp, record
         m = params.mission
-        configured = GripperParams.from_config(cfg)
-        world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed,
-                      triggers=(armed(configured.passive, spec.passive_trigger, n),
-                                armed(configured.active, spec.active_trigger, n)))
-        if comp == Compensation.ORACLE:
-            predictor = OraclePredictor(world.field, dt_s=world.dt_s)
-        elif comp != Compensation.MODEL:
-            predictor = None  # a model given alongside 'none' or 'observer' is not flown
-        fly_on_configured_rotors(predictor, cfg)
-        self.predictor = predictor
+        if settled is None:
+            settled = _settle(cfg, spec, params, comp, predictor, self.trials)
+        elif not np.array_equal(settled.trials, self.trials) or settled.rng.seed != spec.seed:
+            raise ValueError("the settled start is not of these trials of this campaign")
+        world, rng, start = settled.world, settled.rng, settled.start
+        self.predictor = settled.predictor
         # Torque feed-forward from the learnt model (rigid bodies, with the model flown).
         self.torque_ff = bool(params.torque_feedforward and comp == Compensation.MODEL
                               and world.rigid)
@@ -198,27 +273,10 @@ class MissionBatch:
         self.world = world
         self.timing = timing = mission_timing(params, spec, world.dt_control_s)
         self.arrival_s, self.dt_s, self.steps = timing.arrival_s, timing.dt_s, timing.steps
-
-        # Initial conditions: leader hovering (or cruising north), follower below and away.
-        start = starts(params, spec, self.trials, rng)
         self.leader_p0 = start.leader_p_m
         self.lead_vel = start.leader_velocity_mps
         self.lead_v = lead_v = np.tile(self.lead_vel, (n, 1))
-        # Settled start: both fly for settle_s before t = 0 (observers converge); a moving
-        # leader then speeds up smoothly and cruises, the follower in formation below.
-        pre = CruiseStart(m.settle_s, m.leader_ramp_s if spec.moving else 0.0)
-        shift0 = pre.profile(-pre.preroll_s)[0]
-        world.reset(start.leader_p_m + self.lead_vel * shift0,
-                    start.follower_p_m + self.lead_vel * shift0)
-        if spec.moving and pre.start_velocity(self.lead_vel).any():
-            world.set_velocities(lead_v, lead_v)
-        self.leader_ctl = PositionController(cfg, n, use_observer=not spec.leader_fixed,
-                                             vehicle=cfg.leader)
-        self.follower_ctl = PositionController(cfg, n, use_observer=comp != Compensation.NONE,
-                                               has_accelerometer=True)
-        settle(world, self.leader_ctl, self.follower_ctl,
-               pre.reference(start.leader_p_m, lead_v), pre.reference(start.follower_p_m, lead_v),
-               pre.preroll_s, self._predict)
+        self.leader_ctl, self.follower_ctl = settled.leader_ctl, settled.follower_ctl
         self.shape = approach.ApproachShape.of(params, timing.arrival_s)
         self.plan = approach.first_plan(params, self.shape, start.follower_p_m,
                                         start.leader_p_m, lead_v)
@@ -275,20 +333,11 @@ class MissionBatch:
                       clear < self.params.mission.clearance_m)
 
     def _bodies(self, obs: Observation, leader: bool = False) -> BodyState:
-        """``obs`` as the predictor sees a vehicle: hovering at its nominal mass (the follower's,
-        or the leader's)."""
-        n, params = obs.p.shape[0], self.params
-        mass = params.leader_mass_kg if leader else params.mass_kg
-        return BodyState(obs.p, obs.v, obs.R, np.full(n, mass * params.gravity_mps2),
-                         np.full(n, mass))
+        """``obs`` as the predictor sees a vehicle (see :func:`_bodies`)."""
+        return _bodies(self.params, obs, leader)
 
     def _predict(self, obs_l: Observation, obs_f: Observation) -> np.ndarray | None:
-        if self.predictor is None:
-            return None
-        if self.comp == Compensation.ORACLE:
-            return self.predictor.predict_bodies(*self.world.body_states())
-        return self.predictor.predict_bodies(self._bodies(obs_l, leader=True),
-                                             self._bodies(obs_f))
+        return _predict(self.params, self.comp, self.predictor, self.world, obs_l, obs_f)
 
     # -- the decision half of a control period -------------------------------------------------
     def decide(self) -> Decision:

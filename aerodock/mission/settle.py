@@ -11,10 +11,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from aerodock.control.compensation import OraclePredictor
 from aerodock.control.controller import PositionController, Reference
+from aerodock.mission.setup import Starts
+from aerodock.rng import TrialRNG
+from aerodock.rows import as_rows
 from aerodock.world import Observation, World
 
 # Prior sd of an unknown disturbance acceleration at switch-on (thrust errors of a few %, the
@@ -55,6 +60,58 @@ def settle(world: World, leader_ctl: PositionController, follower_ctl: PositionC
         accel = world.observed_accel() if follower_ctl.uses_accelerometer else None
         fout = follower_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, follower_ref(t), None, ff, accel)
         world.advance(lout.command, fout.command)
+
+
+@dataclass(frozen=True)
+class SettledStart:
+    """N trials at t = 0, their settled start flown: what a mission starts from
+    (:func:`aerodock.mission.batch.settle_trials`).
+
+    Attributes:
+        trials: (n,) trial indices (row i draws from stream ``(seed, trials[i])``).
+        rng: the trials' random streams, where they stand.
+        start: where each trial begins at t = 0, and the leader's cruise velocity.
+        world: the trials' world.
+        leader_ctl, follower_ctl: the vehicles' controllers, their estimators converged.
+        predictor: the follower's feed-forward model as flown (the oracle reads this world's
+            field; None: none flown).
+    """
+
+    trials: np.ndarray
+    rng: TrialRNG
+    start: Starts
+    world: World
+    leader_ctl: PositionController
+    follower_ctl: PositionController
+    predictor: Any
+
+    @property
+    def n(self) -> int:
+        """Number of trials."""
+        return int(self.trials.size)
+
+    @property
+    def splittable(self) -> bool:
+        """Whether :meth:`take_rows` can serve single trials from this batch (its world splits:
+        :attr:`aerodock.world.world.World.splittable`)."""
+        return self.world.splittable
+
+    def take_rows(self, rows: np.ndarray) -> SettledStart:
+        """The trials at ``rows`` (indices into this batch) as a settled start of their own: a
+        mission started from it flies them exactly as :func:`~aerodock.mission.batch.
+        settle_trials` of those trials alone would (tested bit for bit). This batch is not
+        changed (every piece is copied), so each row can be taken any number of times.
+
+        Raises:
+            TypeError: the world cannot be split (see :attr:`splittable`).
+        """
+        rows = as_rows(rows, self.n)
+        world = self.world.take_rows(rows)
+        predictor = (OraclePredictor(world.field, dt_s=world.dt_s)
+                     if isinstance(self.predictor, OraclePredictor) else self.predictor)
+        return SettledStart(self.trials[rows], world.rng, self.start.take_rows(rows), world,
+                            self.leader_ctl.take_rows(rows), self.follower_ctl.take_rows(rows),
+                            predictor)
 
 
 # A moving leader is already cruising this long when the mission clock starts.

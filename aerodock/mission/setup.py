@@ -60,6 +60,10 @@ class Starts:
     follower_p_m: np.ndarray
     leader_velocity_mps: np.ndarray  # (3,)
 
+    def take_rows(self, rows: np.ndarray) -> Starts:
+        """The starts of the trials at ``rows``."""
+        return Starts(self.leader_p_m[rows], self.follower_p_m[rows], self.leader_velocity_mps)
+
 
 def starts(params: MissionParams, spec: MissionSpec, trials: np.ndarray,
            rng: TrialRNG) -> Starts:

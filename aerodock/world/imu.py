@@ -126,6 +126,19 @@ class ImuState:
     gyro_radps: np.ndarray
     accel_t: np.ndarray
 
+    def take_rows(self, rows: np.ndarray) -> ImuState:
+        """The chains of the vehicles at ``rows`` of the 2n batch (copies; the component-major
+        arrays by column)."""
+        def cols(f: FilterState) -> FilterState:
+            return FilterState(f.z1[:, rows], f.z2[:, rows], [d[:, rows] for d in f.delay])
+
+        return ImuState(
+            gyro=cols(self.gyro), accel=cols(self.accel), gyro_filter=self.gyro_filter,
+            accel_filter=self.accel_filter, bias_body_mps2=self.bias_body_mps2[rows],
+            attitude=self.attitude[rows], accel_ring=[a[rows] for a in self.accel_ring],
+            nav_accel_mps2=self.nav_accel_mps2[rows], gyro_radps=self.gyro_radps[rows],
+            accel_t=self.accel_t[:, rows])
+
 
 def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: float,
               chain: ImuChainParams, gyro_filter: Biquad | None, accel_filter: Biquad | None,

@@ -9,18 +9,19 @@ so a reference kept by a log or the motion-capture buffer keeps its values.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 
 from aerodock.downwash import BodyState, DownwashField
 from aerodock.rng import TrialRNG
+from aerodock.rows import pair_rows, take_rows
 from aerodock.world.gripper import GripperState
 from aerodock.world.imu import ImuState
 from aerodock.world.platform import BarState
 from aerodock.world.torque_sensing import TorqueLog, TorqueReading
-from aerodock.world.vehicles.fleet import Fleet, concat_states, split_state
+from aerodock.world.vehicles.fleet import Fleet, concat_states, split_state, state_rows
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,12 @@ class BatchConstants:
     rotor_offsets_m: np.ndarray  # (k, 3) the follower's rotor disks, body FRD ((1, 3) zeros for
     # a point mass, which takes the field's whole force from ``acceleration``)
     hover_thrust_n: np.ndarray  # (2n,) each vehicle type's nominal hover thrust, leaders first
+
+    def take_rows(self, rows: np.ndarray) -> BatchConstants:
+        """The constants of the trials at ``rows``."""
+        n = self.bar_mass_kg.shape[0]
+        return BatchConstants(self.bar_mass_kg[rows], self.no_close[rows], self.gravity_mps2,
+                              self.rotor_offsets_m, self.hover_thrust_n[pair_rows(rows, n)])
 
 
 @dataclass
@@ -144,6 +151,30 @@ class WorldState:
     def _split(self) -> None:
         if self._both is not None:
             self._lead, self._fol = split_state(self.fleet, self._both, self.n)
+
+    def take_rows(self, rows: np.ndarray, rng: np.random.Generator | TrialRNG,
+                  field: DownwashField) -> WorldState:
+        """The state of the trials at ``rows`` (copies), drawing from ``rng`` and feeling
+        ``field`` (those trials' own streams and turbulence:
+        :meth:`aerodock.world.world.World.take_rows`).
+
+        Raises:
+            ValueError: the torques are being logged (a flight recorder reads them).
+        """
+        if self.torque_log is not None:
+            raise ValueError("a world whose torques are being logged cannot be split into trials")
+        n, rows = self.n, np.asarray(rows, dtype=np.int64)
+        own = {"n", "fleet", "rng", "field", "leader_fixed", "constants", "imu", "torque_log",
+               "_both", "_lead", "_fol"}
+        taken = {f.name: take_rows(getattr(self, f.name), rows) for f in fields(self)
+                 if f.name not in own}
+        out = WorldState(n=int(rows.size), fleet=self.fleet, rng=rng, field=field,
+                         leader_fixed=self.leader_fixed,
+                         constants=self.constants.take_rows(rows),
+                         imu=None if self.imu is None else self.imu.take_rows(
+                             pair_rows(rows, n)), **taken)
+        out.both = state_rows(self.fleet, self.both, pair_rows(rows, n))
+        return out
 
 
 @dataclass

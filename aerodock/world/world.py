@@ -15,6 +15,7 @@ seed, same numbers.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import replace
 from typing import Any
 
@@ -24,6 +25,7 @@ from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
 from aerodock.downwash.mean import mean_acceleration_fn
 from aerodock.rng import TrialRNG
+from aerodock.rows import as_rows
 from aerodock.world import sensors
 from aerodock.world.gripper import (
     GateState,
@@ -197,6 +199,38 @@ class World:
         # themselves: states are never modified in place, every step makes new ones).
         state.history = [snapshot(state, params)] * (params.latency_steps + 1)
         self.state = state
+
+    def take_rows(self, rows: np.ndarray) -> World:
+        """The trials at ``rows`` (indices into this batch) as a world of their own, exactly where
+        they stand: same constants, their own random streams (a :class:`aerodock.rng.TrialRNG`)
+        and turbulence, copies of their state. A trial flies on in it as it would have in this
+        batch (tested bit for bit).
+
+        Raises:
+            TypeError: the random source is not per trial, or the field cannot split its state
+                (a field without ``take_rows(rows, rng)``, e.g. a plug-in).
+            ValueError: no state yet (:meth:`reset` first), or the torques are being logged.
+        """
+        if not self.splittable:
+            raise TypeError("this world cannot be split into trials: it needs a TrialRNG and a "
+                            "downwash field with take_rows(rows, rng)")
+        if self.state is None:
+            raise ValueError("reset the world before taking trials out of it")
+        rows = as_rows(rows, self.n)
+        out = copy.copy(self)
+        out.n = int(rows.size)
+        out.rng = self.rng.take_rows(rows)
+        out.field = self.field.take_rows(rows, out.rng)
+        out.state = self.state.take_rows(rows, out.rng, out.field)
+        out.constants = out.state.constants
+        out._mean_fn = None
+        return out
+
+    @property
+    def splittable(self) -> bool:
+        """Whether :meth:`take_rows` can take trials out of this world (a per-trial random
+        source and a field that splits its own state)."""
+        return isinstance(self.rng, TrialRNG) and hasattr(self.field, "take_rows")
 
     def set_rotor_loss(self, loss: np.ndarray) -> None:
         """Injected fault: the follower's rotors lose these fractions (n, 4) of their thrust

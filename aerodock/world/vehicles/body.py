@@ -95,8 +95,8 @@ def concat_bodies(a: VehicleBody, b: VehicleBody) -> VehicleBody:
     return VehicleBody(*[np.concatenate([getattr(a, f), getattr(b, f)]) for f in _FIELDS])
 
 
-def body_rows(body: VehicleBody, rows: slice) -> VehicleBody:
-    """The vehicles at ``rows`` (views)."""
+def body_rows(body: VehicleBody, rows: slice | np.ndarray) -> VehicleBody:
+    """The vehicles at ``rows`` (views for a slice, copies for an index array)."""
     return VehicleBody(*[getattr(body, f)[rows] for f in _FIELDS])
 
 

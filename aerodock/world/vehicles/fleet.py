@@ -53,7 +53,7 @@ def _concat(cls: type, a: Any, b: Any) -> Any:
                  for name in _field_names(cls)])
 
 
-def _rows(cls: type, state: Any, sl: slice) -> Any:
+def _rows(cls: type, state: Any, sl: slice | np.ndarray) -> Any:
     return cls(*[body_rows(state.body, sl) if name == "body" else getattr(state, name)[sl]
                  for name in _field_names(cls)])
 
@@ -242,6 +242,11 @@ def build_fleet(cfg: Config,
 def concat_states(fleet: Fleet, lead: Any, fol: Any) -> Any:
     """One batch of 2n vehicles from the leaders' and followers' states (leaders first)."""
     return _concat(fleet.state_type, lead, fol)
+
+
+def state_rows(fleet: Fleet, both: Any, rows: np.ndarray) -> Any:
+    """The vehicles at ``rows`` (an index array) of a batch: copies."""
+    return _rows(fleet.state_type, both, rows)
 
 
 def split_state(fleet: Fleet, both: Any, n: int) -> tuple[Any, Any]:
