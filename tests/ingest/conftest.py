@@ -10,7 +10,7 @@ from ingest_helpers import NEURAL_SWARM_DIR, ULOG_SAMPLE
 
 @pytest.fixture
 def neural_swarm_dir() -> Path:
-    """The shared real Neural-Swarm folder (skips when /work/shared is absent)."""
+    """The shared real Neural-Swarm folder (skips when ``../shared`` beside the clone is absent)."""
     if not NEURAL_SWARM_DIR.is_dir():
         pytest.skip(f"shared data not found at {NEURAL_SWARM_DIR}")
     return NEURAL_SWARM_DIR
