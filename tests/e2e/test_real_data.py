@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
+
+from cli_process import aerodock as run_cli
 
 
 def aerodock(*args, cwd):
-    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
-                          capture_output=True, text=True, timeout=600, cwd=cwd)
-    assert proc.returncode == 0, proc.stderr
-    return proc.stdout
+    return run_cli(*args, check=True, cwd=cwd).stdout
 
 
 def test_ingest_train_on_00_04_evaluate_on_05_06(tmp_path, shared_data):

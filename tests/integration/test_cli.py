@@ -3,18 +3,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
+from functools import partial
 
 import pytest
+from cli_process import aerodock as run_cli
 
-
-def aerodock(*args, check=True):
-    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
-                          capture_output=True, text=True, timeout=300)
-    if check and proc.returncode != 0:
-        raise AssertionError(proc.stderr)
-    return proc
+aerodock = partial(run_cli, check=True, timeout_s=300)
 
 
 @pytest.mark.parametrize("sep", [0.36, 0.64, 1.35])

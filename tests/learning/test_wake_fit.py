@@ -9,12 +9,12 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import tomllib
+from functools import partial
 from pathlib import Path
 
 import pytest
+from cli_process import aerodock as run_cli
 from wake_synth import synthetic_flights
 
 from aerodock.flightlog import save_flightlogs
@@ -133,12 +133,7 @@ def test_real_fit_on_the_shared_flights(shared_data):
 
 
 # -- the command ------------------------------------------------------------------------------
-def aerodock(*args, check=True):
-    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
-                          capture_output=True, text=True, timeout=600)
-    if check and proc.returncode != 0:
-        raise AssertionError(proc.stderr)
-    return proc
+aerodock = partial(run_cli, check=True)
 
 
 def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 
 import pytest
+from cli_process import aerodock
 
 from aerodock.sweep import SweepSpecError, load_spec, parse_spec, run_sweep, write_table
 
@@ -20,11 +19,6 @@ seeds = [0]
 cable_length_m = [0.36, 0.64]
 compensation = ["observer", "oracle"]
 """
-
-
-def aerodock(*args):
-    return subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
-                          capture_output=True, text=True, timeout=600)
 
 
 def test_grid_expands_every_combination_times_seeds():

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
+from cli_process import aerodock
 from PIL import Image
 
 from aerodock.flightlog import load_flightlogs, save_flightlogs
@@ -23,11 +21,6 @@ from aerodock.view import (
 
 BROWN = np.array([140, 86, 75])  # matplotlib tab:brown: the bar
 PURPLE = np.array([148, 103, 189])  # tab:purple: the follower
-
-
-def aerodock(*args):
-    return subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", *args],
-                          capture_output=True, text=True, timeout=600)
 
 
 def frames(path):
