@@ -684,6 +684,16 @@ def reseal(doc: dict[str, Any]) -> dict[str, Any]:
 PROBES = [["--separation", "0.36", "--radial", "0.05", "--leader-speed", "0.25"]]
 
 
+def _numbers(outs: list[str] | None) -> Any:
+    """The probes' JSON without ``source`` (the model's path, which differs by design)."""
+    if outs is None:
+        return None
+    docs = [json.loads(o) for o in outs]
+    for doc in docs:
+        doc.pop("source", None)
+    return docs
+
+
 def predictions(model: Path) -> Any:
     """The model's predictions (force, and torque when it has one) on 2,000 fixed random states,
     loaded by aerodock's own loader; None if it does not load."""
@@ -703,10 +713,13 @@ def predictions(model: Path) -> Any:
     rot = np.tile(np.eye(3), (n, 1, 1))
     rot[:, 0, 0] = rot[:, 1, 1] = np.cos(ang)
     rot[:, 0, 1], rot[:, 1, 0] = -np.sin(ang), np.sin(ang)
-    with np.errstate(all="ignore"):
-        out = [np.asarray(pred.predict(x, rot))]
-        if pred.has_torque:
-            out.append(np.asarray(pred.predict_torque(x, rot)))
+    try:
+        with np.errstate(all="ignore"):
+            out = [np.asarray(pred.predict(x, rot))]
+            if pred.has_torque:
+                out.append(np.asarray(pred.predict_torque(x, rot)))
+    except Exception as exc:  # noqa: BLE001 - loads, then cannot predict: altered
+        return [np.asarray(f"raises {type(exc).__name__}: {exc}")]
     return out
 
 
@@ -720,9 +733,10 @@ def same(a: Any, b: Any) -> bool:
 
 
 def model_check(cli: list[str], files: dict[str, Path], work: Path, limit: int | None,
-                timeout_s: float, pool: ThreadPoolExecutor,
-                max_rss_kib: int) -> tuple[dict[str, Any], list[Run]]:
-    """Each single-field change of model.json, plain and re-sealed, through ``field probe``."""
+                timeout_s: float, pool: ThreadPoolExecutor, max_rss_kib: int,
+                passes: tuple[bool, ...] = (False, True)) -> tuple[dict[str, Any], list[Run]]:
+    """Each single-field change of model.json, plain (``False`` in ``passes``) and re-sealed
+    (``True``), through ``field probe``."""
     src = files["model"]
     doc = json.loads((src / "model.json").read_text())
 
@@ -750,7 +764,7 @@ def model_check(cli: list[str], files: dict[str, Path], work: Path, limit: int |
     changes = model_changes(doc)[:limit]
     # Re-sealed: every change but the training record's (metadata no prediction reads; the
     # plain pass tries those too).
-    jobs = [(desc, new, sealed) for desc, new in changes for sealed in (False, True)
+    jobs = [(desc, new, sealed) for desc, new in changes for sealed in passes
             if not (sealed and desc.startswith("training."))]
 
     def one(i: int, desc: str, new: dict[str, Any], sealed: bool) -> dict[str, Any]:
@@ -763,13 +777,15 @@ def model_check(cli: list[str], files: dict[str, Path], work: Path, limit: int |
         if outs is None:
             verdict["result"] = "refused" if run.rc == 2 and not run.problems else "broken"
         else:
-            altered_cli = outs != ref_out
+            altered_cli = _numbers(outs) != _numbers(ref_out)
             altered_py = not same(predictions(d), ref_pred)
             verdict["result"] = ("accepted-altering" if altered_cli or altered_py
                                  else "accepted-same")
             verdict["altered_by"] = [w for w, x in (("cli probe", altered_cli),
                                                     ("2,000 states", altered_py)) if x]
         shutil.rmtree(d.parent, ignore_errors=True)
+        print(f"[model.json {i + 1}/{len(jobs)}] {verdict['result']}: {desc}"
+              f"{' (re-sealed)' if sealed else ''}", file=sys.stderr, flush=True)
         return verdict, run
 
     results = list(pool.map(lambda a: one(*a), [(i, *j) for i, j in enumerate(jobs)]))
@@ -777,6 +793,8 @@ def model_check(cli: list[str], files: dict[str, Path], work: Path, limit: int |
     runs = [r for _, r in results] + [ref_run]
     summary: dict[str, Any] = {"reference_probe_ok": ref_out is not None, "changes": len(changes)}
     for sealed, key in ((False, "plain"), (True, "resealed")):
+        if sealed not in passes:
+            continue
         vs = [v for v in verdicts if v["resealed"] == sealed]
         summary[key] = {
             "tried": len(vs),
@@ -842,7 +860,7 @@ def text_summary(s: dict[str, Any]) -> str:
              f"{s['json_checked']} checked"]
     m = s.get("model_json")
     if m:
-        for key in ("plain", "resealed"):
+        for key in [k for k in ("plain", "resealed") if k in m]:
             k = m[key]
             lines.append(f"model.json {key}: {k['tried']} single-field changes: {k['results']}; "
                          f"accepted and altering: {len(k['accepted_altering'])}")
@@ -923,13 +941,17 @@ def main(argv: list[str] | None = None) -> int:
 
     with ThreadPoolExecutor(args.jobs) as pool:
         model = None
-        if args.model_changes != 0:  # first: it is short, and the target's own check
+        if args.model_changes != 0:  # the plain changes first: the target's own check
             model, _ = model_check(cli, files, work, args.model_changes, args.timeout,
-                                   pool, max_rss_kib)
+                                   pool, max_rss_kib, passes=(False,))
         runs = []
         for start in range(0, len(plans), 100):  # a partial summary every 100 runs
             runs += list(pool.map(execute, plans[start:start + 100]))
             write(runs, model, partial=True)
+        if model is not None:  # then re-sealed (informational)
+            sealed, _ = model_check(cli, files, work, args.model_changes, args.timeout,
+                                    pool, max_rss_kib, passes=(True,))
+            model["resealed"] = sealed["resealed"]
     summary = write(runs, model, partial=False)
     print(text_summary(summary))
     if not args.work and not args.keep and summary["failures"] == 0:
