@@ -72,6 +72,9 @@ COMMANDS = ["dock", "faults", "bench", "ingest", "train", "evaluate", "evaluate-
             "field probe", "field plot", "field fit"]
 
 
+BLOCKED_CPU_FRACTION = 0.1  # a timed-out run below this CPU share was waiting, not computing
+
+
 def _reject_constant(name: str) -> Any:
     raise ValueError(f"invalid JSON constant {name}")
 
@@ -90,6 +93,7 @@ class Run:
     hang: bool = False
     seconds: float = 0.0
     maxrss_kib: int = 0
+    cpu_s: float = 0.0
     traceback: bool = False
     error_lines: int = 0
     json_checked: bool = False
@@ -100,9 +104,11 @@ class Run:
 
 
 def spawn(cli: list[str], args: list[Any], cwd: Path, timeout_s: float,
-          env: dict[str, str] | None = None) -> tuple[int | None, bool, float, int, bytes, bytes]:
+          env: dict[str, str] | None = None
+          ) -> tuple[int | None, bool, float, int, bytes, bytes, float]:
     """Run ``cli + args`` in ``cwd`` in a new process group; ``(rc, hang, seconds, maxrss_kib,
-    stdout, stderr)``. A run past ``timeout_s`` is killed (its whole group) and flagged a hang;
+    stdout, stderr, cpu_s)`` (CPU: user + system, with the children it waited for). A run past
+    ``timeout_s`` is killed (its whole group) and flagged a hang;
     ``rc`` is negative for a signal, as :func:`os.waitstatus_to_exitcode` gives it."""
     import subprocess
 
@@ -134,7 +140,7 @@ def spawn(cli: list[str], args: list[Any], cwd: Path, timeout_s: float,
         except (ProcessLookupError, PermissionError):
             pass
     return (None if hang else proc.returncode, hang, seconds, usage.ru_maxrss,
-            out_path.read_bytes(), err_path.read_bytes())
+            out_path.read_bytes(), err_path.read_bytes(), usage.ru_utime + usage.ru_stime)
 
 
 def judge(run: Run, args: list[Any], stdout: bytes, stderr: bytes, max_rss_kib: int) -> None:
@@ -280,7 +286,7 @@ def setup(base: Path, cli: list[str], timeout_s: float) -> dict[str, Path]:
     for args in (["dock", "--trials", "2", "--seed", "1", "--config", files["small"],
                   "--save-logs", base / "logs"],
                  ["train", "--data", files["log"], "--out", files["model"], "--max-epochs", "3"]):
-        rc, hang, _, _, _, err = spawn(cli, args, base, max(600.0, timeout_s * 5))
+        rc, hang, _, _, _, err, _ = spawn(cli, args, base, max(600.0, timeout_s * 5))
         if rc != 0:
             raise SystemExit(f"audit setup failed: aerodock {show(args)} -> {rc}: "
                              f"{err.decode(errors='replace')[-500:]}")
@@ -299,7 +305,7 @@ def setup(base: Path, cli: list[str], timeout_s: float) -> dict[str, Path]:
     files["binary"].write_bytes(bytes(random.Random(1).randrange(256) for _ in range(4096)))
     with open(files["sparse"], "wb") as f:  # 4 GiB of holes: costs no disk
         f.truncate(4 << 30)
-    shutil.copy(files["config"], files["nonutf8"])
+    shutil.copy(files["small"], files["nonutf8"])  # a valid small config with an odd name
     (base / "ready").write_text("ok\n")
     return files
 
@@ -327,11 +333,13 @@ class Draw:
         self.n += 1
         return self.dir / f"in{self.n}{suffix}"
 
-    def special(self) -> Any:
-        """Something that is not the file asked for."""
+    def special(self, small_only: bool = False) -> Any:
+        """Something that is not the file asked for (``small_only``: never an empty file, a
+        config of the defaults for commands that run long with them)."""
         f = self.files
         return self.rng.choice([
-            "/dev/zero", "/dev/null", f["fifo"], f["folder"], f["empty"], f["binary"],
+            "/dev/zero", "/dev/null", f["fifo"], f["folder"], f["binary"],
+            *([] if small_only else [f["empty"]]),
             f["sparse"], self.dir / "missing.toml", "", "-", os.fsencode(f["nonutf8"]),
             "/proc/self/mem", "/etc/shadow"])
 
@@ -384,7 +392,7 @@ class Draw:
         out.write_text(dump_toml(doc))
         return out
 
-    def input(self, kind: str) -> Any:
+    def input(self, kind: str, small_only: bool = False) -> Any:
         """An input of ``kind`` (a key of the setup files): good, damaged, odd or not a file."""
         src = self.files[kind]
         r = self.rng.random()
@@ -401,7 +409,7 @@ class Draw:
             return self.damaged(src, src.suffix)
         if r < 0.75 and src.suffix == ".toml":
             return self.odd_toml(src)
-        return self.special()
+        return self.special(small_only)
 
     def config(self, small_only: bool = False) -> Any:
         """A config: the small one, one with long simulated times, or either one damaged;
@@ -412,7 +420,9 @@ class Draw:
             return self.files["small"]
         if r < 0.5:
             return self.long_config()
-        return self.input(self.rng.choice(["small"] if small_only else ["config", "small"]))
+        if small_only:
+            return self.input("small", small_only=True)
+        return self.input(self.rng.choice(["config", "small"]))
 
     def out_path(self, suffix: str) -> Any:
         """Where to write: usually fresh, sometimes odd."""
@@ -568,9 +578,9 @@ def gen(command: str, d: Draw) -> list[Any]:
     elif command == "reproduce":
         # Even --smoke with the small config takes over 60 s here: only odd configs (a damaged
         # one that is still valid runs long, legitimately; such a hang says so in its tail).
-        cfg = d.input("small") if d.p(0.6) else d.long_config()
-        while cfg == d.files["small"]:
-            cfg = d.input("small")
+        cfg = d.input("small", True) if d.p(0.6) else d.long_config()
+        while cfg in (d.files["small"], os.fsencode(d.files["nonutf8"])):
+            cfg = d.input("small", True)
         a = ["reproduce", "--smoke", "--no-real-data", "--out", d.out_path(""), "--config", cfg]
         _opt(d, a, 0.2, "--seed", d.value(0, 1))
     elif command == "targets":
@@ -746,8 +756,8 @@ def model_check(cli: list[str], files: dict[str, Path], work: Path, limit: int |
         for args in PROBES[:1]:
             argv = ["field", "probe", *args, "--samples", "2", "--model", model, "--json"]
             run = Run(-1, "model.json", [show(argv)])
-            rc, run.hang, run.seconds, run.maxrss_kib, so, se = spawn(cli, argv, cwd,
-                                                                      timeout_s)
+            rc, run.hang, run.seconds, run.maxrss_kib, so, se, run.cpu_s = spawn(
+                cli, argv, cwd, timeout_s)
             run.rc = rc
             judge(run, argv, so, se, max_rss_kib)
             first = first or run
@@ -822,6 +832,7 @@ def summarise(runs: list[Run], model: dict[str, Any] | None, args: argparse.Name
         c[key] += 1
     lite = lambda r: {"command": r.argv[0], "rc": r.rc, "seconds": round(r.seconds, 1),  # noqa
                       "maxrss_mb": round(r.maxrss_kib / 1024, 1), "problems": r.problems,
+                      "cpu_s": round(r.cpu_s, 1),
                       "stderr_tail": r.stderr_tail}
     return {
         "tool": "tools/audit.py", "seed": args.seed, "runs": len(runs), "jobs": args.jobs,
@@ -831,6 +842,10 @@ def summarise(runs: list[Run], model: dict[str, Any] | None, args: argparse.Name
                                           for r in runs).items())),
         "per_command": dict(sorted(per.items())),
         "hangs": [lite(r) for r in runs if r.hang],
+        # A hang that used little CPU was waiting (a FIFO, a lock): blocked for ever. One that
+        # computed was a valid long run the CLI's size limits let through.
+        "hangs_blocked": sum(r.hang and r.cpu_s < BLOCKED_CPU_FRACTION * r.seconds
+                             for r in runs),
         "max_rss_mb": round(top.maxrss_kib / 1024, 1) if top else 0.0,
         "max_rss_command": top.argv[0] if top else "",
         "over_rss_limit": [lite(r) for r in runs if r.maxrss_kib > args.max_rss_mb * 1024],
@@ -851,7 +866,8 @@ def text_summary(s: dict[str, Any]) -> str:
              f"{s['timeout_s']:g} s timeout), {s['wall_s'] / 60:.1f} min",
              "exit codes: " + ", ".join(f"{k}: {v}" for k, v in s["exit_codes"].items()),
              "per command: " + ", ".join(f"{k} {v['runs']}" for k, v in s["per_command"].items()),
-             f"hangs: {len(s['hangs'])}; max RSS {s['max_rss_mb']:.0f} MB "
+             f"hangs: {len(s['hangs'])} ({s['hangs_blocked']} blocked, the rest computing); "
+             f"max RSS {s['max_rss_mb']:.0f} MB "
              f"({s['max_rss_command'][:120]}); over {s['max_rss_limit_mb']} MB: "
              f"{len(s['over_rss_limit'])}",
              f"tracebacks: {len(s['tracebacks'])}; exits other than 0/2: "
@@ -918,8 +934,8 @@ def main(argv: list[str] | None = None) -> int:
     def execute(plan: tuple[int, str, list[Any], Path]) -> Run:
         i, command, a, run_dir = plan
         run = Run(i, command, [show(a)])
-        run.rc, run.hang, run.seconds, run.maxrss_kib, so, se = spawn(cli, a, run_dir,
-                                                                      args.timeout)
+        run.rc, run.hang, run.seconds, run.maxrss_kib, so, se, run.cpu_s = spawn(
+            cli, a, run_dir, args.timeout)
         judge(run, a, so, se, max_rss_kib)
         if not run.problems and not args.keep:
             shutil.rmtree(run_dir, ignore_errors=True)

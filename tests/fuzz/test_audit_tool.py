@@ -78,6 +78,7 @@ def test_a_broken_cli_is_reported(work, tmp_path):
     assert res.returncode == 1
     assert [h["command"].split()[0] for h in s["hangs"]] == ["train"]
     assert s["exit_codes"]["hang"] == 1
+    assert s["hangs_blocked"] == 1  # it slept: waiting, not computing
     assert [r["command"].split()[0] for r in s["other_exit_codes"]] == ["dock"]
     assert [r["command"].split()[0] for r in s["tracebacks"]] == ["dock"]
     assert s["max_rss_command"].startswith("export") and s["max_rss_mb"] > 250
