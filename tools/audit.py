@@ -72,6 +72,9 @@ COMMANDS = ["dock", "faults", "bench", "ingest", "train", "evaluate", "evaluate-
             "field probe", "field plot", "field fit"]
 
 
+# Options that take no value: a "--json" after any other option is that option's value.
+FLAGS = {"--json", "--quick", "--smoke", "--no-real-data", "--single", "--spectral-norm", "--bar",
+         "--leader-fixed", "--no-leader-fixed", "--markdown", "--no-markdown", "--help"}
 BLOCKED_CPU_FRACTION = 0.1  # a timed-out run below this CPU share was waiting, not computing
 
 
@@ -160,8 +163,10 @@ def judge(run: Run, args: list[Any], stdout: bytes, stderr: bytes, max_rss_kib: 
         run.problems.append(f"{run.error_lines} 'error:' lines")
     if run.maxrss_kib > max_rss_kib:
         run.problems.append(f"RSS {run.maxrss_kib / 1024:.0f} MB")
-    strs = [a for a in args if isinstance(a, str)]
-    if run.rc == 0 and "--json" in strs and "--help" not in strs:
+    strs = [a if isinstance(a, str) else "" for a in args]
+    json_flag = any(a == "--json" and (i == 0 or not strs[i - 1].startswith("-")
+                                       or strs[i - 1] in FLAGS) for i, a in enumerate(strs))
+    if run.rc == 0 and json_flag and "--help" not in strs:
         run.json_checked = True
         try:
             doc = json.loads(out, parse_constant=_reject_constant)

@@ -201,6 +201,16 @@ def test_long_simulated_times_are_refused_even_for_two_trials(toml, tmp_path):
             "over the limit of 100000")
 
 
+def test_reproduce_refuses_a_long_trial_before_its_curriculum(tmp_path):
+    """tools/audit.py found `reproduce --smoke` with backoff_s = 600 computing for over 60 s
+    (a curriculum first) before its first campaign refused the trial."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[vehicle]\nmodel = "point-mass"\n[mission]\nbackoff_s = 600\n')
+    refused(cli(["reproduce", "--smoke", "--no-real-data", "--out", tmp_path / "out",
+                 "--config", cfg], "long-sim-time"), "physics steps", "over the limit of 100000")
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_run_size_counts_every_mission_time(cfg):
     from aerodock.mission.limits import LimitError, check_campaign_size
 
