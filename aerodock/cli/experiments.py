@@ -38,8 +38,12 @@ def reproduce(
 ) -> None:
     """The paper's experiments end to end: results.json, report.md and figures/."""
     from aerodock.experiments.reproduce import run_reproduce
+    from aerodock.mission.limits import check_campaign_size
 
     cfg = load_config(config)
+    # Its docking campaigns come after minutes of curriculum: a trial the limits refuse is
+    # refused now, not there (each campaign checks its own trials x steps as it starts).
+    check_campaign_size(cfg, 1)
     # ../shared/data beside the repository (this file is REPO/aerodock/cli/experiments.py)
     shared = Path(__file__).resolve().parents[3] / "shared" / "data"
     here = Path.cwd().parent / "shared" / "data"

@@ -116,6 +116,38 @@ class UlogTrack:
     label_valid: np.ndarray | None = None
 
 
+READ_BUDGET_FACTOR = 64
+"""A ULog may be read at most this many times its size (plus :data:`READ_BUDGET_EXTRA_BYTES`).
+pyulog reads a sound file once; its resynchronisation after corrupt bytes re-reads some; on a
+truncated file whose last message claims more bytes than remain, its definitions loop seeks back
+further than it read and never ends (found by tools/audit.py)."""
+READ_BUDGET_EXTRA_BYTES = 64 << 20
+
+
+class _BoundedReader:
+    """A binary file for pyulog that raises ``error`` once more than the budget was read."""
+
+    def __init__(self, raw: Any, size: int, error: type[Exception]) -> None:
+        self._raw, self._error = raw, error
+        self._left = READ_BUDGET_FACTOR * size + READ_BUDGET_EXTRA_BYTES
+
+    def read(self, n: int = -1) -> bytes:
+        data = self._raw.read(n)
+        self._left -= max(len(data), 1)
+        if self._left < 0:
+            raise self._error("its messages loop back on themselves (corrupt or truncated)")
+        return data
+
+    def seek(self, offset: int, whence: int = 0) -> int:
+        return self._raw.seek(offset, whence)
+
+    def tell(self) -> int:
+        return self._raw.tell()
+
+    def close(self) -> None:
+        self._raw.close()
+
+
 def _load(path: Path) -> Any:
     try:
         from pyulog import ULog
@@ -133,8 +165,9 @@ def _load(path: Path) -> Any:
         raise IngestError(path, "empty file")
     sink = io.StringIO()  # pyulog prints corruption notes; keep them off the user's terminal
     try:
-        with contextlib.redirect_stdout(sink):
-            ulog = ULog(str(path), message_name_filter_list=list(TOPICS))
+        with contextlib.redirect_stdout(sink), open(path, "rb") as raw:
+            reader = _BoundedReader(raw, size, ULogException)
+            ulog = ULog(reader, message_name_filter_list=list(TOPICS))
     except ULogException as err:
         raise IngestError(path, f"not a readable ULog file ({err})") from None
     except (OSError, ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError) as err:

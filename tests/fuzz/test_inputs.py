@@ -201,6 +201,16 @@ def test_long_simulated_times_are_refused_even_for_two_trials(toml, tmp_path):
             "over the limit of 100000")
 
 
+def test_reproduce_refuses_a_long_trial_before_its_curriculum(tmp_path):
+    """tools/audit.py found `reproduce --smoke` with backoff_s = 600 computing for over 60 s
+    (a curriculum first) before its first campaign refused the trial."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[vehicle]\nmodel = "point-mass"\n[mission]\nbackoff_s = 600\n')
+    refused(cli(["reproduce", "--smoke", "--no-real-data", "--out", tmp_path / "out",
+                 "--config", cfg], "long-sim-time"), "physics steps", "over the limit of 100000")
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_run_size_counts_every_mission_time(cfg):
     from aerodock.mission.limits import LimitError, check_campaign_size
 
@@ -347,3 +357,13 @@ def test_export_to_a_non_utf8_name_does_not_crash(log_file, tmp_path):
     if res.returncode == 0:
         assert json.loads(res.stdout)["kind"] == "mlp"
         assert (tmp_path / name).is_file()
+
+
+def test_a_ulog_whose_last_message_overruns_the_file_is_refused_not_looped_on(tmp_path):
+    """tools/audit.py found pyulog looping for ever on a damaged ULog: a message header claiming
+    20,000 bytes (corrupt: over its 10,000) where fewer remain makes it seek back further than it
+    read, to the same header. aerodock bounds what pyulog may read."""
+    bad = tmp_path / "loop.ulg"
+    bad.write_bytes(b"ULog\x01\x12\x35\x01" + bytes(8) + b"\x20\x4e\x00" + bytes(19999))
+    refused(cli(["ingest", "--format", "ulog", "--single", bad, "--out", tmp_path / "o.npz"],
+                "ulog-loop"), "loop back on themselves")
