@@ -66,7 +66,9 @@ def node_command(
         "--duration", help="Stop after this many seconds (default: run until Ctrl-C).",
     )] = None,
     config: Annotated[Path | None, typer.Option(
-        "--config", help="aerodock TOML: the vehicles, to check the model was trained on them.",
+        "--config", help="aerodock TOML: the vehicles, to check the model was trained on them; "
+                         "a leader-aware model (so2-leader) takes its wake scales from them "
+                         "(the leader hovering) instead of its training flights'.",
     )] = None,
 ) -> None:
     """Run a trained downwash model as a ROS 2 node next to Freyja or PX4 (the ros extra)."""
@@ -76,7 +78,7 @@ def node_command(
     from aerodock.learning.compatibility import model_warnings
     from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
-    from aerodock.node.core import STATE_TYPES
+    from aerodock.node.core import STATE_TYPES, configured_wake_scales
 
     if not (rate > 0 and rate <= 1000):
         fail(f"--rate must be in (0, 1000] Hz, got {rate}")
@@ -97,6 +99,10 @@ def node_command(
         merged, explicit = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
         fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
+    if (getattr(predictor, "needs_wake_scales", False) and config is None
+            and predictor.default_wake_scales is None):
+        fail(f"a {predictor.kind} model needs the vehicles' wake scales and its model file "
+             "records none: give --config with the leader and follower")
     try:
         import rclpy  # noqa: F401
     except ImportError:
@@ -106,11 +112,20 @@ def node_command(
     notes = model_warnings(predictor, cfg)
     for note in notes:
         typer.echo(f"warning: {note}", err=True)
+    # Only a config the user names says which vehicles fly (the defaults need not be them).
+    scales = None if config is None else configured_wake_scales(predictor, cfg.leader,
+                                                                 cfg.vehicle)
+    if getattr(predictor, "needs_wake_scales", False):
+        shown = predictor.default_wake_scales if scales is None else scales
+        typer.echo(f"aerodock node: wake scales v_hA {shown[0]:.3g} m/s, leader size "
+                   f"{shown[1]:.3g} m, v_hB {shown[2]:.3g} m/s, from "
+                   + ("the training flights" if scales is None else str(config)), err=True)
     settings = NodeSettings(
         mapping=merged, rate_hz=rate, publish=publish, max_age_s=max_age, output_topic=output_topic,
         diagnostics_topic=diagnostics_topic,
         output_frame=None if output_frame == OutputFrame.auto else output_frame.value,
         frame_set="frame" in explicit, state_types=types,
+        wake_scales=None if scales is None else tuple(float(v) for v in scales),
     )
     typer.echo(f"aerodock node: {predictor.kind} model {model}, publish {publish.value} "
                f"({rate:g} Hz {'watchdog' if publish == PublishMode.ON_FOLLOWER else 'timer'}), "

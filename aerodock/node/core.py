@@ -46,6 +46,7 @@ import numpy as np
 
 from aerodock.geometry import euler_to_rotmat, quat_to_rotmat
 from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ
+from aerodock.learning.features import GRAVITY_MPS2, wake_scales
 
 ODOMETRY = "nav_msgs/msg/Odometry"
 CURRENT_STATE = "freyja_msgs/msg/CurrentState"
@@ -392,6 +393,27 @@ class StepResult:
     reason: str = ""
 
 
+def configured_wake_scales(predictor: Any, leader: Any, follower: Any) -> np.ndarray | None:
+    """A leader-aware model's wake scales (3,) for the vehicles the node flies with, or None for
+    other kinds.
+
+    The state messages carry no thrust, so the leader's is its hover thrust (its weight): the
+    scales are :func:`aerodock.learning.features.wake_scales` of the leader's weight and rotors
+    and the follower's mass and rotors, as a simulated mission builds them for a hovering leader
+    (:meth:`aerodock.learning.runtime.Predictor.wake_scales_for_bodies`).
+
+    Args:
+        predictor: the node's predictor (``needs_wake_scales`` says whether it is leader-aware).
+        leader, follower: the vehicles' config sections (``mass_kg``, ``rotor_radius_m``,
+            ``n_rotors``), e.g. ``cfg.leader`` and ``cfg.vehicle``.
+    """
+    if not getattr(predictor, "needs_wake_scales", False):
+        return None
+    return wake_scales(leader.mass_kg * GRAVITY_MPS2, leader.rotor_radius_m,
+                       int(leader.n_rotors), follower.mass_kg, follower.rotor_radius_m,
+                       int(follower.n_rotors))[0]
+
+
 def prediction_step(predictor: Any, leader: VehicleState | None,
                     follower: VehicleState | None, now_s: float, *, max_age_s: float,
                     output_frame: str = "ned", clock: Any = None,
@@ -410,10 +432,11 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
             ``time.perf_counter``).
         faults: role -> the :class:`InputMonitor` verdict on its newest message (None: fine).
         wake_scales: (3,) a leader-aware model's wake scales (leader_vh_mps, leader_size_m,
-            follower_vh_mps; :func:`aerodock.learning.features.wake_scales`). The state
-            messages carry no thrust, so the node passes None: the model file's recorded
-            training scales (``Predictor.default_wake_scales``). Ignored by other kinds, which
-            run exactly as before.
+            follower_vh_mps; :func:`aerodock.learning.features.wake_scales`): the flown
+            vehicles' (:func:`configured_wake_scales`, from ``aerodock node --config``), or
+            None: the model file's recorded training scales
+            (``Predictor.default_wake_scales``). Ignored by other kinds, which run exactly as
+            before.
 
     A prediction that is not finite is also replaced by zero and flagged stale.
     """

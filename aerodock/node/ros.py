@@ -81,6 +81,9 @@ class NodeSettings:
         frame_set: the mapping file sets ``frame`` (the automatic output frame follows it).
         state_types: topic -> ROS type name, for topics whose type is not to be discovered.
         frame_ids: output ``header.frame_id`` per output frame.
+        wake_scales: a leader-aware model's wake scales (3,) for the flown vehicles
+            (:func:`aerodock.node.core.configured_wake_scales`); None: the model file's
+            training scales.
     """
 
     mapping: dict[str, Any]
@@ -93,6 +96,7 @@ class NodeSettings:
     frame_set: bool = False
     state_types: dict[str, str] = field(default_factory=dict)
     frame_ids: dict[str, str] = field(default_factory=lambda: {"ned": "map_ned", "enu": "map"})
+    wake_scales: tuple[float, float, float] | None = None
 
 
 def message_class(type_name: str) -> Any:
@@ -152,6 +156,8 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
             super().__init__(node_name)
             self.predictor = predictor
             self.settings = settings
+            self.wake_scales = (None if settings.wake_scales is None
+                                else np.asarray(settings.wake_scales, dtype=float))
             self.states: dict[str, VehicleState | None] = {"leader": None, "follower": None}
             self.topics = {role: settings.mapping[role]["state"]
                            for role in ("leader", "follower")}
@@ -246,7 +252,8 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerod
                                      self.states["follower"], start,
                                      max_age_s=self.settings.max_age_s,
                                      output_frame=self.output_frame,
-                                     faults={r: m.verdict for r, m in self.monitors.items()})
+                                     faults={r: m.verdict for r, m in self.monitors.items()},
+                                     wake_scales=self.wake_scales)
             stamp = self.get_clock().now().to_msg()
             latency_ms = (time.monotonic() - start) * 1e3  # trigger to the output's stamp
             out = Vector3Stamped()

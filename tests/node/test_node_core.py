@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from node_helpers import random_model
@@ -343,3 +345,59 @@ def test_output_trigger_refuses_unknown_modes_and_events():
     with pytest.raises(ValueError, match="event"):
         output_trigger(PublishMode.TIMER, "leader message", 1.0, None, 0.01)
     assert DEFAULT_PUBLISH_MODE is PublishMode.ON_FOLLOWER
+
+
+# --- a leader-aware model's wake scales from the flown vehicles -------------------------------
+
+
+def test_configured_wake_scales_are_the_vehicles_hovering(tmp_path):
+    """``node --config``: a so2-leader model gets the configured leader's (hovering) and
+    follower's scales, as a simulated mission builds them; other kinds get None."""
+    from aerodock.config import load_config
+    from aerodock.downwash import BodyState
+    from aerodock.learning.features import GRAVITY_MPS2, wake_scales
+    from aerodock.node.core import configured_wake_scales
+
+    plain = Predictor.load(random_model(tmp_path / "so2"))
+    aware = Predictor.load(random_model(tmp_path / "leader", kind="so2-leader"))
+    default = load_config()
+    large = load_config(Path(__file__).parents[2] / "examples" / "large_leader.toml")
+    assert configured_wake_scales(plain, default.leader, default.vehicle) is None
+    got = configured_wake_scales(aware, large.leader, large.vehicle)
+    lead, fol = large.leader, large.vehicle
+    want = wake_scales(lead.mass_kg * GRAVITY_MPS2, lead.rotor_radius_m, lead.n_rotors,
+                       fol.mass_kg, fol.rotor_radius_m, fol.n_rotors)[0]
+    np.testing.assert_array_equal(got, want)
+    # the mission's own scales for a leader at hover thrust, the same rotors
+    aware.set_rotor_geometry(lead.rotor_radius_m, lead.n_rotors, fol.rotor_radius_m,
+                             fol.n_rotors)
+    z = np.zeros((1, 3))
+    bodies = (BodyState(z, z, np.eye(3)[None], np.array([lead.mass_kg * GRAVITY_MPS2]),
+                        np.array([lead.mass_kg])),
+              BodyState(z, z, np.eye(3)[None], np.array([fol.mass_kg * GRAVITY_MPS2]),
+                        np.array([fol.mass_kg])))
+    np.testing.assert_allclose(aware.wake_scales_for_bodies(*bodies)[0], got, rtol=1e-12)
+    # a leader of twice the mass on larger rotors: other scales than the default pair's
+    small = configured_wake_scales(aware, default.leader, default.vehicle)
+    assert got[1] > small[1] and not np.allclose(got, small)
+    # and the step flies them
+    lead_s = _state(1.0, rot=euler_to_rotmat(0.05, -0.03, 0.7))
+    fol_s = _state(1.0, p=(0.2, -0.1, -1.4), v=(0.0, 0.3, 0.1))
+    x, rot = model_inputs(lead_s, fol_s)
+    for scales in (got, small):
+        out = prediction_step(aware, lead_s, fol_s, 1.01, max_age_s=0.05, wake_scales=scales)
+        np.testing.assert_array_equal(out.f_ext_mps2, aware.predict_one(x, rot, scales))
+    assert not np.allclose(
+        prediction_step(aware, lead_s, fol_s, 1.01, max_age_s=0.05, wake_scales=got).f_ext_mps2,
+        prediction_step(aware, lead_s, fol_s, 1.01, max_age_s=0.05, wake_scales=small).f_ext_mps2)
+
+
+def test_node_refuses_a_leader_aware_model_without_scales(tmp_path):
+    """No recorded training scales and no --config: one line, exit 2, before ROS starts."""
+    from cli_process import aerodock
+
+    model = random_model(tmp_path / "leader", kind="so2-leader")
+    res = aerodock("node", "--model", model, "--duration", "0.1", timeout_s=120)
+    assert res.returncode == 2
+    assert "needs the vehicles' wake scales" in res.stderr and "--config" in res.stderr
+    assert "Traceback" not in res.stderr
