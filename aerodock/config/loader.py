@@ -159,11 +159,22 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+# Keys that earlier configs carried and nothing read: a file that sets one is told where the
+# parameter lives instead of having its value ignored.
+RETIRED_KEYS = {
+    "mission.offset_m": "the cable length d_p is 'platform.cable_length_m' (or dock --offset)",
+    "mission.leader_speed_mps": "the leader's speed is dock --leader-speed (or a sweep axis)",
+}
+
+
 def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: str) -> None:
     if not isinstance(user, Mapping):
         raise ConfigError(f"{source}: '{prefix.rstrip('.') or 'the file'}' must be a table")
     for key, value in user.items():
         dotted = f"{prefix}{key}"
+        if dotted in RETIRED_KEYS:
+            raise ConfigError(f"{source}: '{dotted}' is no longer a key (nothing read it): "
+                              f"{RETIRED_KEYS[dotted]}")
         if key not in reference:
             raise ConfigError(f"{source}: unknown key '{dotted}'")
         if dotted == "downwash":

@@ -257,7 +257,6 @@ class PlannerSection:
 class MissionSection:
     """``[mission]``: the docking mission's geometry, timing and safety limits."""
 
-    offset_m: float = number(0.01, 100)
     start_radius_m: float = number(0.01, 100)
     start_below_m: float = number(0, 100)
     start_jitter_m: float = number(0, 10)
@@ -266,7 +265,6 @@ class MissionSection:
     abort_tracking_m: float = number(0.001, 100)
     clearance_m: float = number(0, 10)
     post_dock_thrust_fraction: float = number(0, 1)
-    leader_speed_mps: float = number(0, 100)
     leader_altitude_m: float = number(0.1, 1e4)
     insertion_m: float = number(0, 1)
     terminal_s: float = number(0, 600)

@@ -37,6 +37,10 @@ def test_user_file_overrides_a_subset(tmp_path):
         ("[sim]\ncontrol_rate_hz = 0\n", "'sim.control_rate_hz' must be >= 1"),
         ("[vehicle]\nmas_kg = 1.0\n", "unknown key 'vehicle.mas_kg'"),
         ("[nonsense]\nx = 1\n", "unknown key 'nonsense'"),
+        # keys nothing read: the file is told where the parameter lives, not silently ignored
+        ("[mission]\noffset_m = 0.87\n", "'mission.offset_m' is no longer a key (nothing read "
+                                          "it): the cable length d_p is 'platform.cable_length_m'"),
+        ("[mission]\nleader_speed_mps = 0.5\n", "dock --leader-speed"),
         ("[vehicle]\nmass_kg = \"heavy\"\n", "'vehicle.mass_kg' must be a number"),
         ("[gripper]\ntrigger = \"psychic\"\n", "'gripper.trigger' must be one of"),
         ("[control]\nq_diag = [1, 2]\n", "'control.q_diag' must be 7"),
