@@ -14,8 +14,14 @@ This module removes that bias per flight:
   world's flights carry theirs), else 0.6 m (several wake radii at the default curriculum's
   separations);
 * a flight's bias is the per-axis median of its free-air raw labels; a flight with no free-air
-  samples borrows the median over the other flights' free-air samples of the same call; if there
-  are none at all, the bias is 0 and a warning is recorded.
+  samples borrows the median over the free-air samples of the other flights of the same call
+  *with the same follower vehicle* (its ``meta``'s ``follower_mass_kg``, ``follower_rotor_radius_m``
+  and ``follower_n_rotors``; logs that do not say count as one vehicle), as the bias is a property
+  of the vehicle (thrust scale, mounting: the paper's footnote 2); only if none of those has any,
+  over all the other flights' free-air samples; if there are none at all, the bias is 0 and a
+  warning is recorded. (Pooling over every flight mixed the vehicles of a heterogeneous pair: on
+  swap_sl 00-07 the large Crazyflie's flights below the small one took a z-bias of +0.07 m/s², its
+  own flights above measure -0.31 to -0.39.)
 
 A FlightLog may carry ``extra["label_valid"]`` (T,), truthy where a sample is a valid label (e.g.
 False after the follower has docked and hangs on the cables): invalid samples are excluded from
@@ -101,6 +107,19 @@ def free_air_mask(log: FlightLog, free_air_radius_m: float | None = None) -> np.
     horizontal = np.hypot(dp[:, 0], dp[:, 1])
     radius = free_air_radius_of(log, free_air_radius_m)
     return ((horizontal > radius) | (dp[:, 2] < 0.0)) & valid_mask(log)
+
+
+def follower_vehicle_of(log: FlightLog) -> tuple:
+    """The follower vehicle a log says it flew: ``meta``'s ``follower_mass_kg``,
+    ``follower_rotor_radius_m`` and ``follower_n_rotors`` (each None where it does not say).
+    Flights with equal tuples share a label bias pool (:func:`estimate_biases`)."""
+    out = []
+    for key in ("follower_mass_kg", "follower_rotor_radius_m", "follower_n_rotors"):
+        try:
+            out.append(float(log.meta[key]))
+        except (KeyError, TypeError, ValueError):
+            out.append(None)
+    return tuple(out)
 
 
 def raw_labels(
@@ -203,6 +222,7 @@ def estimate_biases(
     if raw is None:
         raw = [raw_labels(log, lowpass_hz=lowpass_hz) for log in logs]
     masks = [free_air_mask(log, free_air_radius_m) for log in logs]
+    vehicles = [follower_vehicle_of(log) for log in logs]
     notes: list[str] = []
     out: list[BiasEstimate] = []
     for i, (log, lab, mask) in enumerate(zip(logs, raw, masks, strict=True)):
@@ -210,14 +230,18 @@ def estimate_biases(
         if n_free:
             out.append(BiasEstimate(np.median(lab[mask], axis=0), "own", n_free))
             continue
-        others = [r[m] for j, (r, m) in enumerate(zip(raw, masks, strict=True)) if j != i]
-        pooled = np.concatenate(others) if others else np.zeros((0, 3))
-        if len(pooled):
+        others = [j for j in range(len(logs)) if j != i and masks[j].any()]
+        same = [j for j in others if vehicles[j] == vehicles[i]]
+        pool = same or others
+        if pool:
+            pooled = np.concatenate([raw[j][masks[j]] for j in pool])
             out.append(BiasEstimate(np.median(pooled, axis=0), "pooled", 0))
+            whose = "of the same follower vehicle" if same else "(none of its vehicle has any)"
             notes.append(
                 f"{log.name}: no free-air samples (horizontal distance > "
                 f"{free_air_radius_of(log, free_air_radius_m)} m or "
-                "above the leader); used the median of the other flights' free-air samples"
+                f"above the leader); used the median of the other flights' free-air samples "
+                f"{whose}"
             )
         else:
             out.append(BiasEstimate(np.zeros(3), "none", 0))

@@ -14,6 +14,7 @@ from aerodock.learning.datafiles import load_data_paths, load_dataset, save_data
 from aerodock.learning.dataset import DataError, Dataset, build_dataset
 from aerodock.learning.labels import (
     LabelWarning,
+    estimate_biases,
     free_air_mask,
     labels_from_log,
     labels_from_logs,
@@ -21,7 +22,8 @@ from aerodock.learning.labels import (
 from aerodock.learning.splits import split_by_flight, take_minutes, time_block_split_mask
 
 
-def _simple_log(dp: np.ndarray, force: np.ndarray, bias, name="simple", noise=0.0, seed=0):
+def _simple_log(dp: np.ndarray, force: np.ndarray, bias, name="simple", noise=0.0, seed=0,
+                meta=None):
     """Leader level at the origin; obs = cmd + force + bias (+ noise)."""
     n = len(dp)
     rng = np.random.default_rng(seed)
@@ -32,7 +34,7 @@ def _simple_log(dp: np.ndarray, force: np.ndarray, bias, name="simple", noise=0.
         leader_quat=quat, follower_pos_m=dp, follower_vel_mps=np.zeros((n, 3)),
         follower_quat=quat, follower_cmd_accel_mps2=cmd, follower_thrust_n=np.full(n, 6.9),
         follower_obs_accel_mps2=cmd + force + np.asarray(bias) + noise * rng.normal(size=(n, 3)),
-        meta={"name": name, "source": "test"},
+        meta={"name": name, "source": "test", **(meta or {})},
     )
 
 
@@ -76,6 +78,31 @@ def test_flight_without_free_air_borrows_other_flights_bias():
     ds = build_dataset([with_free, only_under])
     assert ds.meta["flights"][1]["bias_source"] == "pooled"
     assert ds.meta["warnings"] == notes
+
+
+def test_a_flight_without_free_air_borrows_the_bias_of_its_own_vehicle():
+    # Two follower vehicles with different biases in one call (a heterogeneous pair's day): a
+    # flight of the large one that is never in free air takes the large one's bias, not a
+    # median dominated by the small one's flights.
+    dp, force = _under_and_out()
+    small, large = np.array([0.1, 0.0, 0.2]), np.array([0.3, -0.1, -0.35])
+    small_meta = {"follower_mass_kg": 0.032, "follower_rotor_radius_m": 0.0225,
+                  "follower_n_rotors": 4}
+    large_meta = {"follower_mass_kg": 0.067, "follower_rotor_radius_m": 0.0325,
+                  "follower_n_rotors": 4}
+    logs = [_simple_log(dp, force, bias, name=f"free{k}", seed=k, meta=meta) for k, (bias, meta)
+            in enumerate([(small, small_meta)] * 3 + [(large, large_meta)])]
+    under = _simple_log(dp[:300], force[:300], large, name="under", seed=9, meta=large_meta)
+    labels, biases, notes = labels_from_logs(logs + [under])
+    assert biases[-1].source == "pooled"
+    np.testing.assert_allclose(biases[-1].bias, large, atol=1e-12)
+    np.testing.assert_allclose(labels[-1], force[:300], atol=1e-12)
+    assert "same follower vehicle" in notes[0]
+    # a vehicle with no free-air flight of its own falls back on all the others
+    lone = _simple_log(dp[:300], force[:300], large, name="lone", seed=9,
+                       meta={**large_meta, "follower_mass_kg": 0.5})
+    (*_, lone_bias), _ = estimate_biases(logs[:3] + [lone])
+    np.testing.assert_allclose(lone_bias.bias, small, atol=1e-12)
 
 
 def test_no_free_air_anywhere_means_zero_bias_and_a_warning():

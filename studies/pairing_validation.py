@@ -1,0 +1,75 @@
+"""Training choices judged on a validation split of the training flights only (issue 24's
+large-under-small target): train on swap_ss 00-04 + swap_sl 00-04, judge on swap_sl 05-07, each
+follower apart; the held-out swap_sl 08-11 are not read.
+
+    .venv/bin/python studies/pairing_validation.py ss_train.npz sl_train.npz [CANDIDATE ...]
+
+``ss_train.npz`` and ``sl_train.npz`` are ``aerodock ingest`` of swap_ss 00-04 and swap_sl 00-07
+(docs/results.md gives the commands). Prints, per candidate and seed 0, 1, 2, the reduction of
+the interaction region's vertical RMSE against the zero model on swap_sl 05-07 per follower
+(``cf51`` small, ``cf101`` large), then mean (sd, min-max). Candidates: see ``CANDIDATES``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from aerodock.learning.datafiles import load_data_paths
+from aerodock.learning.dataset import concat_datasets
+from aerodock.learning.evaluate import evaluate
+from aerodock.learning.train import train_model
+
+# name: (kind, train on swap_ss too, train_model options)
+CANDIDATES: dict[str, tuple[str, bool, dict]] = {
+    "so2": ("so2", True, {}),
+    "so2-leader": ("so2-leader", True, {}),
+    "so2 patience40": ("so2", True, {"patience": 40}),
+    "so2 hidden128": ("so2", True, {"hidden": (128, 128)}),
+    "so2 hidden32": ("so2", True, {"hidden": (32, 32)}),
+    # a diagnostic, not a choice: without the small pair, is the large follower learnt better?
+    "so2 sl-only": ("so2", False, {}),
+    "so2-leader sl-only": ("so2-leader", False, {}),
+}
+SEEDS = (0, 1, 2)
+FIT_LAST, VALIDATION = 4, (5, 6, 7)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("ss_train", help="swap_ss 00-04 (aerodock ingest)")
+    parser.add_argument("sl_train", help="swap_sl 00-07 (aerodock ingest --vehicle ...)")
+    parser.add_argument("candidates", nargs="*", help=f"some of {', '.join(CANDIDATES)}")
+    args = parser.parse_args()
+    unknown = [c for c in args.candidates if c not in CANDIDATES]
+    if unknown:
+        parser.error(f"unknown candidate {unknown[0]!r}")
+    ss, sl = load_data_paths([args.ss_train]), load_data_paths([args.sl_train])
+    number = np.array([int(n.rsplit("_", 2)[-2]) for n in sl.flight_names])[sl.flight_id]
+    follower = np.array([n.rsplit("_", 1)[-1] for n in sl.flight_names])[sl.flight_id]
+    if number.max() > max(VALIDATION):
+        parser.error("sl_train holds flights after 07: the held-out flights must not be read")
+    sl_fit = sl.subset(number <= FIT_LAST)
+    validation = {who: sl.subset(np.isin(number, VALIDATION) & (follower == who))
+                  for who in ("cf51", "cf101")}
+    for name in args.candidates or list(CANDIDATES):
+        kind, with_ss, options = CANDIDATES[name]
+        fit = concat_datasets([ss, sl_fit]) if with_ss else sl_fit
+        scores = {who: [] for who in validation}
+        for seed in SEEDS:
+            predictor = train_model(kind, fit, seed=seed, **options).predictor()
+            for who, ds in validation.items():
+                ev = evaluate(predictor, ds)["interaction"]
+                scores[who].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
+                                          / ev["zero"]["rmse_mps2"]["z"]))
+            print(name, seed, {who: round(v[-1], 1) for who, v in scores.items()}, flush=True)
+        for who, v in scores.items():
+            v = np.array(v)
+            print(f"VAL {name} {who} {v.mean():.1f} ({v.std(ddof=1):.1f}, "
+                  f"{v.min():.1f}-{v.max():.1f})", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
