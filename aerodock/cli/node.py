@@ -99,8 +99,8 @@ def node_command(
         merged, explicit = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
         fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
-    if (getattr(predictor, "needs_wake_scales", False) and config is None
-            and predictor.default_wake_scales is None):
+    aware = getattr(predictor, "needs_wake_scales", False)  # a leader-aware kind
+    if aware and config is None and predictor.default_wake_scales is None:
         fail(f"a {predictor.kind} model needs the vehicles' wake scales and its model file "
              "records none: give --config with the leader and follower")
     try:
@@ -115,7 +115,7 @@ def node_command(
     # Only a config the user names says which vehicles fly (the defaults need not be them).
     scales = None if config is None else configured_wake_scales(predictor, cfg.leader,
                                                                  cfg.vehicle)
-    if getattr(predictor, "needs_wake_scales", False):
+    if aware:
         shown = predictor.default_wake_scales if scales is None else scales
         typer.echo(f"aerodock node: wake scales v_hA {shown[0]:.3g} m/s, leader size "
                    f"{shown[1]:.3g} m, v_hB {shown[2]:.3g} m/s, from "
