@@ -74,12 +74,12 @@ def evaluate_compensation_command(
         fail(f"--kind must be one of {', '.join(KINDS)}, got {kind!r}")
     if figure is not None and figure.is_dir():
         fail(f"{figure}: is a directory; give a file name such as compensation.png")
+    if model is not None and not model.is_dir():
+        fail(f"--model {model}: no such model directory")
     root = data if data is not None else default_data_root()
     if not root.is_dir():
         fail(f"{root}: no such folder (give --data, the Neural-Swarm folder holding swap_ss and "
              "swap_sl_2020-06-19)")
-    if model is not None and not model.is_dir():
-        fail(f"--model {model}: no such model directory")
     cfg = load_config(config)
 
     def say(msg: str) -> None:
