@@ -33,6 +33,7 @@ from aerodock.node.replay import (  # noqa: E402
 
 MAX_AGE_S = 0.05
 GAP_S = (1.5, 2.0)
+DELIVERY_S = 0.12  # margin for a message delivered late on a loaded machine, s
 
 
 @pytest.fixture(scope="module")
@@ -98,19 +99,26 @@ def test_rate_and_latency(run):
 
 def test_missing_leader_gives_zero_and_the_stale_flag(run):
     rec, _, _ = run
-    t0 = rec.send_times_s[0]
     matched = _matched(rec)
     stale = [(row, v) for row, v in matched if v["stale"] == "true"]
     for row, _ in stale:  # never an old prediction
         assert row[2:] == (0.0, 0.0, 0.0)
+    # the gap as the leader's messages were actually sent (a loaded machine sends late; the
+    # stamps are send times, so the gap is judged on them, not on the log's clock); the node
+    # ages a state from when it arrived, so delivery may add up to DELIVERY_S to its freshness
+    leader_s = np.array(sorted(rec.sent["leader"]))
+    jumps = np.diff(leader_s)
+    k = int(np.argmax(jumps))
+    assert jumps[k] > 0.8 * (GAP_S[1] - GAP_S[0])
+    last_before, first_after = leader_s[k], leader_s[k + 1]
     in_gap = [(row, v) for row, v in matched
-              if GAP_S[0] + MAX_AGE_S + 0.03 < row[1] - t0 < GAP_S[1] - 0.03]
-    assert len(in_gap) > 30
+              if last_before + MAX_AGE_S + DELIVERY_S < row[1] < first_after - 0.03]
+    assert len(in_gap) > 20
     assert all(v["stale"] == "true" for _, v in in_gap)
     assert all(float(v["leader_age_ms"]) > MAX_AGE_S * 1e3 for _, v in in_gap)
     assert all(v["stale_reason"].startswith("leader: ") and " ms old (max 50 ms)"
                in v["stale_reason"] for _, v in in_gap)
-    after = [v for row, v in matched if GAP_S[1] + 0.1 < row[1] - t0 < 2.9]
+    after = [v for row, v in matched if first_after + 0.1 < row[1] < rec.send_times_s[-1]]
     assert after and all(v["stale"] == "false" for v in after)
 
 
