@@ -25,6 +25,7 @@ from aerodock.learning.train import train_model
 CANDIDATES: dict[str, tuple[str, bool, dict]] = {
     "so2": ("so2", True, {}),
     "so2-leader": ("so2-leader", True, {}),
+    "so2-pair": ("so2-pair", True, {}),
     "so2 patience40": ("so2", True, {"patience": 40}),
     "so2 hidden128": ("so2", True, {"hidden": (128, 128)}),
     "so2 hidden32": ("so2", True, {"hidden": (32, 32)}),

@@ -22,7 +22,7 @@ from aerodock.cli.common import (
 )
 from aerodock.fileio import one_line
 
-KINDS = ("so2", "so2-ext", "so2-leader", "mlp")
+KINDS = ("so2", "so2-ext", "so2-leader", "so2-pair", "mlp")
 """Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
 
 

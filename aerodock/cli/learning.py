@@ -31,7 +31,7 @@ from aerodock.cli.common import (
 from aerodock.config import load_config
 from aerodock.fileio import one_line
 
-TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
+TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
 # The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
 COLLECTABLE = tuple(kind for kind in TRAINABLE if kind != "zero")
 SPLITS = ("auto", "flight", "time-blocks")
@@ -71,7 +71,8 @@ def train_command(
         str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, so2-wrench (force "
                                           "and torque; needs logs with torques), so2-leader "
                                           "(leader-aware; needs the vehicles' rotors in the "
-                                          "logs), mlp (or zero).")
+                                          "logs), so2-pair (so2-leader with the follower's "
+                                          "size), mlp (or zero).")
     ] = "so2",
     minutes: Annotated[
         float | None,

@@ -67,7 +67,8 @@ def node_command(
     )] = None,
     config: Annotated[Path | None, typer.Option(
         "--config", help="aerodock TOML: the vehicles, to check the model was trained on them; "
-                         "a leader-aware model (so2-leader) takes its wake scales from them "
+                         "a leader-aware model (so2-leader, so2-pair) takes its wake scales "
+                         "from them "
                          "(the leader hovering) instead of its training flights'.",
     )] = None,
 ) -> None:
@@ -118,7 +119,8 @@ def node_command(
     if aware:
         shown = predictor.default_wake_scales if scales is None else scales
         typer.echo(f"aerodock node: wake scales v_hA {shown[0]:.3g} m/s, leader size "
-                   f"{shown[1]:.3g} m, v_hB {shown[2]:.3g} m/s, from "
+                   f"{shown[1]:.3g} m, v_hB {shown[2]:.3g} m/s, "
+                   + (f"follower size {shown[3]:.3g} m, " if len(shown) > 3 else "") + "from "
                    + ("the training flights" if scales is None else str(config)), err=True)
     settings = NodeSettings(
         mapping=merged, rate_hz=rate, publish=publish, max_age_s=max_age, output_topic=output_topic,

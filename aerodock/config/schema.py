@@ -293,7 +293,7 @@ class CurriculumSection:
     free_air_m: float = number(0.01, 100)
     leader_drift_max_mps: float = number(0, 100)
     drift_fraction: float = number(0, 1)
-    model: str = choice("mlp", "so2", "so2-ext", "so2-wrench", "so2-leader")
+    model: str = choice("mlp", "so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair")
     label_basis: str = choice("command", "thrust")
 
 

@@ -26,7 +26,12 @@ import numpy as np
 
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
-from aerodock.learning.features import AIR_DENSITY_KGPM3, GRAVITY_MPS2, wake_scales
+from aerodock.learning.features import (
+    AIR_DENSITY_KGPM3,
+    GRAVITY_MPS2,
+    WAKE_SCALE_NAMES,
+    wake_scales,
+)
 from aerodock.learning.labels import (
     BiasEstimate,
     free_air_radius_of,
@@ -171,7 +176,7 @@ class Dataset:
 
     def wake_scales(self, *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
                     gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
-        """The leader-aware kinds' wake scales (n, 3) (:data:`features.WAKE_SCALE_NAMES`).
+        """The leader-aware kinds' wake scales (n, 4) (:data:`features.WAKE_SCALE_NAMES`).
 
         The leader's thrust is its logged (or commanded) thrust where the flight has one
         (:attr:`leader_thrust_n`), otherwise its hover thrust ``m g``; its rotor radius and
@@ -181,7 +186,7 @@ class Dataset:
         Raises:
             DataError: a flight whose metadata lack one of these (one line naming it).
         """
-        out = np.empty((self.n, 3))
+        out = np.empty((self.n, len(WAKE_SCALE_NAMES)))
         thrust = (np.full(self.n, np.nan) if self.leader_thrust_n is None
                   else self.leader_thrust_n)
         for k in np.unique(self.flight_id):

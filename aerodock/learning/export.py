@@ -7,8 +7,9 @@ of the invariant outputs back to the world. No PyTorch is imported: ``aerodock[e
 enough.
 
 Inputs ``x`` (n, 9: ``[dp, v_A, v_B]``, NED) and ``leader_R`` (n, 3, 3, leader body to world),
-and for a leader-aware model (``so2-leader``) ``wake_scales`` (n, 3: the leader's hover induced
-velocity, m/s, its size ``sqrt(n) R``, m, the follower's hover induced velocity, m/s; see
+and for a leader-aware model ``wake_scales`` (``so2-leader``: n, 3: the leader's hover induced
+velocity, m/s, its size ``sqrt(n) R``, m, the follower's hover induced velocity, m/s;
+``so2-pair``: n, 4, and the follower's size ``sqrt(n) R``, m; see
 :func:`aerodock.learning.features.wake_scales`);
 output ``f_ext_mps2`` (n, 3, NED), with a dynamic batch axis ``n``; a ``so2-wrench`` model has a
 second output, ``tau_ext_nm`` (n, 3: the wake's torque on the follower, N m, world NED; rotate it
@@ -42,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open
-from aerodock.learning.features import GRAVITY_MPS2, LEADER_KINDS, TORQUE_KINDS
+from aerodock.learning.features import GRAVITY_MPS2, LEADER_KINDS, N_WAKE_SCALES, TORQUE_KINDS
 from aerodock.learning.modelfile import (
     CHECKSUM_KEY,
     MODEL_FORMAT,
@@ -162,14 +163,17 @@ def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
     va2 = g.add(g.mul(ax, ax), g.mul(ay, ay))
     vb_soft = g.sqrt(g.add(vb2, eps_v2))
     cos_b = g.div(g.add(g.mul(urx, bx), g.mul(ury, by)), vb_soft)
-    if kind in ("so2", "so2-leader"):
+    if kind in ("so2", "so2-leader", "so2-pair"):
         z = g.stack([cos_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2)])
         accel_scale = None
-        if kind == "so2-leader":
+        if kind in LEADER_KINDS:
             s3 = g.op("Unsqueeze", SCALES_INPUT_NAME, g.const([1], "axis", np.int64))
             vh_a, size_a, vh_b = (g.col(s3, 0, k) for k in range(3))
-            z = g.stack([cos_b, g.div(g.sqrt(rho2), size_a), g.div(g.sqrt(vb2), vh_a),
-                         g.div(pz, size_a), g.div(bz, vh_a), g.div(g.sqrt(va2), vh_a)])
+            parts = [cos_b, g.div(g.sqrt(rho2), size_a), g.div(g.sqrt(vb2), vh_a),
+                     g.div(pz, size_a), g.div(bz, vh_a), g.div(g.sqrt(va2), vh_a)]
+            if kind == "so2-pair":
+                parts.append(g.div(g.col(s3, 0, 3), size_a))
+            z = g.stack(parts)
             ratio = g.div(vh_a, vh_b)
             accel_scale = g.mul(g.mul(ratio, ratio), g.const(GRAVITY_MPS2, "g"))
 
@@ -254,7 +258,8 @@ def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
     inputs = [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
               helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])]
     if spec.kind in LEADER_KINDS:
-        inputs.append(helper.make_tensor_value_info(SCALES_INPUT_NAME, g.elem, ["n", 3]))
+        inputs.append(helper.make_tensor_value_info(SCALES_INPUT_NAME, g.elem,
+                                                    ["n", N_WAKE_SCALES[spec.kind]]))
     graph = helper.make_graph(
         g.nodes, f"aerodock_{spec.kind.replace('-', '_')}", inputs,
         [helper.make_tensor_value_info(name, g.elem, ["n", 3]) for name in outputs],
@@ -466,7 +471,8 @@ def _compare(path: str | Path, predictor: Any, *, n: int,
     scales = None
     if getattr(predictor, "needs_wake_scales", False):  # leaders of 0.25-4x a hover's v_h^2
         scales = np.stack([rng.uniform(2.0, 9.0, n), rng.uniform(0.03, 0.3, n),
-                           rng.uniform(3.0, 8.0, n)], axis=1)
+                           rng.uniform(3.0, 8.0, n), rng.uniform(0.03, 0.3, n)],
+                          axis=1)[:, :N_WAKE_SCALES[predictor.kind]]
         feeds[SCALES_INPUT_NAME] = scales.astype(dtype)
         scales = feeds[SCALES_INPUT_NAME].astype(float)
     if (SCALES_INPUT_NAME in [i.name for i in sess.get_inputs()]) != (scales is not None):

@@ -85,6 +85,12 @@ velocities in units of ``v_hA``, the force in units of ``a_s = g (v_hA / v_hB)^2
 invariant, so the equivariance of ``"so2"`` carries over unchanged; with one leader and one
 follower the features are a fixed rescaling of ``h``.
 
+Pair-aware kind (``"so2-pair"``): ``"so2-leader"`` with a seventh feature, the follower's size
+in units of the leader's, ``L_B / L_A`` (``L_B = sqrt(n_B) R_B``, the fourth wake scale). The
+force scale ``a_s`` assumes the follower's rotors take the wake whole; a follower as wide as the
+wake or wider does not (it averages the jet over its disks, and part of it falls beside them), and
+``L_B / L_A`` is the invariant that says how much. Still invariant: the equivariance holds.
+
 Kind ``"mlp"`` (the baseline) uses ``x`` itself, in the world frame, with an identity output map.
 
 The implementations below are written once, generically, and run on NumPy arrays (the runtime)
@@ -103,18 +109,23 @@ FEATURE_VERSION = 1
 EPS_POS_M = 1e-3
 EPS_VEL_MPS = 1e-2
 
-KINDS = ("so2", "so2-ext", "so2-wrench", "so2-leader", "mlp", "zero")
-LEADER_KINDS = ("so2-leader",)
+KINDS = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
+LEADER_KINDS = ("so2-leader", "so2-pair")
 """Kinds that take the wake scales (:data:`WAKE_SCALE_NAMES`) as a third input."""
-WAKE_SCALE_NAMES = ("leader_vh_mps", "leader_size_m", "follower_vh_mps")
+WAKE_SCALE_NAMES = ("leader_vh_mps", "leader_size_m", "follower_vh_mps", "follower_size_m")
 """The wake scales' columns: the leader's hover induced velocity (m/s), its wake's width scale
-``sqrt(n) R`` (m) and the follower's hover induced velocity (m/s)."""
+``sqrt(n) R`` (m), the follower's hover induced velocity (m/s) and its size ``sqrt(n) R`` (m).
+:func:`wake_scales` builds all four; a kind reads the first :data:`N_WAKE_SCALES` of them."""
+N_WAKE_SCALES = {"so2-leader": 3, "so2-pair": 4}
+"""How many of the wake scales (the first ones) each leader-aware kind takes."""
 AIR_DENSITY_KGPM3 = 1.225
 GRAVITY_MPS2 = 9.81
 TORQUE_KINDS = ("so2-wrench",)
 """Kinds that also predict the wake's torque (their outputs: force components, then torque's)."""
-N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "so2-leader": 6, "mlp": 9, "zero": 0}
-N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "so2-leader": 2, "mlp": 3, "zero": 0}
+N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "so2-leader": 6, "so2-pair": 7,
+              "mlp": 9, "zero": 0}
+N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "so2-leader": 2, "so2-pair": 2, "mlp": 3,
+             "zero": 0}
 FEATURE_NAMES: dict[str, tuple[str, ...]] = {
     "so2": (
         "cos_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps", "rho_vA_mps",
@@ -131,6 +142,10 @@ FEATURE_NAMES: dict[str, tuple[str, ...]] = {
         "cos_dp_vB", "rho_dp_per_size", "rho_vB_per_vh", "axial_dp_per_size", "axial_vB_per_vh",
         "rho_vA_per_vh",
     ),
+    "so2-pair": (
+        "cos_dp_vB", "rho_dp_per_size", "rho_vB_per_vh", "axial_dp_per_size", "axial_vB_per_vh",
+        "rho_vA_per_vh", "follower_size_per_size",
+    ),
     "mlp": (
         "dp_n_m", "dp_e_m", "dp_d_m", "vA_n_mps", "vA_e_mps", "vA_d_mps",
         "vB_n_mps", "vB_e_mps", "vB_d_mps",
@@ -143,6 +158,7 @@ OUTPUT_NAMES: dict[str, tuple[str, ...]] = {
     "so2-wrench": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2",
                    "tau_radial_nm", "tau_tangential_nm", "tau_axial_nm"),
     "so2-leader": ("f_radial_per_scale", "f_axial_per_scale"),
+    "so2-pair": ("f_radial_per_scale", "f_axial_per_scale"),
     "mlp": ("f_n_mps2", "f_e_mps2", "f_d_mps2"),
     "zero": (),
 }
@@ -159,6 +175,8 @@ SCALE_FLOOR: dict[str, tuple[float, ...]] = {
                    _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
     # dimensionless: 1 leader size (about 5 cm on a Crazyflie), 0.01 v_h (about 4 cm/s)
     "so2-leader": (_ANGLE_FLOOR, 1.0, 0.01, 1.0, 0.01, 0.01),
+    # the size ratio: 0.1 (a follower a tenth of the leader's size apart)
+    "so2-pair": (_ANGLE_FLOOR, 1.0, 0.01, 1.0, 0.01, 0.01, 0.1),
     "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
     "zero": (),
 }
@@ -219,12 +237,14 @@ def _feature_map_generic(
     if kind == "so2":
         z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
         out_map = stack([e_r, a3], -1)
-    elif kind == "so2-leader":
+    elif kind in ("so2-leader", "so2-pair"):
         vh_a, size_a, vh_b = scales[..., 0], scales[..., 1], scales[..., 2]
         ratio = vh_a / vh_b
         accel_scale = (ratio * ratio * GRAVITY_MPS2)[..., None]
-        z = stack([cos_b, rho / size_a, vb2**0.5 / vh_a, pz / size_a, bz / vh_a,
-                   va2**0.5 / vh_a], -1)
+        parts = [cos_b, rho / size_a, vb2**0.5 / vh_a, pz / size_a, bz / vh_a, va2**0.5 / vh_a]
+        if kind == "so2-pair":
+            parts.append(scales[..., 3] / size_a)
+        z = stack(parts, -1)
         out_map = stack([e_r * accel_scale, a3 * accel_scale], -1)
     elif kind in ("so2-ext", "so2-wrench"):
         va_soft = (va2 + eps_vel_mps * eps_vel_mps) ** 0.5
@@ -271,20 +291,28 @@ def check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.nd
     return x, leader_r
 
 
-def check_wake_scales(wake_scales: Any, n: int) -> np.ndarray:
-    """Validate wake scales (n, 3) (:data:`WAKE_SCALE_NAMES`): finite and positive.
+def check_wake_scales(wake_scales: Any, n: int, kind: str = "so2-leader") -> np.ndarray:
+    """Validate wake scales (:data:`WAKE_SCALE_NAMES`) for a leader-aware ``kind``: (n, k) or
+    (k,) with ``k`` at least the kind's :data:`N_WAKE_SCALES`, finite and positive.
+
+    Returns:
+        (n, N_WAKE_SCALES[kind]): the first columns, the ones the kind reads (more may be given:
+        :func:`wake_scales` builds all four, a ``so2-leader`` model takes three).
 
     Raises:
         ValueError: missing, of the wrong shape, or not finite and positive.
     """
+    k = N_WAKE_SCALES[kind]
+    names = ", ".join(WAKE_SCALE_NAMES[:k])
     if wake_scales is None:
-        raise ValueError("a leader-aware model needs wake_scales (n, 3): "
-                         + ", ".join(WAKE_SCALE_NAMES))
+        raise ValueError(f"a {kind!r} model needs wake_scales (n, {k}): {names}")
     scales = np.asarray(wake_scales, dtype=float)
-    if scales.shape == (3,):
-        scales = np.broadcast_to(scales, (n, 3))
-    if scales.shape != (n, 3):
-        raise ValueError(f"wake_scales must have shape ({n}, 3), got {scales.shape}")
+    if scales.ndim == 1:
+        scales = np.broadcast_to(scales, (n, scales.shape[0]))
+    if scales.ndim != 2 or scales.shape[0] != n or scales.shape[1] < k:
+        raise ValueError(f"wake_scales must have shape ({n}, {k}) ({names}), "
+                         f"got {scales.shape}")
+    scales = scales[:, :k]
     if not np.all(np.isfinite(scales) & (scales > 0)):
         raise ValueError("wake_scales must be finite and positive")
     return scales
@@ -303,7 +331,7 @@ def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotor
                 follower_mass_kg: Any, follower_rotor_radius_m: Any, follower_n_rotors: Any,
                 *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
                 gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
-    """The wake scales (n, 3) of kind ``"so2-leader"`` (see the module docstring).
+    """The wake scales (n, 4) of the leader-aware kinds (see the module docstring).
 
     Args:
         leader_thrust_n: (n,) or scalar, the leader's collective thrust, N (logged or
@@ -311,12 +339,13 @@ def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotor
         leader_rotor_radius_m, leader_n_rotors: the leader's rotor radius (m) and count.
         follower_mass_kg: the follower's mass, kg (its hover thrust is ``m g``: not its
             instantaneous thrust, which is part of the label).
-        follower_rotor_radius_m, follower_n_rotors: the follower's rotors.
+        follower_rotor_radius_m, follower_n_rotors: the follower's rotors (its size
+            ``sqrt(n_B) R_B`` is the fourth scale, read by ``"so2-pair"``).
         air_density_kgpm3: air density, kg/m^3.
         gravity_mps2: gravity, m/s^2.
 
     Returns:
-        ``[v_hA (m/s), sqrt(n_A) R_A (m), v_hB (m/s)]`` per sample.
+        ``[v_hA (m/s), sqrt(n_A) R_A (m), v_hB (m/s), sqrt(n_B) R_B (m)]`` per sample.
     """
     thrust = np.atleast_1d(np.asarray(leader_thrust_n, float))
     vh_a = hover_induced_velocity_mps(thrust, leader_rotor_radius_m, leader_n_rotors,
@@ -325,7 +354,9 @@ def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotor
     vh_b = hover_induced_velocity_mps(np.asarray(follower_mass_kg, float) * gravity_mps2,
                                       follower_rotor_radius_m, follower_n_rotors,
                                       air_density_kgpm3)
-    return np.stack(np.broadcast_arrays(vh_a, size, vh_b), axis=-1).astype(float)
+    size_b = (np.sqrt(np.asarray(follower_n_rotors, float))
+              * np.asarray(follower_rotor_radius_m, float))
+    return np.stack(np.broadcast_arrays(vh_a, size, vh_b, size_b), axis=-1).astype(float)
 
 
 def feature_map(
@@ -340,13 +371,14 @@ def feature_map(
     """NumPy features and output map of a model kind.
 
     Args:
-        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"so2-leader"`` or ``"mlp"``.
+        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"so2-leader"``, ``"so2-pair"`` or
+            ``"mlp"``.
         x: (n, 9) ``[dp, v_A, v_B]``, world NED.
         leader_R: (n, 3, 3) leader attitude, body to world.
         eps_pos_m: radial regularisation (see the module docstring).
         eps_vel_mps: velocity-direction regularisation.
-        wake_scales: (n, 3) or (3,) wake scales (:data:`WAKE_SCALE_NAMES`); needed by the
-            leader-aware kinds, ignored by the others.
+        wake_scales: (n, k) or (k,) wake scales (:data:`WAKE_SCALE_NAMES`, the first
+            :data:`N_WAKE_SCALES` read); needed by the leader-aware kinds, ignored by the others.
 
     Returns:
         ``(z, M)``: features (n, F) and the output map (n, 3, K) taking the network's K outputs
@@ -356,7 +388,7 @@ def feature_map(
     if kind == "mlp":
         return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
     check_eps(eps_pos_m, eps_vel_mps)
-    scales = check_wake_scales(wake_scales, x.shape[0]) if kind in LEADER_KINDS else None
+    scales = check_wake_scales(wake_scales, x.shape[0], kind) if kind in LEADER_KINDS else None
     return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps, scales)
 
 
@@ -376,7 +408,7 @@ def feature_map_torch(
         eye = torch.eye(3, dtype=x.dtype, device=x.device)
         return x, eye.expand(x.shape[0], 3, 3)
     if kind in LEADER_KINDS and wake_scales is None:
-        raise ValueError(f"model kind {kind!r} needs wake_scales (n, 3)")
+        raise ValueError(f"model kind {kind!r} needs wake_scales (n, {N_WAKE_SCALES[kind]})")
     return _feature_map_generic(kind, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps,
                                 wake_scales)
 

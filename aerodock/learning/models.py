@@ -22,6 +22,8 @@ the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A 
 * :class:`SO2LeaderModel` (``"so2-leader"``): ``"so2"`` made leader-aware: a third input, the
   wake scales (n, 3: the leader's hover induced velocity and rotor size, the follower's hover
   induced velocity), makes its features and outputs dimensionless by momentum theory.
+* :class:`SO2PairModel` (``"so2-pair"``): ``"so2-leader"`` with the follower's size in units of
+  the leader's as a seventh feature (a fourth wake scale, the follower's ``sqrt(n) R``).
 * :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame
   (standardised with one scale for the north and east components of each vector, see
   :meth:`DownwashModel.set_normalisation`).
@@ -116,7 +118,7 @@ class DownwashModel(nn.Module):
     def features(
         self, x: torch.Tensor, leader_R: torch.Tensor, wake_scales: torch.Tensor | None = None
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Features ``z`` (n, F) and output map ``M`` (n, 3, K) (``wake_scales`` (n, 3): the
+        """Features ``z`` (n, F) and output map ``M`` (n, 3, K) (``wake_scales`` (n, k): the
         leader-aware kinds' third input, see :mod:`aerodock.learning.features`)."""
         return feature_map_torch(
             self.kind, x, leader_R, eps_pos_m=self.eps_pos_m, eps_vel_mps=self.eps_vel_mps,
@@ -250,6 +252,14 @@ class SO2LeaderModel(DownwashModel):
     kind = "so2-leader"
 
 
+class SO2PairModel(DownwashModel):
+    """Pair-aware SO(2) model: ``"so2-leader"`` with the follower's size in units of the
+    leader's, ``L_B / L_A``, as a seventh invariant feature (see
+    :mod:`aerodock.learning.features`)."""
+
+    kind = "so2-pair"
+
+
 class MLPModel(DownwashModel):
     """Baseline: plain MLP on ``x`` (world frame) predicting the world-frame force."""
 
@@ -279,7 +289,7 @@ class ZeroModel(nn.Module):
 
 MODEL_CLASSES: dict[str, type[nn.Module]] = {
     "so2": SO2Model, "so2-ext": SO2ExtModel, "so2-wrench": SO2WrenchModel,
-    "so2-leader": SO2LeaderModel, "mlp": MLPModel,
+    "so2-leader": SO2LeaderModel, "so2-pair": SO2PairModel, "mlp": MLPModel,
     "zero": ZeroModel,
 }
 

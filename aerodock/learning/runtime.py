@@ -24,8 +24,9 @@ A ``so2-wrench`` model also predicts the wake's torque (:attr:`Predictor.has_tor
 :meth:`Predictor.predict_torque_bodies` in the follower's body frame (N m, FRD), what the
 autopilot's torque feed-forward subtracts (:mod:`aerodock.control.torque_feedforward`).
 
-A leader-aware model (``so2-leader``, :attr:`Predictor.needs_wake_scales`) takes a third input,
-the wake scales (n, 3) of :func:`aerodock.learning.features.wake_scales`. Where they come from:
+A leader-aware model (``so2-leader``, ``so2-pair``, :attr:`Predictor.needs_wake_scales`) takes a
+third input, the wake scales (n, k) of :func:`aerodock.learning.features.wake_scales` (it reads the
+first :data:`~aerodock.learning.features.N_WAKE_SCALES`; more may be given). Where they come from:
 
 * :meth:`Predictor.predict` / :meth:`Predictor.predict_one`: the caller's ``wake_scales``, or,
   when none are given, :attr:`Predictor.default_wake_scales`: the median of the training data's
@@ -53,6 +54,7 @@ from aerodock.learning.features import (
     GRAVITY_MPS2,
     LEADER_KINDS,
     N_FEATURES,
+    N_WAKE_SCALES,
     TORQUE_KINDS,
     check_eps,
     check_inputs,
@@ -110,7 +112,7 @@ class Predictor:
         self.has_torque = spec.kind in TORQUE_KINDS
         self.needs_wake_scales = spec.kind in LEADER_KINDS
         self.meta = dict(meta or {})
-        self.default_wake_scales = _recorded_wake_scales(self.meta)
+        self.default_wake_scales = _recorded_wake_scales(self.meta, spec.kind)
         self.rotor_geometry = _recorded_rotor_geometry(self.meta)
         if spec.kind == "zero":
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
@@ -185,10 +187,11 @@ class Predictor:
                 raise ValueError(f"a {self.kind!r} model needs wake_scales and its model file "
                                  "records no default (training.wake_scales)")
             wake_scales = self.default_wake_scales
-        return check_wake_scales(wake_scales, n)
+        return check_wake_scales(wake_scales, n, self.kind)
 
     def wake_scales_for_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
-        """The wake scales (n, 3) of two vehicles' batched states (see the module docstring).
+        """The wake scales (n, 4) of two vehicles' batched states (see the module docstring;
+        the default scales, (n, k), when the rotor geometry is unknown).
 
         Raises:
             ValueError: no rotor geometry and no default scales.
@@ -278,10 +281,10 @@ class Predictor:
     def predict_one(self, x: np.ndarray, leader_R: np.ndarray,
                     wake_scales: np.ndarray | None = None) -> np.ndarray:
         """One sample: ``x`` (9,), ``leader_R`` (3, 3) -> (3,) m/s², NED (see :meth:`predict`;
-        ``wake_scales`` (3,) a leader-aware model's, which runs through the batched path)."""
+        ``wake_scales`` (k,) a leader-aware model's, which runs through the batched path)."""
         if self.needs_wake_scales:
             return self.predict(np.reshape(x, (1, 9)), np.reshape(leader_R, (1, 3, 3)),
-                                None if wake_scales is None else np.reshape(wake_scales, (1, 3))
+                                None if wake_scales is None else np.reshape(wake_scales, (1, -1))
                                 )[0]
         dx, dy, dz, ax, ay, az, bx, by, bz = np.asarray(x, dtype=float).reshape(9).tolist()
         if self.kind == "mlp":
@@ -349,8 +352,8 @@ class Predictor:
         return np.einsum("nji,nj->ni", follower_rot, torque)  # R^T tau
 
 
-def _recorded_wake_scales(meta: dict[str, Any]) -> np.ndarray | None:
-    """``training.wake_scales.default`` of a model document (3,), or None."""
+def _recorded_wake_scales(meta: dict[str, Any], kind: str) -> np.ndarray | None:
+    """``training.wake_scales.default`` of a leader-aware model's document (k,), or None."""
     training = meta.get("training")
     record = training.get("wake_scales") if isinstance(training, dict) else None
     default = record.get("default") if isinstance(record, dict) else None
@@ -358,7 +361,8 @@ def _recorded_wake_scales(meta: dict[str, Any]) -> np.ndarray | None:
         arr = np.asarray(default, dtype=float)
     except (TypeError, ValueError):
         return None
-    return arr if arr.shape == (3,) and np.all(np.isfinite(arr) & (arr > 0)) else None
+    k = N_WAKE_SCALES.get(kind)
+    return arr if k and arr.shape == (k,) and np.all(np.isfinite(arr) & (arr > 0)) else None
 
 
 def _recorded_rotor_geometry(meta: dict[str, Any]) -> dict[str, tuple[float, int]] | None:

@@ -51,9 +51,11 @@ from torch import nn
 from aerodock.learning.dataset import Dataset
 from aerodock.learning.features import (
     LEADER_KINDS,
+    N_WAKE_SCALES,
     TORQUE_KINDS,
     WAKE_SCALE_NAMES,
     check_kind,
+    check_wake_scales,
     feature_map,
     invariant_components,
 )
@@ -104,13 +106,13 @@ class TrainedModel:
     @torch.no_grad()
     def predict(self, x: np.ndarray, leader_R: np.ndarray,
                 wake_scales: np.ndarray | None = None) -> np.ndarray:
-        """Torch prediction (n, 3), m/s², NED, as float64 NumPy (``wake_scales`` (n, 3): the
-        leader-aware kinds' third input)."""
+        """Torch prediction (n, 3), m/s², NED, as float64 NumPy (``wake_scales`` (n, k): the
+        leader-aware kinds' third input, :func:`~aerodock.learning.features.check_wake_scales`)."""
         self.model.eval()
         xt = torch.as_tensor(np.asarray(x), dtype=torch.float32)
         rt = torch.as_tensor(np.asarray(leader_R), dtype=torch.float32)
         st = None if wake_scales is None else torch.as_tensor(
-            np.array(np.broadcast_to(np.asarray(wake_scales, float), (xt.shape[0], 3))),
+            np.array(check_wake_scales(wake_scales, xt.shape[0], self.kind)),
             dtype=torch.float32)
         return self.model(xt, rt, st).double().numpy()
 
@@ -153,13 +155,15 @@ def check_trainable(ds: Dataset, min_samples: int = 20, kind: str | None = None)
         raise ValueError("degenerate data: leader_R holds matrices that are not rotations")
 
 
-def training_wake_scales(ds: Dataset) -> dict[str, Any]:
-    """What a leader-aware model records of its training data's wake scales: the median of each
-    (:data:`~aerodock.learning.features.WAKE_SCALE_NAMES`, m/s and m), the default the runtime
-    uses when it is given no leader (``default``), and each one's range (``min``, ``max``)."""
-    scales = ds.wake_scales()
+def training_wake_scales(ds: Dataset, kind: str = "so2-leader") -> dict[str, Any]:
+    """What a leader-aware model records of its training data's wake scales (the ones ``kind``
+    reads): the median of each (:data:`~aerodock.learning.features.WAKE_SCALE_NAMES`, m/s and
+    m), the default the runtime uses when it is given no leader (``default``), and each one's
+    range (``min``, ``max``)."""
+    k = N_WAKE_SCALES[kind]
+    scales = ds.wake_scales()[:, :k]
     return {
-        "names": list(WAKE_SCALE_NAMES),
+        "names": list(WAKE_SCALE_NAMES[:k]),
         "default": [float(f"{v:.6g}") for v in np.median(scales, axis=0)],
         "min": [float(f"{v:.6g}") for v in scales.min(axis=0)],
         "max": [float(f"{v:.6g}") for v in scales.max(axis=0)],
@@ -354,7 +358,7 @@ def train_model(
         },
     }
     if kind in LEADER_KINDS:
-        info["wake_scales"] = training_wake_scales(train)
+        info["wake_scales"] = training_wake_scales(train, kind)
     if kind == "zero":
         return TrainedModel("zero", build_model("zero"), {**info, "train_time_s": 0.0}, {})
     t_start = time.perf_counter()

@@ -46,7 +46,7 @@ import numpy as np
 
 from aerodock.geometry import euler_to_rotmat, quat_to_rotmat
 from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ
-from aerodock.learning.features import GRAVITY_MPS2, wake_scales
+from aerodock.learning.features import GRAVITY_MPS2, N_WAKE_SCALES, wake_scales
 
 ODOMETRY = "nav_msgs/msg/Odometry"
 CURRENT_STATE = "freyja_msgs/msg/CurrentState"
@@ -394,8 +394,8 @@ class StepResult:
 
 
 def configured_wake_scales(predictor: Any, leader: Any, follower: Any) -> np.ndarray | None:
-    """A leader-aware model's wake scales (3,) for the vehicles the node flies with, or None for
-    other kinds.
+    """A leader-aware model's wake scales (k,: the ones its kind reads) for the vehicles the node
+    flies with, or None for other kinds.
 
     The state messages carry no thrust, so the leader's is its hover thrust (its weight): the
     scales are :func:`aerodock.learning.features.wake_scales` of the leader's weight and rotors
@@ -411,7 +411,7 @@ def configured_wake_scales(predictor: Any, leader: Any, follower: Any) -> np.nda
         return None
     return wake_scales(leader.mass_kg * GRAVITY_MPS2, leader.rotor_radius_m,
                        int(leader.n_rotors), follower.mass_kg, follower.rotor_radius_m,
-                       int(follower.n_rotors))[0]
+                       int(follower.n_rotors))[0, :N_WAKE_SCALES[predictor.kind]]
 
 
 def prediction_step(predictor: Any, leader: VehicleState | None,
@@ -431,8 +431,9 @@ def prediction_step(predictor: Any, leader: VehicleState | None,
         clock: a ``() -> float`` seconds clock timing the prediction (default
             ``time.perf_counter``).
         faults: role -> the :class:`InputMonitor` verdict on its newest message (None: fine).
-        wake_scales: (3,) a leader-aware model's wake scales (leader_vh_mps, leader_size_m,
-            follower_vh_mps; :func:`aerodock.learning.features.wake_scales`): the flown
+        wake_scales: (k,) a leader-aware model's wake scales (leader_vh_mps, leader_size_m,
+            follower_vh_mps, and for ``so2-pair`` follower_size_m;
+            :func:`aerodock.learning.features.wake_scales`): the flown
             vehicles' (:func:`configured_wake_scales`, from ``aerodock node --config``), or
             None: the model file's recorded training scales
             (``Predictor.default_wake_scales``). Ignored by other kinds, which run exactly as

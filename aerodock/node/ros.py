@@ -81,7 +81,7 @@ class NodeSettings:
         frame_set: the mapping file sets ``frame`` (the automatic output frame follows it).
         state_types: topic -> ROS type name, for topics whose type is not to be discovered.
         frame_ids: output ``header.frame_id`` per output frame.
-        wake_scales: a leader-aware model's wake scales (3,) for the flown vehicles
+        wake_scales: a leader-aware model's wake scales (k,) for the flown vehicles
             (:func:`aerodock.node.core.configured_wake_scales`); None: the model file's
             training scales.
     """
@@ -96,7 +96,7 @@ class NodeSettings:
     frame_set: bool = False
     state_types: dict[str, str] = field(default_factory=dict)
     frame_ids: dict[str, str] = field(default_factory=lambda: {"ned": "map_ned", "enu": "map"})
-    wake_scales: tuple[float, float, float] | None = None
+    wake_scales: tuple[float, ...] | None = None
 
 
 def message_class(type_name: str) -> Any:

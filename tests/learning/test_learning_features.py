@@ -1,4 +1,5 @@
-"""Feature maps and SO(2) equivariance of the so2, so2-ext and so2-leader models (hypothesis)."""
+"""Feature maps and SO(2) equivariance of the so2, so2-ext, so2-leader and so2-pair models
+(hypothesis)."""
 
 from __future__ import annotations
 
@@ -44,10 +45,10 @@ def _random_model(kind: str, seed: int = 3) -> tuple[torch.nn.Module, Predictor]
     return model.double(), Predictor(model.spec(), model.weights())
 
 
-MODELS = {kind: _random_model(kind) for kind in ("so2", "so2-ext", "so2-leader", "mlp")}
-# The leader-aware kind's wake scales (a Crazyflie-like leader and follower): invariant inputs,
-# the same before and after a rotation; the other kinds ignore them.
-SCALES = np.array([[4.5, 0.045, 4.4]])
+MODELS = {kind: _random_model(kind) for kind in ("so2", "so2-ext", "so2-leader", "so2-pair", "mlp")}
+# The leader-aware kinds' wake scales (a Crazyflie-like leader and follower): invariant inputs,
+# the same before and after a rotation; so2-leader reads the first three, the other kinds none.
+SCALES = np.array([[4.5, 0.045, 4.4, 0.05]])
 
 
 def _scene(s) -> tuple[np.ndarray, np.ndarray]:
@@ -71,7 +72,7 @@ def _torch_predict(model: torch.nn.Module, x: np.ndarray, rot: np.ndarray) -> np
         return model(torch.as_tensor(x), torch.as_tensor(rot), torch.as_tensor(SCALES)).numpy()
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader", "so2-pair"])
 @settings(max_examples=60, deadline=None)
 @given(s=scene, theta=angle)
 def test_rotating_whole_scene_about_leader_axis(kind, s, theta):
@@ -88,7 +89,7 @@ def test_rotating_whole_scene_about_leader_axis(kind, s, theta):
     np.testing.assert_allclose(_torch_predict(model, x2, rot2), f1 @ q.T, atol=1e-9)
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader", "so2-pair"])
 @settings(max_examples=60, deadline=None)
 @given(s=scene, theta=angle)
 def test_rotating_vectors_about_fixed_leader_axis(kind, s, theta):
@@ -108,7 +109,7 @@ def test_rotating_vectors_about_fixed_leader_axis(kind, s, theta):
         assert abs(float(dphi[0])) < 1e-6
 
 
-@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader"])
+@pytest.mark.parametrize("kind", ["so2", "so2-ext", "so2-leader", "so2-pair"])
 @settings(max_examples=40, deadline=None)
 @given(s=scene, theta=angle)
 def test_leader_yaw_about_own_axis_changes_nothing(kind, s, theta):

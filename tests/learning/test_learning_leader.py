@@ -44,7 +44,7 @@ def test_wake_scales_are_momentum_theory():
     """v_h = sqrt(T / (2 rho n pi R^2)); size sqrt(n) R; the follower's from m g."""
     scales = wake_scales([MASS_KG * 9.81], RADIUS_M, N_ROTORS, MASS_KG, RADIUS_M, N_ROTORS)
     v_h = np.sqrt(MASS_KG * 9.81 / (2 * 1.225 * N_ROTORS * np.pi * RADIUS_M**2))
-    np.testing.assert_allclose(scales[0], [v_h, 2 * RADIUS_M, v_h], rtol=1e-12)
+    np.testing.assert_allclose(scales[0], [v_h, 2 * RADIUS_M, v_h, 2 * RADIUS_M], rtol=1e-12)
     assert 7.0 < v_h < 8.0  # 0.7 kg on four 5-inch propellers: 6.9 N over 0.051 m^2
     np.testing.assert_allclose(hover_induced_velocity_mps(4 * MASS_KG * 9.81, RADIUS_M, N_ROTORS),
                                2 * v_h)

@@ -1,0 +1,64 @@
+"""Issue 24's real-flight targets, one model kind: trained on swap_ss 00-04 + swap_sl 00-07,
+judged on the held-out swap_sl 08-11 (each follower apart) and swap_ss 05-06.
+
+    .venv/bin/python studies/pairing_heldout.py ss_train.npz sl_train.npz ss_test.npz \\
+        sl_test.npz KIND [KIND ...]
+
+The data files are ``aerodock ingest`` of swap_ss 00-04, swap_sl 00-07, swap_ss 05-06 and
+swap_sl 08-11 (docs/results.md gives the commands). Prints, per kind and seed 0, 1, 2, the
+reduction of the interaction region's vertical RMSE against the zero model (``evaluate``'s
+``interaction.model.rmse_mps2.z`` against ``interaction.zero.rmse_mps2.z``, the leader-aware
+kinds given the data's wake scales), then mean (sd, min-max): the same figures as
+``aerodock train`` then ``aerodock evaluate`` on the flights of one follower.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from aerodock.learning.datafiles import load_data_paths
+from aerodock.learning.evaluate import evaluate
+from aerodock.learning.features import KINDS
+from aerodock.learning.train import train_model
+
+SEEDS = (0, 1, 2)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for name in ("ss_train", "sl_train", "ss_test", "sl_test"):
+        parser.add_argument(name)
+    parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
+    args = parser.parse_args()
+    bad = [k for k in args.kinds if k not in KINDS]
+    if bad:
+        parser.error(f"unknown model kind {bad[0]!r}")
+    # loaded together, as ``aerodock train --data ss_train.npz sl_train.npz`` does: a flight
+    # without free-air samples borrows the bias of its vehicle's flights across both files
+    fit = load_data_paths([args.ss_train, args.sl_train])
+    sl_test = load_data_paths([args.sl_test])
+    follower = np.array([n.rsplit("_", 1)[-1] for n in sl_test.flight_names])[sl_test.flight_id]
+    judged = {"ss 05-06": load_data_paths([args.ss_test]),
+              "small under large": sl_test.subset(follower == "cf51"),
+              "large under small": sl_test.subset(follower == "cf101")}
+    for kind in args.kinds:
+        scores: dict[str, list[float]] = {name: [] for name in judged}
+        for seed in SEEDS:
+            trained = train_model(kind, fit, seed=seed)
+            predictor = trained.predictor()
+            for name, ds in judged.items():
+                ev = evaluate(predictor, ds)["interaction"]
+                scores[name].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
+                                           / ev["zero"]["rmse_mps2"]["z"]))
+            print(kind, seed, {name: round(v[-1], 1) for name, v in scores.items()}, flush=True)
+        for name, v in scores.items():
+            arr = np.array(v)
+            print(f"HELDOUT {kind} {name}: {arr.mean():.1f} % ({arr.std(ddof=1):.1f}, "
+                  f"{arr.min():.1f}-{arr.max():.1f})", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
