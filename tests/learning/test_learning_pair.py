@@ -71,6 +71,9 @@ def test_pair_kind_tells_followers_apart_where_leader_kind_cannot(two_follower_m
                 - test.y_true_mean
             rmse[kind] = float(np.sqrt(np.mean(err**2)))
         assert rmse["so2-pair"] <= 0.6 * rmse["so2-leader"], (size, rmse)
+        # its stated accuracy: within 0.2 of the true field's RMS (seed 0: 0.13 and 0.11)
+        true_rms = float(np.sqrt(np.mean(test.y_true_mean**2)))
+        assert rmse["so2-pair"] <= 0.2 * true_rms, (size, rmse, true_rms)
 
 
 def test_leader_kind_reads_three_scales_of_four(two_follower_models):
