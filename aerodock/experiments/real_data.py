@@ -11,15 +11,23 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from aerodock.flightlog import FlightLog
+    from aerodock.learning.dataset import Dataset
 
 # The swap flights pass at 0.2-0.5 m laterally: free air for the bias estimate starts nearer
 # than in our simulated curriculum (the dataset README: "beyond about 12 cm almost nothing").
 FREE_AIR_RADIUS_M = 0.2
 TRAIN_FLIGHTS = ("00", "01", "02", "03", "04")
 TEST_FLIGHTS = ("05", "06")
+# The sample-efficiency curve: minutes of training data (the five training flights hold about
+# four) and seeds, quick and full.
+SE_MINUTES = {True: (0.5, 1, 2), False: (0.5, 1, 2, 3)}
+SE_SEEDS = {True: (0, 1), False: (0, 1, 2)}
 
 
 def _flight_number(name: str) -> str | None:
@@ -33,21 +41,30 @@ def _rmse_parts(ev: dict[str, Any], region: str, who: str) -> dict[str, float]:
             "overall": float(r["overall"])}
 
 
+def real_split(folder: Path) -> tuple[list[FlightLog], list[FlightLog], Dataset, Dataset]:
+    """The Neural-Swarm folder's flights split for the study: (train logs, test logs, train data
+    set, test data set), flights :data:`TRAIN_FLIGHTS` to train, :data:`TEST_FLIGHTS` to judge
+    (both vehicles' logs of each), labels with :data:`FREE_AIR_RADIUS_M`; other files are left
+    out."""
+    from aerodock.ingest import read_logs
+    from aerodock.learning.dataset import build_dataset
+
+    logs = read_logs("neural-swarm", [Path(folder)])
+    train_logs = [lg for lg in logs if _flight_number(lg.name) in TRAIN_FLIGHTS]
+    test_logs = [lg for lg in logs if _flight_number(lg.name) in TEST_FLIGHTS]
+    return (train_logs, test_logs, build_dataset(train_logs, free_air_radius_m=FREE_AIR_RADIUS_M),
+            build_dataset(test_logs, free_air_radius_m=FREE_AIR_RADIUS_M))
+
+
 def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int = 0
                     ) -> dict[str, Any]:
     """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``."""
-    from aerodock.ingest import read_logs
-    from aerodock.learning.dataset import build_dataset
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
     from aerodock.learning.sample_efficiency import sample_efficiency
     from aerodock.learning.train import train_model
 
-    logs = read_logs("neural-swarm", [Path(folder)])
-    train_logs = [lg for lg in logs if _flight_number(lg.name) in TRAIN_FLIGHTS]
-    test_logs = [lg for lg in logs if _flight_number(lg.name) in TEST_FLIGHTS]
-    train_ds = build_dataset(train_logs, free_air_radius_m=FREE_AIR_RADIUS_M)
-    test_ds = build_dataset(test_logs, free_air_radius_m=FREE_AIR_RADIUS_M)
+    train_logs, test_logs, train_ds, test_ds = real_split(folder)
     out: dict[str, Any] = {
         "folder": str(folder), "train_flights": [lg.name for lg in train_logs],
         "test_flights": [lg.name for lg in test_logs], "train_minutes": train_ds.minutes,
@@ -66,8 +83,7 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
         "vertical"] / zero_v
     out["sample_efficiency"] = sample_efficiency(
         train_ds, test_ds, kinds=("so2", "so2-ext", "mlp"),
-        minutes=(0.5, 1, 2) if quick else (0.5, 1, 2, 3),
-        seeds=(0, 1) if quick else (0, 1, 2), metric="interaction")
+        minutes=SE_MINUTES[quick], seeds=SE_SEEDS[quick], metric="interaction")
     from aerodock.learning.sample_efficiency import plot_sample_efficiency
 
     plot_sample_efficiency(out["sample_efficiency"], fig_dir / "real_sample_efficiency.png")

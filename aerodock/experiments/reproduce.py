@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,6 +43,11 @@ from aerodock.experiments.paper_counts import paper_outcome_probabilities
 from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
+
+if TYPE_CHECKING:
+    from aerodock.flightlog import FlightLog
+    from aerodock.learning.dataset import Dataset
+    from aerodock.learning.runtime import Predictor
 
 
 @dataclass(frozen=True)
@@ -198,6 +203,63 @@ def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
     return results, traces, timings
 
 
+@dataclass
+class LearningData:
+    """What step 1 of the reproduction learns from: see :func:`learning_data`."""
+
+    curriculum: dict[str, Any]  # run_curriculum's summary
+    deep_predictor: Predictor  # the deep curriculum's model (down to the docking depth)
+    predictor: Predictor  # the paper's curriculum's model (the deep one without deep stages)
+    test_ds: Dataset  # held-out excitation flights
+    train_logs: list[FlightLog]  # the curriculum's flights, then the sample-efficiency pool
+
+
+def learning_data(cfg: Config, size: RunSize, data_dir: Path, seed: int = 0, *,
+                  say: Callable[[str], None] = print,
+                  train_kwargs: dict[str, Any] | None = None,
+                  name_as: Path | None = None) -> LearningData:
+    """Step 1 of the reproduction: the curriculum (data and models) in ``data_dir``, held-out
+    excitation flights (``size.test_flights_per_stage`` per stage, saved as ``heldout.npz``) and
+    the sample-efficiency pool (``size.se_pool_flights // 5`` more flights per stage, flown with
+    the paper's model, added to the curriculum's flights).
+
+    ``train_kwargs`` go to each stage's training; ``name_as`` is the folder the results name
+    (``data_dir`` itself unless it is being built under another name)."""
+    from aerodock.flightlog import load_flightlogs
+    from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
+    from aerodock.learning.datafiles import save_dataset
+    from aerodock.learning.dataset import build_dataset
+    from aerodock.learning.runtime import Predictor
+
+    data_dir = Path(data_dir)
+    learn_cfg = cfg.with_overrides({"curriculum": size.curriculum}) if size.curriculum else cfg
+    curriculum = run_curriculum(learn_cfg, data_dir, seed=seed,
+                                progress=lambda m: say("    " + m),
+                                train_kwargs=train_kwargs, name_as=name_as)
+    # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
+    # trained before the deep stages: the reproduction flies the paper's.
+    deep_predictor = Predictor.load(data_dir / "models" / "final")
+    predictor = (Predictor.load(data_dir / "models" / "paper")
+                 if "paper_model" in curriculum else deep_predictor)
+    test_logs = []
+    for st in curriculum_stages(learn_cfg):
+        test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
+                                        st.depth_max_m, seed + 7919 + st.index,
+                                        name=f"test{st.index}")
+    test_ds = build_dataset(test_logs)
+    save_dataset(data_dir / "heldout.npz", test_ds)
+    train_logs = [lg for st in curriculum_stages(learn_cfg)
+                  for lg in load_flightlogs(data_dir / f"stage{st.index}.npz")]
+    if size.se_pool_flights:
+        # More flights (nominal controller + the paper's model) so that 10 minutes exist to
+        # draw from.
+        for st in curriculum_stages(learn_cfg):
+            train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
+                                             st.depth_max_m, seed + 4241 + st.index, predictor,
+                                             name=f"pool{st.index}")
+    return LearningData(curriculum, deep_predictor, predictor, test_ds, train_logs)
+
+
 def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
                   say: Callable[[str], None] = print,
                   shared_data: Path | None = None,
@@ -226,8 +288,7 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
     naming the folder ``named`` it becomes."""
     from aerodock.experiments.report import write_report
-    from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
-    from aerodock.learning.datafiles import save_dataset
+    from aerodock.learning.curriculum import run_curriculum
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import Predictor
@@ -259,32 +320,10 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         epochs["progress"] = lambda e, n, *_: bar("training epochs", e, n)
     if size.train_max_epochs is not None:
         epochs["max_epochs"] = size.train_max_epochs
-    learn_cfg = cfg.with_overrides({"curriculum": size.curriculum}) if size.curriculum else cfg
-    curriculum = run_curriculum(learn_cfg, data_dir, seed=seed,
-                                progress=lambda m: say("    " + m),
-                                train_kwargs=epochs or None, name_as=named / "data")
-    # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
-    # trained before the deep stages: the reproduction flies the paper's.
-    deep_predictor = Predictor.load(data_dir / "models" / "final")
-    predictor = (Predictor.load(data_dir / "models" / "paper")
-                 if "paper_model" in curriculum else deep_predictor)
-    test_logs = []
-    for st in curriculum_stages(learn_cfg):
-        test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
-                                        st.depth_max_m, seed + 7919 + st.index,
-                                        name=f"test{st.index}")
-    test_ds = build_dataset(test_logs)
-    save_dataset(data_dir / "heldout.npz", test_ds)
-    from aerodock.flightlog import load_flightlogs
-
-    train_logs = [lg for st in curriculum_stages(learn_cfg)
-                  for lg in load_flightlogs(data_dir / f"stage{st.index}.npz")]
-    if size.se_pool_flights:
-        # More flights (nominal controller + final model) so that 10 minutes exist to draw from.
-        for st in curriculum_stages(learn_cfg):
-            train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
-                                             st.depth_max_m, seed + 4241 + st.index, predictor,
-                                             name=f"pool{st.index}")
+    learning = learning_data(cfg, size, data_dir, seed, say=say, train_kwargs=epochs or None,
+                             name_as=named / "data")
+    curriculum, test_ds, train_logs = learning.curriculum, learning.test_ds, learning.train_logs
+    deep_predictor, predictor = learning.deep_predictor, learning.predictor
     heldout_eval = evaluate(deep_predictor, test_ds)
     results["learning"] = {
         "curriculum": curriculum,
