@@ -56,9 +56,47 @@ def real_split(folder: Path) -> tuple[list[FlightLog], list[FlightLog], Dataset,
             build_dataset(test_logs, free_air_radius_m=FREE_AIR_RADIUS_M))
 
 
-def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int = 0
-                    ) -> dict[str, Any]:
-    """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``."""
+OTHER_PAIR_VEHICLES = "cf51=small,cf101=large"
+"""The vehicles of the small-large swap day (``swap_sl_2020-06-19``): who is which size."""
+FOLLOWERS = {"cf51": "small under large", "cf101": "large under small"}
+"""Each vehicle of the small-large day, as the follower: the pairing its flights show."""
+
+
+def transfer_to_other_pair(predictors: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """Models trained on the small pair, judged on every flight of the small-large day
+    (``folder``), each follower apart: a leader (or a follower) of a size the training never
+    showed.
+
+    Returns:
+        ``{"folder", "flights", "pairings": {pairing: {"interaction_samples", "models": {kind:
+        {"vertical_mps2", "vertical_reduction"}}}}}`` over the interaction region; the reduction
+        is against the zero model (``predictors`` must hold ``"zero"``).
+    """
+    from aerodock.ingest import read_logs
+    from aerodock.learning.dataset import build_dataset
+    from aerodock.learning.evaluate import evaluate
+
+    logs = read_logs("neural-swarm", [Path(folder)], vehicle=OTHER_PAIR_VEHICLES)
+    ds = build_dataset(logs, free_air_radius_m=FREE_AIR_RADIUS_M)
+    follower = np.array([n.rsplit("_", 1)[-1] for n in ds.flight_names])[ds.flight_id]
+    out: dict[str, Any] = {"folder": str(folder), "flights": len(logs), "pairings": {}}
+    for vehicle, pairing in FOLLOWERS.items():
+        sub = ds.subset(follower == vehicle)
+        models = {}
+        for kind, pred in predictors.items():
+            ev = evaluate(pred, sub)["interaction"]
+            models[kind] = {"vertical_mps2": float(ev["model"]["rmse_mps2"]["z"]),
+                            "vertical_reduction": float(1.0 - ev["model"]["rmse_mps2"]["z"]
+                                                        / ev["zero"]["rmse_mps2"]["z"])}
+        out["pairings"][pairing] = {"interaction_samples": int(ev["n"]), "models": models}
+    return out
+
+
+def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int = 0,
+                    other_pair: Path | None = None) -> dict[str, Any]:
+    """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``. With
+    ``other_pair`` (the small-large day's folder), the models are also judged on it
+    (:func:`transfer_to_other_pair`, ``transfer``)."""
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
     from aerodock.learning.sample_efficiency import sample_efficiency
@@ -78,6 +116,8 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
         out["models"][kind] = {region: _rmse_parts(ev, region, "model")
                                for region in ("all", "interaction")}
         out["interaction_samples"] = int(ev["interaction"]["n"])
+    out["transfer"] = (None if other_pair is None
+                       else transfer_to_other_pair(predictors, other_pair))
     zero_v = out["models"]["zero"]["interaction"]["vertical"]
     out["so2_vertical_reduction_interaction"] = 1.0 - out["models"]["so2"]["interaction"][
         "vertical"] / zero_v

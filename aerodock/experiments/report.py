@@ -237,6 +237,25 @@ def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
     return rel
 
 
+def _transfer_table(tr: dict[str, Any]) -> list[str]:
+    """The small pair's models on the small-large day, each follower apart (markdown)."""
+    pairings = list(tr["pairings"])
+    kinds = [k for k in next(iter(tr["pairings"].values()))["models"] if k != "zero"]
+    lines = ["### Transfer to a pair of other sizes", "",
+             f"The models above, trained on the small pair only, judged on all {tr['flights']} "
+             "flight logs of the small-large day: interaction region, vertical RMSE in m/s² "
+             "and its reduction against the zero model.", "",
+             "| model | " + " | ".join(pairings) + " |", "|---" * (len(pairings) + 1) + "|"]
+    for kind in ["zero", *kinds]:
+        cells = []
+        for p in pairings:
+            m = tr["pairings"][p]["models"][kind]
+            cells.append(f"{m['vertical_mps2']:.3f}" if kind == "zero"
+                         else f"{m['vertical_mps2']:.3f} ({100 * m['vertical_reduction']:.1f} %)")
+        lines.append(f"| {kind} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
 def _se_table(se: dict[str, Any], title: str) -> list[str]:
     kinds = list(se["models"])
     lines = [f"### {title}", "", "| minutes | region | " + " | ".join(kinds) + " | zero |",
@@ -393,6 +412,8 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
                          f"{d['interaction']['planar']:.3f} |")
         lines += ["", f"Interaction region: {rd['interaction_samples']} held-out samples (follower "
                   "below the other vehicle within 0.2 m laterally).", ""]
+        if rd.get("transfer"):
+            lines += _transfer_table(rd["transfer"])
         if rd.get("sample_efficiency"):
             lines += _se_table(rd["sample_efficiency"], "Sample efficiency, real data")
     if "compensation" in r:
