@@ -17,13 +17,10 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from pairing_validation import score_seeds  # studies/ is the script's folder, on sys.path
 
 from aerodock.learning.datafiles import load_data_paths
-from aerodock.learning.evaluate import evaluate
 from aerodock.learning.features import KINDS
-from aerodock.learning.train import train_model
-
-SEEDS = (0, 1, 2)
 
 
 def main() -> int:
@@ -44,19 +41,7 @@ def main() -> int:
               "small under large": sl_test.subset(follower == "cf51"),
               "large under small": sl_test.subset(follower == "cf101")}
     for kind in args.kinds:
-        scores: dict[str, list[float]] = {name: [] for name in judged}
-        for seed in SEEDS:
-            trained = train_model(kind, fit, seed=seed)
-            predictor = trained.predictor()
-            for name, ds in judged.items():
-                ev = evaluate(predictor, ds)["interaction"]
-                scores[name].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
-                                           / ev["zero"]["rmse_mps2"]["z"]))
-            print(kind, seed, {name: round(v[-1], 1) for name, v in scores.items()}, flush=True)
-        for name, v in scores.items():
-            arr = np.array(v)
-            print(f"HELDOUT {kind} {name}: {arr.mean():.1f} % ({arr.std(ddof=1):.1f}, "
-                  f"{arr.min():.1f}-{arr.max():.1f})", flush=True)
+        score_seeds("HELDOUT", kind, kind, fit, judged)
     return 0
 
 

@@ -17,7 +17,7 @@ import argparse
 import numpy as np
 
 from aerodock.learning.datafiles import load_data_paths
-from aerodock.learning.dataset import concat_datasets
+from aerodock.learning.dataset import Dataset, concat_datasets
 from aerodock.learning.evaluate import evaluate
 from aerodock.learning.train import train_model
 
@@ -35,6 +35,26 @@ CANDIDATES: dict[str, tuple[str, bool, dict]] = {
 }
 SEEDS = (0, 1, 2)
 FIT_LAST, VALIDATION = 4, (5, 6, 7)
+
+
+def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, Dataset],
+                options: dict | None = None) -> dict[str, list[float]]:
+    """Train ``kind`` on ``fit`` for each of :data:`SEEDS` and print, per data set of
+    ``judged``, the interaction region's vertical RMSE reduction against the zero model (%), per
+    seed and then as ``TAG NAME WHO: mean % (sd, min-max)``; returns the reductions."""
+    scores: dict[str, list[float]] = {who: [] for who in judged}
+    for seed in SEEDS:
+        predictor = train_model(kind, fit, seed=seed, **(options or {})).predictor()
+        for who, ds in judged.items():
+            ev = evaluate(predictor, ds)["interaction"]
+            scores[who].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
+                                      / ev["zero"]["rmse_mps2"]["z"]))
+        print(name, seed, {who: round(v[-1], 1) for who, v in scores.items()}, flush=True)
+    for who, v in scores.items():
+        arr = np.array(v)
+        print(f"{tag} {name} {who}: {arr.mean():.1f} % ({arr.std(ddof=1):.1f}, "
+              f"{arr.min():.1f}-{arr.max():.1f})", flush=True)
+    return scores
 
 
 def main() -> int:
@@ -57,18 +77,7 @@ def main() -> int:
     for name in args.candidates or list(CANDIDATES):
         kind, with_ss, options = CANDIDATES[name]
         fit = concat_datasets([ss, sl_fit]) if with_ss else sl_fit
-        scores = {who: [] for who in validation}
-        for seed in SEEDS:
-            predictor = train_model(kind, fit, seed=seed, **options).predictor()
-            for who, ds in validation.items():
-                ev = evaluate(predictor, ds)["interaction"]
-                scores[who].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
-                                          / ev["zero"]["rmse_mps2"]["z"]))
-            print(name, seed, {who: round(v[-1], 1) for who, v in scores.items()}, flush=True)
-        for who, v in scores.items():
-            v = np.array(v)
-            print(f"VAL {name} {who} {v.mean():.1f} ({v.std(ddof=1):.1f}, "
-                  f"{v.min():.1f}-{v.max():.1f})", flush=True)
+        score_seeds("VAL", name, kind, fit, validation, options)
     return 0
 
 

@@ -90,6 +90,21 @@ def make_log(
     )
 
 
+def scaled_field(log: FlightLog, share: float, meta: dict, extra: dict | None = None
+                 ) -> FlightLog:
+    """``log`` with its wake (``extra["true_field_mean_mps2"]``) scaled by ``share``: the labels
+    and the true field alike; ``meta`` and ``extra`` are added to the log's."""
+    true = log.extra["true_field_mean_mps2"]
+    return FlightLog(
+        t_s=log.t_s, leader_pos_m=log.leader_pos_m, leader_vel_mps=log.leader_vel_mps,
+        leader_quat=log.leader_quat, follower_pos_m=log.follower_pos_m,
+        follower_vel_mps=log.follower_vel_mps, follower_quat=log.follower_quat,
+        follower_cmd_accel_mps2=log.follower_cmd_accel_mps2,
+        follower_thrust_n=log.follower_thrust_n,
+        follower_obs_accel_mps2=log.follower_obs_accel_mps2 + (share - 1.0) * true,
+        meta={**log.meta, **meta}, extra={"true_field_mean_mps2": share * true, **(extra or {})})
+
+
 def make_logs(
     rng: np.random.Generator, n_flights: int = 6, duration_s: float = 20.0, **kwargs
 ) -> list[FlightLog]:

@@ -11,7 +11,7 @@ from aerodock.learning.dataset import build_dataset, concat_datasets
 from aerodock.learning.features import feature_map, hover_induced_velocity_mps, wake_scales
 from aerodock.learning.runtime import Predictor
 from aerodock.learning.train import train_model
-from tests.learning.learning_synth import make_logs
+from tests.learning.learning_synth import make_logs, scaled_field
 
 MASS_KG, RADIUS_M, N_ROTORS = 0.7, 0.0635, 4
 VEHICLES = {"leader_mass_kg": MASS_KG, "leader_rotor_radius_m": RADIUS_M,
@@ -23,21 +23,11 @@ def _leader_logs(seed: int, thrust_factor: float, n_flights: int = 6) -> list[Fl
     """Flights under a leader of thrust ``thrust_factor * m g`` (logged as
     ``extra["leader_thrust_n"]``), whose wake is the synthetic field times ``thrust_factor``:
     the induced velocity squared scales with the thrust at a fixed rotor geometry."""
-    logs = []
-    for log in make_logs(np.random.default_rng(seed), n_flights=n_flights):
-        true = log.extra["true_field_mean_mps2"]
-        extra = {"true_field_mean_mps2": thrust_factor * true,
-                 "leader_thrust_n": np.full(log.n_samples, thrust_factor * MASS_KG * 9.81)}
-        logs.append(FlightLog(
-            t_s=log.t_s, leader_pos_m=log.leader_pos_m, leader_vel_mps=log.leader_vel_mps,
-            leader_quat=log.leader_quat, follower_pos_m=log.follower_pos_m,
-            follower_vel_mps=log.follower_vel_mps, follower_quat=log.follower_quat,
-            follower_cmd_accel_mps2=log.follower_cmd_accel_mps2,
-            follower_thrust_n=log.follower_thrust_n,
-            follower_obs_accel_mps2=log.follower_obs_accel_mps2 + (thrust_factor - 1.0) * true,
-            meta={**log.meta, **VEHICLES, "name": f"{log.name}_T{thrust_factor:g}"},
-            extra=extra))
-    return logs
+    return [scaled_field(log, thrust_factor,
+                         {**VEHICLES, "name": f"{log.name}_T{thrust_factor:g}"},
+                         {"leader_thrust_n": np.full(log.n_samples,
+                                                     thrust_factor * MASS_KG * 9.81)})
+            for log in make_logs(np.random.default_rng(seed), n_flights=n_flights)]
 
 
 def test_wake_scales_are_momentum_theory():

@@ -11,7 +11,7 @@ from aerodock.learning.dataset import build_dataset, concat_datasets
 from aerodock.learning.features import N_WAKE_SCALES, WAKE_SCALE_NAMES, wake_scales
 from aerodock.learning.runtime import Predictor
 from aerodock.learning.train import train_model
-from tests.learning.learning_synth import make_logs
+from tests.learning.learning_synth import make_logs, scaled_field
 
 MASS_KG, RADIUS_M, N_ROTORS = 0.7, 0.0635, 4
 LARGE = 1.5  # the large follower's rotor radius in units of the small one's
@@ -27,19 +27,8 @@ def _follower_logs(seed: int, size: float, n_flights: int = 6) -> list[FlightLog
     vehicles = {"leader_mass_kg": MASS_KG, "leader_rotor_radius_m": RADIUS_M,
                 "leader_n_rotors": N_ROTORS, "follower_mass_kg": MASS_KG * size**2,
                 "follower_rotor_radius_m": RADIUS_M * size, "follower_n_rotors": N_ROTORS}
-    logs = []
-    for log in make_logs(np.random.default_rng(seed), n_flights=n_flights):
-        true = log.extra["true_field_mean_mps2"]
-        logs.append(FlightLog(
-            t_s=log.t_s, leader_pos_m=log.leader_pos_m, leader_vel_mps=log.leader_vel_mps,
-            leader_quat=log.leader_quat, follower_pos_m=log.follower_pos_m,
-            follower_vel_mps=log.follower_vel_mps, follower_quat=log.follower_quat,
-            follower_cmd_accel_mps2=log.follower_cmd_accel_mps2,
-            follower_thrust_n=log.follower_thrust_n,
-            follower_obs_accel_mps2=log.follower_obs_accel_mps2 + (share - 1.0) * true,
-            meta={**log.meta, **vehicles, "name": f"{log.name}_B{size:g}"},
-            extra={"true_field_mean_mps2": share * true}))
-    return logs
+    return [scaled_field(log, share, {**vehicles, "name": f"{log.name}_B{size:g}"})
+            for log in make_logs(np.random.default_rng(seed), n_flights=n_flights)]
 
 
 @pytest.fixture(scope="module")
