@@ -14,8 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 
-import numpy as np
-
+from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
 from aerodock.learning.label_floor import OUT_OF_WAKE_RADIUS_M, label_floor
 
@@ -30,7 +29,7 @@ def main() -> int:
     rows = []
     for path in args.data:
         ds = load_data_paths([path])
-        follower = np.array([name.rsplit("_", 1)[-1] for name in ds.flight_names])[ds.flight_id]
+        follower = follower_vehicle(ds)
         for who in sorted(set(follower)):
             floor = label_floor(ds, follower == who, out_radius_m=args.out_radius)
             rows.append({"data": path, "follower": who, **floor.as_dict()})

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
 from pairing_validation import score_seeds  # studies/ is the script's folder, on sys.path
 
+from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
 from aerodock.learning.features import KINDS
 
@@ -36,7 +36,7 @@ def main() -> int:
     # without free-air samples borrows the bias of its vehicle's flights across both files
     fit = load_data_paths([args.ss_train, args.sl_train])
     sl_test = load_data_paths([args.sl_test])
-    follower = np.array([n.rsplit("_", 1)[-1] for n in sl_test.flight_names])[sl_test.flight_id]
+    follower = follower_vehicle(sl_test)
     judged = {"ss 05-06": load_data_paths([args.ss_test]),
               "small under large": sl_test.subset(follower == "cf51"),
               "large under small": sl_test.subset(follower == "cf101")}

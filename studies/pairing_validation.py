@@ -16,6 +16,7 @@ import argparse
 
 import numpy as np
 
+from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
 from aerodock.learning.dataset import Dataset, concat_datasets
 from aerodock.learning.evaluate import evaluate
@@ -68,7 +69,7 @@ def main() -> int:
         parser.error(f"unknown candidate {unknown[0]!r}")
     ss, sl = load_data_paths([args.ss_train]), load_data_paths([args.sl_train])
     number = np.array([int(n.rsplit("_", 2)[-2]) for n in sl.flight_names])[sl.flight_id]
-    follower = np.array([n.rsplit("_", 1)[-1] for n in sl.flight_names])[sl.flight_id]
+    follower = follower_vehicle(sl)
     if number.max() > max(VALIDATION):
         parser.error("sl_train holds flights after 07: the held-out flights must not be read")
     sl_fit = sl.subset(number <= FIT_LAST)

@@ -62,6 +62,12 @@ FOLLOWERS = {"cf51": "small under large", "cf101": "large under small"}
 """Each vehicle of the small-large day, as the follower: the pairing its flights show."""
 
 
+def follower_vehicle(ds: Dataset) -> np.ndarray:
+    """Per sample of a Neural-Swarm data set, the follower's vehicle: its flight name's last
+    part (``"cf51"`` of ``swap_sl_2020-06-19_08_cf51``)."""
+    return np.array([name.rsplit("_", 1)[-1] for name in ds.flight_names])[ds.flight_id]
+
+
 def transfer_to_other_pair(predictors: dict[str, Any], folder: Path) -> dict[str, Any]:
     """Models trained on the small pair, judged on every flight of the small-large day
     (``folder``), each follower apart: a leader (or a follower) of a size the training never
@@ -78,7 +84,7 @@ def transfer_to_other_pair(predictors: dict[str, Any], folder: Path) -> dict[str
 
     logs = read_logs("neural-swarm", [Path(folder)], vehicle=OTHER_PAIR_VEHICLES)
     ds = build_dataset(logs, free_air_radius_m=FREE_AIR_RADIUS_M)
-    follower = np.array([n.rsplit("_", 1)[-1] for n in ds.flight_names])[ds.flight_id]
+    follower = follower_vehicle(ds)
     out: dict[str, Any] = {"folder": str(folder), "flights": len(logs), "pairings": {}}
     for vehicle, pairing in FOLLOWERS.items():
         sub = ds.subset(follower == vehicle)

@@ -163,7 +163,7 @@ def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
     va2 = g.add(g.mul(ax, ax), g.mul(ay, ay))
     vb_soft = g.sqrt(g.add(vb2, eps_v2))
     cos_b = g.div(g.add(g.mul(urx, bx), g.mul(ury, by)), vb_soft)
-    if kind in ("so2", "so2-leader", "so2-pair"):
+    if kind == "so2" or kind in LEADER_KINDS:
         z = g.stack([cos_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2)])
         accel_scale = None
         if kind in LEADER_KINDS:

@@ -237,7 +237,7 @@ def _feature_map_generic(
     if kind == "so2":
         z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
         out_map = stack([e_r, a3], -1)
-    elif kind in ("so2-leader", "so2-pair"):
+    elif kind in LEADER_KINDS:
         vh_a, size_a, vh_b = scales[..., 0], scales[..., 1], scales[..., 2]
         ratio = vh_a / vh_b
         accel_scale = (ratio * ratio * GRAVITY_MPS2)[..., None]
@@ -291,7 +291,7 @@ def check_inputs(x: np.ndarray, leader_r: np.ndarray) -> tuple[np.ndarray, np.nd
     return x, leader_r
 
 
-def check_wake_scales(wake_scales: Any, n: int, kind: str = "so2-leader") -> np.ndarray:
+def check_wake_scales(wake_scales: Any, n: int, kind: str) -> np.ndarray:
     """Validate wake scales (:data:`WAKE_SCALE_NAMES`) for a leader-aware ``kind``: (n, k) or
     (k,) with ``k`` at least the kind's :data:`N_WAKE_SCALES`, finite and positive.
 
