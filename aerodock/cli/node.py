@@ -108,7 +108,16 @@ def node_command(
         import rclpy  # noqa: F401
     except ImportError:
         fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
-    from aerodock.node.ros import NodeSettings, run_node
+    from aerodock.node.ros import NodeSettings, run_node, topic_name_error
+
+    topics = {"--output-topic": output_topic, "--diagnostics-topic": diagnostics_topic,
+              **{f"--mapping {role}.state": merged[role]["state"]
+                 for role in ("leader", "follower")},
+              **{f"--state-type {topic}": topic for topic in types}}
+    for option, topic in topics.items():
+        why = topic_name_error(topic)
+        if why is not None:
+            fail(one_line(f"{option} {topic!r}: {why}"))
 
     notes = model_warnings(predictor, cfg)
     for note in notes:

@@ -141,6 +141,26 @@ def state_from_message(type_name: str, msg: Any, mapping: dict[str, Any],
     raise ValueError(f"state type {type_name} is not one of {', '.join(STATE_TYPES)}")
 
 
+def topic_name_error(name: str, node_name: str = "aerodock_f_ext") -> str | None:
+    """Why ROS 2 would refuse ``name`` as a topic of the node (``None``: it takes it).
+
+    rclpy's own rules, checked before the node starts: the name as given (empty, a token that
+    starts with a digit, characters other than alphanumerics, ``_``, ``/``, ``~``, ``{}``), then
+    fully expanded in the node's namespace (a repeated or trailing ``/``, an unknown
+    substitution)."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+    from rclpy.validate_topic_name import validate_topic_name
+
+    try:
+        validate_topic_name(name)
+        validate_full_topic_name(expand_topic_name(name, node_name, "/"))
+    except (InvalidTopicNameException, ValueError) as err:
+        return str(err).splitlines()[0].rstrip(":").split(", at /")[0]
+    return None
+
+
 def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerodock_f_ext",
               warnings_to_log: list[str] | None = None) -> Any:
     """Build the node (``rclpy.init`` must have been called). See the module docstring."""

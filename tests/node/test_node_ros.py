@@ -140,3 +140,27 @@ def test_node_warns_about_other_vehicles_and_rejects_bad_input(tmp_path):
     rate = subprocess.run([*cmd, str(model), "--rate", "0"], capture_output=True, text=True,
                           timeout=60, env=env)
     assert rate.returncode == 2 and "--rate" in rate.stderr
+
+
+@pytest.mark.parametrize(("option", "topic", "needle"), [
+    ("--output-topic", "/a//b", "repeated '/'"),
+    ("--output-topic", "1e-300", "must not start with a number"),
+    ("--output-topic", "", "must not be empty"),
+    ("--output-topic", "/a/", "must not end with a forward slash"),
+    ("--diagnostics-topic", "a b", "characters other than"),
+    ("--state-type", "/x//y=nav_msgs/msg/Odometry", "repeated '/'"),
+])
+def test_a_topic_ros_would_refuse_is_one_line_and_exit_2(tmp_path, option, topic, needle):
+    """ROS 2's topic rules are checked before the node starts: one line, exit 2 (rclpy raised
+    InvalidTopicNameException at create_publisher, exit 1)."""
+    from aerodock.node.ros import topic_name_error
+
+    model = random_model(tmp_path / "model")
+    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", "node",
+                           "--model", str(model), "--duration", "0.3", option, topic],
+                          capture_output=True, text=True, timeout=60,
+                          env=ros_env(free_domain_id()))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith("error: ") and proc.stderr.count("\n") == 1
+    assert needle in proc.stderr and option in proc.stderr
+    assert topic_name_error("/aerodock/f_ext") is None and topic_name_error("~/f_ext") is None
