@@ -19,6 +19,7 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 
 import numpy as np
 import pytest
+from short_mission import SHORT_MISSION
 
 from aerodock.config import load_config
 
@@ -61,6 +62,13 @@ attitude, and every vehicle is exactly nominal (for tests of a mechanism's preci
 def ideal_cfg(cfg):
     """The default configuration on the idealised world (:data:`IDEAL_WORLD`)."""
     return cfg.with_overrides(IDEAL_WORLD)
+
+
+@pytest.fixture(scope="session")
+def short_cfg():
+    """The default configuration with the mission's waiting times cut (``short_mission.py``):
+    for tests of a property that holds whatever the timing."""
+    return load_config().with_overrides(SHORT_MISSION)
 
 
 @pytest.fixture

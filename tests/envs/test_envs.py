@@ -18,8 +18,9 @@ from aerodock.mission import AbortReason, MissionSpec, run_campaign  # noqa: E40
 from aerodock.mission.checks import MissionSpecError  # noqa: E402
 
 
-def test_single_env_passes_gymnasium_check_env():
-    env = gym.make(ENV_ID, render_mode="rgb_array")
+def test_single_env_passes_gymnasium_check_env(short_cfg):
+    # (the checks hold whatever the mission's timing: the short one, tests/short_mission.py)
+    env = gym.make(ENV_ID, render_mode="rgb_array", config=short_cfg)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a checker warning fails the test too
         check_env(env.unwrapped)
@@ -39,10 +40,12 @@ def test_vector_env_passes_the_vector_checks_and_gymnasium_wrappers():
         wrapped.step(wrapped.action_space.sample())
 
 
-def test_zero_residual_flies_run_campaigns_mission(cfg):
-    """With no residual, each trial's outcome and clearance are those of run_campaign."""
+def test_zero_residual_flies_run_campaigns_mission(short_cfg):
+    """With no residual, each trial's outcome and clearance are those of run_campaign (whatever
+    the mission's timing: the short one, tests/short_mission.py)."""
+    cfg = short_cfg
     n, seed = 4, 3
-    env = DockingVectorEnv(num_envs=n, campaign_seed=seed, compensation="oracle")
+    env = DockingVectorEnv(num_envs=n, campaign_seed=seed, compensation="oracle", config=cfg)
     env.reset(seed=0)
     docked = np.zeros(n, bool)
     missed = np.zeros(n, bool)
@@ -72,10 +75,11 @@ def test_zero_residual_flies_run_campaigns_mission(cfg):
     np.testing.assert_array_equal(info["trial"], np.arange(n, 2 * n))
 
 
-def test_vector_env_equals_sync_vector_env_of_single_envs():
+def test_vector_env_equals_sync_vector_env_of_single_envs(short_cfg):
     """Sub-environment i of the native vector env is DockingEnv reset with seed s + i."""
     n, s = 3, 10
-    kwargs = {"campaign_seed": 1, "compensation": "observer", "leader_speed_mps": 0.25}
+    kwargs = {"campaign_seed": 1, "compensation": "observer", "leader_speed_mps": 0.25,
+              "config": short_cfg}
     native = DockingVectorEnv(num_envs=n, **kwargs)
     sync = SyncVectorEnv([lambda: DockingEnv(**kwargs) for _ in range(n)])
     o1, _ = native.reset(seed=s)
@@ -121,10 +125,10 @@ def run_episode(env, policy, seed):
     raise AssertionError("the episode did not end")
 
 
-def test_time_out_is_truncated_and_a_dock_terminated():
+def test_time_out_is_truncated_and_a_dock_terminated(short_cfg):
     """An approach whose docking window closes undocked is a time-out: truncated, not
     terminated (the mission's timeout abort); a docked trial is terminated."""
-    env = DockingEnv(campaign_seed=0)
+    env = DockingEnv(campaign_seed=0, config=short_cfg)
     rng = np.random.default_rng(0)
     steps, term, trunc, info = run_episode(
         env, lambda: rng.uniform(-1, 1, 3).astype(np.float32), 0)
@@ -132,7 +136,7 @@ def test_time_out_is_truncated_and_a_dock_terminated():
     assert info["abort_reason"] == AbortReason.TIMEOUT and info["aborted"]
     # It ends on the step the docking window closes.
     assert steps * env.batch.dt_s == pytest.approx(env.batch.mission.timing.timeout_s)
-    env = DockingEnv(campaign_seed=0, compensation="oracle")
+    env = DockingEnv(campaign_seed=0, compensation="oracle", config=short_cfg)
     _, term, trunc, info = run_episode(env, lambda: np.zeros(3, np.float32), 0)
     assert term and not trunc and info["docked"]
 

@@ -24,8 +24,9 @@ def _resets(env):
     yield env.reset(seed=3)
 
 
-def test_served_resets_fly_the_episodes_of_resets_that_settle_their_own_trial():
-    kwargs = {"campaign_seed": 2, "leader_speed_mps": 0.25}
+def test_served_resets_fly_the_episodes_of_resets_that_settle_their_own_trial(short_cfg):
+    # (equal whatever the mission's timing: the short one, tests/short_mission.py)
+    kwargs = {"campaign_seed": 2, "leader_speed_mps": 0.25, "config": short_cfg}
     served, alone = DockingEnv(settle_block=6, **kwargs), DockingEnv(settle_block=1, **kwargs)
     rng = np.random.default_rng(0)
     for (o1, i1), (o2, i2) in zip(_resets(served), _resets(alone), strict=True):
@@ -41,8 +42,9 @@ def test_served_resets_fly_the_episodes_of_resets_that_settle_their_own_trial():
     assert alone.starts.blocks == 0 and not alone.starts.enabled
 
 
-def test_a_served_episode_ends_as_its_own_does():
-    served, alone = DockingEnv(settle_block=4), DockingEnv(settle_block=1)
+def test_a_served_episode_ends_as_its_own_does(short_cfg):
+    served = DockingEnv(settle_block=4, config=short_cfg)
+    alone = DockingEnv(settle_block=1, config=short_cfg)
     for env in (served, alone):
         env.reset(seed=0)
         env.reset()  # served from the first block
@@ -60,8 +62,8 @@ def test_a_served_episode_ends_as_its_own_does():
     assert ends[0][1:] == ends[1][1:]
 
 
-def test_a_reset_outside_the_block_settles_a_new_one():
-    env = DockingEnv(settle_block=3)
+def test_a_reset_outside_the_block_settles_a_new_one(short_cfg):
+    env = DockingEnv(settle_block=3, config=short_cfg)
     env.reset(seed=10)  # block: 10, 11 and the first draw after seed 10
     env.reset(seed=11)
     assert (env.starts.blocks, env.starts.served) == (1, 1)

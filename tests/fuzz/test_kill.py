@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
+from short_mission import short_mission_toml
 
 ENTRY = "from aerodock.cli import main; main()"
 # Widens the window between the two files of a model directory: sleeps after any os.replace
@@ -194,10 +195,13 @@ def test_kill_during_export(models, tmp_path):
 
 # ---- folders of several files: sweep --out and collect --out ------------------------------
 
-SWEEP_SPEC = ("[sweep]\ntrials = 1\nseeds = [{seed}]\n"
+# What a kill leaves does not depend on what the runs fly: the mission's waiting times cut
+# (tests/short_mission.py) in both, for fewer simulated seconds per run.
+SWEEP_SPEC = ("[sweep]\ntrials = 1\nseeds = [{seed}]\nconfig = \"short.toml\"\n"
               "[axes]\ncompensation = [\"observer\", \"oracle\"]\n")
 COLLECT_CONFIG = ("[curriculum]\nflights_per_stage = 1\nstage0_depth_m = [0.9, 1.2]\n"
-                  "min_depth_m = 0.9\ndeep_depths_m = []\nmodel = \"mlp\"\n")
+                  "min_depth_m = 0.9\ndeep_depths_m = []\nmodel = \"mlp\"\n"
+                  + short_mission_toml())
 
 
 def _tree(folder: Path) -> dict[str, bytes]:
@@ -224,6 +228,7 @@ def test_kill_during_sweep_leaves_one_study(tmp_path):
     new one complete (its table and summary of the new seed, its figures); never a mix."""
     out = tmp_path / "study"
     specs = {}
+    (tmp_path / "short.toml").write_text(short_mission_toml())
     for seed in (0, 1):
         specs[seed] = tmp_path / f"spec{seed}.toml"
         specs[seed].write_text(SWEEP_SPEC.format(seed=seed))

@@ -8,7 +8,8 @@ import pytest
 from aerodock.mission import MissionSpec, run_campaign
 
 
-def test_batch_equals_single_trials(cfg):
+def test_batch_equals_single_trials(short_cfg):
+    cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
     n = 4
     batch = run_campaign(cfg, MissionSpec(trials=n, compensation="oracle", seed=11),
                          record="trace")
@@ -22,7 +23,8 @@ def test_batch_equals_single_trials(cfg):
         assert one.err_down_m[0] == batch.err_down_m[i]
 
 
-def test_same_seed_same_numbers_different_seed_different(cfg):
+def test_same_seed_same_numbers_different_seed_different(short_cfg):
+    cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
     a = run_campaign(cfg, MissionSpec(trials=3, seed=5), record="trace")
     b = run_campaign(cfg, MissionSpec(trials=3, seed=5), record="trace")
     c = run_campaign(cfg, MissionSpec(trials=3, seed=6), record="trace")
@@ -52,9 +54,10 @@ def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(cfg):
                               equal_nan=True)
 
 
-def test_armed_and_disarmed_trials_fly_as_in_their_own_campaigns(cfg):
+def test_armed_and_disarmed_trials_fly_as_in_their_own_campaigns(short_cfg):
     """Per-trial trigger flags: one batch flies the same trials armed and disarmed (as reproduce's
     moving-leader study does), and each half's outcomes equal its own campaign's."""
+    cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
     n = 3
     common = dict(offset_m=0.36, leader_speed_mps=0.25, compensation="observer", seed=7)
     armed = run_campaign(cfg, MissionSpec(trials=n, **common), record="trace")

@@ -7,6 +7,7 @@ from functools import partial
 
 import pytest
 from cli_process import aerodock as run_cli
+from short_mission import short_mission_toml
 
 aerodock = partial(run_cli, check=True, timeout_s=300)
 
@@ -51,9 +52,18 @@ def test_bad_config_is_one_line_error(tmp_path):
     assert "Traceback" not in proc.stderr
 
 
-def test_dock_json_and_bad_trials():
-    out = json.loads(aerodock("dock", "--trials", "4", "--compensation", "oracle", "--json")
-                     .stdout)
+@pytest.fixture(scope="module")
+def short_toml(tmp_path_factory):
+    """A config with the mission's waiting times cut (tests/short_mission.py): what these tests
+    check of ``dock`` holds whatever the timing."""
+    path = tmp_path_factory.mktemp("short") / "short.toml"
+    path.write_text(short_mission_toml())
+    return str(path)
+
+
+def test_dock_json_and_bad_trials(short_toml):
+    out = json.loads(aerodock("dock", "--trials", "4", "--compensation", "oracle", "--json",
+                              "--config", short_toml).stdout)
     assert out["trials"] == 4 and 0 <= out["success_rate"] <= 1
     assert len(out["success_wilson95"]) == 2
     proc = aerodock("dock", "--trials", "0", check=False)
@@ -62,11 +72,11 @@ def test_dock_json_and_bad_trials():
     assert proc.returncode == 2 and "--model" in proc.stderr
 
 
-def test_dock_saves_flightlogs(tmp_path):
+def test_dock_saves_flightlogs(tmp_path, short_toml):
     from aerodock.flightlog import load_flightlogs
 
     out = json.loads(aerodock("dock", "--trials", "2", "--compensation", "oracle", "--save-logs",
-                              str(tmp_path), "--json").stdout)
+                              str(tmp_path), "--json", "--config", short_toml).stdout)
     logs = load_flightlogs(out["logs"])
     assert len(logs) == 2
     assert "true_field_mean_mps2" in logs[0].extra
@@ -175,10 +185,11 @@ def test_train_on_two_paths_and_degenerate_data_keeps_the_good_model(flights, tm
     assert ((model / "model.json").read_bytes(), (model / "weights.npz").read_bytes()) == good
 
 
-def test_dock_flies_the_controller_it_is_given():
+def test_dock_flies_the_controller_it_is_given(short_toml):
     """--controller changes what flies (it was once overwritten by the config)."""
     runs = {c: json.loads(aerodock("dock", "--trials", "2", "--seed", "4", "--controller", c,
-                                   "--json").stdout) for c in ("paper", "tuned")}
+                                   "--json", "--config", short_toml).stdout)
+            for c in ("paper", "tuned")}
     assert runs["paper"]["controller"] == "paper"
     assert (runs["paper"]["terminal_err_down_median_m"]
             != runs["tuned"]["terminal_err_down_median_m"])

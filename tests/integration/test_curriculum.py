@@ -44,10 +44,11 @@ def test_excitation_flights_sweep_through_the_wake(cfg):
         assert log.extra["true_field_mean_mps2"][:, 2].max() > 1.0
 
 
-def test_run_curriculum_writes_logs_and_deploys_models(cfg, tmp_path):
-    cfg = cfg.with_overrides({"curriculum": {"flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2],
-                                             "min_depth_m": 0.6, "deep_depths_m": [0.45],
-                                             "deep_flights_per_stage": 3}})
+def test_run_curriculum_writes_logs_and_deploys_models(short_cfg, tmp_path):
+    # (bookkeeping: the short settled start of tests/short_mission.py does as well)
+    cfg = short_cfg.with_overrides({"curriculum": {
+        "flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2], "min_depth_m": 0.6,
+        "deep_depths_m": [0.45], "deep_flights_per_stage": 3}})
     summary = run_curriculum(cfg, tmp_path, seed=0, train_kwargs={"max_epochs": 5})
     assert [s["stage"] for s in summary["stages"]] == [0, 1, 2]
     assert np.allclose(summary["stages"][2]["depth_band_m"], [0.45, 0.6])

@@ -11,6 +11,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from short_mission import short_mission_toml
+
 HERE = Path(__file__).resolve().parent
 FIELDS = ("MinimalField", "OutwardThrustAxisField", "NoWakeField")
 # Only these have no mean_acceleration(): their mean is estimated or reported unavailable.
@@ -18,7 +20,9 @@ WITHOUT_MEAN = ("MinimalField", "NoWakeField")
 
 # The smallest honest curriculum: one stage (0.5-0.8 m below the leader) of three flights
 # (0.6 min, so the sample-efficiency study still trains at 0.5 min) and one deep stage (0.3-0.5 m)
-# of three. Everything else is what `reproduce --smoke` and the other commands do by default.
+# of three; the mission's waiting times cut (tests/short_mission.py: what is checked here is that
+# the field goes through, not what the mission achieves). Everything else is what
+# `reproduce --smoke` and the other commands do by default.
 _CONFIG = """[downwash]
 field = "protocol_fields:{name}"
 [downwash.params]
@@ -27,7 +31,7 @@ stage0_depth_m = [0.5, 0.8]
 flights_per_stage = 3
 deep_depths_m = [0.3]
 deep_flights_per_stage = 3
-"""
+""" + short_mission_toml()
 
 
 def write_config(folder: Path, name: str) -> Path:
