@@ -110,7 +110,8 @@ def spawn(cli: list[str], args: list[Any], cwd: Path, timeout_s: float,
           env: dict[str, str] | None = None
           ) -> tuple[int | None, bool, float, int, bytes, bytes, float]:
     """Run ``cli + args`` in ``cwd`` in a new process group; ``(rc, hang, seconds, maxrss_kib,
-    stdout, stderr, cpu_s)`` (CPU: user + system, with the children it waited for). A run past
+    stdout, stderr, cpu_s)`` (CPU: user + system, with the children it waited for; for a run
+    killed at the timeout, its whole group's, :func:`group_cpu_seconds`). A run past
     ``timeout_s`` is killed (its whole group) and flagged a hang;
     ``rc`` is negative for a signal, as :func:`os.waitstatus_to_exitcode` gives it."""
     import subprocess
@@ -128,6 +129,7 @@ def spawn(cli: list[str], args: list[Any], cwd: Path, timeout_s: float,
                 break
             if time.monotonic() - t0 > timeout_s:
                 hang = True
+                group_cpu_s = group_cpu_seconds(proc.pid)  # before the kill: a pool's workers
                 try:
                     os.killpg(proc.pid, signal.SIGKILL)
                 except ProcessLookupError:
@@ -142,8 +144,28 @@ def spawn(cli: list[str], args: list[Any], cwd: Path, timeout_s: float,
             os.killpg(proc.pid, signal.SIGKILL)
         except (ProcessLookupError, PermissionError):
             pass
+    cpu_s = usage.ru_utime + usage.ru_stime
+    if hang:  # the killed group's CPU: the processes alive at the kill, plus what was reaped
+        cpu_s = max(cpu_s, group_cpu_s)
     return (None if hang else proc.returncode, hang, seconds, usage.ru_maxrss,
-            out_path.read_bytes(), err_path.read_bytes(), usage.ru_utime + usage.ru_stime)
+            out_path.read_bytes(), err_path.read_bytes(), cpu_s)
+
+
+def group_cpu_seconds(pgid: int) -> float:
+    """CPU seconds (user + system, children they reaped included) of every live process in
+    process group ``pgid``, from ``/proc``: a run whose work is in pool workers it has not
+    reaped computes in them, which ``wait4`` on the leader alone does not see (0 off Linux)."""
+    ticks = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    total = 0
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue  # gone meanwhile
+        # after the command name: state ppid pgrp ... utime(12) stime(13) cutime(14) cstime(15)
+        if int(fields[2]) == pgid:
+            total += sum(int(v) for v in fields[11:15])
+    return total / ticks
 
 
 def judge(run: Run, args: list[Any], stdout: bytes, stderr: bytes, max_rss_kib: int) -> None:
