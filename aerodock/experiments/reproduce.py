@@ -83,8 +83,9 @@ SHORT_MISSION: dict[str, dict[str, float]] = {
 """The mission's waiting times cut: settled start 1 s (configured: 3), hold after capture 0.5 s,
 docking window and back-off 1 s, a moving leader's ramp 1 s and hold 2 s. A docked hover trial
 flies 5.1 simulated seconds instead of 8.1 (settled start included); what the mission achieves
-changes, every step it takes does not. ``reproduce --smoke`` flies it (it checks that a field or a config goes through, not a
-figure), and the tests of properties that hold whatever the timing."""
+changes, every step it takes does not. ``reproduce --smoke`` flies it (it checks that a field
+or a config goes through, not a figure), and the tests of properties that hold whatever the
+timing."""
 
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
                 moving_trials=8, se_minutes=(0.5, 2),
