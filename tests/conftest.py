@@ -19,7 +19,7 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 
 import numpy as np
 import pytest
-from short_mission import SHORT_MISSION
+from short_mission import short_config
 
 from aerodock.config import load_config
 
@@ -68,7 +68,7 @@ def ideal_cfg(cfg):
 def short_cfg():
     """The default configuration with the mission's waiting times cut (``short_mission.py``):
     for tests of a property that holds whatever the timing."""
-    return load_config().with_overrides(SHORT_MISSION)
+    return short_config()
 
 
 @pytest.fixture

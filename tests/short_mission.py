@@ -4,9 +4,18 @@ A test of what the mission achieves (docking rates, sinks, errors) flies the con
 
 from __future__ import annotations
 
+from functools import cache
+
+from aerodock.config import Config, load_config
 from aerodock.experiments.reproduce import SHORT_MISSION
 
-__all__ = ["SHORT_MISSION", "short_mission_toml"]
+__all__ = ["SHORT_MISSION", "short_config", "short_mission_toml"]
+
+
+@cache
+def short_config() -> Config:
+    """The default configuration with :data:`SHORT_MISSION`'s timing (built once)."""
+    return load_config().with_overrides(SHORT_MISSION)
 
 
 def short_mission_toml() -> str:

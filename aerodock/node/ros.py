@@ -141,7 +141,11 @@ def state_from_message(type_name: str, msg: Any, mapping: dict[str, Any],
     raise ValueError(f"state type {type_name} is not one of {', '.join(STATE_TYPES)}")
 
 
-def topic_name_error(name: str, node_name: str = "aerodock_f_ext") -> str | None:
+NODE_NAME = "aerodock_f_ext"
+"""The node's ROS 2 name (relative topic names expand in its namespace)."""
+
+
+def topic_name_error(name: str, node_name: str = NODE_NAME) -> str | None:
     """Why ROS 2 would refuse ``name`` as a topic of the node (``None``: it takes it).
 
     rclpy's own rules, checked before the node starts: the name as given (empty, a token that
@@ -161,7 +165,7 @@ def topic_name_error(name: str, node_name: str = "aerodock_f_ext") -> str | None
     return None
 
 
-def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = "aerodock_f_ext",
+def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_NAME,
               warnings_to_log: list[str] | None = None) -> Any:
     """Build the node (``rclpy.init`` must have been called). See the module docstring."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue

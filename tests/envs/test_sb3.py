@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from short_mission import short_config
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -13,15 +14,12 @@ from stable_baselines3 import PPO  # noqa: E402
 from stable_baselines3.common.env_checker import check_env  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor  # noqa: E402
 
-from aerodock.config import load_config  # noqa: E402
 from aerodock.envs import DockingEnv, DockingVectorEnv  # noqa: E402
 from aerodock.envs.sb3 import DockingSB3VecEnv  # noqa: E402
-from aerodock.experiments.reproduce import SHORT_MISSION  # noqa: E402
 
 # The API and the lockstep hold whatever the mission's timing: the short one (fewer simulated
 # seconds per settled start and episode; tests/short_mission.py).
-KWARGS = {"campaign_seed": 1, "leader_speed_mps": 0.25,
-          "config": load_config().with_overrides(SHORT_MISSION)}
+KWARGS = {"campaign_seed": 1, "leader_speed_mps": 0.25, "config": short_config()}
 
 
 def test_single_env_passes_stable_baselines3_check_env():
