@@ -115,8 +115,8 @@ def main(argv: list[str] | None = None) -> int:
             train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
             progress=_progress)
     else:
-        minutes = tuple(args.minutes or real_data.SE_MINUTES[False])
-        seeds = tuple(real_data.SE_SEEDS[False] if args.seeds is None else args.seeds)
+        minutes = tuple(args.minutes or real_data.SE_MINUTES["full"])
+        seeds = tuple(real_data.SE_SEEDS["full"] if args.seeds is None else args.seeds)
         train_logs, test_logs, train_ds, test_ds = real_split_or_fail(args.real_folder)
         record.update(folder=str(args.real_folder), train_flights=[lg.name for lg in train_logs],
                       test_flights=[lg.name for lg in test_logs])

@@ -25,9 +25,9 @@ FREE_AIR_RADIUS_M = 0.2
 TRAIN_FLIGHTS = ("00", "01", "02", "03", "04")
 TEST_FLIGHTS = ("05", "06")
 # The sample-efficiency curve: minutes of training data (the five training flights hold about
-# four) and seeds, quick and full.
-SE_MINUTES = {True: (0.5, 1, 2), False: (0.5, 1, 2, 3)}
-SE_SEEDS = {True: (0, 1), False: (0, 1, 2)}
+# four) and seeds, by run size (``reproduce``'s full, quick and smoke runs).
+SE_MINUTES = {"full": (0.5, 1, 2, 3), "quick": (0.5, 1, 2), "smoke": (0.5,)}
+SE_SEEDS = {"full": (0, 1, 2), "quick": (0, 1), "smoke": (0,)}
 
 
 def _flight_number(name: str) -> str | None:
@@ -99,10 +99,12 @@ def transfer_to_other_pair(predictors: dict[str, Any], folder: Path) -> dict[str
 
 
 def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int = 0,
-                    other_pair: Path | None = None) -> dict[str, Any]:
+                    other_pair: Path | None = None, smoke: bool = False) -> dict[str, Any]:
     """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``. With
     ``other_pair`` (the small-large day's folder), the models are also judged on it
-    (:func:`transfer_to_other_pair`, ``transfer``)."""
+    (:func:`transfer_to_other_pair`, ``transfer``). ``quick`` and ``smoke`` shorten the
+    sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)
+    and nothing else."""
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
     from aerodock.learning.sample_efficiency import sample_efficiency
@@ -127,9 +129,10 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     zero_v = out["models"]["zero"]["interaction"]["vertical"]
     out["so2_vertical_reduction_interaction"] = 1.0 - out["models"]["so2"]["interaction"][
         "vertical"] / zero_v
+    size = "smoke" if smoke else "quick" if quick else "full"
     out["sample_efficiency"] = sample_efficiency(
         train_ds, test_ds, kinds=("so2", "so2-ext", "mlp"),
-        minutes=SE_MINUTES[quick], seeds=SE_SEEDS[quick], metric="interaction")
+        minutes=SE_MINUTES[size], seeds=SE_SEEDS[size], metric="interaction")
     from aerodock.learning.sample_efficiency import plot_sample_efficiency
 
     plot_sample_efficiency(out["sample_efficiency"], fig_dir / "real_sample_efficiency.png")

@@ -446,7 +446,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
 
         other = shared_data / "neural-swarm" / "swap_sl_2020-06-19"
         results["real_data"] = real_data_study(real_dir, fig_dir, quick=quick, seed=seed,
-                                               other_pair=other if other.is_dir() else None)
+                                               other_pair=other if other.is_dir() else None,
+                                               smoke=smoke)
         from aerodock.experiments.compensation_study import FOLDERS, compensation_section
 
         if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):

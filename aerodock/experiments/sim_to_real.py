@@ -37,7 +37,7 @@ FREE_AIR_RADIUS_M`; the simulated flights record theirs).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -104,7 +104,8 @@ def leader_speed_p95_mps(logs: list[FlightLog]) -> float:
 
 def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
                       leader_drift_max_mps: float | None = None, seed: int = 0,
-                      progress: Callable[[str], None] | None = None) -> list[FlightLog]:
+                      progress: Callable[[str], None] | None = None,
+                      bands: Sequence[int] | None = None) -> list[FlightLog]:
     """Wake-excitation flights of the world ``cfg`` over its curriculum depth bands, flown by
     the nominal controller, their labels in the thrust basis (see the module doc).
 
@@ -115,6 +116,9 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
         leader_drift_max_mps: top speed of the drifting leaders (None: the config's).
         seed: random seed (band ``k`` flies seed ``seed + 1000 k``, as the curriculum does).
         progress: called with a line per band.
+        bands: the indices of the depth bands to fly (None: every band). Each band is a batch
+            of its own (its bar hangs out of the way at its own depth), so the cost grows with
+            the number of bands more than with the flights per band.
     """
     from aerodock.learning.curriculum import curriculum_stages, excitation_flights
 
@@ -126,6 +130,8 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
     c = cfg.curriculum
     logs: list[FlightLog] = []
     for stage in curriculum_stages(cfg):
+        if bands is not None and stage.index not in bands:
+            continue
         n = flights_per_band or int(c.deep_flights_per_stage if stage.deep
                                     else c.flights_per_stage)
         if progress:
@@ -164,6 +170,15 @@ def field_on_logs(cfg: Config, logs: list[FlightLog]) -> np.ndarray:
     return np.concatenate(out)
 
 
+def smoke_bands(cfg: Config) -> tuple[int, ...]:
+    """The depth bands a smoke run flies: the curriculum's first (the far wake) and its last
+    two (the docking depth), one batch each, instead of every band."""
+    from aerodock.learning.curriculum import curriculum_stages
+
+    last = len(curriculum_stages(cfg)) - 1
+    return tuple(sorted({0, max(last - 1, 0), last}))
+
+
 def _vertical(ev: dict[str, Any]) -> float:
     return float(ev["interaction"]["model"]["rmse_mps2"]["z"])
 
@@ -188,8 +203,8 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
             size), instead of the curriculum's flights and 200 epochs.
         seed: flights, split and weights.
         progress: called with a line per step.
-        smoke: the smallest run that crosses every step (1 flight per band, 8 epochs: the
-            suite's size; no figure worth quoting).
+        smoke: the smallest run that crosses every step (1 flight in each of
+            :func:`smoke_bands`, 8 epochs: the suite's size; no figure worth quoting).
 
     Returns:
         A JSON-ready dict: the flights used, the interaction region's vertical RMSE of the zero,
@@ -214,7 +229,8 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     say(f"{pair.name}: simulated flights in {cfg.source} (leaders drifting up to "
         f"{drift_mps:g} m/s)")
     sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
-                                 leader_drift_max_mps=drift_mps, seed=seed, progress=progress)
+                                 leader_drift_max_mps=drift_mps, seed=seed, progress=progress,
+                                 bands=smoke_bands(cfg) if smoke else None)
     epochs = 8 if smoke else 40 if quick else 200
     sim_ds = build_dataset(sim_logs)
     test_ds = build_dataset(test_real, free_air_radius_m=FREE_AIR_RADIUS_M)

@@ -1,7 +1,7 @@
 """The sim-to-real check on the shared real flights (small under small): in the suite at its
-smallest (one simulated flight per depth band, 8 epochs); ``AERODOCK_E2E=quick`` (``make
-test-e2e``) at its quick size, checking that a model of real flights halves the zero model's
-error."""
+smallest (one simulated flight in each of three depth bands, 8 epochs); ``AERODOCK_E2E=quick``
+(``make test-e2e``) at its quick size, checking that a model of real flights halves the zero
+model's error."""
 
 from __future__ import annotations
 
