@@ -9,10 +9,11 @@ from aerodock.cli.common import bar_callback
 from aerodock.sweep import parse_spec, run_sweep
 
 
-def test_sweep_reports_each_campaign(cfg):
+def test_sweep_reports_each_campaign(short_cfg):
+    # (whatever the mission's timing: the short one, tests/short_mission.py)
     spec = parse_spec({"sweep": {"trials": 1, "seeds": [0, 1]}})
     seen = []
-    run_sweep(spec, cfg, jobs=1, progress=lambda d, n: seen.append((d, n)))
+    run_sweep(spec, short_cfg, jobs=1, progress=lambda d, n: seen.append((d, n)))
     assert seen == [(1, 2), (2, 2)]
 
 
