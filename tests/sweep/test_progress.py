@@ -10,8 +10,10 @@ from aerodock.sweep import parse_spec, run_sweep
 
 
 def test_sweep_reports_each_campaign(short_cfg):
-    # (whatever the mission's timing: the short one, tests/short_mission.py)
-    spec = parse_spec({"sweep": {"trials": 1, "seeds": [0, 1]}})
+    # (whatever the mission's timing and the campaigns: the short timing, tests/short_mission.py,
+    # and the oracle, whose trials end when they dock rather than at the time limit)
+    spec = parse_spec({"sweep": {"trials": 1, "seeds": [0, 1]},
+                       "axes": {"compensation": ["oracle"]}})
     seen = []
     run_sweep(spec, short_cfg, jobs=1, progress=lambda d, n: seen.append((d, n)))
     assert seen == [(1, 2), (2, 2)]
