@@ -11,6 +11,7 @@ import json
 import numpy as np
 import pytest
 import typer
+from short_mission import short_mission_toml
 from typer.testing import CliRunner
 
 from aerodock import bench
@@ -93,8 +94,10 @@ def test_predictor_figures_without_a_trained_model():
         assert out[rt]["value"] is None and out[rt]["reason"]
 
 
-def test_memory_figure_from_a_subprocess():
-    out = bench_memory(trials=2, traced=False)
+def test_memory_figure_from_a_subprocess(tmp_path):
+    short = tmp_path / "short.toml"  # the figures' plumbing: the short timing (short_mission.py)
+    short.write_text(short_mission_toml())
+    out = bench_memory(trials=2, traced=False, config_path=short)
     assert out["peak_rss_mib"]["unit"] == "MiB"
     assert out["peak_rss_mib"]["value"] >= out["rss_after_imports_mib"]["value"] > 10
     assert out["campaign_wall_s"]["value"] > 0 and "traced_peak_mib" not in out

@@ -28,8 +28,10 @@ def test_single_env_passes_gymnasium_check_env(short_cfg):
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
 
 
-def test_vector_env_passes_the_vector_checks_and_gymnasium_wrappers():
-    env = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point")
+def test_vector_env_passes_the_vector_checks_and_gymnasium_wrappers(short_cfg):
+    # (the API holds whatever the mission's timing: the short one, tests/short_mission.py)
+    env = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point",
+                       config=short_cfg)
     assert isinstance(env.unwrapped, DockingVectorEnv)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -96,8 +98,9 @@ def test_vector_env_equals_sync_vector_env_of_single_envs(short_cfg):
         np.testing.assert_array_equal(ia["phase"], ib["phase"])
 
 
-def test_residual_changes_the_flight_and_leader_dropout_aborts():
-    env = DockingEnv(campaign_seed=0, leader_dropout_s=(1.0, 2.0))
+def test_residual_changes_the_flight_and_leader_dropout_aborts(short_cfg):
+    # (whatever the mission's timing: the short one, tests/short_mission.py)
+    env = DockingEnv(campaign_seed=0, leader_dropout_s=(1.0, 2.0), config=short_cfg)
     obs0, _ = env.reset(seed=5)
     push = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # up, 2 m/s²
     for _ in range(30):
@@ -141,15 +144,15 @@ def test_time_out_is_truncated_and_a_dock_terminated(short_cfg):
     assert term and not trunc and info["docked"]
 
 
-def test_non_finite_actions_raise():
-    env = DockingEnv()
+def test_non_finite_actions_raise(short_cfg):
+    env = DockingEnv(config=short_cfg)  # (the short timing: tests/short_mission.py)
     env.reset(seed=0)
     for bad in (np.nan, np.inf, -np.inf):
         with pytest.raises(ValueError, match="NaN or infinite"):
             env.step(np.array([0.0, bad, 0.0], dtype=np.float32))
     with pytest.raises(ValueError, match="shape"):
         env.step(np.zeros(4, np.float32))
-    venv = DockingVectorEnv(num_envs=2)
+    venv = DockingVectorEnv(num_envs=2, config=short_cfg)
     venv.reset(seed=0)
     act = np.zeros((2, 3), np.float32)
     act[1, 2] = np.nan
@@ -200,8 +203,10 @@ def test_bad_arguments_are_refused():
         DockingVectorEnv(num_envs=0)
 
 
-def test_residual_example_quick_mode_trains_and_evaluates(cfg):
-    """examples/residual_ars.py in quick mode; its baseline is run_campaign's LQG mission."""
+def test_residual_example_quick_mode_trains_and_evaluates(short_cfg):
+    """examples/residual_ars.py in quick mode, one ARS iteration; its baseline is run_campaign's
+    LQG mission. (Its plumbing, whatever the mission's timing: its environments fly the short one
+    of tests/short_mission.py, through the example's ENV_KWARGS.)"""
     import importlib.util
     from pathlib import Path
 
@@ -209,11 +214,12 @@ def test_residual_example_quick_mode_trains_and_evaluates(cfg):
     spec = importlib.util.spec_from_file_location("residual_ars", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    result = mod.main(["--quick"])
-    assert len(result["training"]) == result["settings"]["iterations"] == 2
+    mod.ENV_KWARGS["config"] = short_cfg
+    result = mod.main(["--quick", "--iterations", "1"])
+    assert len(result["training"]) == result["settings"]["iterations"] == 1
     assert result["weights_norm"] > 0  # ARS moved the policy
     n = result["settings"]["eval_trials"]
-    base = run_campaign(cfg, MissionSpec(trials=n, seed=0, offset_m=0.36,
+    base = run_campaign(short_cfg, MissionSpec(trials=n, seed=0, offset_m=0.36,
                                          compensation="observer",
                                          first_trial=mod.HELDOUT_FIRST_TRIAL))
     assert result["baseline_lqg"]["docked_rate"] == base.success.mean()
@@ -223,13 +229,14 @@ def test_residual_example_quick_mode_trains_and_evaluates(cfg):
         assert r["docked_rate"] + r["missed_rate"] + r["aborted_rate"] == pytest.approx(1.0)
 
 
-def test_bench_vector_env_figures(cfg, benchmark):
+def test_bench_vector_env_figures(short_cfg, benchmark):
     """The bench's env-steps/s figures exist for both batch sizes (speed is measured by
-    `aerodock bench`, not asserted here)."""
+    `aerodock bench`, not asserted here; the short timing of tests/short_mission.py: a shorter
+    settled start on each reset)."""
     from aerodock import bench
     from aerodock.bench.vector_env import bench_vector_env
 
-    figs = benchmark.pedantic(bench_vector_env, args=(cfg, (1, 8), True), rounds=1,
+    figs = benchmark.pedantic(bench_vector_env, args=(short_cfg, (1, 8), True), rounds=1,
                               iterations=1)
     assert set(figs) == {"1", "8"} and all(f["value"] > 0 for f in figs.values())
     rows = bench.table_rows({"figures": {"gym_vector_env": figs}})

@@ -71,10 +71,13 @@ def test_a_reset_outside_the_block_settles_a_new_one(short_cfg):
     assert (env.starts.blocks, env.starts.served) == (2, 1)
 
 
-def test_blocks_are_off_where_a_trial_settled_in_a_block_could_differ(cfg):
+def test_blocks_are_off_where_a_trial_settled_in_a_block_could_differ(short_cfg):
     """A learnt feed-forward (its matrix products round with the batch's shape) and a plug-in
-    field that cannot split its state: each reset settles its own trial."""
-    model = DockingEnv(compensation="model", predictor=OraclePredictor(build_field(cfg)))
+    field that cannot split its state: each reset settles its own trial (whatever the mission's
+    timing: the short one, tests/short_mission.py)."""
+    cfg = short_cfg
+    model = DockingEnv(compensation="model", predictor=OraclePredictor(build_field(cfg)),
+                       config=cfg)
     plug_in = DockingEnv(config=cfg.with_overrides(
         {"downwash": {"field": "aerodock.downwash.template:UniformColumnField"}}))
     for env in (model, plug_in):
@@ -88,13 +91,14 @@ def test_settle_block_is_checked(bad):
         DockingEnv(settle_block=bad)
 
 
-def test_bench_env_reset_figures(cfg, benchmark):
+def test_bench_env_reset_figures(short_cfg, benchmark):
     """The bench's reset figures exist and count what they timed (the cost is measured by
-    `aerodock bench --only gym` or `python -m aerodock.bench.env_reset`, not asserted here)."""
+    `aerodock bench --only gym` or `python -m aerodock.bench.env_reset`, not asserted here; the
+    counts do not depend on the settled start's length: the short one, tests/short_mission.py)."""
     from aerodock import bench
     from aerodock.bench.env_reset import bench_env_reset
 
-    figs = benchmark.pedantic(bench_env_reset, args=(cfg, 4, True), rounds=1, iterations=1)
+    figs = benchmark.pedantic(bench_env_reset, args=(short_cfg, 4, True), rounds=1, iterations=1)
     counts = figs.pop("block_counts")
     assert counts["resets"] == 2 * 8 == counts["blocks_settled"] + counts["served"]
     assert counts["served"] >= counts["resets"] // 2

@@ -85,7 +85,7 @@ def test_episodes_end_together_with_terminal_observations_and_the_next_trials_st
 
 
 def test_the_batch_answers_for_every_index():
-    env = DockingSB3VecEnv(DockingVectorEnv(num_envs=2))
+    env = DockingSB3VecEnv(DockingVectorEnv(num_envs=2, config=KWARGS["config"]))
     assert env.get_attr("num_envs") == [2, 2] and env.get_attr("num_envs", 1) == [2]
     assert env.env_is_wrapped(VecMonitor) == [False, False]
     assert env.env_method("reset", seed=3)[0][1]["trial"].tolist() == [3, 4]
@@ -102,7 +102,8 @@ def test_the_batch_answers_for_every_index():
 def test_ppo_trains_a_few_hundred_steps_on_the_native_vector_env():
     torch = pytest.importorskip("torch")
     torch.set_num_threads(1)
-    env = VecMonitor(DockingSB3VecEnv(DockingVectorEnv(num_envs=4, campaign_seed=0)))
+    env = VecMonitor(DockingSB3VecEnv(DockingVectorEnv(num_envs=4, campaign_seed=0,
+                                                       config=KWARGS["config"])))
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=2, seed=0, device="cpu")
     before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=256)
@@ -118,7 +119,8 @@ def test_ppo_trains_a_few_hundred_steps_on_the_native_vector_env():
 def test_ppo_example_quick_mode_trains_and_evaluates(backend):
     """examples/ppo_sb3.py in quick mode through the adapter (its make_vec_env route is SB3's
     own vector env over DockingEnv, which test_sub_environments_are_make_vec_envs_single_
-    environments already flies; left out of the suite for its 30 s)."""
+    environments already flies; left out of the suite for its 30 s). Its environments fly the
+    short timing, through the example's ENV_KWARGS."""
     import importlib.util
     from pathlib import Path
 
@@ -126,6 +128,7 @@ def test_ppo_example_quick_mode_trains_and_evaluates(backend):
     spec = importlib.util.spec_from_file_location("ppo_sb3", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
+    mod.ENV_KWARGS["config"] = KWARGS["config"]
     result = mod.main(["--quick", "--backend", backend])
     assert result["env_steps"] == 256 and result["env_steps_per_s"] > 0
     for key in ("baseline_lqg", "ppo_policy"):

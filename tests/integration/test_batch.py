@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from aerodock.mission import MissionSpec, run_campaign
+from aerodock.mission import MissionBatch, MissionSpec, Phase, run_campaign
 
 
 def test_batch_equals_single_trials(short_cfg):
     cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
-    n = 4
+    n = 2
     batch = run_campaign(cfg, MissionSpec(trials=n, compensation="oracle", seed=11),
                          record="trace")
     for i in range(n):
@@ -27,27 +27,41 @@ def test_same_seed_same_numbers_different_seed_different(short_cfg):
     cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
     a = run_campaign(cfg, MissionSpec(trials=3, seed=5), record="trace")
     b = run_campaign(cfg, MissionSpec(trials=3, seed=5), record="trace")
-    c = run_campaign(cfg, MissionSpec(trials=3, seed=6), record="trace")
+    c = MissionBatch(cfg, MissionSpec(trials=3, seed=6), record="trace")
+    for _ in range(50):  # the first 50 periods of seed 6 (all that is compared)
+        c.fly()
     assert np.array_equal(a.trace["follower_p"], b.trace["follower_p"])
-    assert not np.array_equal(a.trace["follower_p"][:50], c.trace["follower_p"][:50])
+    assert not np.array_equal(a.trace["follower_p"][:50], c.result().trace["follower_p"][:50])
 
 
 def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(cfg):
     """A trial that ended (docked and hung for post_dock_s, or backed off) is still simulated
     while its batch flies the others; what happens to it then is not its outcome. Without a model
     the hanging pair sinks (the follower does not answer the wake on it) and hits the ground
-    later: flown alone or in a batch, each trial's outcome is the same."""
+    later: each trial's outcome when the batch ends is its outcome on the period its own flight
+    ended (where a campaign of it alone ends: the period after it is done), and the trial that
+    ends first, flown alone, has the same outcome."""
     from aerodock.control.profiles import controller_config
 
     ours = controller_config(cfg, "ours")
     n = 6
-    batch = run_campaign(ours, MissionSpec(trials=n, compensation="observer", seed=1))
+    flying = MissionBatch(ours, MissionSpec(trials=n, compensation="observer", seed=1))
+    own_end: dict[int, tuple[int, object]] = {}  # trial -> (period, its outcome then)
+    while not flying.finished:
+        done = flying.phase == Phase.DONE
+        flying.fly()
+        for i in np.nonzero(done)[0]:
+            own_end.setdefault(int(i), (flying.k, flying.result().take([i])))
+    batch = flying.result()
     assert batch.success.sum() >= 4  # our controller docks without the model ...
     sink = batch.summary()["post_dock_sink_median_m"]
     assert sink is not None and sink > 0.5  # ... but the pair it leaves hanging sinks
-    for i in range(n):
-        one = run_campaign(ours, MissionSpec(trials=1, compensation="observer", seed=1,
-                                             first_trial=i))
+    first = min(own_end, key=lambda i: own_end[i][0])
+    assert own_end[first][0] < flying.k  # the batch flew on after it
+    alone = run_campaign(ours, MissionSpec(trials=1, compensation="observer", seed=1,
+                                           first_trial=first))
+    outcomes = [(i, own_end.get(i, (flying.k, batch.take([i])))[1]) for i in range(n)]
+    for i, one in [*outcomes, (first, alone)]:
         for name in ("success", "rotor_strike", "ground_contact", "clearance_violation"):
             assert getattr(one, name)[0] == getattr(batch, name)[i], (i, name)
         assert np.array_equal(one.post_dock_sink_m, batch.post_dock_sink_m[i:i + 1],

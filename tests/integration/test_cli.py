@@ -61,9 +61,16 @@ def short_toml(tmp_path_factory):
     return str(path)
 
 
-def test_dock_json_and_bad_trials(short_toml):
-    out = json.loads(aerodock("dock", "--trials", "4", "--compensation", "oracle", "--json",
-                              "--config", short_toml).stdout)
+@pytest.fixture(scope="module")
+def docked(tmp_path_factory, short_toml):
+    """``aerodock dock --json --save-logs`` in its own process: what it printed, parsed."""
+    logs = tmp_path_factory.mktemp("logs")
+    return json.loads(aerodock("dock", "--trials", "4", "--compensation", "oracle", "--json",
+                               "--save-logs", str(logs), "--config", short_toml).stdout)
+
+
+def test_dock_json_and_bad_trials(docked):
+    out = docked
     assert out["trials"] == 4 and 0 <= out["success_rate"] <= 1
     assert len(out["success_wilson95"]) == 2
     proc = aerodock("dock", "--trials", "0", check=False)
@@ -72,13 +79,11 @@ def test_dock_json_and_bad_trials(short_toml):
     assert proc.returncode == 2 and "--model" in proc.stderr
 
 
-def test_dock_saves_flightlogs(tmp_path, short_toml):
+def test_dock_saves_flightlogs(docked):
     from aerodock.flightlog import load_flightlogs
 
-    out = json.loads(aerodock("dock", "--trials", "2", "--compensation", "oracle", "--save-logs",
-                              str(tmp_path), "--json", "--config", short_toml).stdout)
-    logs = load_flightlogs(out["logs"])
-    assert len(logs) == 2
+    logs = load_flightlogs(docked["logs"])
+    assert len(logs) == 4
     assert "true_field_mean_mps2" in logs[0].extra
 
 
@@ -149,11 +154,13 @@ def test_several_paths_after_one_data(tmp_path):
 
 @pytest.fixture(scope="module")
 def flights(tmp_path_factory):
-    from aerodock.config import load_config
+    from short_mission import short_config
+
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    result = run_campaign(load_config(), MissionSpec(trials=2, seed=1), record="full")
+    # (training data for the command's plumbing: the short timing, tests/short_mission.py)
+    result = run_campaign(short_config(), MissionSpec(trials=2, seed=1), record="full")
     folder = tmp_path_factory.mktemp("flights")
     return [save_flightlogs(folder / f"f{i}.npz", [log]) for i, log in enumerate(result.logs)]
 
@@ -186,16 +193,20 @@ def test_train_on_two_paths_and_degenerate_data_keeps_the_good_model(flights, tm
 
 
 def test_dock_flies_the_controller_it_is_given(short_toml):
-    """--controller changes what flies (it was once overwritten by the config)."""
-    runs = {c: json.loads(aerodock("dock", "--trials", "2", "--seed", "4", "--controller", c,
-                                   "--json", "--config", short_toml).stdout)
-            for c in ("paper", "tuned")}
+    """--controller changes what flies (it was once overwritten by the config); in-process (the
+    option's way to the mission, not the process, is what is checked here)."""
+    runs = {}
+    for c in ("paper", "tuned"):
+        rc, out, err = run_inprocess("dock", "--trials", "2", "--seed", "4", "--controller", c,
+                                     "--json", "--config", short_toml)
+        assert rc == 0, err
+        runs[c] = json.loads(out)
     assert runs["paper"]["controller"] == "paper"
     assert (runs["paper"]["terminal_err_down_median_m"]
             != runs["tuned"]["terminal_err_down_median_m"])
-    bad = aerodock("dock", "--trials", "2", "--controller", "bogus", check=False)
-    assert bad.returncode == 2
-    assert bad.stderr.strip().count("\n") == 0 and "controller" in bad.stderr
+    rc, out, err = run_inprocess("dock", "--trials", "2", "--controller", "bogus")
+    assert rc == 2 and out == ""
+    assert err.strip().count("\n") == 0 and "controller" in err
 
 
 def test_targets_refuses_bad_trials_in_one_line():

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from aerodock.flightlog import load_flightlogs
-from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
+from aerodock.learning.curriculum import curriculum_stages, run_curriculum
 from aerodock.learning.runtime import Predictor
 
 
@@ -20,12 +21,27 @@ def test_default_stages_follow_the_paper_then_go_deep(cfg):
         (5, 0.3, 0.5, True), (6, 0.27, 0.3, True)]
 
 
-def test_deep_stages_fly_the_bar_above_the_follower(cfg):
+@pytest.fixture(scope="module")
+def collected(short_cfg, tmp_path_factory):
+    """A small curriculum: stage 0 at 0.6-0.9 m without a model, stage 1 (the paper's last) at
+    0.3-0.6 m, then one deep stage at 0.27-0.3 m (the docking depth), 2 + 2 + 3 flights; its
+    folder, summary and configuration. (The bookkeeping and the flights' pattern hold whatever
+    the settled start's length: the short one of tests/short_mission.py.)"""
+    cfg = short_cfg.with_overrides({"curriculum": {
+        "flights_per_stage": 2, "stage0_depth_m": [0.6, 0.9], "min_depth_m": 0.3,
+        "deep_depths_m": [0.27], "deep_flights_per_stage": 3}})
+    out = tmp_path_factory.mktemp("curriculum")
+    summary = run_curriculum(cfg, out, seed=0, train_kwargs={"max_epochs": 5})
+    return out, summary, cfg
+
+
+def test_deep_stages_fly_the_bar_above_the_follower(cfg, collected):
     from aerodock.learning.curriculum import _bar_out_of_the_way
 
     assert _bar_out_of_the_way(cfg, 0.5).platform.cable_length_m == 0.36  # paper's stages as is
-    logs = excitation_flights(cfg, 2, 0.27, 0.3, seed=2)
-    gp = cfg.gripper
+    out, _, flown = collected
+    logs = load_flightlogs(out / "stage2.npz")  # the deep stage, 0.27-0.3 m
+    gp = flown.gripper
     gate_top_depth = 0.27 - gp.mount_height_m - gp.gate_height_m  # at the shallowest depth
     for log in logs:
         assert log.meta["cable_length_m"] < 0.2
@@ -33,8 +49,9 @@ def test_deep_stages_fly_the_bar_above_the_follower(cfg):
         assert np.all(bar_depth < gate_top_depth + 0.005)  # the bar hangs above the gate
 
 
-def test_excitation_flights_sweep_through_the_wake(cfg):
-    logs = excitation_flights(cfg, 3, 0.6, 0.9, seed=1)
+def test_excitation_flights_sweep_through_the_wake(collected):
+    out, _, _ = collected
+    logs = load_flightlogs(out / "stage0.npz")  # 0.6-0.9 m below the leader, without a model
     for log in logs:
         rel = log.follower_pos_m - log.leader_pos_m
         lateral = np.linalg.norm(rel[:, :2], axis=1)
@@ -44,25 +61,21 @@ def test_excitation_flights_sweep_through_the_wake(cfg):
         assert log.extra["true_field_mean_mps2"][:, 2].max() > 1.0
 
 
-def test_run_curriculum_writes_logs_and_deploys_models(short_cfg, tmp_path):
-    # (bookkeeping: the short settled start of tests/short_mission.py does as well)
-    cfg = short_cfg.with_overrides({"curriculum": {
-        "flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2], "min_depth_m": 0.6,
-        "deep_depths_m": [0.45], "deep_flights_per_stage": 3}})
-    summary = run_curriculum(cfg, tmp_path, seed=0, train_kwargs={"max_epochs": 5})
+def test_run_curriculum_writes_logs_and_deploys_models(collected):
+    out, summary, _ = collected
     assert [s["stage"] for s in summary["stages"]] == [0, 1, 2]
-    assert np.allclose(summary["stages"][2]["depth_band_m"], [0.45, 0.6])
+    assert np.allclose(summary["stages"][2]["depth_band_m"], [0.27, 0.3])
     # the paper's model: trained after the last paper stage, before the deep one
     assert summary["paper_model"].endswith("paper")
-    paper = Predictor.load(tmp_path / "models" / "paper")
-    stage1 = Predictor.load(tmp_path / "models" / "stage1")
+    paper = Predictor.load(out / "models" / "paper")
+    stage1 = Predictor.load(out / "models" / "stage1")
     x = np.zeros((1, 9)) + [0, 0, 0.5, 0, 0, 0, 0, 0, 0]
     assert np.array_equal(paper.predict(x, np.eye(3)[None]), stage1.predict(x, np.eye(3)[None]))
-    stage1 = load_flightlogs(tmp_path / "stage1.npz")
+    stage1 = load_flightlogs(out / "stage1.npz")
     assert all(lg.meta["compensation"] == "observer+model" for lg in stage1)
     assert np.abs(stage1[0].extra["feedforward_mps2"]).max() > 0  # the stage-0 model flew
-    assert load_flightlogs(tmp_path / "stage0.npz")[0].meta["compensation"] == "observer"
-    pred = Predictor.load(tmp_path / "models" / "final")
+    assert load_flightlogs(out / "stage0.npz")[0].meta["compensation"] == "observer"
+    pred = Predictor.load(out / "models" / "final")
     assert pred.predict(np.zeros((1, 9)) + [0, 0, 0.8, 0, 0, 0, 0, 0, 0],
                         np.eye(3)[None]).shape == (1, 3)
     assert abs(summary["minutes"] - 7 * 12.5 / 60) < 0.01  # 2 + 2 + 3 (deep) flights

@@ -13,7 +13,8 @@ from aerodock.learning.datafiles import load_dataset
 from aerodock.learning.runtime import Predictor
 
 
-def test_learning_data_holds_out_its_test_flights_and_pools_model_flights(cfg, tmp_path):
+def test_learning_data_holds_out_its_test_flights_and_pools_model_flights(short_cfg, tmp_path):
+    cfg = short_cfg  # bookkeeping, whatever the settled start's length (tests/short_mission.py)
     size = dataclasses.replace(
         SMOKE, test_flights_per_stage=1, se_pool_flights=5,
         curriculum={"flights_per_stage": 2, "stage0_depth_m": [0.9, 1.2], "min_depth_m": 0.9,

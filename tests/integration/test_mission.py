@@ -82,27 +82,36 @@ def test_abort_when_leader_state_is_lost(cfg):
     assert np.all(end[:, 2] - lead[:, 2] > 0.8)
 
 
-def test_short_dropout_does_not_abort(cfg):
-    res = run_campaign(cfg, MissionSpec(trials=4, compensation="oracle", seed=3,
-                                        leader_dropout_s=(1.0, 0.3)))
+def test_short_dropout_does_not_abort(short_cfg):
+    # (a dropout shorter than leader_lost_s, which the short timing keeps: tests/short_mission.py)
+    res = run_campaign(short_cfg, MissionSpec(trials=4, compensation="oracle", seed=3,
+                                              leader_dropout_s=(1.0, 0.3)))
     assert not (res.abort_reason == AbortReason.LEADER_LOST).any()
 
 
-def test_without_compensation_the_wake_pushes_the_follower_down(cfg):
-    res = run_campaign(cfg, MissionSpec(trials=8, compensation="none", seed=4))
-    ora = run_campaign(cfg, MissionSpec(trials=8, compensation="oracle", seed=4))
+@pytest.fixture(scope="module")
+def oracle_50(cfg):
+    """50 oracle trials at d_p = 0.36 m (the configured cable), seed 0: the acceptance campaign;
+    its first 8 trials are the 8-trial campaign of seed 0 (a trial's numbers are its own)."""
+    return run_campaign(cfg, MissionSpec(trials=50, offset_m=0.36, compensation="oracle",
+                                         seed=0))
+
+
+def test_without_compensation_the_wake_pushes_the_follower_down(cfg, oracle_50):
+    assert cfg.platform.cable_length_m == 0.36  # the oracle's campaign flies the same cable
+    res = run_campaign(cfg, MissionSpec(trials=8, compensation="none", seed=0))
+    ora = oracle_50.take(np.arange(8))
     assert np.median(res.err_down_m) > 3 * np.median(ora.err_down_m)
     assert res.clearance_violation.sum() == 0
 
 
 @pytest.mark.slow
-def test_acceptance_oracle_docks_95_percent(cfg):
+def test_acceptance_oracle_docks_95_percent(oracle_50):
     """Issue 3 acceptance, on the rigid-body world: 50 trials at d_p = 0.36 m with the oracle
     dock >= 85 % with no clearance violation. (The point-mass world docked 100 %; with wake
     torques, bar turbulence and the slip-throughs they cause, the full reproduce run measures
     178/200 for the oracle with the tuned controller.)"""
-    res = run_campaign(cfg, MissionSpec(trials=50, offset_m=0.36, compensation="oracle", seed=0))
-    s = res.summary()
+    s = oracle_50.summary()
     assert s["success_rate"] >= 0.85
     assert s["clearance_violations"] == 0
 
@@ -122,7 +131,10 @@ def test_the_wake_fed_forward_makes_the_papers_controller_dock(cfg):
     assert fed["docked"] >= alone["docked"] + 6
 
 
-def test_moving_leader_mission_runs(cfg):
+def test_moving_leader_mission_runs(short_cfg):
+    # (the moving mission's plumbing, on the short timing of tests/short_mission.py: the leader
+    # flies 1.56 m north, closest approach 0.38 m; 1.70 m and 0.38 m on the configured timing)
+    cfg = short_cfg
     res = run_campaign(cfg, MissionSpec(trials=4, compensation="oracle", seed=5,
                                         leader_speed_mps=0.25), record="trace")
     assert res.arrival_s == cfg.planner.horizon_moving_s
@@ -140,10 +152,11 @@ def test_bad_mission_arguments(cfg):
         run_campaign(cfg, MissionSpec(trials=1, compensation="model"))
 
 
-def test_predictor_is_flown_only_with_model_compensation(cfg):
+def test_predictor_is_flown_only_with_model_compensation(short_cfg):
     from aerodock.control.compensation import OraclePredictor
     from aerodock.downwash import build_field
 
+    cfg = short_cfg  # which feed-forward flies, whatever the timing (tests/short_mission.py)
     oracle_like = OraclePredictor(build_field(cfg))
     spec = dict(trials=4, seed=9)
     with_obs = run_campaign(cfg, MissionSpec(compensation="observer", **spec), oracle_like)
@@ -228,14 +241,16 @@ def test_one_accelerometer_reading_per_control_period(cfg):
     assert not np.array_equal(world.observed_accel(), first)
 
 
-def test_targets_measure_every_scenario_and_the_learnt_mean(cfg):
+def test_targets_measure_every_scenario_and_the_learnt_mean(short_cfg):
     """The targets table: each scenario flown (its own d_p and leader speed), the met flags
-    computed from the measured rates, the learnt mean compared where the field is known."""
+    computed from the measured rates, the learnt mean compared where the field is known (the
+    table's bookkeeping, whatever the mission's timing: the short one, tests/short_mission.py)."""
     from aerodock.control.compensation import OraclePredictor
     from aerodock.control.profiles import controller_config
     from aerodock.downwash import build_field
     from aerodock.experiments.targets import SCENARIOS, targets
 
+    cfg = short_cfg
     oracle = OraclePredictor(build_field(cfg))
     res = targets({"ours + oracle": (controller_config(cfg, "ours"), oracle)}, 2, oracle, 3)
     row = res["rows"]["ours + oracle"]["scenarios"]

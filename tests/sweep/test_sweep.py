@@ -7,6 +7,7 @@ import json
 
 import pytest
 from cli_process import aerodock
+from short_mission import short_mission_toml
 
 from aerodock.sweep import SweepSpecError, load_spec, parse_spec, run_sweep, write_table
 
@@ -58,14 +59,17 @@ def test_bad_specifications_name_the_key(doc, message):
         parse_spec(doc, "s.toml")
 
 
-def test_leader_dropout_fault_shows_in_the_table(cfg):
+def test_leader_dropout_fault_shows_in_the_table(short_cfg):
+    # (the table's columns, whatever the mission's timing: the short one, tests/short_mission.py)
     spec = parse_spec({"sweep": {"trials": 2}, "axes": {"leader_dropout_s": [[1.0, 2.0]]}})
-    rows = run_sweep(spec, cfg, backend="local", jobs=1)
+    rows = run_sweep(spec, short_cfg, backend="local", jobs=1)
     assert [r["abort_reason"] for r in rows] == ["leader_lost", "leader_lost"]
     assert all(r["fault"] == "leader_dropout" and r["dropout_start_s"] == 1.0 for r in rows)
 
 
-def test_ray_backend_table_equals_local_backend(tmp_path, cfg):
+def test_ray_backend_table_equals_local_backend(tmp_path, short_cfg):
+    # Ray = local whatever the mission's timing: the short one (tests/short_mission.py)
+    cfg = short_cfg
     ray = pytest.importorskip("ray")
     spec_path = tmp_path / "tiny.toml"
     spec_path.write_text(TINY)
@@ -89,8 +93,11 @@ def test_ray_backend_table_equals_local_backend(tmp_path, cfg):
 
 def test_sweep_command_writes_table_parquet_summary_and_figures(tmp_path):
     spec_path = tmp_path / "tiny.toml"
+    # the command's files, whatever the mission's timing: the short one (tests/short_mission.py)
+    (tmp_path / "short.toml").write_text(short_mission_toml())
     spec_path.write_text(TINY.replace('["observer", "oracle"]', '["oracle"]')
-                         .replace("[0.36, 0.64]", "[0.36]"))
+                         .replace("[0.36, 0.64]", "[0.36]")
+                         .replace("[sweep]\n", '[sweep]\nconfig = "short.toml"\n'))
     out = tmp_path / "out"
     proc = aerodock("sweep", str(spec_path), "--out", str(out), "--jobs", "1", "--json")
     assert proc.returncode == 0, proc.stderr

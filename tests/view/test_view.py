@@ -47,10 +47,18 @@ def has_green(img):
 
 
 @pytest.fixture(scope="module")
-def sim_log(tmp_path_factory, cfg):
-    res = run_campaign(cfg, MissionSpec(trials=1, compensation="oracle", seed=0), record="full")
+def docked(short_cfg):
+    """One docked oracle trial, its trace and its FlightLog: what the views draw (whatever the
+    mission's timing: the short one, tests/short_mission.py)."""
+    res = run_campaign(short_cfg, MissionSpec(trials=1, compensation="oracle", seed=0),
+                       record="full")
     assert res.success[0]
-    return save_flightlogs(tmp_path_factory.mktemp("sim") / "dock.npz", res.logs)
+    return res
+
+
+@pytest.fixture(scope="module")
+def sim_log(tmp_path_factory, docked):
+    return save_flightlogs(tmp_path_factory.mktemp("sim") / "dock.npz", docked.logs)
 
 
 def test_view_simulated_log_draws_vehicles_bar_and_gate(sim_log, tmp_path):
@@ -121,12 +129,11 @@ def test_rerun_stream_saves_a_recording(sim_log, tmp_path):
     assert path.stat().st_size > 1000
 
 
-def test_report_embeds_an_animated_docking(cfg, tmp_path):
+def test_report_embeds_an_animated_docking(docked, short_cfg, tmp_path):
     from aerodock.experiments.report import fig_docking_animation
 
-    res = run_campaign(cfg, MissionSpec(trials=2, compensation="oracle", seed=0), record="trace")
-    tr = dict(res.trace, success=res.success, arrival_s=res.arrival_s)
-    path = fig_docking_animation(tr, tmp_path, cfg)
+    tr = dict(docked.trace, success=docked.success, arrival_s=docked.arrival_s)
+    path = fig_docking_animation(tr, tmp_path, short_cfg)
     imgs = frames(path)
     assert path.name == "hover_docking.gif" and 10 <= len(imgs) <= 60
     assert Image.open(path).size[0] >= 800  # readable in the report
