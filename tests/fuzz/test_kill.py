@@ -108,12 +108,12 @@ def test_kill_during_ingest(shared_data, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def data_file(tmp_path_factory) -> Path:
-    from aerodock.config import load_config
+def data_file(tmp_path_factory, short_cfg) -> Path:
+    """Two trials' FlightLogs (the short mission: what the models learn is not the point)."""
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    result = run_campaign(load_config(), MissionSpec(trials=2, seed=5), record="full")
+    result = run_campaign(short_cfg, MissionSpec(trials=2, seed=5), record="full")
     return save_flightlogs(tmp_path_factory.mktemp("kill") / "data.npz", result.logs)
 
 
