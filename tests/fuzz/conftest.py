@@ -21,14 +21,14 @@ def fuzz_dir(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def flightlog_file(fuzz_dir) -> Path:
+def flightlog_file(fuzz_dir, short_cfg) -> Path:
     """A FlightLog file written by aerodock: two simulated docking trials (3 s of each, so that
-    a thousand damaged copies stay quick to write and read)."""
-    from aerodock.config import load_config
+    a thousand damaged copies stay quick to write and read), flown on the short mission (the
+    file is what is damaged, not what it flew)."""
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    result = run_campaign(load_config(), MissionSpec(trials=2, seed=3), record="full")
+    result = run_campaign(short_cfg, MissionSpec(trials=2, seed=3), record="full")
     return save_flightlogs(fuzz_dir / "base.npz", [log.slice(0, 300) for log in result.logs])
 
 

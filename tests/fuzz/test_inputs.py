@@ -45,12 +45,12 @@ def refused(res: subprocess.CompletedProcess, *needles: str) -> str:
 
 
 @pytest.fixture(scope="module")
-def log_file(tmp_path_factory) -> Path:
-    from aerodock.config import load_config
+def log_file(tmp_path_factory, short_cfg) -> Path:
+    """A FlightLog file (one trial on the short mission: an input, whatever it flew)."""
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    result = run_campaign(load_config(), MissionSpec(trials=1, seed=3), record="full")
+    result = run_campaign(short_cfg, MissionSpec(trials=1, seed=3), record="full")
     return save_flightlogs(tmp_path_factory.mktemp("log") / "log.npz", result.logs)
 
 
@@ -345,10 +345,12 @@ def test_ingest_out_dev_null_or_a_fifo_is_refused(log_file, fifo, tmp_path):
 
 def test_export_to_a_non_utf8_name_does_not_crash(log_file, tmp_path):
     pytest.importorskip("onnx")
+    from fuzz_helpers import run_cli
+
     model = tmp_path / "model"
-    res = cli(["train", "--data", log_file, "--out", model, "--model", "mlp",
-               "--max-epochs", "2"], "setup")
-    assert res.returncode == 0, res.stderr
+    res = run_cli(["train", "--data", log_file, "--out", model, "--model", "mlp",
+                   "--max-epochs", "2"], family="setup")  # the input, made in-process
+    assert res.rc == 0, res.err
     name = os.fsdecode(b"\xff\xfe.onnx")
     res = cli(["export", "--model", model, "--out", name, "--json"], "odd-output-name",
               cwd=tmp_path)

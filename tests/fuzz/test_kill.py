@@ -1,8 +1,12 @@
-"""kill -9 during ``ingest``, ``train`` and ``export``: the old output stays intact or the new one
-is complete, never a mix; temporary files of a killed write are removed by the next write.
+"""kill -9 during ``ingest``, ``train``, ``export``, ``sweep`` and ``collect``: the old output stays
+intact or the new one is complete, never a mix; temporary files of a killed write are removed by
+the next write.
 
 Each command first runs to completion (its output is the "old" one, and its duration sets the
 range of kill moments); then it runs again and is killed with SIGKILL at random moments.
+``sweep`` and ``collect`` first write the new folder in a subprocess (its duration, and what a
+complete new folder holds), then the old one in-process; after a kill that let the new folder
+in, the old one is copied back; the last write, in-process, removes the killed runs' leftovers.
 """
 
 from __future__ import annotations
@@ -104,12 +108,12 @@ def test_kill_during_ingest(shared_data, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def data_file(tmp_path_factory) -> Path:
-    from aerodock.config import load_config
+def data_file(tmp_path_factory, short_cfg) -> Path:
+    """Two trials' FlightLogs (the short mission: what the models learn is not the point)."""
     from aerodock.flightlog import save_flightlogs
     from aerodock.mission import MissionSpec, run_campaign
 
-    result = run_campaign(load_config(), MissionSpec(trials=2, seed=5), record="full")
+    result = run_campaign(short_cfg, MissionSpec(trials=2, seed=5), record="full")
     return save_flightlogs(tmp_path_factory.mktemp("kill") / "data.npz", result.logs)
 
 
@@ -196,12 +200,15 @@ def test_kill_during_export(models, tmp_path):
 # ---- folders of several files: sweep --out and collect --out ------------------------------
 
 # What a kill leaves does not depend on what the runs fly: the mission's waiting times cut
-# (tests/short_mission.py) in both, for fewer simulated seconds per run.
+# (tests/short_mission.py) in both, and the world at its cheapest (the point-mass vehicles, the
+# physics stepped at the control rate), for fewer and cheaper simulated seconds per run: the
+# runs fly, train and write the same folders, in less time.
+FAST_WORLD = '[vehicle]\nmodel = "point-mass"\n[sim]\nphysics_rate_hz = 100.0\n'
 SWEEP_SPEC = ("[sweep]\ntrials = 1\nseeds = [{seed}]\nconfig = \"short.toml\"\n"
               "[axes]\ncompensation = [\"observer\", \"oracle\"]\n")
 COLLECT_CONFIG = ("[curriculum]\nflights_per_stage = 1\nstage0_depth_m = [0.9, 1.2]\n"
                   "min_depth_m = 0.9\ndeep_depths_m = []\nmodel = \"mlp\"\n"
-                  + short_mission_toml())
+                  + FAST_WORLD + short_mission_toml())
 
 
 def _tree(folder: Path) -> dict[str, bytes]:
@@ -223,12 +230,27 @@ def _sweep_seeds(folder: Path) -> set[str]:
     return seeds
 
 
+def _in_process(args: list) -> None:
+    """A run that is not killed, in this process (no interpreter start-up): it writes the old
+    study or collection, or is the next write that removes killed runs' temporary folders."""
+    from fuzz_helpers import run_cli
+
+    res = run_cli(args, family="setup")
+    assert res.rc == 0, res.err
+
+
+def _restore(snapshot: Path, out: Path) -> None:
+    """Put the old folder back, as its own run wrote it (after a kill that let the new one in)."""
+    shutil.rmtree(out)
+    shutil.copytree(snapshot, out)
+
+
 def test_kill_during_sweep_leaves_one_study(tmp_path):
     """sweep --out killed at random moments: the folder is the old study, byte for byte, or the
     new one complete (its table and summary of the new seed, its figures); never a mix."""
     out = tmp_path / "study"
     specs = {}
-    (tmp_path / "short.toml").write_text(short_mission_toml())
+    (tmp_path / "short.toml").write_text(FAST_WORLD + short_mission_toml())
     for seed in (0, 1):
         specs[seed] = tmp_path / f"spec{seed}.toml"
         specs[seed].write_text(SWEEP_SPEC.format(seed=seed))
@@ -238,8 +260,10 @@ def test_kill_during_sweep_leaves_one_study(tmp_path):
     new_names = set(_tree(out))
     new_figures = {k: v for k, v in _tree(out).items() if k.startswith("figures")}
     assert _sweep_seeds(out) == {"csv:1", "summary:1"}
-    _run(old_args)
+    _in_process(old_args)  # the old study replaces the new one
     old = _tree(out)
+    assert _sweep_seeds(out) == {"csv:0", "summary:0"}
+    snapshot = shutil.copytree(out, tmp_path / "old-study")
     for delay in _moments(duration, 3, seed=4):
         _kill_at(new_args, delay)
         now = _tree(out)
@@ -247,9 +271,8 @@ def test_kill_during_sweep_leaves_one_study(tmp_path):
             assert set(now) == new_names, f"files of two runs after a kill at {delay:.2f} s"
             assert _sweep_seeds(out) == {"csv:1", "summary:1"}, f"mixed at {delay:.2f} s"
             assert {k: v for k, v in now.items() if k.startswith("figures")} == new_figures
-            _run(old_args)
-            old = _tree(out)
-    _run(old_args)
+            _restore(snapshot, out)
+    _in_process(old_args)
     assert not _temps(tmp_path), "a killed sweep's temporary folder outlived the next sweep"
 
 
@@ -280,13 +303,15 @@ def test_kill_during_collect_leaves_one_collection(tmp_path):
     duration = _run(new_args)
     complete = set(_collect_seeds(out))
     assert set(_collect_seeds(out).values()) == {2}
-    _run(old_args)
+    _in_process(old_args)  # the old collection replaces the new one
+    assert _collect_seeds(out) == dict.fromkeys(complete, 1)
+    snapshot = shutil.copytree(out, tmp_path / "old-collection")
     for delay in _moments(duration, 3, seed=5):
         _kill_at(new_args, delay)
         seeds = _collect_seeds(out)
         assert set(seeds) == complete, f"incomplete folder after a kill at {delay:.2f} s"
         assert len(set(seeds.values())) == 1, f"two seeds mixed after a kill at {delay:.2f} s"
         if set(seeds.values()) == {2}:
-            _run(old_args)
-    _run(old_args)
+            _restore(snapshot, out)
+    _in_process(old_args)
     assert not _temps(tmp_path), "a killed collect's temporary folder outlived the next one"

@@ -307,18 +307,18 @@ def test_save_refuses_a_directory_with_other_files(tmp_path):
     assert (tmp_path / "m" / "notes.txt").read_text() == "mine"
 
 
+# The writer of a model directory (TrainedModel.save's), looping over two models: only the
+# model file module is imported (no PyTorch, no test module), so the process is ready at once.
 _SAVE_LOOP = """
-import sys, torch, numpy as np
-sys.path.insert(0, {tests!r})
-from test_learning_runtime import _random_trained
-a, b = _random_trained("so2"), _random_trained("so2")
-with torch.no_grad():
-    for p in b.model.parameters():
-        p.mul_(2.0)
+import pickle
+from aerodock.learning.modelfile import save_model_dir
+with open({models!r}, "rb") as fh:
+    models = pickle.load(fh)
 print("ready", flush=True)
 i = 0
 while True:
-    (a if i % 2 else b).save({path!r})
+    spec, weights, info = models[i % 2]
+    save_model_dir({path!r}, spec, weights, training=info)
     i += 1
 """
 
@@ -328,15 +328,21 @@ def test_kill_during_saves_leaves_a_whole_model(tmp_path):
     """kill -9 at random moments of repeated saves: the directory always holds one whole model
     (weights matching model.json), one of the two being written, and no mix."""
     import os
+    import pickle
     import signal
     import time
-    from pathlib import Path
 
     path = tmp_path / "m"
     first = _random_trained("so2")
     first.save(path)
     want = {json.dumps({k: v.tolist() for k, v in sorted(_weights_of(path).items())})}
-    code = _SAVE_LOOP.format(tests=str(Path(__file__).parent), path=str(path))
+    doubled = _random_trained("so2")
+    with torch.no_grad():
+        for p in doubled.model.parameters():
+            p.mul_(2.0)
+    with open(tmp_path / "models.pkl", "wb") as fh:  # the doubled one first, then the first
+        pickle.dump([(m.model.spec(), m.model.weights(), m.info) for m in (doubled, first)], fh)
+    code = _SAVE_LOOP.format(models=str(tmp_path / "models.pkl"), path=str(path))
     rng = np.random.default_rng(5)
     for _ in range(6):
         proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)

@@ -137,12 +137,19 @@ aerodock = partial(run_cli, check=True)
 
 
 def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
+    """In-process (what it writes is checked; the bad inputs below run as a user's process)."""
+    from typer.testing import CliRunner
+
+    from aerodock.cli.app import app
+
     data = tmp_path / "synth.npz"
     save_flightlogs(data, synthetic)
     out, toml = tmp_path / "fit", tmp_path / "wake.toml"
-    proc = aerodock("field", "fit", str(data), "--holdout", "synth_ss_03", "--bootstrap", "2",
-                    "--out", str(out), "--config-out", str(toml), "--json")
-    result = json.loads(proc.stdout)
+    res = CliRunner().invoke(app, ["field", "fit", str(data), "--holdout", "synth_ss_03",
+                                   "--bootstrap", "2", "--out", str(out), "--config-out",
+                                   str(toml), "--json"])
+    assert res.exit_code == 0, (res.output, res.exception)
+    result = json.loads(res.stdout)
     assert set(result["params"]) == set(wf.FITTED_PARAMS)
     assert result["held_out_flights"] == ["synth_ss_03"]
     assert result["bootstrap_runs"] == 2

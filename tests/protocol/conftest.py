@@ -12,3 +12,10 @@ from protocol_helpers import FIELDS, write_config
 def field_configs(tmp_path_factory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("protocol-configs")
     return {name: write_config(folder, name) for name in FIELDS}
+
+
+@pytest.fixture(scope="session")
+def collect_configs(tmp_path_factory) -> dict[str, Path]:
+    """The same configs with the one paper stage as their curriculum (``collect``'s test)."""
+    folder = tmp_path_factory.mktemp("protocol-collect-configs")
+    return {name: write_config(folder, name, deep=False) for name in FIELDS}

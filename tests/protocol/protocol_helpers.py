@@ -34,10 +34,15 @@ deep_flights_per_stage = 3
 """ + short_mission_toml()
 
 
-def write_config(folder: Path, name: str) -> Path:
-    """A user config that plugs in ``protocol_fields:NAME``."""
-    path = folder / f"{name}.toml"
-    path.write_text(_CONFIG.format(name=name))
+def write_config(folder: Path, name: str, deep: bool = True) -> Path:
+    """A user config that plugs in ``protocol_fields:NAME``; without ``deep``, its curriculum
+    is the one paper stage alone (``collect``'s test: the deep stage flies the same world with
+    the stage model fed forward, which ``reproduce --smoke`` covers with a plug-in field)."""
+    path = folder / f"{name}{'' if deep else '-paper-stage'}.toml"
+    text = _CONFIG.format(name=name)
+    if not deep:
+        text = text.replace("deep_depths_m = [0.3]", "deep_depths_m = []")
+    path.write_text(text)
     return path
 
 

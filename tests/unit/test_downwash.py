@@ -14,6 +14,7 @@ from aerodock.downwash.base import BodyState
 from aerodock.downwash.jet import RoundJetField
 from aerodock.downwash.probe import half_magnitude_radius_m, probe_bodies, probe_field
 from aerodock.geometry import rot_z
+from aerodock.rng import TrialRNG
 
 MASS, G = 0.7, 9.81
 SEPARATIONS = (0.36, 0.64, 1.35)
@@ -186,49 +187,53 @@ def test_force_scales_with_leader_thrust_as_momentum_theory_says():
 
 
 def test_turbulence_spread_and_correlation_time(field, cfg):
+    """100 trials of 2 s at the physics rate (the turbulence starts from its stationary
+    distribution, each trial its own random stream): the pooled spread and autocorrelation."""
     dt = 1.0 / cfg.sim.physics_rate_hz
-    leader, follower = probe_bodies(0.36, 0.0, 0.0, MASS, G)
-    field.reset(1, np.random.default_rng(3))
-    k = 60000
-    draws = np.array([field.acceleration(leader, follower, dt)[0] for _ in range(k)])
+    n, k = 100, 1000
+    leader, follower = probe_bodies(np.full(n, 0.36), np.zeros(n), 0.0, MASS, G)
+    field.reset(n, TrialRNG(3, n))
+    draws = np.array([field.acceleration(leader, follower, dt) for _ in range(k)])  # (k, n, 3)
     turb = field.turbulence(leader, follower)
-    assert draws[:, 2].std() == pytest.approx(np.sqrt(turb["axial_var_mps4"][0]), rel=0.1)
-    assert draws[:, 0].std() == pytest.approx(np.sqrt(turb["lateral_var_mps4"][0]), rel=0.1)
-    dev = draws[:, 2] - draws[:, 2].mean()
+    assert draws[..., 2].std() == pytest.approx(np.sqrt(turb["axial_var_mps4"][0]), rel=0.1)
+    assert draws[..., 0].std() == pytest.approx(np.sqrt(turb["lateral_var_mps4"][0]), rel=0.1)
+    dev = draws[..., 2] - draws[..., 2].mean()
     tau = turb["corr_time_s"][0]
     for lag_s in (0.02, 0.05):
         lag = int(round(lag_s / dt))
-        corr = np.dot(dev[:-lag], dev[lag:]) / np.dot(dev, dev)
+        corr = np.sum(dev[:-lag] * dev[lag:]) / np.sum(dev * dev)  # within each trial
         assert corr == pytest.approx(np.exp(-lag_s / tau), abs=0.08)
 
 
 def test_each_disk_has_its_own_partly_shared_turbulence():
     """Two disks on the follower's x axis, level on the wake's axis: each disk's force (from the
     total and the torque) fluctuates by turb_vertical of its mean, and the two are correlated
-    by exp(-spacing / (turb_length_ratio * b)), the share the field says."""
+    by exp(-spacing / (turb_length_ratio * b)), the share the field says. (100 trials of 2 s,
+    each its own random stream, from the stationary distribution: pooled statistics.)"""
     field = RoundJetField(turb_vertical=0.3, turb_lateral=0.0, body_area_ratio=0.0,
                           turb_length_ratio=0.5)
     arm = 0.135
     offsets = np.array([[arm, 0.0, 0.0], [-arm, 0.0, 0.0]])
-    leader, follower = probe_bodies(0.64, 0.0, 0.0, MASS, G)
-    field.reset(1, np.random.default_rng(8))
+    n = 100
+    leader, follower = probe_bodies(np.full(n, 0.64), np.zeros(n), 0.0, MASS, G)
+    field.reset(n, TrialRNG(8, n))
     rows = []
-    for _ in range(40000):
+    for _ in range(1000):
         force, torque = field.wrench(leader, follower, offsets, 0.002)
-        rows.append((force[0, 2], torque[0, 1]))
-    fz, ty = np.array(rows).T
+        rows.append((force[:, 2], torque[:, 1]))
+    fz, ty = (np.array(col) for col in zip(*rows, strict=True))  # (steps, trials)
     # torque_y = z x - x z: -(arm F1 - arm F2) for downward (NED +z) disk forces
     f1, f2 = 0.5 * (fz - ty / arm), 0.5 * (fz + ty / arm)
     for f in (f1, f2):
         assert f.std() / f.mean() == pytest.approx(0.3, rel=0.08)
     b = field.half_width0_m + field.spread_rate * 0.64
     share = np.exp(-2 * arm / (0.5 * b))
-    assert np.corrcoef(f1, f2)[0, 1] == pytest.approx(share, abs=0.08)
+    assert np.corrcoef(f1.ravel(), f2.ravel())[0, 1] == pytest.approx(share, abs=0.08)
     # and the correlation time is the shared one
     dev = f1 - f1.mean()
     tau = field.turbulence(leader, follower)["corr_time_s"][0]
     lag = 15
-    corr = np.dot(dev[:-lag], dev[lag:]) / np.dot(dev, dev)
+    corr = np.sum(dev[:-lag] * dev[lag:]) / np.sum(dev * dev)  # within each trial
     assert corr == pytest.approx(np.exp(-lag * 0.002 / tau), abs=0.08)
 
 
@@ -239,7 +244,6 @@ from aerodock.downwash.wrench import (  # noqa: E402
     quad_rotor_offsets_body_m,
 )
 from aerodock.geometry import euler_to_rotmat  # noqa: E402
-from aerodock.rng import TrialRNG  # noqa: E402
 
 ROTORS = quad_rotor_offsets_body_m(0.27)
 
