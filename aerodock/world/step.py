@@ -19,7 +19,6 @@ import numpy as np
 
 from aerodock.downwash import BodyState
 from aerodock.world import terms
-from aerodock.world.gripper import _CAPTURED
 from aerodock.world.params import WorldParams
 from aerodock.world.state import StepFrame, WorldState
 
@@ -60,7 +59,7 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     rot, pos, vel = both.R, both.p, both.v
     thrust = both.thrust_n
     mass = both.body.mass_kg
-    captured = state.gripper.gate == _CAPTURED
+    captured, any_captured = state.gripper.capture
     bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(state.bar.yaw_rad, out=bar_axis[0])
     np.sin(state.bar.yaw_rad, out=bar_axis[1])
@@ -72,7 +71,7 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass[:n]),
         fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass[n:]),
         mass_kg=mass, mass_rows_kg=both.body.mass_rows_kg,
-        captured=captured, any_captured=bool(captured.any()),
+        captured=captured, any_captured=any_captured,
         bar_axis_t=bar_axis,
         force_n=np.zeros((2 * n, 3)),
         torque_t=np.zeros((3, 2 * n)) if params.rigid else None,

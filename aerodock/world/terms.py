@@ -124,8 +124,7 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     if gyro_sd:
         draw = standard_normal_t(state.rng, n, 6)
         noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
-        np.multiply(draw[:3], gyro_sd, out=noise[:, :n])
-        np.multiply(draw[3:], gyro_sd, out=noise[:, n:])
+        np.multiply(draw.reshape(2, 3, n), gyro_sd, out=_halves(noise, n))
         frame.gyro_noise_radps = noise.T
     ims = state.imu
     if ims is None:
@@ -146,9 +145,9 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
                  + (params.imu.accel_vibration_mps2 * load) ** 2)
     draw = standard_normal_t(state.rng, n, 6)
-    force_t = force.T.copy()
-    force_t[:, :n] += draw[:3] * sd[:n]
-    force_t[:, n:] += draw[3:] * sd[n:]
+    force_t = np.empty((3, 2 * n))
+    np.add(_halves(force.T, n), draw.reshape(2, 3, n) * sd.reshape(2, 1, n),
+           out=_halves(force_t, n))
     np.maximum(force_t, -chain.accel_range_mps2, out=force_t)
     np.minimum(force_t, chain.accel_range_mps2, out=force_t)
     ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
@@ -224,8 +223,8 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
     new, n = frame.new, state.n
-    below = new.p[:, 2] > 0.0
-    if below.any():
+    if np.fmax.reduce(new.p[:, 2]) > 0.0:  # the highest z, NaN aside (fmax skips NaN)
+        below = new.p[:, 2] > 0.0
         new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
         new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
         state.ground_contact |= below[n:] | below[:n]
@@ -264,6 +263,12 @@ def snapshot(state: WorldState, params: WorldParams) -> tuple[np.ndarray, ...]:
     both, n = state.both, state.n
     att = both.R if params.rigid else both.rpy
     return both.p[:n], both.v[:n], att[:n], both.p[n:], both.v[n:], att[n:]
+
+
+def _halves(rows: np.ndarray, n: int) -> np.ndarray:
+    """A component-major (3, 2n) array as (2, 3, n) (leaders, followers; a view): the layout of a
+    (6, n) draw of the leaders' three numbers, then the followers'."""
+    return rows.reshape(3, 2, n).transpose(1, 0, 2)
 
 
 def _yaw(rot: np.ndarray) -> np.ndarray:
