@@ -200,6 +200,9 @@ class RoundJetField:
         # bar_force_n() call of the same physics step (same leader object), then dropped.
         self._lead_key: BodyState | None = None
         self._lead_wake: tuple | None = None
+        # The disks' force coefficient of the last follower mass array (see _disk_coeff).
+        self._coeff_key: np.ndarray | None = None
+        self._coeff: np.ndarray | float = 0.0
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -247,7 +250,7 @@ class RoundJetField:
         off the axis, pushing the disks nearer the axis down (the paper's oscillatory behaviour
         near the wake's edge).
         """
-        offsets = np.asarray(rotor_offsets_body_m, dtype=float).reshape(-1, 3)
+        offsets = _offsets(rotor_offsets_body_m)
         force, torque, _ = self._step(leader, follower, offsets, dt, True)
         return np.ascontiguousarray(force.T), torque
 
@@ -279,7 +282,8 @@ class RoundJetField:
         offsets = self.rotor_offsets_body_m
         geo = self._geometry(lead, follower, offsets)
         tau, share = self._turbulence_time_and_share(geo, offsets)
-        f_disk, f_body = self._axial(geo, follower, lead)
+        axial = self._axial(geo, follower, lead)
+        f_disk, f_body = axial[:geo["k"]], axial[geo["k"]]
         mass = np.asarray(follower.mass_kg, dtype=float)
         root = np.sqrt(share)
 
@@ -339,11 +343,9 @@ class RoundJetField:
         along += 1.0
         along *= speed
         rel = axis * along
-        lateral = self.bar_turb_lateral * speed
-        work = np.array(R[:, :, 0].T, dtype=float, order="C")  # a copy, even for n = 1
-        rel += np.multiply(work, lateral * noise[1], out=work)
-        np.copyto(work, R[:, :, 1].T)
-        rel += np.multiply(work, lateral * noise[2], out=work)
+        lateral = _lateral(R, noise[1:3], self.bar_turb_lateral * speed)
+        rel += lateral[0]
+        rel += lateral[1]
         rel -= np.asarray(bar_v_mps, dtype=float).T
         if bar_axis is not None:
             ba = np.ascontiguousarray(np.asarray(bar_axis, dtype=float).T)
@@ -466,9 +468,8 @@ class RoundJetField:
         d2 /= half_width * half_width
         d2 *= -_LN2
         speed = centre * np.exp(d2, out=d2)
-        above = depth < 0.0
-        if above.any():  # nothing above the rotors
-            speed *= np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
+        if _fmin(depth) < 0.0:  # nothing above the rotors
+            speed *= np.where(depth < 0.0, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
         return axis, speed, half_width, centre
 
     def _geometry(self, lead: tuple, follower: BodyState, offsets: np.ndarray) -> dict:
@@ -484,9 +485,10 @@ class RoundJetField:
             cols = np.zeros((k + 1, 3))
             cols[:k] = offsets
             points = (offsets, cols[None, :, 0:1], cols[None, :, 1:2],
-                      cols[None, :, 2:3] if offsets[:, 2].any() else None)
+                      cols[None, :, 2:3] if offsets[:, 2].any() else None,
+                      _torque_arms(offsets))
             self._points = {id(offsets): points}
-        _, px, py, pz = points
+        _, px, py, pz, arms = points
         rel = np.multiply(rt[0][:, None, :], px, out=np.empty((3, k + 1, n)))
         rel += rt[1][:, None, :] * py
         if pz is not None:
@@ -498,10 +500,10 @@ class RoundJetField:
         d2 = r2[0] + r2[1]
         d2 += r2[2]
         return {"depth": depth, "half_width": half_width, "centre": centre, "radial": radial,
-                "d2": d2, "k": k, "rt": rt, "flat": pz is None}
+                "d2": d2, "k": k, "rt": rt, "flat": pz is None, "arms": arms}
 
-    def _axial(self, geo: dict, follower: BodyState, lead: tuple) -> tuple[np.ndarray, ...]:
-        """Mean axial force (N) on each disk (k, n) and on the body (n,)."""
+    def _axial(self, geo: dict, follower: BodyState, lead: tuple) -> np.ndarray:
+        """Mean axial force (N) on each disk and on the body, (P, n) (the body last)."""
         k = geo["k"]
         axis = lead[0]
         prod = np.asarray(follower.v, dtype=float).T * axis
@@ -522,23 +524,32 @@ class RoundJetField:
         sig2b = b2[k] / (4.0 * _LN2)
         sige2b = sig2b + 0.25 * self.body_radius_m ** 2
         w_body = centre[k] * np.sqrt(sig2b / sige2b) * np.exp(-d2[k] / (4.0 * sige2b))
-        above = depth < 0.0
-        if above.any():  # nothing above the rotors
+        if _fmin(depth) < 0.0:  # nothing above the rotors (fmin: NaN aside, as depth < 0)
+            above = depth < 0.0
             taper = np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
             w_disk *= taper[:k]
             w_body *= taper[k]
-        mass = np.asarray(follower.mass_kg, dtype=float)
         rho = self.air_density_kgpm3
-        area = self.follower_disk_area_m2
+        axial = np.empty(d2.shape)
+        f_disk = _ingest_law(w_disk, v_axial, p, axial[:k])
+        f_disk *= self._disk_coeff(follower.mass_kg)
+        f_body = _ingest_law(w_body, v_axial, 2.0, axial[k])
+        f_body *= 0.5 * self.body_drag_coeff * rho * self.body_area_m2
+        return axial
+
+    def _disk_coeff(self, mass_kg: np.ndarray) -> np.ndarray | float:
+        """``c rho A v_hf^(2 - p)`` of each follower (v_hf: its own hover-induced velocity, from
+        its mass); cached for the same mass array (a world passes the same one every step)."""
+        if mass_kg is self._coeff_key:
+            return self._coeff
+        rho, area, p = self.air_density_kgpm3, self.follower_disk_area_m2, self.ingest_exponent
         coeff = self.ingest_coeff * rho * area
-        if p != 2.0:  # v_hf^(2 - p): the follower's own hover-induced velocity
+        if p != 2.0:
+            mass = np.asarray(mass_kg, dtype=float)
             coeff = coeff * (mass * self.gravity_mps2
                              / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
-        f_disk = _ingest_law(w_disk, v_axial, p)
-        f_disk *= coeff
-        f_body = _ingest_law(w_body, v_axial, 2.0)
-        f_body *= 0.5 * self.body_drag_coeff * rho * self.body_area_m2
-        return f_disk, f_body
+        self._coeff_key, self._coeff = mass_kg, coeff
+        return coeff
 
     def _turbulence_time_and_share(self, geo: dict,
                                    offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -566,10 +577,7 @@ class RoundJetField:
         (k, n), share (n,)) or None for the mean."""
         k = geo["k"]
         axis = lead[0]
-        f_disk, f_body = self._axial(geo, follower, lead)
-        axial = np.empty(geo["d2"].shape)  # (P, n)
-        axial[:k] = f_disk
-        axial[k] = f_body
+        axial = self._axial(geo, follower, lead)  # (P, n)
         if noise is None:
             along = axial
         else:
@@ -591,10 +599,9 @@ class RoundJetField:
             planar /= geo["half_width"]
         gust = None
         if noise is not None and self.turb_lateral:
-            # One lateral process pushes every disk and the body.
-            R = leader.R  # noqa: N806
-            gust = R[:, :, 0].T * noise[0][1]
-            gust += R[:, :, 1].T * noise[0][2]
+            # One lateral process pushes every disk and the body: R e1 n_1 + R e2 n_2.
+            lateral = _lateral(leader.R, noise[0][1:3])
+            gust = np.add(lateral[0], lateral[1], out=lateral[0])
             gust *= self.turb_lateral
         if not split and not want_torque:
             total = axis * along.sum(axis=0)
@@ -613,7 +620,7 @@ class RoundJetField:
         if gust is not None:
             force += gust[:, None, :] * np.abs(axial)
         disks = force[:, :k].sum(axis=1)
-        body = np.ascontiguousarray(force[:, k])
+        body = force[:, k]  # a view: its reader copies it
         if not want_torque:
             return disks, None, body
         # R^T F_k per disk (3, k, n), then sum_k r_k x (R^T F_k).
@@ -623,14 +630,25 @@ class RoundJetField:
         fb = prod[:, 0]
         fb += prod[:, 1]
         fb += prod[:, 2]
-        ox, oy, oz = (offsets[:, c:c + 1] for c in range(3))  # (k, 1)
         torque = np.empty((axis.shape[1], 3))
+        if geo["flat"]:
+            # Per disk (y_k f_z, x_k f_z, x_k f_y - y_k f_x), summed over the disks in order
+            # into the torque's columns; the second is minus that sum.
+            arms = geo["arms"]  # (4, k, 1): y, x, x, y
+            terms = np.empty((3,) + fb.shape[1:])
+            np.multiply(arms[0:2], fb[2], out=terms[0:2])
+            cross = np.multiply(arms[2:4], fb[1::-1])
+            np.subtract(cross[0], cross[1], out=terms[2])
+            torque_t = np.add.reduce(terms, axis=1, out=torque.T)
+            np.negative(torque_t[1], out=torque_t[1])
+            return disks, torque, body
+        ox, oy, oz = (offsets[:, c:c + 1] for c in range(3))  # (k, 1)
         torque[:, 0] = (oy * fb[2]).sum(axis=0)
         torque[:, 1] = -(ox * fb[2]).sum(axis=0)
         torque[:, 2] = (ox * fb[1] - oy * fb[0]).sum(axis=0)
-        if not geo["flat"]:  # disks out of the centre of mass's plane
-            torque[:, 0] -= (oz * fb[1]).sum(axis=0)
-            torque[:, 1] += (oz * fb[0]).sum(axis=0)
+        # disks out of the centre of mass's plane
+        torque[:, 0] -= (oz * fb[1]).sum(axis=0)
+        torque[:, 1] += (oz * fb[0]).sum(axis=0)
         return disks, torque, body
 
     def _planar_scale(self, k: int) -> np.ndarray:
@@ -654,16 +672,56 @@ class RoundJetField:
         return noise
 
 
-def _ingest_law(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float) -> np.ndarray:
+def _ingest_law(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float,
+                out: np.ndarray | None = None) -> np.ndarray:
     """``phi(w - v) - phi(-v)`` with ``phi(x) = sign(x) |x|^p``: the force of wake air of
     speed ``w`` on a disk moving at ``v`` along the axis, less that of its motion in still air
-    (the vehicle's own drag). Exactly ``w`` for ``p = 1``."""
+    (the vehicle's own drag). Exactly ``w`` for ``p = 1``. Written into ``out`` if given."""
     if p == 1.0:
-        return np.array(w_mps, dtype=float, copy=True)
+        if out is None:
+            return np.array(w_mps, dtype=float, copy=True)
+        np.copyto(out, w_mps)
+        return out
     rel = w_mps - v_axial_mps
     if p == 2.0:
-        return rel * np.abs(rel) + v_axial_mps * np.abs(v_axial_mps)
-    out = np.power(np.abs(rel), p, out=np.abs(rel))
+        out = np.multiply(rel, np.abs(rel), out=out)
+        out += v_axial_mps * np.abs(v_axial_mps)
+        return out
+    out = np.abs(rel, out=out)
+    np.power(out, p, out=out)
     np.copysign(out, rel, out=out)
-    out += np.copysign(np.power(np.abs(v_axial_mps), p), v_axial_mps)
+    own = np.abs(v_axial_mps)
+    np.power(own, p, out=own)
+    out += np.copysign(own, v_axial_mps, out=own)
     return out
+
+
+def _offsets(rotor_offsets_body_m: np.ndarray) -> np.ndarray:
+    """The disks' centres as a (k, 3) float array: the array itself when it is one (the
+    geometry's caches are keyed by the object)."""
+    offsets = rotor_offsets_body_m
+    if (isinstance(offsets, np.ndarray) and offsets.dtype == np.float64 and offsets.ndim == 2
+            and offsets.shape[1] == 3):
+        return offsets
+    return np.asarray(offsets, dtype=float).reshape(-1, 3)
+
+
+def _torque_arms(offsets: np.ndarray) -> np.ndarray:
+    """(4, k, 1) the disks' (y, x, x, y): the arms of the flat disks' torque."""
+    x, y = offsets[:, 0], offsets[:, 1]
+    arms = np.stack([y, x, x, y])[:, :, None]
+    arms.flags.writeable = False
+    return arms
+
+
+def _lateral(rot: np.ndarray, noise: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """(2, 3, n) ``R e1 (s n_1)`` and ``R e2 (s n_2)`` for rotations (n, 3, 3) and lateral
+    processes ``noise`` (2, n) (``s``: a scale (n,), or none), component-major."""
+    if scale is not None:
+        noise = noise * scale
+    return np.multiply(rot[:, :, 0:2].transpose(2, 1, 0), noise[:, None, :])
+
+
+def _fmin(values: np.ndarray) -> float:
+    """The least element, NaN aside (``fmin``): "any element < x" in one reduction."""
+    return np.fmin.reduce(values, axis=None)

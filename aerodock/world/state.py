@@ -106,6 +106,9 @@ class WorldState:
     imu: ImuState | None = None
     torque_reading: TorqueReading | None = None
     steps_at_last_torque: int = 0
+    # The vehicles' true constants per half, for the body they are of (begin_step: the frame
+    # passes the same arrays every step, which the field's caches key on).
+    body_halves: tuple | None = None
     # The 2n batch and its halves (see the module docstring).
     _both: Any = None
     _lead: Any = None
@@ -165,7 +168,7 @@ class WorldState:
             raise ValueError("a world whose torques are being logged cannot be split into trials")
         n, rows = self.n, np.asarray(rows, dtype=np.int64)
         own = {"n", "fleet", "rng", "field", "leader_fixed", "constants", "imu", "torque_log",
-               "_both", "_lead", "_fol"}
+               "body_halves", "_both", "_lead", "_fol"}
         taken = {f.name: take_rows(getattr(self, f.name), rows) for f in fields(self)
                  if f.name not in own}
         out = WorldState(n=int(rows.size), fleet=self.fleet, rng=rng, field=field,
@@ -190,7 +193,8 @@ class StepFrame:
         close_command: (n,) the active trigger's command this step.
         both: the 2n vehicles at the start of the step; ``rot``/``pos``/``vel`` its arrays.
         lead, fol: the two halves as the downwash field sees them.
-        mass_kg, mass_rows_kg: (2n,) and (2n, 3) each vehicle's true mass.
+        mass_kg, mass_rows_kg: (2n,) and (2n, 3) each vehicle's true mass;
+            ``fol_mass_rows_kg`` the followers' rows.
         captured, any_captured: followers hanging from the bar.
         bar_axis_t: (3, n) the bars' axes, ``(cos yaw, sin yaw, 0)``, component-major.
         force_n: (2n, 3) external forces on the vehicles, world NED, N (accumulator).
@@ -217,6 +221,7 @@ class StepFrame:
     fol: BodyState
     mass_kg: np.ndarray
     mass_rows_kg: np.ndarray
+    fol_mass_rows_kg: np.ndarray
     captured: np.ndarray
     any_captured: bool
     bar_axis_t: np.ndarray

@@ -58,7 +58,12 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     both = state.both
     rot, pos, vel = both.R, both.p, both.v
     thrust = both.thrust_n
-    mass = both.body.mass_kg
+    body = both.body
+    halves = state.body_halves
+    if halves is None or halves[0] is not body:  # the same arrays every step of this body
+        mass = body.mass_kg
+        halves = state.body_halves = (body, mass[:n], mass[n:], body.mass_rows_kg[n:])
+    _, lead_mass, fol_mass, fol_mass_rows = halves
     captured, any_captured = state.gripper.capture
     bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(state.bar.yaw_rad, out=bar_axis[0])
@@ -68,9 +73,9 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         targets=targets,
         close_command=state.constants.no_close if close_command is None else close_command,
         both=both, rot=rot, pos=pos, vel=vel,
-        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass[:n]),
-        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass[n:]),
-        mass_kg=mass, mass_rows_kg=both.body.mass_rows_kg,
+        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], lead_mass),
+        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], fol_mass),
+        mass_kg=body.mass_kg, mass_rows_kg=body.mass_rows_kg, fol_mass_rows_kg=fol_mass_rows,
         captured=captured, any_captured=any_captured,
         bar_axis_t=bar_axis,
         force_n=np.zeros((2 * n, 3)),

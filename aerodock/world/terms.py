@@ -36,7 +36,7 @@ def wake_on_rotor_disks(state: WorldState, frame: StepFrame, params: WorldParams
         frame.torque_t[:, n:] += torque.T
     else:
         force = state.field.acceleration(frame.lead, frame.fol, params.dt_s)
-        force *= frame.mass_rows_kg[n:]
+        force *= frame.fol_mass_rows_kg
     frame.wake_force_n = force
     frame.force_n[n:] += force
 
@@ -52,7 +52,7 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     if force is not None:
         frame.force_n[n:] += force
         total = total + force
-    state.last_downwash_mps2 = total / frame.mass_rows_kg[n:]
+    state.last_downwash_mps2 = total / frame.fol_mass_rows_kg
 
 
 def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -200,7 +200,7 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     if frame.any_captured:
         hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
                              platform.bar_mass_kg)
-        fol_own = (fol_accel - consts.gravity_mps2) * frame.mass_rows_kg[n:]
+        fol_own = (fol_accel - consts.gravity_mps2) * frame.fol_mass_rows_kg
         frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
     else:
         hang_mass = consts.bar_mass_kg
