@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -119,9 +120,10 @@ class WorldParams:
             latency_steps=int(round(cfg.mocap.latency_s / dt_s)),
         )
 
-    @property
+    @cached_property
     def rigid(self) -> bool:
-        """Rigid-body vehicles (attitude, rotors, torques) rather than point masses."""
+        """Rigid-body vehicles (attitude, rotors, torques) rather than point masses (read by
+        every term of every step: cached)."""
         return self.fleet.has_torque
 
     @property

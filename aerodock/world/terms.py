@@ -15,7 +15,7 @@ import numpy as np
 from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
-from aerodock.world.gripper import bar_in_gripper, step_gripper
+from aerodock.world.gripper import contact_in_gripper, step_gripper
 from aerodock.world.imu import filter_sample
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
@@ -71,9 +71,13 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
     n = state.n
     fol_p, fol_v, fol_R = frame.pos[n:], frame.vel[n:], frame.rot[n:]  # noqa: N806
     bar = state.bar
-    contact, inside, up = bar_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
-                                         params.gripper,
-                                         cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
+    contact, inside, up = contact_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
+                                             params.gripper,
+                                             cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
+    if contact is None:  # no bar touches an arm: no force (the accumulators, sums onto +0,
+        # hold no -0 that adding a zero push would turn into +0)
+        frame.contact_n, frame.inside = np.zeros(n), inside
+        return
     if frame.any_captured:
         contact = np.where(frame.captured, 0.0, contact)
     push = up * contact[:, None]

@@ -32,7 +32,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
-from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
+from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
     gain_columns,
@@ -143,7 +143,7 @@ class RigidBodyState:
     @property
     def rpy(self) -> np.ndarray:
         """(n, 3) ZYX Euler angles, rad."""
-        return np.stack(rotmat_to_euler(self.R), axis=1)
+        return rotmat_to_rpy(self.R)
 
 
 def rotor_thrusts_n(rotor_speed: np.ndarray, thrust_gain: np.ndarray,
