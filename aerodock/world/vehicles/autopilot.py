@@ -156,10 +156,12 @@ def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np
 
 
 def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
-                   cols: tuple[np.ndarray, ...], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+                   cols: tuple[np.ndarray, ...], dt_s: float,
+                   out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`rate_control` on a component-major (3, n) setpoint with ``cols`` of
-    :func:`gain_columns`: (torque (3, n), new integral (n, 3), C-ordered). ``gyro_radps`` is
-    (n, 3) or, transposed, a component-major (3, n) array's ``.T``."""
+    :func:`gain_columns`: (torque (3, n), written into ``out`` if given, new integral (n, 3),
+    C-ordered). ``gyro_radps`` is (n, 3) or, transposed, a component-major (3, n) array's
+    ``.T``."""
     err = rate_sp_radps - np.asarray(gyro_radps, dtype=float).T
     new_t = err * dt_s
     new_t += np.asarray(integral, dtype=float).T
@@ -168,7 +170,7 @@ def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: 
     accel = err
     accel *= cols[5]
     accel += np.multiply(new_t, cols[6], out=np.empty_like(new_t))
-    accel *= cols[7]
+    accel = np.multiply(accel, cols[7], out=accel if out is None else out)
     return accel, np.ascontiguousarray(new_t.T)
 
 
@@ -181,13 +183,20 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     zero) so that the torque differences survive, then every rotor is clipped to
     ``[0, rotor_thrust_max_n]``.
     """
+    torque_nm = np.asarray(torque_nm, dtype=float)
+    wrench = np.empty((4, torque_nm.shape[0]))
+    wrench[0] = thrust_n
+    wrench[1:] = torque_nm.T
+    return mix_t(wrench, mixer_inv, rotor_thrust_max_n).T
+
+
+def mix_t(wrench_t: np.ndarray, mixer_inv: np.ndarray, rotor_thrust_max_n: float) -> np.ndarray:
+    """:func:`mix` on a component-major (4, n) ``[T, tau_x, tau_y, tau_z]``: rotor-major (k, n)
+    thrusts."""
     # Explicit column sums (no BLAS gemm: rounding would depend on the batch size), rotor-major
-    # (k, n) so that every operation below runs on contiguous rows.
-    m = mixer_inv[:, :, None]
-    f = m[0] * thrust_n
-    f += m[1] * torque_nm[:, 0]
-    f += m[2] * torque_nm[:, 1]
-    f += m[3] * torque_nm[:, 2]
+    # (k, n) so that every operation below runs on contiguous rows: the four products at once
+    # (4, k, n), added in order (an outer axis: row by row).
+    f = np.add.reduce(np.multiply(mixer_inv[:, :, None], wrench_t[:, None, :]), axis=0)
     # Feasible collective shifts keep every rotor in [0, max]: s in [-min f, max - max f].
     lo = np.minimum.reduce(f, axis=0)
     np.negative(lo, out=lo)
@@ -203,4 +212,4 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     f += shift
     np.maximum(f, 0.0, out=f)
     np.minimum(f, rotor_thrust_max_n, out=f)
-    return f.T
+    return f

@@ -36,7 +36,7 @@ from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
     gain_columns,
-    mix,
+    mix_t,
     rate_control_t,
     rate_setpoint_t,
 )
@@ -210,13 +210,17 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                         attitude: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
     gyro's rates and its attitude estimate (``attitude``; None: the true attitude)."""
-    cols = gain_columns(params.gains, params.inertia_kgm2, state.R.shape[0])
+    n = state.R.shape[0]
+    cols = gain_columns(params.gains, params.inertia_kgm2, n)
     rot = state.R if attitude is None else attitude
     rate_sp = rate_setpoint_t(rot, targets.R_des, targets.yaw_rate_radps, cols)
-    torque, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s)
+    wrench = np.empty((4, n))  # [T, tau_x, tau_y, tau_z], component-major: the mixer's input
+    wrench[0] = targets.thrust_n
+    _, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s,
+                                 out=wrench[1:])
     if targets.torque_ff_nm is not None:  # (n, 3) feed-forward; the loop's torque is (3, n)
-        torque = torque + targets.torque_ff_nm.T
-    f_cmd = mix(targets.thrust_n, torque.T, params.mixer_inv, params.rotor_thrust_max_n)
+        wrench[1:] += targets.torque_ff_nm.T
+    f_cmd = mix_t(wrench, params.mixer_inv, params.rotor_thrust_max_n).T
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
     speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
     return np.sqrt(speed, out=speed), integral
