@@ -60,8 +60,7 @@ def accel_to_attitude_thrust(
         raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
     accel = np.atleast_2d(np.asarray(accel_mps2, dtype=float))
     n = accel.shape[0]
-    yaw = _rows(yaw_rad, n)
-    roll_pitch, thrust = _inverse(accel, np.cos(yaw), np.sin(yaw), _rows(mass_kg, n),
+    roll_pitch, thrust = _inverse(accel, _cos_sin(_rows(yaw_rad, n), n), _rows(mass_kg, n),
                                   gravity_mps2, tilt_max_rad, _rows(thrust_max_n, n))
     return roll_pitch[0], roll_pitch[1], thrust
 
@@ -77,20 +76,26 @@ def command_and_applied(accel_mps2: np.ndarray, yaw_rad: np.ndarray, mass_kg: fl
         raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
     accel = np.asarray(accel_mps2, dtype=float)
     n = accel.shape[0]
-    yaw = _rows(yaw_rad, n)
-    cy, sy = np.cos(yaw), np.sin(yaw)
+    cos_sin = _cos_sin(_rows(yaw_rad, n), n)
     mass = _rows(mass_kg, n)
-    roll_pitch, thrust = _inverse(accel, cy, sy, mass, gravity_mps2, tilt_max_rad,
+    roll_pitch, thrust = _inverse(accel, cos_sin, mass, gravity_mps2, tilt_max_rad,
                                   _rows(thrust_max_n, n))
-    applied = _forward(roll_pitch, cy, sy, thrust / mass, gravity_mps2)
+    applied = _forward(roll_pitch, cos_sin, thrust / mass, gravity_mps2)
     return roll_pitch[0], roll_pitch[1], thrust, applied
 
 
-def _inverse(accel: np.ndarray, cy: np.ndarray, sy: np.ndarray, mass: np.ndarray,
-             gravity_mps2: float, tilt_max_rad: float,
-             thrust_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`accel_to_attitude_thrust` on (n, 3) accelerations, the yaw's cosine and sine and
-    (n,) or 0-d mass and thrust limit: (roll and pitch (2, n), thrust (n,))."""
+def _cos_sin(yaw: np.ndarray, n: int) -> np.ndarray:
+    """(2, n) the yaws' cosines and sines (a scalar yaw: every trial's)."""
+    out = np.empty((2, n))
+    np.cos(yaw, out=out[0])
+    np.sin(yaw, out=out[1])
+    return out
+
+
+def _inverse(accel: np.ndarray, cos_sin: np.ndarray, mass: np.ndarray, gravity_mps2: float,
+             tilt_max_rad: float, thrust_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`accel_to_attitude_thrust` on (n, 3) accelerations, the yaw's cosine and sine
+    (2, n) and (n,) or 0-d mass and thrust limit: (roll and pitch (2, n), thrust (n,))."""
     n = accel.shape[0]
     # f = m (g e3 - a), R e3 T = f; component-major (3, n): its rows are f_x, f_y, f_z.
     force = np.subtract(_down(gravity_mps2), accel.T, out=np.empty((3, n)))
@@ -124,24 +129,33 @@ def _inverse(accel: np.ndarray, cy: np.ndarray, sy: np.ndarray, mass: np.ndarray
 
     # In the yaw-aligned frame, R e3 = [cos(roll) sin(pitch), -sin(roll), cos(roll) cos(pitch)].
     # Rz(yaw)^T z_body, written out (no einsum: faster, and independent of the batch size).
-    z_x, z_y = z_xy
-    zx = cy * z_x + sy * z_y
-    zy = -sy * z_x + cy * z_y
+    # The four products (cy, sy) x (z_x, z_y) at once: zx = cy z_x + sy z_y and
+    # zy = -sy z_x + cy z_y = cy z_y - sy z_x (the same addition, x + (-y) being x - y).
+    prod = np.multiply(cos_sin[:, None, :], z_xy)
+    zx = np.add(prod[0, 0], prod[1, 1])
+    zy = np.subtract(prod[0, 1], prod[1, 0])
     roll_pitch = np.empty((2, n))
-    np.arctan2(-zy, np.hypot(zx, zz), out=roll_pitch[0])
+    np.arctan2(np.negative(zy, out=zy), np.hypot(zx, zz), out=roll_pitch[0])
     np.arctan2(zx, zz, out=roll_pitch[1])
     return roll_pitch, thrust
 
 
-def _forward(roll_pitch: np.ndarray, cy: np.ndarray, sy: np.ndarray, k: np.ndarray,
+def _forward(roll_pitch: np.ndarray, cos_sin: np.ndarray, k: np.ndarray,
              gravity_mps2: float) -> np.ndarray:
     """:func:`attitude_thrust_to_accel` on roll and pitch (2, ...), the yaw's cosine and sine
-    and ``k = T / m``, all of the full shape: (..., 3)."""
-    # Third column of Rz(yaw) Ry(pitch) Rx(roll) (see aerodock.geometry.euler_to_rotmat).
+    (2, ...) and ``k = T / m``, all of the full shape: (..., 3)."""
+    # Third column of Rz(yaw) Ry(pitch) Rx(roll) (see aerodock.geometry.euler_to_rotmat):
+    # -(cy sp cr + sy sr) k, -(sy sp cr - cy sr) k (the two rows at once), g - cp cr k.
     (cr, cp), (sr, sp) = np.cos(roll_pitch), np.sin(roll_pitch)
+    horizontal = np.multiply(cos_sin, sp)
+    horizontal *= cr
+    cross = np.multiply(cos_sin[::-1], sr)
+    np.add(horizontal[0, ...], cross[0, ...], out=horizontal[0, ...])  # (..., 0-d views too)
+    np.subtract(horizontal[1, ...], cross[1, ...], out=horizontal[1, ...])
+    np.negative(horizontal, out=horizontal)
+    horizontal *= k
     out = np.empty(k.shape + (3,))
-    np.multiply(-(cy * sp * cr + sy * sr), k, out=out[..., 0])
-    np.multiply(-(sy * sp * cr - cy * sr), k, out=out[..., 1])
+    out[..., 0], out[..., 1] = horizontal
     np.subtract(gravity_mps2, cp * cr * k, out=out[..., 2])
     return out
 
@@ -193,5 +207,7 @@ def attitude_thrust_to_accel(
     shape = np.broadcast_shapes(roll.shape, pitch.shape, yaw.shape, thrust.shape, mass.shape)
     roll_pitch = np.empty((2,) + shape)
     roll_pitch[0], roll_pitch[1] = roll, pitch
+    cos_sin = np.empty((2,) + shape)
+    cos_sin[0], cos_sin[1] = np.cos(yaw), np.sin(yaw)
     k = np.broadcast_to(thrust / mass, shape)  # every product below has the full shape
-    return _forward(roll_pitch, np.cos(yaw), np.sin(yaw), k, gravity_mps2)
+    return _forward(roll_pitch, cos_sin, k, gravity_mps2)

@@ -186,6 +186,7 @@ class RoundJetField:
         # the two lateral ones), each disk's own axial one (k, n), and the bar's (3, n).
         self._common = np.zeros((_SHARED_ROWS, 0))
         self._own = np.zeros((0, 0))
+        self._processes = np.zeros((_SHARED_ROWS, 0))  # both, stacked; the two are its views
         self._offsets_obj: np.ndarray | None = None
         self._points: dict[int, tuple] = {}  # the disks' and the body's centres, by offsets
         self._planar_key: tuple | None = None  # what _planar_scale_col was computed for
@@ -200,9 +201,12 @@ class RoundJetField:
         # bar_force_n() call of the same physics step (same leader object), then dropped.
         self._lead_key: BodyState | None = None
         self._lead_wake: tuple | None = None
-        # The disks' force coefficient of the last follower mass array (see _disk_coeff).
+        # The force coefficients of the last follower mass array (see _force_coeff), and the
+        # per-row constants of _axial (see _area_columns).
         self._coeff_key: np.ndarray | None = None
-        self._coeff: np.ndarray | float = 0.0
+        self._coeff = np.zeros((0, 0))
+        self._area_key: tuple | None = None
+        self._area_cols: tuple = ()
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -221,8 +225,7 @@ class RoundJetField:
         ``rng`` (:class:`~aerodock.downwash.base.SupportsTakeRows`)."""
         out = copy.copy(self)  # the parameters and the geometry caches are shared
         out._rng = rng
-        out._common = self._common[:, rows]
-        out._own = self._own[:, rows]
+        out._set_processes(self._processes[:, rows])
         out._bar_noise = self._bar_noise[:, rows]
         # Kept for the rest of one physics step only (keyed by the step's objects).
         out._lead_key = out._lead_wake = None
@@ -366,8 +369,13 @@ class RoundJetField:
     # -- internals -----------------------------------------------------------------------------
     def _draw_follower_noise(self, n: int, k: int) -> None:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
-        self._common = np.array(draw[:_SHARED_ROWS], order="C")
-        self._own = np.array(draw[_SHARED_ROWS:], order="C")
+        self._set_processes(np.array(draw, order="C"))
+
+    def _set_processes(self, processes: np.ndarray) -> None:
+        """The follower's turbulence states, (3 + k, n): the shared ones, then each disk's own
+        (one array: a step advances them in one operation each)."""
+        self._processes = processes
+        self._common, self._own = processes[:_SHARED_ROWS], processes[_SHARED_ROWS:]
 
     def _step(self, leader: BodyState, follower: BodyState, offsets: np.ndarray, dt: float,
               want_torque: bool, split: bool = True,
@@ -387,10 +395,8 @@ class RoundJetField:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
         decay = np.exp(-dt / tau)
         innov = np.sqrt(1.0 - decay * decay)
-        self._common *= decay
-        self._common += draw[:_SHARED_ROWS] * innov
-        self._own *= decay
-        self._own += draw[_SHARED_ROWS:] * innov
+        self._processes *= decay  # the shared processes and the disks' own, (3 + k, n)
+        self._processes += draw * innov
         disks, torque, body = self._forces_from(geo, lead, leader, follower, offsets,
                                                 (self._common, self._own, share), want_torque,
                                                 split)
@@ -514,40 +520,60 @@ class RoundJetField:
         b2 = geo["half_width"] * geo["half_width"]
         # Disks: w^p is a Gaussian of variance sig2 = b^2 / (2 p ln2); averaged over a disk of
         # radius a (second moment a^2 / 4 per axis) it is (sig2 / sige2) exp(-d^2 / (2 sige2)).
-        sig2 = b2[:k] / (2.0 * p * _LN2)
-        sige2 = sig2 + 0.25 * self.follower_disk_radius_m ** 2
-        log_g = np.log(sig2 / sige2)
-        log_g -= d2[:k] / (2.0 * sige2)
+        # Body: drag (p = 2) averaged over its area: (sig2 / sige2)^(1/2) exp(-d^2 / (4 sige2))
+        # with sig2 = b^2 / (4 ln2). Rows: the disks, then the body (per-row constants).
+        div, add, scale = self._area_columns(k)
+        sig2 = b2 / div
+        sige2 = sig2 + add
+        ratio = sig2 / sige2
+        spread = np.divide(d2, np.multiply(sige2, scale, out=sige2), out=sige2)
+        w = np.empty(d2.shape)  # (P, n): the wake speed each disk and the body take in
+        log_g = np.log(ratio[:k])
+        log_g -= spread[:k]
         log_g /= p
-        w_disk = centre[:k] * np.exp(log_g, out=log_g)
-        # Body: drag (p = 2) averaged over its area.
-        sig2b = b2[k] / (4.0 * _LN2)
-        sige2b = sig2b + 0.25 * self.body_radius_m ** 2
-        w_body = centre[k] * np.sqrt(sig2b / sige2b) * np.exp(-d2[k] / (4.0 * sige2b))
+        np.multiply(centre[:k], np.exp(log_g, out=log_g), out=w[:k])
+        w_body = np.multiply(centre[k], np.sqrt(ratio[k]), out=w[k])
+        w_body *= np.exp(np.negative(spread[k]))
         if _fmin(depth) < 0.0:  # nothing above the rotors (fmin: NaN aside, as depth < 0)
             above = depth < 0.0
-            taper = np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
-            w_disk *= taper[:k]
-            w_body *= taper[k]
-        rho = self.air_density_kgpm3
-        axial = np.empty(d2.shape)
-        f_disk = _ingest_law(w_disk, v_axial, p, axial[:k])
-        f_disk *= self._disk_coeff(follower.mass_kg)
-        f_body = _ingest_law(w_body, v_axial, 2.0, axial[k])
-        f_body *= 0.5 * self.body_drag_coeff * rho * self.body_area_m2
+            w *= np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
+        axial = _ingest_laws(w, v_axial, p, k)
+        axial *= self._force_coeff(follower.mass_kg, k)
         return axial
 
-    def _disk_coeff(self, mass_kg: np.ndarray) -> np.ndarray | float:
-        """``c rho A v_hf^(2 - p)`` of each follower (v_hf: its own hover-induced velocity, from
-        its mass); cached for the same mass array (a world passes the same one every step)."""
-        if mass_kg is self._coeff_key:
+    def _area_columns(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(k + 1, 1) columns of :meth:`_axial`'s per-row constants (cached): sig2's divisor
+        ``2 p ln2`` (the disks) or ``4 ln2`` (the body), the area's second moment ``a^2 / 4``,
+        and the exponent's factor 2 or 4."""
+        key = (k, self.ingest_exponent, self.follower_disk_radius_m, self.body_radius_m)
+        if self._area_key != key:
+            p = self.ingest_exponent
+            cols = np.empty((3, k + 1, 1))
+            cols[0], cols[0, k] = 2.0 * p * _LN2, 4.0 * _LN2
+            cols[1], cols[1, k] = 0.25 * self.follower_disk_radius_m ** 2, \
+                0.25 * self.body_radius_m ** 2
+            cols[2], cols[2, k] = 2.0, 4.0
+            cols.flags.writeable = False
+            self._area_key, self._area_cols = key, tuple(cols)
+        return self._area_cols
+
+    def _force_coeff(self, mass_kg: np.ndarray, k: int) -> np.ndarray:
+        """(k + 1, n) the force per unit of the ingest law, per disk ``c rho A v_hf^(2 - p)``
+        (v_hf: the follower's own hover-induced velocity, from its mass) and for the body
+        ``rho C_d A_b / 2``; cached for the same mass array (a world passes the same one every
+        step)."""
+        if mass_kg is self._coeff_key and self._coeff.shape[0] == k + 1:
             return self._coeff
         rho, area, p = self.air_density_kgpm3, self.follower_disk_area_m2, self.ingest_exponent
-        coeff = self.ingest_coeff * rho * area
+        mass = np.asarray(mass_kg, dtype=float)
+        coeff = np.empty((k + 1, mass.shape[0]))
+        disk = self.ingest_coeff * rho * area
         if p != 2.0:
-            mass = np.asarray(mass_kg, dtype=float)
-            coeff = coeff * (mass * self.gravity_mps2
-                             / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
+            disk = disk * (mass * self.gravity_mps2
+                           / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
+        coeff[:k] = disk
+        coeff[k] = 0.5 * self.body_drag_coeff * rho * self.body_area_m2
+        coeff.flags.writeable = False
         self._coeff_key, self._coeff = mass_kg, coeff
         return coeff
 
@@ -693,6 +719,28 @@ def _ingest_law(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float,
     own = np.abs(v_axial_mps)
     np.power(own, p, out=own)
     out += np.copysign(own, v_axial_mps, out=own)
+    return out
+
+
+def _ingest_laws(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float, k: int) -> np.ndarray:
+    """:func:`_ingest_law` on rows ``w_mps`` (k + 1, n): the first k (the disks) with ``p``,
+    the last (the body) with 2 (the operations they share done once)."""
+    if p == 1.0 or p == 2.0:
+        out = np.empty(w_mps.shape)
+        _ingest_law(w_mps[:k], v_axial_mps, p, out[:k])
+        _ingest_law(w_mps[k], v_axial_mps, 2.0, out[k])
+        return out
+    rel = w_mps - v_axial_mps
+    out = np.abs(rel)
+    own = np.abs(v_axial_mps)
+    # The body's: rel |rel| + v |v|.
+    body = np.multiply(rel[k], out[k], out=out[k])
+    body += v_axial_mps * own
+    # The disks': sign(rel) |rel|^p + sign(v) |v|^p.
+    disks = np.power(out[:k], p, out=out[:k])
+    np.copysign(disks, rel[:k], out=disks)
+    np.power(own, p, out=own)
+    disks += np.copysign(own, v_axial_mps, out=own)
     return out
 
 
