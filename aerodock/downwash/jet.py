@@ -341,12 +341,11 @@ class RoundJetField:
             tau = self.turb_time_ratio * half_width / np.maximum(centre, 1e-6)
             self._bar_noise = self._ou_step(self._bar_noise, step, tau)
         noise = self._bar_noise
-        R = leader.R  # noqa: N806
         along = 0.5 * self.bar_turb_vertical * noise[0]
         along += 1.0
         along *= speed
         rel = axis * along
-        lateral = _lateral(R, noise[1:3], self.bar_turb_lateral * speed)
+        lateral = _lateral(lead[5], noise[1:3], self.bar_turb_lateral * speed)
         rel += lateral[0]
         rel += lateral[1]
         rel -= np.asarray(bar_v_mps, dtype=float).T
@@ -423,8 +422,10 @@ class RoundJetField:
         """The parts of the wake that depend on the leader only, component-major: the axis (body
         z) (3, n), the jet's momentum speed ``sqrt(2 ln2 T / (rho pi))`` (so that
         ``w_c = it / b``) (n,), the same floored for divisions, the leader's velocity across the
-        axis (3, n) and position (3, n)."""
-        axis = np.array(leader.R[:, :, 2].T, dtype=float, order="C")
+        axis (3, n) and position (3, n), and its three body axes (3, 3, n)."""
+        # The leader's body axes, component-major (3 axes, 3, n): x and y carry the gusts.
+        frame = np.ascontiguousarray(np.asarray(leader.R, dtype=float).transpose(2, 1, 0))
+        axis = frame[2]
         thrust = np.maximum(np.asarray(leader.thrust_n, dtype=float), 0.0)
         jet = np.sqrt(thrust * (2.0 * _LN2 / (self.air_density_kgpm3 * np.pi)))
         lv = np.ascontiguousarray(np.asarray(leader.v, dtype=float).T)
@@ -434,13 +435,13 @@ class RoundJetField:
         v_perp = np.multiply(along, axis, out=prod)
         np.subtract(lv, v_perp, out=v_perp)
         position = np.ascontiguousarray(np.asarray(leader.p, dtype=float).T)
-        return axis, jet, np.maximum(jet, 1e-6), v_perp, position
+        return axis, jet, np.maximum(jet, 1e-6), v_perp, position, frame
 
     def _depth_terms(self, lead: tuple, rel: np.ndarray) -> tuple[np.ndarray, ...]:
         """For points at ``rel`` (3, ..., n) from the leader (overwritten): depth along the
         axis, half-width, centreline speed (..., n) and radial vector from the (skewed) wake
         centre (3, ..., n)."""
-        axis, jet, jet_min, v_perp, _ = lead
+        axis, jet, jet_min, v_perp = lead[:4]
         shape = (3,) + (1,) * (rel.ndim - 2) + (rel.shape[-1],)
         axis_b, v_perp_b = axis.reshape(shape), v_perp.reshape(shape)
         prod = rel * axis_b
@@ -626,7 +627,7 @@ class RoundJetField:
         gust = None
         if noise is not None and self.turb_lateral:
             # One lateral process pushes every disk and the body: R e1 n_1 + R e2 n_2.
-            lateral = _lateral(leader.R, noise[0][1:3])
+            lateral = _lateral(lead[5], noise[0][1:3])
             gust = np.add(lateral[0], lateral[1], out=lateral[0])
             gust *= self.turb_lateral
         if not split and not want_torque:
@@ -762,12 +763,13 @@ def _torque_arms(offsets: np.ndarray) -> np.ndarray:
     return arms
 
 
-def _lateral(rot: np.ndarray, noise: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
-    """(2, 3, n) ``R e1 (s n_1)`` and ``R e2 (s n_2)`` for rotations (n, 3, 3) and lateral
-    processes ``noise`` (2, n) (``s``: a scale (n,), or none), component-major."""
+def _lateral(frame: np.ndarray, noise: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """(2, 3, n) ``R e1 (s n_1)`` and ``R e2 (s n_2)`` for the body axes ``frame`` (3, 3, n) of
+    :meth:`RoundJetField._leader_wake` and lateral processes ``noise`` (2, n) (``s``: a scale
+    (n,), or none), component-major."""
     if scale is not None:
         noise = noise * scale
-    return np.multiply(rot[:, :, 0:2].transpose(2, 1, 0), noise[:, None, :])
+    return np.multiply(frame[0:2], noise[:, None, :])
 
 
 def _fmin(values: np.ndarray) -> float:
