@@ -163,8 +163,9 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     # The heading the external source reports (the motion capture's, as late).
     latency = params.latency_steps
     att = state.history[(state.step_index - latency) % (latency + 1)]
-    rot_ext = np.concatenate([att[2], att[5]])
-    yaw_ext = np.arctan2(rot_ext[:, 1, 0], rot_ext[:, 0, 0])
+    yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
+    np.arctan2(att[2][:, 1, 0], att[2][:, 0, 0], out=yaw_ext[:n])
+    np.arctan2(att[5][:, 1, 0], att[5][:, 0, 0], out=yaw_ext[n:])
     ims.attitude = estimate_step(ims.attitude, gyro_t, ims.accel_t, ims.nav_accel_mps2, yaw_ext,
                                  params.imu.estimator, params.dt_s)
     ims.gyro_radps = gyro_t.T

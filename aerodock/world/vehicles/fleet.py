@@ -129,6 +129,7 @@ class PointMassFleet:
         state.p[rows] = old.p[rows]
         state.v[rows] = old.v[rows]
         state.rpy[rows] = old.rpy[rows]
+        state.__dict__.pop("R", None)  # its rotation, if computed, was of the old angles
         np.divide(old.body.mass_kg[rows] * self.params.gravity_mps2, old.thrust_gain[rows],
                   out=state.thrust_cmd_state_n[rows])
         return state

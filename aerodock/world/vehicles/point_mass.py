@@ -9,6 +9,7 @@ bias that exists with or without a leader, like a mis-estimated hover throttle).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -72,9 +73,10 @@ class VehicleState:
         """Batch size."""
         return int(self.p.shape[0])
 
-    @property
+    @cached_property
     def R(self) -> np.ndarray:  # noqa: N802 - the rotation matrix is R by convention
-        """(n, 3, 3) body-to-world rotation."""
+        """(n, 3, 3) body-to-world rotation (computed once per state: states are never
+        modified in place, and a step reads it twice)."""
         return rpy_to_rotmat(self.rpy)
 
     @property
