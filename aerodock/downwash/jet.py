@@ -226,6 +226,8 @@ class RoundJetField:
         out = copy.copy(self)  # the parameters and the geometry caches are shared
         out._rng = rng
         out._set_processes(self._processes[:, rows])
+        if self._coeff_key is not None:  # the force coefficients of these trials' masses
+            out._coeff_key, out._coeff = self._coeff_key[rows], self._coeff[:, rows]
         out._bar_noise = self._bar_noise[:, rows]
         # Kept for the rest of one physics step only (keyed by the step's objects).
         out._lead_key = out._lead_wake = None

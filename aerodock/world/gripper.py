@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum
-from functools import cached_property
 
 import numpy as np
 
@@ -107,20 +106,6 @@ class GripperState:
         """(n,) bool."""
         return self.gate == GateState.CAPTURED
 
-    @cached_property
-    def capture(self) -> tuple[np.ndarray, bool]:
-        """(captured (n,) bool, read-only; whether any is): computed once per state (states
-        are never modified in place), read by every physics step."""
-        captured = self.gate == _CAPTURED
-        captured.flags.writeable = False
-        return captured, bool(captured.any())
-
-    @cached_property
-    def idle(self) -> bool:
-        """Every gate open and no servo waiting to start (start times NaN or never): a step in
-        which no trigger fires changes nothing."""
-        return bool((self.gate == _OPEN).all() and not (self.servo_start_s < np.inf).any())
-
 
 def calibrated_gripper(n: int, params: GripperParams, rng: np.random.Generator) -> GripperState:
     """Grippers after the start-of-flight calibration of the strain gauge's resting bias."""
@@ -194,6 +179,19 @@ def contact_in_gripper(
 
 
 
+def gripper_idle(state: GripperState) -> bool:
+    """Every gate open and no servo waiting to start (start times NaN or never): a step in which
+    no trigger fires changes nothing (see :func:`step_is_idle`)."""
+    return bool((state.gate == _OPEN).all() and not (state.servo_start_s < np.inf).any())
+
+
+def step_is_idle(idle: bool, sample_sensor: bool, close_command: np.ndarray,
+                 params: GripperParams) -> bool:
+    """Whether :func:`step_gripper` would return its state unchanged without drawing: an
+    ``idle`` gripper (:func:`gripper_idle`) between sensor samples with no active command."""
+    return idle and not sample_sensor and not (_armed_any(params.active) and close_command.any())
+
+
 def step_gripper(
     state: GripperState,
     t_s: float,
@@ -216,9 +214,6 @@ def step_gripper(
         params: gripper constants.
         rng: noise source.
     """
-    if not sample_sensor and state.idle and not (_armed_any(params.active)
-                                                 and close_command.any()):
-        return state  # no trigger can fire and no servo is waiting or closing
     reading = state.reading_n
     open_ = state.gate == _OPEN
     untriggered = open_ & np.isnan(state.servo_start_s)

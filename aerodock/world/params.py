@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import cached_property
 
 import numpy as np
 
@@ -120,10 +119,9 @@ class WorldParams:
             latency_steps=int(round(cfg.mocap.latency_s / dt_s)),
         )
 
-    @cached_property
+    @property
     def rigid(self) -> bool:
-        """Rigid-body vehicles (attitude, rotors, torques) rather than point masses (read by
-        every term of every step: cached)."""
+        """Rigid-body vehicles (attitude, rotors, torques) rather than point masses."""
         return self.fleet.has_torque
 
     @property

@@ -17,7 +17,7 @@ import numpy as np
 from aerodock.downwash import BodyState, DownwashField
 from aerodock.rng import TrialRNG
 from aerodock.rows import pair_rows, take_rows
-from aerodock.world.gripper import GripperState
+from aerodock.world.gripper import _CAPTURED, GripperState, gripper_idle
 from aerodock.world.imu import ImuState
 from aerodock.world.platform import BarState
 from aerodock.world.torque_sensing import TorqueLog, TorqueReading
@@ -106,9 +106,6 @@ class WorldState:
     imu: ImuState | None = None
     torque_reading: TorqueReading | None = None
     steps_at_last_torque: int = 0
-    # The vehicles' true constants per half, for the body they are of (begin_step: the frame
-    # passes the same arrays every step, which the field's caches key on).
-    body_halves: tuple | None = None
     # The 2n batch and its halves (see the module docstring).
     _both: Any = None
     _lead: Any = None
@@ -151,6 +148,31 @@ class WorldState:
             self._split()
         self._fol, self._both = value, None
 
+    def body_halves(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The vehicles' true masses: the leaders' (n,), the followers' (n,) and the followers'
+        rows (n, 3), the same arrays every step for the same body (the field's caches key on
+        them)."""
+        body = self.both.body
+        cached = self.__dict__.get("_body_halves")  # not a field: not state, a view of it
+        if cached is None or cached[0] is not body:
+            n, mass = self.n, body.mass_kg
+            cached = self.__dict__["_body_halves"] = (body, mass[:n], mass[n:],
+                                                      body.mass_rows_kg[n:])
+        return cached[1:]
+
+    def gripper_flags(self) -> tuple[np.ndarray, bool, bool]:
+        """The gripper's (captured (n,) bool, read-only; any captured; idle, see
+        :func:`~aerodock.world.gripper.gripper_idle`), computed once per gripper state (states
+        are never modified in place) and read by every physics step."""
+        gripper = self.gripper
+        cached = self.__dict__.get("_gripper_flags")  # not a field: not state, a view of it
+        if cached is None or cached[0] is not gripper:
+            captured = gripper.gate == _CAPTURED
+            captured.flags.writeable = False
+            cached = self.__dict__["_gripper_flags"] = (
+                gripper, captured, bool(captured.any()), gripper_idle(gripper))
+        return cached[1:]
+
     def _split(self) -> None:
         if self._both is not None:
             self._lead, self._fol = split_state(self.fleet, self._both, self.n)
@@ -168,7 +190,7 @@ class WorldState:
             raise ValueError("a world whose torques are being logged cannot be split into trials")
         n, rows = self.n, np.asarray(rows, dtype=np.int64)
         own = {"n", "fleet", "rng", "field", "leader_fixed", "constants", "imu", "torque_log",
-               "body_halves", "_both", "_lead", "_fol"}
+               "_both", "_lead", "_fol"}
         taken = {f.name: take_rows(getattr(self, f.name), rows) for f in fields(self)
                  if f.name not in own}
         out = WorldState(n=int(rows.size), fleet=self.fleet, rng=rng, field=field,

@@ -59,12 +59,8 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     rot, pos, vel = both.R, both.p, both.v
     thrust = both.thrust_n
     body = both.body
-    halves = state.body_halves
-    if halves is None or halves[0] is not body:  # the same arrays every step of this body
-        mass = body.mass_kg
-        halves = state.body_halves = (body, mass[:n], mass[n:], body.mass_rows_kg[n:])
-    _, lead_mass, fol_mass, fol_mass_rows = halves
-    captured, any_captured = state.gripper.capture
+    lead_mass, fol_mass, fol_mass_rows = state.body_halves()
+    captured, any_captured, _ = state.gripper_flags()
     bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(state.bar.yaw_rad, out=bar_axis[0])
     np.sin(state.bar.yaw_rad, out=bar_axis[1])

@@ -15,7 +15,7 @@ import numpy as np
 from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
-from aerodock.world.gripper import contact_in_gripper, step_gripper
+from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
 from aerodock.world.imu import filter_sample
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
@@ -251,6 +251,8 @@ def gripper(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     the servo's latency and travel, the gate. Random draws: the strain gauge's noise."""
     gp, t, dt = params.gripper, state.t_s, params.dt_s
     sample = int(t * gp.sensor_rate_hz + 1e-9) != int((t - dt) * gp.sensor_rate_hz + 1e-9)
+    if step_is_idle(state.gripper_flags()[2], sample, frame.close_command, gp):
+        return  # no trigger can fire and no servo is waiting or closing: nothing changes
     state.gripper = step_gripper(state.gripper, t, frame.contact_n, frame.inside, sample,
                                  frame.close_command, gp, state.rng)
     if sample:  # what the follower knows of a touch (its labels' mask)
