@@ -267,7 +267,7 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_t: np.ndar
     Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
     broadcast would call the inner loop once per vehicle)."""
     f = omega * omega  # rotor_thrusts_n, rotor-major
-    f *= params.thrust_coeff * thrust_gain
+    f *= _thrust_coeffs(params.thrust_coeff, thrust_gain)
     # Each rotor's share in one broadcast (4, 3, n), then summed over the rotors in order.
     share = np.multiply(params.rotor_torque_map[:, :, None], f[:, None, :])
     torque = share[0]
@@ -316,6 +316,18 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_t: np.ndar
     else:
         force[:2] = 0.0
     return force, torque
+
+
+def _thrust_coeffs(thrust_coeff: float, thrust_gain: np.ndarray) -> np.ndarray:
+    """(n,) each vehicle's true k_T, ``thrust_coeff * thrust_gain`` (the last one kept: a step
+    asks twice with the same gain array, which states carry over unchanged)."""
+    last = _THRUST_COEFFS
+    if last[0] is not thrust_gain or last[1] != thrust_coeff:
+        last[:] = thrust_gain, thrust_coeff, thrust_coeff * thrust_gain
+    return last[2]
+
+
+_THRUST_COEFFS: list = [None, None, None]
 
 
 def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray | float, np.ndarray]:
@@ -423,7 +435,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     omega_new *= alpha
     omega_new += omega
     f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
-    f_new *= params.thrust_coeff * state.thrust_gain
+    f_new *= _thrust_coeffs(params.thrust_coeff, state.thrust_gain)
     thrust_new = f_new[0] + f_new[1]
     thrust_new += f_new[2]
     thrust_new += f_new[3]
