@@ -74,8 +74,8 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
     contact, inside, up = contact_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
                                              params.gripper,
                                              cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
-    if contact is None:  # no bar touches an arm: no force (the accumulators, sums onto +0,
-        # hold no -0 that adding a zero push would turn into +0)
+    if contact is None:  # no bar touches an arm: its zero push would change no number (the
+        # accumulators, sums onto +0, hold no -0 for it to turn into +0)
         frame.contact_n, frame.inside = np.zeros(n), inside
         return
     if frame.any_captured:
