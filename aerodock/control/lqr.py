@@ -121,8 +121,9 @@ def lqr_command(
     # over the 7 states written out in order from 0.0, as numpy's sum(-1) adds them.
     if k.ndim == 2:  # one gain: input-major (4, n) rows, one contiguous row per state
         # Every product k_ij e_j (4, 7, n) at once, then summed over j from 0.0 in order (an
-        # outer axis: added row by row, as the loop over j did).
-        prod = np.multiply(k[:, :, None], err.T[None, :, :])
+        # outer axis: added row by row, as the loop over j did). The errors made contiguous
+        # first: on err.T's strided rows numpy iterates a few elements at a time.
+        prod = np.multiply(k[:, :, None], np.ascontiguousarray(err.T))
         u = np.add.reduce(prod, axis=1, initial=0.0).T
     else:
         prod = k * err[:, None, :]
