@@ -396,8 +396,10 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     np.copyto(w_t, state.w.T)
     w5[3:] = w5[:2]
     omega_t = np.ascontiguousarray(omega.T)
-    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body.T, w_t, params,
+    # R^T v, component-major: the rotor drag reads its rows (strided, numpy would iterate a
+    # broadcast over them a few elements at a time).
+    v_body_t = np.ascontiguousarray(np.matmul(v[:, None, :], rot)[:, 0].T)
+    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body_t, w_t, params,
                                         body.torque_gain)
     if ext_torque_nm is not None:
         torque += np.asarray(ext_torque_nm, dtype=float).T
