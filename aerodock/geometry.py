@@ -50,10 +50,23 @@ def _rotmat_zyx(cr: np.ndarray, sr: np.ndarray, cp: np.ndarray, sp: np.ndarray, 
 
 def rotmat_to_euler(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rotation matrices ``S + (3, 3)`` to ZYX Euler angles (roll, pitch, yaw), radians."""
-    roll = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
-    pitch = -np.arcsin(np.clip(rot[..., 2, 0], -1.0, 1.0))
-    yaw = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
-    return roll, pitch, yaw
+    rpy = rotmat_to_rpy(rot)
+    return rpy[..., 0], rpy[..., 1], rpy[..., 2]
+
+
+def rotmat_to_rpy(rot: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``S + (3, 3)`` to ZYX Euler angles ``S + (3,)`` (roll, pitch, yaw),
+    radians: :func:`rotmat_to_euler` stacked on the last axis."""
+    rot = np.asarray(rot, dtype=float)
+    shape = rot.shape[:-1]
+    rot = rot.reshape(-1, 3, 3)  # a single rotation too (its angles' out= are rows, not scalars)
+    rpy = np.empty((rot.shape[0], 3))
+    np.arctan2(rot[:, 2, 1], rot[:, 2, 2], out=rpy[:, 0])
+    # -arcsin of the entry clipped to [-1, 1] (np.clip's numbers, without its wrapper's cost)
+    sin_pitch = np.minimum(np.maximum(rot[:, 2, 0], -1.0), 1.0)
+    np.negative(np.arcsin(sin_pitch, out=sin_pitch), out=rpy[:, 1])
+    np.arctan2(rot[:, 1, 0], rot[:, 0, 0], out=rpy[:, 2])
+    return rpy.reshape(shape)
 
 
 def quat_to_rotmat(quat_wxyz: np.ndarray) -> np.ndarray:

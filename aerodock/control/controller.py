@@ -21,7 +21,7 @@ from aerodock.config.schema import VehicleSection
 from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
-from aerodock.control.inversion import accel_to_attitude_thrust, attitude_thrust_to_accel
+from aerodock.control.inversion import command_and_applied
 from aerodock.control.lqr import lqr_command, lqr_gain
 from aerodock.control.observer import BiasObserver
 from aerodock.geometry import rpy_to_rotmat
@@ -183,14 +183,15 @@ class PositionController:
         bias = self.observer.bias_mps2 if self.observer is not None else np.zeros((n, 3))
         if residual is not None:
             bias = bias + residual
-        ff = np.zeros((n, 3)) if feedforward_mps2 is None else feedforward_mps2
-        desired = accel - bias - ff
+        desired = accel - bias
+        if feedforward_mps2 is None:  # x - 0 is x, bit for bit: nothing to subtract
+            ff = np.zeros((n, 3))
+        else:
+            ff = feedforward_mps2
+            desired -= ff
         p = self.params
-        roll, pitch, thrust = accel_to_attitude_thrust(
-            desired, rpy_meas[:, 2], p.mass_kg, p.gravity_mps2, p.tilt_max_rad, p.thrust_max_n
-        )
-        applied = attitude_thrust_to_accel(roll, pitch, rpy_meas[:, 2], thrust, p.mass_kg,
-                                           p.gravity_mps2)
+        roll, pitch, thrust, applied = command_and_applied(
+            desired, rpy_meas[:, 2], p.mass_kg, p.gravity_mps2, p.tilt_max_rad, p.thrust_max_n)
         if freyja:  # Freyja hands its estimator the command: by default the learnt
             # feed-forward is counted as known (the estimator sees what the model left); with
             # freyja_estimator_input = "command", the whole command (see docs/control.md)
@@ -200,8 +201,9 @@ class PositionController:
         self._last_input = applied + ff if residual is None else applied + ff + residual
         if self.accel_observer is not None:
             self.accel_observer.commanded(thrust, ff)
-        yaw_rate = np.clip(yaw_rate, -self.yaw_rate_max, self.yaw_rate_max)
-        saturated = np.abs(applied - desired).max(axis=1) > 1e-6
+        # np.clip's numbers, without its wrapper's cost
+        yaw_rate = np.minimum(np.maximum(yaw_rate, -self.yaw_rate_max), self.yaw_rate_max)
+        saturated = np.maximum.reduce(np.abs(applied - desired), axis=1) > 1e-6
         out = ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
                             saturated)
         if self.hold_ticks > 1:

@@ -120,11 +120,11 @@ def lqr_command(
     # Broadcast-and-sum (not BLAS): a trial's result does not depend on the batch size. The sum
     # over the 7 states written out in order from 0.0, as numpy's sum(-1) adds them.
     if k.ndim == 2:  # one gain: input-major (4, n) rows, one contiguous row per state
-        err_t = np.ascontiguousarray(err.T)
-        u = np.add(0.0, k[:, 0:1] * err_t[0])
-        for j in range(1, N_STATE):
-            u += k[:, j:j + 1] * err_t[j]
-        u = u.T
+        # Every product k_ij e_j (4, 7, n) at once, then summed over j from 0.0 in order (an
+        # outer axis: added row by row, as the loop over j did). The errors made contiguous
+        # first: on err.T's strided rows numpy iterates a few elements at a time.
+        prod = np.multiply(k[:, :, None], np.ascontiguousarray(err.T))
+        u = np.add.reduce(prod, axis=1, initial=0.0).T
     else:
         prod = k * err[:, None, :]
         u = np.add(0.0, prod[:, :, 0])

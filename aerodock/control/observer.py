@@ -142,17 +142,21 @@ class BiasObserver:
         """
         # Explicit column sums instead of BLAS matmul: each trial's numbers then do not depend
         # on the batch size (BLAS blocking changes rounding with the shape), and it is faster.
+        # The three rows of [p, v, b] at once, (3, n, 3): x_i = f_i0 s_0 + f_i1 s_1 + f_i2 s_2
+        # + g_i u, added in that order as the written-out sums were.
         f, g, k = self._f, self._g, self._next_gain()
         s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
         u = np.asarray(u_applied_mps2, dtype=float)
-        x0 = f[0, 0] * s0 + f[0, 1] * s1 + f[0, 2] * s2 + g[0] * u
-        x1 = f[1, 0] * s0 + f[1, 1] * s1 + f[1, 2] * s2 + g[1] * u
-        x2 = f[2, 0] * s0 + f[2, 1] * s1 + f[2, 2] * s2 + g[2] * u
-        ip, iv = p_meas - x0, v_meas - x1
+        col = f[:, :, None, None]
+        x = col[:, 0] * s0
+        x += col[:, 1] * s1
+        x += col[:, 2] * s2
+        x += g[:, None, None] * u
+        ip, iv = p_meas - x[0], v_meas - x[1]
+        x += k[:, 0, None, None] * ip
+        x += k[:, 1, None, None] * iv
         state = np.empty_like(self.state)
-        state[..., 0] = x0 + k[0, 0] * ip + k[0, 1] * iv
-        state[..., 1] = x1 + k[1, 0] * ip + k[1, 1] * iv
-        state[..., 2] = x2 + k[2, 0] * ip + k[2, 1] * iv
+        np.copyto(state.transpose(2, 0, 1), x)
         self.state = state
 
     def _next_gain(self) -> np.ndarray:

@@ -186,6 +186,7 @@ class RoundJetField:
         # the two lateral ones), each disk's own axial one (k, n), and the bar's (3, n).
         self._common = np.zeros((_SHARED_ROWS, 0))
         self._own = np.zeros((0, 0))
+        self._processes = np.zeros((_SHARED_ROWS, 0))  # both, stacked; the two are its views
         self._offsets_obj: np.ndarray | None = None
         self._points: dict[int, tuple] = {}  # the disks' and the body's centres, by offsets
         self._planar_key: tuple | None = None  # what _planar_scale_col was computed for
@@ -200,6 +201,12 @@ class RoundJetField:
         # bar_force_n() call of the same physics step (same leader object), then dropped.
         self._lead_key: BodyState | None = None
         self._lead_wake: tuple | None = None
+        # The force coefficients of the last follower mass array (see _force_coeff), and the
+        # per-row constants of _axial (see _area_columns).
+        self._coeff_key: np.ndarray | None = None
+        self._coeff = np.zeros((0, 0))
+        self._area_key: tuple | None = None
+        self._area_cols: tuple = ()
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -218,8 +225,9 @@ class RoundJetField:
         ``rng`` (:class:`~aerodock.downwash.base.SupportsTakeRows`)."""
         out = copy.copy(self)  # the parameters and the geometry caches are shared
         out._rng = rng
-        out._common = self._common[:, rows]
-        out._own = self._own[:, rows]
+        out._set_processes(self._processes[:, rows])
+        if self._coeff_key is not None:  # the force coefficients of these trials' masses
+            out._coeff_key, out._coeff = self._coeff_key[rows], self._coeff[:, rows]
         out._bar_noise = self._bar_noise[:, rows]
         # Kept for the rest of one physics step only (keyed by the step's objects).
         out._lead_key = out._lead_wake = None
@@ -247,7 +255,7 @@ class RoundJetField:
         off the axis, pushing the disks nearer the axis down (the paper's oscillatory behaviour
         near the wake's edge).
         """
-        offsets = np.asarray(rotor_offsets_body_m, dtype=float).reshape(-1, 3)
+        offsets = _offsets(rotor_offsets_body_m)
         force, torque, _ = self._step(leader, follower, offsets, dt, True)
         return np.ascontiguousarray(force.T), torque
 
@@ -279,7 +287,8 @@ class RoundJetField:
         offsets = self.rotor_offsets_body_m
         geo = self._geometry(lead, follower, offsets)
         tau, share = self._turbulence_time_and_share(geo, offsets)
-        f_disk, f_body = self._axial(geo, follower, lead)
+        axial = self._axial(geo, follower, lead)
+        f_disk, f_body = axial[:geo["k"]], axial[geo["k"]]
         mass = np.asarray(follower.mass_kg, dtype=float)
         root = np.sqrt(share)
 
@@ -334,16 +343,13 @@ class RoundJetField:
             tau = self.turb_time_ratio * half_width / np.maximum(centre, 1e-6)
             self._bar_noise = self._ou_step(self._bar_noise, step, tau)
         noise = self._bar_noise
-        R = leader.R  # noqa: N806
         along = 0.5 * self.bar_turb_vertical * noise[0]
         along += 1.0
         along *= speed
         rel = axis * along
-        lateral = self.bar_turb_lateral * speed
-        work = np.array(R[:, :, 0].T, dtype=float, order="C")  # a copy, even for n = 1
-        rel += np.multiply(work, lateral * noise[1], out=work)
-        np.copyto(work, R[:, :, 1].T)
-        rel += np.multiply(work, lateral * noise[2], out=work)
+        lateral = _lateral(lead[5], noise[1:3], self.bar_turb_lateral * speed)
+        rel += lateral[0]
+        rel += lateral[1]
         rel -= np.asarray(bar_v_mps, dtype=float).T
         if bar_axis is not None:
             ba = np.ascontiguousarray(np.asarray(bar_axis, dtype=float).T)
@@ -364,8 +370,13 @@ class RoundJetField:
     # -- internals -----------------------------------------------------------------------------
     def _draw_follower_noise(self, n: int, k: int) -> None:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
-        self._common = np.array(draw[:_SHARED_ROWS], order="C")
-        self._own = np.array(draw[_SHARED_ROWS:], order="C")
+        self._set_processes(np.array(draw, order="C"))
+
+    def _set_processes(self, processes: np.ndarray) -> None:
+        """The follower's turbulence states, (3 + k, n): the shared ones, then each disk's own
+        (one array: a step advances them in one operation each)."""
+        self._processes = processes
+        self._common, self._own = processes[:_SHARED_ROWS], processes[_SHARED_ROWS:]
 
     def _step(self, leader: BodyState, follower: BodyState, offsets: np.ndarray, dt: float,
               want_torque: bool, split: bool = True,
@@ -385,10 +396,8 @@ class RoundJetField:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
         decay = np.exp(-dt / tau)
         innov = np.sqrt(1.0 - decay * decay)
-        self._common *= decay
-        self._common += draw[:_SHARED_ROWS] * innov
-        self._own *= decay
-        self._own += draw[_SHARED_ROWS:] * innov
+        self._processes *= decay  # the shared processes and the disks' own, (3 + k, n)
+        self._processes += draw * innov
         disks, torque, body = self._forces_from(geo, lead, leader, follower, offsets,
                                                 (self._common, self._own, share), want_torque,
                                                 split)
@@ -415,8 +424,10 @@ class RoundJetField:
         """The parts of the wake that depend on the leader only, component-major: the axis (body
         z) (3, n), the jet's momentum speed ``sqrt(2 ln2 T / (rho pi))`` (so that
         ``w_c = it / b``) (n,), the same floored for divisions, the leader's velocity across the
-        axis (3, n) and position (3, n)."""
-        axis = np.array(leader.R[:, :, 2].T, dtype=float, order="C")
+        axis (3, n) and position (3, n), and its three body axes (3, 3, n)."""
+        # The leader's body axes, component-major (3 axes, 3, n): x and y carry the gusts.
+        frame = np.ascontiguousarray(np.asarray(leader.R, dtype=float).transpose(2, 1, 0))
+        axis = frame[2]
         thrust = np.maximum(np.asarray(leader.thrust_n, dtype=float), 0.0)
         jet = np.sqrt(thrust * (2.0 * _LN2 / (self.air_density_kgpm3 * np.pi)))
         lv = np.ascontiguousarray(np.asarray(leader.v, dtype=float).T)
@@ -426,13 +437,13 @@ class RoundJetField:
         v_perp = np.multiply(along, axis, out=prod)
         np.subtract(lv, v_perp, out=v_perp)
         position = np.ascontiguousarray(np.asarray(leader.p, dtype=float).T)
-        return axis, jet, np.maximum(jet, 1e-6), v_perp, position
+        return axis, jet, np.maximum(jet, 1e-6), v_perp, position, frame
 
     def _depth_terms(self, lead: tuple, rel: np.ndarray) -> tuple[np.ndarray, ...]:
         """For points at ``rel`` (3, ..., n) from the leader (overwritten): depth along the
         axis, half-width, centreline speed (..., n) and radial vector from the (skewed) wake
         centre (3, ..., n)."""
-        axis, jet, jet_min, v_perp, _ = lead
+        axis, jet, jet_min, v_perp = lead[:4]
         shape = (3,) + (1,) * (rel.ndim - 2) + (rel.shape[-1],)
         axis_b, v_perp_b = axis.reshape(shape), v_perp.reshape(shape)
         prod = rel * axis_b
@@ -466,9 +477,8 @@ class RoundJetField:
         d2 /= half_width * half_width
         d2 *= -_LN2
         speed = centre * np.exp(d2, out=d2)
-        above = depth < 0.0
-        if above.any():  # nothing above the rotors
-            speed *= np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
+        if _fmin(depth) < 0.0:  # nothing above the rotors
+            speed *= np.where(depth < 0.0, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
         return axis, speed, half_width, centre
 
     def _geometry(self, lead: tuple, follower: BodyState, offsets: np.ndarray) -> dict:
@@ -484,9 +494,10 @@ class RoundJetField:
             cols = np.zeros((k + 1, 3))
             cols[:k] = offsets
             points = (offsets, cols[None, :, 0:1], cols[None, :, 1:2],
-                      cols[None, :, 2:3] if offsets[:, 2].any() else None)
+                      cols[None, :, 2:3] if offsets[:, 2].any() else None,
+                      _torque_arms(offsets))
             self._points = {id(offsets): points}
-        _, px, py, pz = points
+        _, px, py, pz, arms = points
         rel = np.multiply(rt[0][:, None, :], px, out=np.empty((3, k + 1, n)))
         rel += rt[1][:, None, :] * py
         if pz is not None:
@@ -498,10 +509,10 @@ class RoundJetField:
         d2 = r2[0] + r2[1]
         d2 += r2[2]
         return {"depth": depth, "half_width": half_width, "centre": centre, "radial": radial,
-                "d2": d2, "k": k, "rt": rt, "flat": pz is None}
+                "d2": d2, "k": k, "rt": rt, "flat": pz is None, "arms": arms}
 
-    def _axial(self, geo: dict, follower: BodyState, lead: tuple) -> tuple[np.ndarray, ...]:
-        """Mean axial force (N) on each disk (k, n) and on the body (n,)."""
+    def _axial(self, geo: dict, follower: BodyState, lead: tuple) -> np.ndarray:
+        """Mean axial force (N) on each disk and on the body, (P, n) (the body last)."""
         k = geo["k"]
         axis = lead[0]
         prod = np.asarray(follower.v, dtype=float).T * axis
@@ -512,33 +523,62 @@ class RoundJetField:
         b2 = geo["half_width"] * geo["half_width"]
         # Disks: w^p is a Gaussian of variance sig2 = b^2 / (2 p ln2); averaged over a disk of
         # radius a (second moment a^2 / 4 per axis) it is (sig2 / sige2) exp(-d^2 / (2 sige2)).
-        sig2 = b2[:k] / (2.0 * p * _LN2)
-        sige2 = sig2 + 0.25 * self.follower_disk_radius_m ** 2
-        log_g = np.log(sig2 / sige2)
-        log_g -= d2[:k] / (2.0 * sige2)
+        # Body: drag (p = 2) averaged over its area: (sig2 / sige2)^(1/2) exp(-d^2 / (4 sige2))
+        # with sig2 = b^2 / (4 ln2). Rows: the disks, then the body (per-row constants).
+        div, add, scale = self._area_columns(k)
+        sig2 = b2 / div
+        sige2 = sig2 + add
+        ratio = sig2 / sige2
+        spread = np.divide(d2, np.multiply(sige2, scale, out=sige2), out=sige2)
+        w = np.empty(d2.shape)  # (P, n): the wake speed each disk and the body take in
+        log_g = np.log(ratio[:k])
+        log_g -= spread[:k]
         log_g /= p
-        w_disk = centre[:k] * np.exp(log_g, out=log_g)
-        # Body: drag (p = 2) averaged over its area.
-        sig2b = b2[k] / (4.0 * _LN2)
-        sige2b = sig2b + 0.25 * self.body_radius_m ** 2
-        w_body = centre[k] * np.sqrt(sig2b / sige2b) * np.exp(-d2[k] / (4.0 * sige2b))
-        above = depth < 0.0
-        if above.any():  # nothing above the rotors
-            taper = np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
-            w_disk *= taper[:k]
-            w_body *= taper[k]
-        mass = np.asarray(follower.mass_kg, dtype=float)
-        rho = self.air_density_kgpm3
-        area = self.follower_disk_area_m2
-        coeff = self.ingest_coeff * rho * area
-        if p != 2.0:  # v_hf^(2 - p): the follower's own hover-induced velocity
-            coeff = coeff * (mass * self.gravity_mps2
-                             / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
-        f_disk = _ingest_law(w_disk, v_axial, p)
-        f_disk *= coeff
-        f_body = _ingest_law(w_body, v_axial, 2.0)
-        f_body *= 0.5 * self.body_drag_coeff * rho * self.body_area_m2
-        return f_disk, f_body
+        np.multiply(centre[:k], np.exp(log_g, out=log_g), out=w[:k])
+        w_body = np.multiply(centre[k], np.sqrt(ratio[k]), out=w[k])
+        w_body *= np.exp(np.negative(spread[k]))
+        if _fmin(depth) < 0.0:  # nothing above the rotors (fmin: NaN aside, as depth < 0)
+            above = depth < 0.0
+            w *= np.where(above, np.exp(-((depth / self.half_width0_m) ** 2)), 1.0)
+        axial = _ingest_laws(w, v_axial, p, k)
+        axial *= self._force_coeff(follower.mass_kg, k)
+        return axial
+
+    def _area_columns(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(k + 1, 1) columns of :meth:`_axial`'s per-row constants (cached): sig2's divisor
+        ``2 p ln2`` (the disks) or ``4 ln2`` (the body), the area's second moment ``a^2 / 4``,
+        and the exponent's factor 2 or 4."""
+        key = (k, self.ingest_exponent, self.follower_disk_radius_m, self.body_radius_m)
+        if self._area_key != key:
+            p = self.ingest_exponent
+            cols = np.empty((3, k + 1, 1))
+            cols[0], cols[0, k] = 2.0 * p * _LN2, 4.0 * _LN2
+            cols[1], cols[1, k] = 0.25 * self.follower_disk_radius_m ** 2, \
+                0.25 * self.body_radius_m ** 2
+            cols[2], cols[2, k] = 2.0, 4.0
+            cols.flags.writeable = False
+            self._area_key, self._area_cols = key, tuple(cols)
+        return self._area_cols
+
+    def _force_coeff(self, mass_kg: np.ndarray, k: int) -> np.ndarray:
+        """(k + 1, n) the force per unit of the ingest law, per disk ``c rho A v_hf^(2 - p)``
+        (v_hf: the follower's own hover-induced velocity, from its mass) and for the body
+        ``rho C_d A_b / 2``; cached for the same mass array (a world passes the same one every
+        step)."""
+        if mass_kg is self._coeff_key and self._coeff.shape[0] == k + 1:
+            return self._coeff
+        rho, area, p = self.air_density_kgpm3, self.follower_disk_area_m2, self.ingest_exponent
+        mass = np.asarray(mass_kg, dtype=float)
+        coeff = np.empty((k + 1, mass.shape[0]))
+        disk = self.ingest_coeff * rho * area
+        if p != 2.0:
+            disk = disk * (mass * self.gravity_mps2
+                           / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
+        coeff[:k] = disk
+        coeff[k] = 0.5 * self.body_drag_coeff * rho * self.body_area_m2
+        coeff.flags.writeable = False
+        self._coeff_key, self._coeff = mass_kg, coeff
+        return coeff
 
     def _turbulence_time_and_share(self, geo: dict,
                                    offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -566,10 +606,7 @@ class RoundJetField:
         (k, n), share (n,)) or None for the mean."""
         k = geo["k"]
         axis = lead[0]
-        f_disk, f_body = self._axial(geo, follower, lead)
-        axial = np.empty(geo["d2"].shape)  # (P, n)
-        axial[:k] = f_disk
-        axial[k] = f_body
+        axial = self._axial(geo, follower, lead)  # (P, n)
         if noise is None:
             along = axial
         else:
@@ -591,10 +628,9 @@ class RoundJetField:
             planar /= geo["half_width"]
         gust = None
         if noise is not None and self.turb_lateral:
-            # One lateral process pushes every disk and the body.
-            R = leader.R  # noqa: N806
-            gust = R[:, :, 0].T * noise[0][1]
-            gust += R[:, :, 1].T * noise[0][2]
+            # One lateral process pushes every disk and the body: R e1 n_1 + R e2 n_2.
+            lateral = _lateral(lead[5], noise[0][1:3])
+            gust = np.add(lateral[0], lateral[1], out=lateral[0])
             gust *= self.turb_lateral
         if not split and not want_torque:
             total = axis * along.sum(axis=0)
@@ -613,7 +649,7 @@ class RoundJetField:
         if gust is not None:
             force += gust[:, None, :] * np.abs(axial)
         disks = force[:, :k].sum(axis=1)
-        body = np.ascontiguousarray(force[:, k])
+        body = force[:, k]  # a view: its reader copies it
         if not want_torque:
             return disks, None, body
         # R^T F_k per disk (3, k, n), then sum_k r_k x (R^T F_k).
@@ -623,14 +659,25 @@ class RoundJetField:
         fb = prod[:, 0]
         fb += prod[:, 1]
         fb += prod[:, 2]
-        ox, oy, oz = (offsets[:, c:c + 1] for c in range(3))  # (k, 1)
         torque = np.empty((axis.shape[1], 3))
+        if geo["flat"]:
+            # Per disk (y_k f_z, x_k f_z, x_k f_y - y_k f_x), summed over the disks in order
+            # into the torque's columns; the second is minus that sum.
+            arms = geo["arms"]  # (4, k, 1): y, x, x, y
+            terms = np.empty((3,) + fb.shape[1:])
+            np.multiply(arms[0:2], fb[2], out=terms[0:2])
+            cross = np.multiply(arms[2:4], fb[1::-1])
+            np.subtract(cross[0], cross[1], out=terms[2])
+            torque_t = np.add.reduce(terms, axis=1, out=torque.T)
+            np.negative(torque_t[1], out=torque_t[1])
+            return disks, torque, body
+        ox, oy, oz = (offsets[:, c:c + 1] for c in range(3))  # (k, 1)
         torque[:, 0] = (oy * fb[2]).sum(axis=0)
         torque[:, 1] = -(ox * fb[2]).sum(axis=0)
         torque[:, 2] = (ox * fb[1] - oy * fb[0]).sum(axis=0)
-        if not geo["flat"]:  # disks out of the centre of mass's plane
-            torque[:, 0] -= (oz * fb[1]).sum(axis=0)
-            torque[:, 1] += (oz * fb[0]).sum(axis=0)
+        # disks out of the centre of mass's plane
+        torque[:, 0] -= (oz * fb[1]).sum(axis=0)
+        torque[:, 1] += (oz * fb[0]).sum(axis=0)
         return disks, torque, body
 
     def _planar_scale(self, k: int) -> np.ndarray:
@@ -654,16 +701,79 @@ class RoundJetField:
         return noise
 
 
-def _ingest_law(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float) -> np.ndarray:
+def _ingest_law(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float,
+                out: np.ndarray | None = None) -> np.ndarray:
     """``phi(w - v) - phi(-v)`` with ``phi(x) = sign(x) |x|^p``: the force of wake air of
     speed ``w`` on a disk moving at ``v`` along the axis, less that of its motion in still air
-    (the vehicle's own drag). Exactly ``w`` for ``p = 1``."""
+    (the vehicle's own drag). Exactly ``w`` for ``p = 1``. Written into ``out`` if given."""
     if p == 1.0:
-        return np.array(w_mps, dtype=float, copy=True)
+        if out is None:
+            return np.array(w_mps, dtype=float, copy=True)
+        np.copyto(out, w_mps)
+        return out
     rel = w_mps - v_axial_mps
     if p == 2.0:
-        return rel * np.abs(rel) + v_axial_mps * np.abs(v_axial_mps)
-    out = np.power(np.abs(rel), p, out=np.abs(rel))
+        out = np.multiply(rel, np.abs(rel), out=out)
+        out += v_axial_mps * np.abs(v_axial_mps)
+        return out
+    out = np.abs(rel, out=out)
+    np.power(out, p, out=out)
     np.copysign(out, rel, out=out)
-    out += np.copysign(np.power(np.abs(v_axial_mps), p), v_axial_mps)
+    own = np.abs(v_axial_mps)
+    np.power(own, p, out=own)
+    out += np.copysign(own, v_axial_mps, out=own)
     return out
+
+
+def _ingest_laws(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float, k: int) -> np.ndarray:
+    """:func:`_ingest_law` on rows ``w_mps`` (k + 1, n): the first k (the disks) with ``p``,
+    the last (the body) with 2 (the operations they share done once)."""
+    if p == 1.0 or p == 2.0:
+        out = np.empty(w_mps.shape)
+        _ingest_law(w_mps[:k], v_axial_mps, p, out[:k])
+        _ingest_law(w_mps[k], v_axial_mps, 2.0, out[k])
+        return out
+    rel = w_mps - v_axial_mps
+    out = np.abs(rel)
+    own = np.abs(v_axial_mps)
+    # The body's: rel |rel| + v |v|.
+    body = np.multiply(rel[k], out[k], out=out[k])
+    body += v_axial_mps * own
+    # The disks': sign(rel) |rel|^p + sign(v) |v|^p.
+    disks = np.power(out[:k], p, out=out[:k])
+    np.copysign(disks, rel[:k], out=disks)
+    np.power(own, p, out=own)
+    disks += np.copysign(own, v_axial_mps, out=own)
+    return out
+
+
+def _offsets(rotor_offsets_body_m: np.ndarray) -> np.ndarray:
+    """The disks' centres as a (k, 3) float array: the array itself when it is one (the
+    geometry's caches are keyed by the object)."""
+    offsets = rotor_offsets_body_m
+    if (isinstance(offsets, np.ndarray) and offsets.dtype == np.float64 and offsets.ndim == 2
+            and offsets.shape[1] == 3):
+        return offsets
+    return np.asarray(offsets, dtype=float).reshape(-1, 3)
+
+
+def _torque_arms(offsets: np.ndarray) -> np.ndarray:
+    """(4, k, 1) the disks' (y, x, x, y): the arms of the flat disks' torque."""
+    x, y = offsets[:, 0], offsets[:, 1]
+    arms = np.stack([y, x, x, y])[:, :, None]
+    arms.flags.writeable = False
+    return arms
+
+
+def _lateral(frame: np.ndarray, noise: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """(2, 3, n) ``R e1 (s n_1)`` and ``R e2 (s n_2)`` for the body axes ``frame`` (3, 3, n) of
+    :meth:`RoundJetField._leader_wake` and lateral processes ``noise`` (2, n) (``s``: a scale
+    (n,), or none), component-major."""
+    if scale is not None:
+        noise = noise * scale
+    return np.multiply(frame[0:2], noise[:, None, :])
+
+
+def _fmin(values: np.ndarray) -> float:
+    """The least element, NaN aside (``fmin``): "any element < x" in one reduction."""
+    return np.fmin.reduce(values, axis=None)

@@ -53,14 +53,22 @@ def estimate_step(rot_hat: np.ndarray, gyro_t: np.ndarray, accel_t: np.ndarray,
     # Gravity in the body, as the accelerometer sees it once the known acceleration is removed:
     # f = R^T (a - g e3), so -(f - R^T a) = g R^T e3.
     comp_body = np.matmul(accel_comp_world[:, None, :], rot_hat)[:, 0]  # R_hat^T a_comp
-    meas = comp_body.T - accel_t
-    norm = np.sqrt(meas[0] * meas[0] + meas[1] * meas[1] + meas[2] * meas[2])
+    # Both factors of the cross product meas x est with their first two rows repeated (5, m):
+    # (meas_y est_z - meas_z est_y, ...) is then two products of slices.
+    m = rot_hat.shape[0]
+    meas5, est5 = np.empty((5, m)), np.empty((5, m))
+    meas = np.subtract(comp_body.T, accel_t, out=meas5[:3])
+    sq = meas * meas
+    norm = np.add(sq[0], sq[1], out=sq[0])
+    norm += sq[2]
+    np.sqrt(norm, out=norm)
     meas /= np.maximum(norm, 1e-6)
-    est = rot_hat[:, 2, :].T  # R_hat^T e3: the estimate's down axis in the body, (3, m)
-    err = np.empty_like(meas)  # meas x est
-    err[0] = meas[1] * est[2] - meas[2] * est[1]
-    err[1] = meas[2] * est[0] - meas[0] * est[2]
-    err[2] = meas[0] * est[1] - meas[1] * est[0]
+    meas5[3:] = meas5[:2]
+    est = est5[:3]  # R_hat^T e3: the estimate's down axis in the body, (3, m)
+    np.copyto(est, rot_hat[:, 2, :].T)
+    est5[3:] = est5[:2]
+    err = meas5[1:4] * est5[2:5]  # meas x est
+    err -= meas5[2:5] * est5[1:4]
     omega = gyro_t + params.accel_gain_radps * err
     if params.heading_gain_radps:
         yaw_hat = np.arctan2(rot_hat[:, 1, 0], rot_hat[:, 0, 0])

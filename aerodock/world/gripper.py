@@ -132,6 +132,18 @@ def bar_in_gripper(
     The contact force pushes the bar along ``up`` and the follower along ``-up``. ``cos_sin``:
     ``(cos(bar_yaw_rad), sin(bar_yaw_rad))`` if the caller has them already.
     """
+    force, inside, up = contact_in_gripper(follower_p, follower_R, follower_v, bar_p, bar_v,
+                                           bar_yaw_rad, params, cos_sin)
+    return (np.zeros_like(inside, dtype=float) if force is None else force), inside, up
+
+
+def contact_in_gripper(
+    follower_p: np.ndarray, follower_R: np.ndarray, follower_v: np.ndarray,  # noqa: N803
+    bar_p: np.ndarray, bar_v: np.ndarray, bar_yaw_rad: np.ndarray, params: GripperParams,
+    cos_sin: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
+    """:func:`bar_in_gripper` with None for the force when no bar touches an arm (the usual
+    step: the caller then has nothing to add)."""
     up = np.negative(follower_R[:, :, 2])
     arm = up * params.mount_height_m
     arm += follower_p
@@ -159,12 +171,25 @@ def bar_in_gripper(
     penetration = params.bar_radius_m - height
     touching = in_mouth & (penetration > 0)
     if not touching.any():
-        return np.zeros_like(height), inside, up
+        return None, inside, up
     rate = -dot_rows(bar_v - follower_v, up)
     force = params.contact_stiffness_npm * penetration + params.contact_damping_nspm * rate
     force = np.where(touching, np.maximum(force, 0.0), 0.0)
     return force, inside, up
 
+
+
+def gripper_idle(state: GripperState) -> bool:
+    """Every gate open and no servo waiting to start (start times NaN or never): a step in which
+    no trigger fires changes nothing (see :func:`step_is_idle`)."""
+    return bool((state.gate == _OPEN).all() and not (state.servo_start_s < np.inf).any())
+
+
+def step_is_idle(idle: bool, sample_sensor: bool, close_command: np.ndarray,
+                 params: GripperParams) -> bool:
+    """Whether :func:`step_gripper` would return its state unchanged without drawing: an
+    ``idle`` gripper (:func:`gripper_idle`) between sensor samples with no active command."""
+    return idle and not sample_sensor and not (_armed_any(params.active) and close_command.any())
 
 
 def step_gripper(

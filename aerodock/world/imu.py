@@ -85,11 +85,13 @@ def filter_sample(state: FilterState, sample: np.ndarray, biquad: Biquad | None)
     if biquad is None:
         out = sample
     else:
-        out = biquad.b0 * sample + state.z1
+        forward = biquad.b0 * sample
+        out = forward + state.z1
         z1 = biquad.b1 * sample
         z1 -= biquad.a1 * out
         z1 += state.z2
-        z2 = biquad.b2 * sample
+        # b2 x: the low-pass's b2 is b0, whose product is at hand.
+        z2 = forward if biquad.b2 == biquad.b0 else biquad.b2 * sample
         z2 -= biquad.a2 * out
         state.z1, state.z2 = z1, z2
     if state.delay:

@@ -18,6 +18,8 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.geometry import dot_rows, norm_rows
 
+_min = np.minimum.reduce  # NaN if any element is NaN: "min >= x" is then False, as elementwise
+
 
 @dataclass(frozen=True)
 class PlatformParams:
@@ -115,12 +117,13 @@ def step_bar(
     free -= params.swing_damping * rel_v
     free[:, 2] += params.gravity_mps2
     # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
-    taut = dist >= length - 1e-6
     radial_v = dot_rows(rel_v, unit)
     tangential_v2 = dot_rows(rel_v, rel_v) - radial_v**2
     lam = dot_rows(unit, free - anchor_a)
     lam += tangential_v2 / length
-    lam = np.maximum(lam, 0.0) if taut.all() else np.where(taut, np.maximum(lam, 0.0), 0.0)
+    np.maximum(lam, 0.0, out=lam)
+    if not _min(dist) >= length - 1e-6:  # a slack cable somewhere (or a NaN): no tension there
+        lam = np.where(dist >= length - 1e-6, lam, 0.0)
     accel = free - lam[:, None] * unit
     cable_force = (mass_kg * lam)[:, None] * unit
     v = accel * dt_s
@@ -131,16 +134,17 @@ def step_bar(
     # sphere and keeps no radial velocity relative to the anchor.
     rel = p - anchor_p_next
     dist = norm_rows(rel)
-    tense = lam > 0
-    hold = (dist > length) | tense
-    if hold.any():
-        every = hold.all()  # the usual case: skip the selections
+    every_tense = _min(lam) > 0  # the usual case: every cable pulls, skip the selections
+    tense = None if every_tense else lam > 0
+    hold = None if every_tense else (dist > length) | tense
+    if every_tense or hold.any():
+        every = every_tense or hold.all()
         unit_new = rel / np.maximum(dist, 1e-9)[:, None]
         on_sphere = unit_new * length
         on_sphere += anchor_p_next
         p = on_sphere if every else np.where(hold[:, None], on_sphere, p)
         radial = dot_rows(v - anchor_v, unit_new)
-        if not tense.all():
+        if not every_tense and not tense.all():
             radial = np.where(tense, radial, np.maximum(radial, 0.0))
         no_radial = v - radial[:, None] * unit_new
         v = no_radial if every else np.where(hold[:, None], no_radial, v)

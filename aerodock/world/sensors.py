@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
+from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.rng import TrialRNG, standard_normal_t
 from aerodock.world.params import WorldParams
 from aerodock.world.state import WorldState
@@ -49,7 +49,7 @@ def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation,
     per_trial = isinstance(rng, TrialRNG) and rng.n == n
 
     def noisy(p: np.ndarray, v: np.ndarray, rot: np.ndarray) -> Observation:
-        rpy = np.stack(rotmat_to_euler(rot), axis=1) if rot.ndim == 3 else rot.copy()
+        rpy = rotmat_to_rpy(rot) if rot.ndim == 3 else rot.copy()
         if per_trial:
             draw = standard_normal_t(rng, n, 9 if att_sd > 0 else 6)
             if att_sd > 0:

@@ -17,7 +17,7 @@ import numpy as np
 from aerodock.downwash import BodyState, DownwashField
 from aerodock.rng import TrialRNG
 from aerodock.rows import pair_rows, take_rows
-from aerodock.world.gripper import GripperState
+from aerodock.world.gripper import _CAPTURED, GripperState, gripper_idle
 from aerodock.world.imu import ImuState
 from aerodock.world.platform import BarState
 from aerodock.world.torque_sensing import TorqueLog, TorqueReading
@@ -148,6 +148,31 @@ class WorldState:
             self._split()
         self._fol, self._both = value, None
 
+    def body_halves(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The vehicles' true masses: the leaders' (n,), the followers' (n,) and the followers'
+        rows (n, 3), the same arrays every step for the same body (the field's caches key on
+        them)."""
+        body = self.both.body
+        cached = self.__dict__.get("_body_halves")  # not a field: not state, a view of it
+        if cached is None or cached[0] is not body:
+            n, mass = self.n, body.mass_kg
+            cached = self.__dict__["_body_halves"] = (body, mass[:n], mass[n:],
+                                                      body.mass_rows_kg[n:])
+        return cached[1:]
+
+    def gripper_flags(self) -> tuple[np.ndarray, bool, bool]:
+        """The gripper's (captured (n,) bool, read-only; any captured; idle, see
+        :func:`~aerodock.world.gripper.gripper_idle`), computed once per gripper state (states
+        are never modified in place) and read by every physics step."""
+        gripper = self.gripper
+        cached = self.__dict__.get("_gripper_flags")  # not a field: not state, a view of it
+        if cached is None or cached[0] is not gripper:
+            captured = gripper.gate == _CAPTURED
+            captured.flags.writeable = False
+            cached = self.__dict__["_gripper_flags"] = (
+                gripper, captured, bool(captured.any()), gripper_idle(gripper))
+        return cached[1:]
+
     def _split(self) -> None:
         if self._both is not None:
             self._lead, self._fol = split_state(self.fleet, self._both, self.n)
@@ -190,7 +215,8 @@ class StepFrame:
         close_command: (n,) the active trigger's command this step.
         both: the 2n vehicles at the start of the step; ``rot``/``pos``/``vel`` its arrays.
         lead, fol: the two halves as the downwash field sees them.
-        mass_kg, mass_rows_kg: (2n,) and (2n, 3) each vehicle's true mass.
+        mass_kg, mass_rows_kg: (2n,) and (2n, 3) each vehicle's true mass;
+            ``fol_mass_rows_kg`` the followers' rows.
         captured, any_captured: followers hanging from the bar.
         bar_axis_t: (3, n) the bars' axes, ``(cos yaw, sin yaw, 0)``, component-major.
         force_n: (2n, 3) external forces on the vehicles, world NED, N (accumulator).
@@ -217,6 +243,7 @@ class StepFrame:
     fol: BodyState
     mass_kg: np.ndarray
     mass_rows_kg: np.ndarray
+    fol_mass_rows_kg: np.ndarray
     captured: np.ndarray
     any_captured: bool
     bar_axis_t: np.ndarray

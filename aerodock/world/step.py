@@ -19,7 +19,6 @@ import numpy as np
 
 from aerodock.downwash import BodyState
 from aerodock.world import terms
-from aerodock.world.gripper import _CAPTURED
 from aerodock.world.params import WorldParams
 from aerodock.world.state import StepFrame, WorldState
 
@@ -59,8 +58,9 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     both = state.both
     rot, pos, vel = both.R, both.p, both.v
     thrust = both.thrust_n
-    mass = both.body.mass_kg
-    captured = state.gripper.gate == _CAPTURED
+    body = both.body
+    lead_mass, fol_mass, fol_mass_rows = state.body_halves()
+    captured, any_captured, _ = state.gripper_flags()
     bar_axis = np.empty((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(state.bar.yaw_rad, out=bar_axis[0])
     np.sin(state.bar.yaw_rad, out=bar_axis[1])
@@ -69,10 +69,10 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         targets=targets,
         close_command=state.constants.no_close if close_command is None else close_command,
         both=both, rot=rot, pos=pos, vel=vel,
-        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], mass[:n]),
-        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], mass[n:]),
-        mass_kg=mass, mass_rows_kg=both.body.mass_rows_kg,
-        captured=captured, any_captured=bool(captured.any()),
+        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], lead_mass),
+        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], fol_mass),
+        mass_kg=body.mass_kg, mass_rows_kg=body.mass_rows_kg, fol_mass_rows_kg=fol_mass_rows,
+        captured=captured, any_captured=any_captured,
         bar_axis_t=bar_axis,
         force_n=np.zeros((2 * n, 3)),
         torque_t=np.zeros((3, 2 * n)) if params.rigid else None,

@@ -15,7 +15,7 @@ import numpy as np
 from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
-from aerodock.world.gripper import bar_in_gripper, step_gripper
+from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
 from aerodock.world.imu import filter_sample
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
@@ -36,7 +36,7 @@ def wake_on_rotor_disks(state: WorldState, frame: StepFrame, params: WorldParams
         frame.torque_t[:, n:] += torque.T
     else:
         force = state.field.acceleration(frame.lead, frame.fol, params.dt_s)
-        force *= frame.mass_rows_kg[n:]
+        force *= frame.fol_mass_rows_kg
     frame.wake_force_n = force
     frame.force_n[n:] += force
 
@@ -52,7 +52,7 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     if force is not None:
         frame.force_n[n:] += force
         total = total + force
-    state.last_downwash_mps2 = total / frame.mass_rows_kg[n:]
+    state.last_downwash_mps2 = total / frame.fol_mass_rows_kg
 
 
 def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -71,9 +71,13 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
     n = state.n
     fol_p, fol_v, fol_R = frame.pos[n:], frame.vel[n:], frame.rot[n:]  # noqa: N806
     bar = state.bar
-    contact, inside, up = bar_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
-                                         params.gripper,
-                                         cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
+    contact, inside, up = contact_in_gripper(fol_p, fol_R, fol_v, bar.p, bar.v, bar.yaw_rad,
+                                             params.gripper,
+                                             cos_sin=(frame.bar_axis_t[0], frame.bar_axis_t[1]))
+    if contact is None:  # no bar touches an arm: its zero push would change no number (the
+        # accumulators, sums onto +0, hold no -0 for it to turn into +0)
+        frame.contact_n, frame.inside = np.zeros(n), inside
+        return
     if frame.any_captured:
         contact = np.where(frame.captured, 0.0, contact)
     push = up * contact[:, None]
@@ -124,8 +128,7 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     if gyro_sd:
         draw = standard_normal_t(state.rng, n, 6)
         noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
-        np.multiply(draw[:3], gyro_sd, out=noise[:, :n])
-        np.multiply(draw[3:], gyro_sd, out=noise[:, n:])
+        np.multiply(draw.reshape(2, 3, n), gyro_sd, out=_halves(noise, n))
         frame.gyro_noise_radps = noise.T
     ims = state.imu
     if ims is None:
@@ -146,9 +149,9 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
                  + (params.imu.accel_vibration_mps2 * load) ** 2)
     draw = standard_normal_t(state.rng, n, 6)
-    force_t = force.T.copy()
-    force_t[:, :n] += draw[:3] * sd[:n]
-    force_t[:, n:] += draw[3:] * sd[n:]
+    force_t = np.empty((3, 2 * n))
+    np.add(_halves(force.T, n), draw.reshape(2, 3, n) * sd.reshape(2, 1, n),
+           out=_halves(force_t, n))
     np.maximum(force_t, -chain.accel_range_mps2, out=force_t)
     np.minimum(force_t, chain.accel_range_mps2, out=force_t)
     ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
@@ -160,8 +163,9 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     # The heading the external source reports (the motion capture's, as late).
     latency = params.latency_steps
     att = state.history[(state.step_index - latency) % (latency + 1)]
-    rot_ext = np.concatenate([att[2], att[5]])
-    yaw_ext = np.arctan2(rot_ext[:, 1, 0], rot_ext[:, 0, 0])
+    yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
+    np.arctan2(att[2][:, 1, 0], att[2][:, 0, 0], out=yaw_ext[:n])
+    np.arctan2(att[5][:, 1, 0], att[5][:, 0, 0], out=yaw_ext[n:])
     ims.attitude = estimate_step(ims.attitude, gyro_t, ims.accel_t, ims.nav_accel_mps2, yaw_ext,
                                  params.imu.estimator, params.dt_s)
     ims.gyro_radps = gyro_t.T
@@ -201,7 +205,7 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     if frame.any_captured:
         hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
                              platform.bar_mass_kg)
-        fol_own = (fol_accel - consts.gravity_mps2) * frame.mass_rows_kg[n:]
+        fol_own = (fol_accel - consts.gravity_mps2) * frame.fol_mass_rows_kg
         frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
     else:
         hang_mass = consts.bar_mass_kg
@@ -224,8 +228,8 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
     new, n = frame.new, state.n
-    below = new.p[:, 2] > 0.0
-    if below.any():
+    if np.fmax.reduce(new.p[:, 2]) > 0.0:  # the highest z, NaN aside (fmax skips NaN)
+        below = new.p[:, 2] > 0.0
         new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
         new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
         state.ground_contact |= below[n:] | below[:n]
@@ -247,6 +251,8 @@ def gripper(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     the servo's latency and travel, the gate. Random draws: the strain gauge's noise."""
     gp, t, dt = params.gripper, state.t_s, params.dt_s
     sample = int(t * gp.sensor_rate_hz + 1e-9) != int((t - dt) * gp.sensor_rate_hz + 1e-9)
+    if step_is_idle(state.gripper_flags()[2], sample, frame.close_command, gp):
+        return  # no trigger can fire and no servo is waiting or closing: nothing changes
     state.gripper = step_gripper(state.gripper, t, frame.contact_n, frame.inside, sample,
                                  frame.close_command, gp, state.rng)
     if sample:  # what the follower knows of a touch (its labels' mask)
@@ -264,6 +270,12 @@ def snapshot(state: WorldState, params: WorldParams) -> tuple[np.ndarray, ...]:
     both, n = state.both, state.n
     att = both.R if params.rigid else both.rpy
     return both.p[:n], both.v[:n], att[:n], both.p[n:], both.v[n:], att[n:]
+
+
+def _halves(rows: np.ndarray, n: int) -> np.ndarray:
+    """A component-major (3, 2n) array as (2, 3, n) (leaders, followers; a view): the layout of a
+    (6, n) draw of the leaders' three numbers, then the followers'."""
+    return rows.reshape(3, 2, n).transpose(1, 0, 2)
 
 
 def _yaw(rot: np.ndarray) -> np.ndarray:

@@ -74,9 +74,13 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
     object: (-attitude_p / 2, rate limit, -rate limit, integral limit, -integral limit, rate_p,
     rate_i, inertia), each a read-only (3, 1) column or, given ``n``, a (3, n) tile (the same
     numbers in one flat loop: a broadcast runs numpy's slower general loop)."""
+    last = _GAIN_COLUMNS_LAST
+    if last[0] is gains and last[1] is inertia_kgm2 and last[2] == n:  # the step's usual call
+        return last[3]
     key = (id(gains), np.asarray(inertia_kgm2, dtype=float).tobytes(), n)
     hit = _GAIN_COLUMNS.get(key)
     if hit is not None and hit[0] is gains:
+        last[:] = gains, inertia_kgm2, n, hit[1]
         return hit[1]
     limit = gains.rate_max_radps
     int_limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
@@ -93,11 +97,14 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
     if len(_GAIN_COLUMNS) > 64:
         _GAIN_COLUMNS.clear()
     _GAIN_COLUMNS[key] = (gains, cols)
+    last[:] = gains, inertia_kgm2, n, cols
     return cols
 
 
 _GAIN_COLUMNS: dict[tuple[int, bytes, int | None],
                     tuple[AutopilotGains, tuple[np.ndarray, ...]]] = {}
+# The last call's (gains, inertia object, n, columns): a step asks with the same objects.
+_GAIN_COLUMNS_LAST: list = [None, None, None, None]
 
 
 def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803
@@ -149,10 +156,12 @@ def rate_control(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np
 
 
 def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: np.ndarray,
-                   cols: tuple[np.ndarray, ...], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+                   cols: tuple[np.ndarray, ...], dt_s: float,
+                   out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`rate_control` on a component-major (3, n) setpoint with ``cols`` of
-    :func:`gain_columns`: (torque (3, n), new integral (n, 3), C-ordered). ``gyro_radps`` is
-    (n, 3) or, transposed, a component-major (3, n) array's ``.T``."""
+    :func:`gain_columns`: (torque (3, n), written into ``out`` if given, new integral (n, 3),
+    C-ordered). ``gyro_radps`` is (n, 3) or, transposed, a component-major (3, n) array's
+    ``.T``."""
     err = rate_sp_radps - np.asarray(gyro_radps, dtype=float).T
     new_t = err * dt_s
     new_t += np.asarray(integral, dtype=float).T
@@ -161,7 +170,7 @@ def rate_control_t(rate_sp_radps: np.ndarray, gyro_radps: np.ndarray, integral: 
     accel = err
     accel *= cols[5]
     accel += np.multiply(new_t, cols[6], out=np.empty_like(new_t))
-    accel *= cols[7]
+    accel = np.multiply(accel, cols[7], out=accel if out is None else out)
     return accel, np.ascontiguousarray(new_t.T)
 
 
@@ -174,13 +183,20 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     zero) so that the torque differences survive, then every rotor is clipped to
     ``[0, rotor_thrust_max_n]``.
     """
+    torque_nm = np.asarray(torque_nm, dtype=float)
+    wrench = np.empty((4, torque_nm.shape[0]))
+    wrench[0] = thrust_n
+    wrench[1:] = torque_nm.T
+    return mix_t(wrench, mixer_inv, rotor_thrust_max_n).T
+
+
+def mix_t(wrench_t: np.ndarray, mixer_inv: np.ndarray, rotor_thrust_max_n: float) -> np.ndarray:
+    """:func:`mix` on a component-major (4, n) ``[T, tau_x, tau_y, tau_z]``: rotor-major (k, n)
+    thrusts."""
     # Explicit column sums (no BLAS gemm: rounding would depend on the batch size), rotor-major
-    # (k, n) so that every operation below runs on contiguous rows.
-    m = mixer_inv[:, :, None]
-    f = m[0] * thrust_n
-    f += m[1] * torque_nm[:, 0]
-    f += m[2] * torque_nm[:, 1]
-    f += m[3] * torque_nm[:, 2]
+    # (k, n) so that every operation below runs on contiguous rows: the four products at once
+    # (4, k, n), added in order (an outer axis: row by row).
+    f = np.add.reduce(np.multiply(mixer_inv[:, :, None], wrench_t[:, None, :]), axis=0)
     # Feasible collective shifts keep every rotor in [0, max]: s in [-min f, max - max f].
     lo = np.minimum.reduce(f, axis=0)
     np.negative(lo, out=lo)
@@ -196,4 +212,4 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     f += shift
     np.maximum(f, 0.0, out=f)
     np.minimum(f, rotor_thrust_max_n, out=f)
-    return f.T
+    return f

@@ -30,6 +30,7 @@ from aerodock.world.vehicles.point_mass import (
     VehicleParams,
     VehicleState,
     command_targets,
+    forget_rotation,
     hover_state,
     step_vehicle_targets,
 )
@@ -129,6 +130,7 @@ class PointMassFleet:
         state.p[rows] = old.p[rows]
         state.v[rows] = old.v[rows]
         state.rpy[rows] = old.rpy[rows]
+        forget_rotation()  # a rotation kept for these angles is of the old ones
         np.divide(old.body.mass_kg[rows] * self.params.gravity_mps2, old.thrust_gain[rows],
                   out=state.thrust_cmd_state_n[rows])
         return state

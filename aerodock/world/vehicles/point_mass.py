@@ -74,13 +74,27 @@ class VehicleState:
 
     @property
     def R(self) -> np.ndarray:  # noqa: N802 - the rotation matrix is R by convention
-        """(n, 3, 3) body-to-world rotation."""
-        return rpy_to_rotmat(self.rpy)
+        """(n, 3, 3) body-to-world rotation (of the last angles asked for, kept: a step reads
+        the same state's twice, and states are never modified in place)."""
+        rpy = self.rpy
+        if _LAST_ROTATION[0] is not rpy:
+            _LAST_ROTATION[:] = rpy, rpy_to_rotmat(rpy)
+        return _LAST_ROTATION[1]
 
     @property
     def thrust_n(self) -> np.ndarray:
         """(n,) actual collective thrust, N."""
         return self.thrust_cmd_state_n * self.thrust_gain
+
+
+# The angles (the array object) and rotation of the last VehicleState.R (see there; code that
+# changes a state's angles in place, the leader's stand, forgets it: forget_rotation).
+_LAST_ROTATION: list = [None, None]
+
+
+def forget_rotation() -> None:
+    """Drop the rotation kept by :attr:`VehicleState.R` (after changing angles in place)."""
+    _LAST_ROTATION[:] = None, None
 
 
 @dataclass(frozen=True)

@@ -32,11 +32,11 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
-from aerodock.geometry import rotmat_to_euler, rpy_to_rotmat
+from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
     gain_columns,
-    mix,
+    mix_t,
     rate_control_t,
     rate_setpoint_t,
 )
@@ -65,7 +65,8 @@ class RigidBodyParams:
     gains: AutopilotGains
     mixer_inv: np.ndarray  # (4, 4): [T, tau_x, tau_y, tau_z] -> rotor thrusts
     rotor_torque_map: np.ndarray  # (4, 3): rotor thrusts -> body torque
-    rotor_drag_sums: np.ndarray  # (4, 6): rotor speeds -> sums of omega_i [1, x, y, x^2, y^2, xy]
+    rotor_drag_sums: np.ndarray  # (4, 7): rotor speeds -> sums of omega_i [1, -y, x, y, x^2, y^2,
+    # xy] (the rotor drag's, _DRAG_SUM_COLUMNS)
 
     @classmethod
     def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None) -> RigidBodyParams:
@@ -85,7 +86,9 @@ class RigidBodyParams:
         torque_map = np.stack([-offsets[:, 1], offsets[:, 0], spin * v.rotor_torque_ratio_m],
                               axis=1)
         x, y = offsets[:, 0], offsets[:, 1]  # the rotor disks lie in the body x-y plane
-        drag_sums = np.stack([np.ones(4), x, y, x * x, y * y, x * y], axis=1)
+        columns = {"1": np.ones(4), "x": x, "y": y, "-y": -y, "xx": x * x, "yy": y * y,
+                   "xy": x * y}
+        drag_sums = np.stack([columns[c] for c in _DRAG_SUM_COLUMNS], axis=1)
         mixer = np.vstack([np.ones(4), torque_map.T])
         gains = AutopilotGains(
             attitude_p=np.asarray(a.attitude_p, dtype=float),
@@ -140,7 +143,7 @@ class RigidBodyState:
     @property
     def rpy(self) -> np.ndarray:
         """(n, 3) ZYX Euler angles, rad."""
-        return np.stack(rotmat_to_euler(self.R), axis=1)
+        return rotmat_to_rpy(self.R)
 
 
 def rotor_thrusts_n(rotor_speed: np.ndarray, thrust_gain: np.ndarray,
@@ -207,13 +210,17 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                         attitude: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
     gyro's rates and its attitude estimate (``attitude``; None: the true attitude)."""
-    cols = gain_columns(params.gains, params.inertia_kgm2, state.R.shape[0])
+    n = state.R.shape[0]
+    cols = gain_columns(params.gains, params.inertia_kgm2, n)
     rot = state.R if attitude is None else attitude
     rate_sp = rate_setpoint_t(rot, targets.R_des, targets.yaw_rate_radps, cols)
-    torque, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s)
+    wrench = np.empty((4, n))  # [T, tau_x, tau_y, tau_z], component-major: the mixer's input
+    wrench[0] = targets.thrust_n
+    _, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s,
+                                 out=wrench[1:])
     if targets.torque_ff_nm is not None:  # (n, 3) feed-forward; the loop's torque is (3, n)
-        torque = torque + targets.torque_ff_nm.T
-    f_cmd = mix(targets.thrust_n, torque.T, params.mixer_inv, params.rotor_thrust_max_n)
+        wrench[1:] += targets.torque_ff_nm.T
+    f_cmd = mix_t(wrench, params.mixer_inv, params.rotor_thrust_max_n).T
     # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
     speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
     return np.sqrt(speed, out=speed), integral
@@ -236,20 +243,31 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
         params: vehicle constants.
     """
     force, torque = _body_wrench_t(np.ascontiguousarray(np.asarray(rotor_speed, dtype=float).T),
-                                   np.asarray(thrust_gain, dtype=float), v_body_mps, w_radps,
-                                   params)
+                                   np.asarray(thrust_gain, dtype=float),
+                                   np.asarray(v_body_mps, dtype=float).T,
+                                   np.asarray(w_radps, dtype=float).T, params)
     return force.T, torque.T
 
 
-def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
-                   w_radps: np.ndarray, params: RigidBodyParams,
+# The rotor drag's weighted sums S = sum_i omega_i c_i (columns c of ``rotor_drag_sums``); with
+# -y before x, the in-plane forces' (-s_y, s_x) is a slice.
+_DRAG_SUM_COLUMNS = ("1", "-y", "x", "y", "xx", "yy", "xy")
+# The sums the axial force and the roll and pitch moments read, as three blocks of rows: the
+# moment matrix sum_i omega_i (1, y, x)^T (1, y, x), row-major (it is symmetric): its columns
+# (s, s_y, s_x), (s_y, s_yy, s_xy), (s_x, s_xy, s_xx) multiply v_z, w_x and w_y.
+_DRAG_MOMENT_ROWS = np.array([0, 3, 2, 3, 5, 6, 2, 6, 4])
+
+
+def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_t: np.ndarray,
+                   w_t: np.ndarray, params: RigidBodyParams,
                    torque_gain: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n): force and torque (3, n).
+    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n) and component-major velocity
+    and rates (3, n) (rows may be strided views): force and torque (3, n).
 
     Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
     broadcast would call the inner loop once per vehicle)."""
     f = omega * omega  # rotor_thrusts_n, rotor-major
-    f *= params.thrust_coeff * thrust_gain
+    f *= _thrust_coeffs(params.thrust_coeff, thrust_gain)
     # Each rotor's share in one broadcast (4, 3, n), then summed over the rotors in order.
     share = np.multiply(params.rotor_torque_map[:, :, None], f[:, None, :])
     torque = share[0]
@@ -266,41 +284,74 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.nd
     kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
     if kd or kz:
         terms = np.multiply(params.rotor_drag_sums[:, :, None], omega[:, None, :])
-        sums = terms[0]
+        sums = terms[0]  # (7, n): see _DRAG_SUM_COLUMNS
         sums += terms[1]
         sums += terms[2]
         sums += terms[3]
-        s, sx, sy, sxx, syy, sxy = sums
-        vx, vy, vz = v_body_mps.T
-        wx, wy, wz = w_radps.T
-        axial = s * vz + wx * sy - wy * sx  # sum omega_i (u_i)_z
-        np.subtract(0.0, kd * (s * vx - wz * sy), out=force[0])
-        np.subtract(0.0, kd * (s * vy + wz * sx), out=force[1])
-        force[2] -= kz * axial
-        torque[0] -= kz * (sy * vz + wx * syy - wy * sxy)
-        torque[1] += kz * (sx * vz + wx * sxy - wy * sxx)
-        torque[2] -= kd * (sx * vy - sy * vx + wz * (sxx + syy))
+        vx, vy, vz = v_body_t
+        wx, wy, wz = w_t
+        # sum omega_i (u_i)_z and the moments it makes, kz ((s, s_y, s_x) v_z
+        # + w_x (s_y, s_yy, s_xy) - w_y (s_x, s_xy, s_xx)): force z, torque x, -torque y.
+        moments = sums.take(_DRAG_MOMENT_ROWS, axis=0)
+        axial = moments[0:3] * vz
+        axial += wx * moments[3:6]
+        axial -= wy * moments[6:9]
+        axial *= kz
+        force[2] -= axial[0]
+        torque[0] -= axial[1]
+        torque[1] += axial[2]
+        # The in-plane H-forces: -kd (s v_x - w_z s_y, s v_y + w_z s_x).
+        plane = sums[0] * v_body_t[:2]
+        plane += wz * sums[1:3]
+        plane *= kd
+        np.subtract(0.0, plane, out=force[:2])
+        # Their yaw moment: -kd (s_x v_y - s_y v_x + w_z (s_xx + s_yy)).
+        yaw = sums[2] * vy
+        yaw -= sums[3] * vx
+        spin = np.add(sums[4], sums[5])
+        spin *= wz
+        yaw += spin
+        yaw *= kd
+        torque[2] -= yaw
     else:
         force[:2] = 0.0
     return force, torque
 
 
-def _motor_alpha(body: VehicleBody, dt_s: float) -> np.ndarray | float:
-    """The motors' first-order step factor ``1 - exp(-dt / tau)`` per vehicle, (n, 1), or one
-    number when every vehicle's motors are alike (cached per body and dt)."""
+def _thrust_coeffs(thrust_coeff: float, thrust_gain: np.ndarray) -> np.ndarray:
+    """(n,) each vehicle's true k_T, ``thrust_coeff * thrust_gain`` (the last one kept: a step
+    asks twice with the same gain array, which states carry over unchanged)."""
+    last = _THRUST_COEFFS
+    if last[0] is not thrust_gain or last[1] != thrust_coeff:
+        last[:] = thrust_gain, thrust_coeff, thrust_coeff * thrust_gain
+    return last[2]
+
+
+_THRUST_COEFFS: list = [None, None, None]
+
+
+def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray | float, np.ndarray]:
+    """Per-step constants of ``body``'s vehicles (cached per body and dt): the motors'
+    first-order step factor ``1 - exp(-dt / tau)``, (n, 1) or one number when every vehicle's
+    motors are alike, and the inertia component-major with its first two rows repeated,
+    ``(J_x, J_y, J_z, J_x, J_y)`` (5, n) (the cross product's operands are then slices)."""
     key = (id(body), dt_s)
-    hit = _ALPHA.get(key)
+    hit = _BODY_CONSTANTS.get(key)
     if hit is None or hit[0] is not body:
-        if len(_ALPHA) > 64:
-            _ALPHA.clear()
+        if len(_BODY_CONSTANTS) > 64:
+            _BODY_CONSTANTS.clear()
         tau = body.motor_tau_s
         alpha = (1.0 - np.exp(-dt_s / float(tau[0])) if np.all(tau == tau[0])
                  else (1.0 - np.exp(-dt_s / tau))[:, None])
-        hit = _ALPHA[key] = (body, alpha)
+        inertia = np.asarray(body.inertia_kgm2, dtype=float).T
+        rows = np.concatenate([inertia, inertia[:2]])
+        rows.flags.writeable = False
+        hit = _BODY_CONSTANTS[key] = (body, (alpha, rows))
     return hit[1]
 
 
-_ALPHA: dict[tuple[int, float], tuple[VehicleBody, np.ndarray | float]] = {}
+_BODY_CONSTANTS: dict[tuple[int, float], tuple[VehicleBody, tuple[np.ndarray | float,
+                                                                   np.ndarray]]] = {}
 
 
 def step_rigid_body(
@@ -336,43 +387,41 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     rot = state.R
     omega = state.rotor_speed
     v = state.v
-    w = state.w
     n = v.shape[0]
+    alpha, inertia = _body_constants(body, dt_s)
+    # The body rates component-major with the first two repeated, (w_x, w_y, w_z, w_x, w_y):
+    # the cross product's (w_y, w_z, w_x) and (w_z, w_x, w_y) are then slices.
+    w5 = np.empty((5, n))
+    w_t = w5[:3]
+    np.copyto(w_t, state.w.T)
+    w5[3:] = w5[:2]
     omega_t = np.ascontiguousarray(omega.T)
-    v_body = np.matmul(v[:, None, :], rot)[:, 0]  # R^T v
-    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body, w, params,
+    # R^T v, component-major: the rotor drag reads its rows (strided, numpy would iterate a
+    # broadcast over them a few elements at a time).
+    v_body_t = np.ascontiguousarray(np.matmul(v[:, None, :], rot)[:, 0].T)
+    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body_t, w_t, params,
                                         body.torque_gain)
     if ext_torque_nm is not None:
         torque += np.asarray(ext_torque_nm, dtype=float).T
     accel = np.matmul(rot, force_body.T[:, :, None])[:, :, 0]
     accel_t = accel.T
     if params.parasitic_drag_coeff:
-        vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
-        speed = vx * vx
-        speed += vy * vy
-        speed += vz * vz
+        sq = v * v
+        speed = sq[:, 0] + sq[:, 1]
+        speed += sq[:, 2]
         np.sqrt(speed, out=speed)
         speed *= params.parasitic_drag_coeff
         accel_t -= v.T * speed
     accel += ext_force_n
     accel /= body.mass_rows_kg
     accel[:, 2] += params.gravity_mps2
-    # Euler's equations with diagonal inertia: J dw = tau - w x (J w).
-    inertia = np.ascontiguousarray(body.inertia_kgm2.T)  # (3, n): each vehicle's own
-    w_t = w.T
-    jx, jy, jz = np.multiply(w_t, inertia, out=np.empty((3, n)))
-    wx, wy, wz = w_t
-    # torque -= w x J w (the components of np.cross, written out: no axis juggling per call).
-    gyro = wy * jz
-    gyro -= wz * jy
-    torque[0] -= gyro
-    np.multiply(wz, jx, out=gyro)
-    gyro -= wx * jz
-    torque[1] -= gyro
-    np.multiply(wx, jy, out=gyro)
-    gyro -= wy * jx
-    torque[2] -= gyro
-    torque /= inertia  # the angular acceleration
+    # Euler's equations with diagonal inertia: J dw = tau - w x (J w), the cross product's
+    # components (w_y (Jw)_z - w_z (Jw)_y, ...) as two products of slices.
+    jw = w5 * inertia
+    gyro = w5[1:4] * jw[2:5]
+    gyro -= w5[2:5] * jw[1:4]
+    torque -= gyro
+    torque /= inertia[:3]  # the angular acceleration
     torque *= dt_s
     w_new = np.empty((n, 3))
     w_new_t = np.add(w_t, torque, out=w_new.T)
@@ -385,10 +434,10 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     phi *= 0.5 * dt_s
     rot_new = _rotate_t(rot, phi)
     omega_new = rotor_speed_cmd - omega
-    omega_new *= _motor_alpha(body, dt_s)
+    omega_new *= alpha
     omega_new += omega
     f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
-    f_new *= params.thrust_coeff * state.thrust_gain
+    f_new *= _thrust_coeffs(params.thrust_coeff, state.thrust_gain)
     thrust_new = f_new[0] + f_new[1]
     thrust_new += f_new[2]
     thrust_new += f_new[3]
@@ -439,8 +488,8 @@ def _rotate_t(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     theta2 = sq[0] + sq[1]
     theta2 += sq[2]
     theta = np.sqrt(theta2)
-    small = theta2 < 1e-12
-    if small.any():  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
+    if _fmin(theta2) < 1e-12:  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
+        small = theta2 < 1e-12
         safe = np.where(small, 1.0, theta)
         a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
         b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
@@ -451,18 +500,21 @@ def _rotate_t(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
         np.subtract(1.0, b, out=b)
         b /= theta * theta
     # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I, built component-major (3, 3, n)
-    # so that every operation runs on a contiguous row of n.
+    # so that every operation runs on a contiguous row of n: b p_i p_j, plus the rows of
+    # (a p_x, a p_y, a p_z, -a p_x, -a p_y, -a p_z, 1 - b theta^2) that the entries i, j take
+    # (the diagonal, then [a p]x's: adding -x is subtracting x, bit for bit).
     n = phi.shape[1]
     bp = np.multiply(phi, b, out=sq)
     d = np.multiply(bp[:, None, :], phi, out=np.empty((3, 3, n)))  # b p_i p_j
-    diag = b * theta2
+    signed = np.empty((7, n))
+    np.multiply(phi, a, out=signed[:3])
+    np.negative(signed[:3], out=signed[3:6])
+    diag = np.multiply(b, theta2, out=signed[6])
     np.subtract(1.0, diag, out=diag)
-    d.reshape(9, n)[::4] += diag
-    ax, ay, az = np.multiply(phi, a, out=bp)
-    d[0, 1] -= az
-    d[1, 0] += az
-    d[0, 2] += ay
-    d[2, 0] -= ay
-    d[1, 2] -= ax
-    d[2, 1] += ax
+    d.reshape(9, n)[...] += signed.take(_EXP_ROWS, axis=0)
     return np.matmul(rot, d.transpose(2, 0, 1))
+
+
+# Which row of _rotate_t's ``signed`` each entry of exp([phi]x) adds (row-major 3 x 3).
+_EXP_ROWS = np.array([6, 5, 1, 2, 6, 3, 4, 0, 6])
+_fmin = np.fmin.reduce  # min ignoring NaN: "any element < x", without a boolean array
