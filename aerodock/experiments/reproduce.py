@@ -468,9 +468,23 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     say("writing results.json, report.md and figures/")
     figures = write_report(results, traces, out_dir, cfg)
     results["figures"] = figures
-    # A figure that could not be computed (NaN) is written as null.
+    # Paths name the folder the run becomes, not the one it is built in; a figure that could not
+    # be computed (NaN) is written as null.
+    results = _renamed(results, out_dir, named)
     write_json(out_dir / "results.json", json_ready(results))
     return results
+
+
+def _renamed(node: Any, built: Path, named: Path) -> Any:
+    """``node`` with every string path inside ``built`` (the folder being built) naming the same
+    file inside ``named`` (the folder it becomes)."""
+    if isinstance(node, dict):
+        return {k: _renamed(v, built, named) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_renamed(v, built, named) for v in node]
+    if isinstance(node, str) and (node == str(built) or node.startswith(f"{built}{os.sep}")):
+        return str(named) + node[len(str(built)):]
+    return node
 
 
 def _floor_ratio(heldout_eval: dict[str, Any], cfg: Config) -> dict[str, Any]:

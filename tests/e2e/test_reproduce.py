@@ -18,6 +18,15 @@ import pytest
 QUICK = os.environ.get("AERODOCK_E2E", "smoke") == "quick"
 
 
+def _strings(node):
+    """Every string inside a JSON document."""
+    if isinstance(node, dict):
+        node = list(node.values())
+    if isinstance(node, list):
+        return [s for v in node for s in _strings(v)]
+    return [node] if isinstance(node, str) else []
+
+
 @pytest.mark.slow
 def test_reproduce_writes_results_report_and_figures(tmp_path):
     out = tmp_path / "run"
@@ -28,6 +37,9 @@ def test_reproduce_writes_results_report_and_figures(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "report.md" in proc.stdout
     res = json.loads((out / "results.json").read_text())
+    built = [p for p in _strings(res) if p.startswith(str(tmp_path)) and ".tmp" in p]
+    assert not built, built  # paths name the folder, not the one it was built in
+    assert all(os.path.exists(p) for p in _strings(res) if p.startswith(str(out)))
     for key in ("learning", "cable_study", "hover_docking", "moving_leader",
                 "sample_efficiency"):
         assert key in res
