@@ -8,10 +8,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
-from aerodock.cli.common import fail, print_json
+from aerodock.cli.common import LoggedProgress, fail, print_json
 from aerodock.fileio import json_ready, one_line
 from aerodock.flightlog import FlightLog, FlightLogError, save_flightlogs
 from aerodock.ingest import expand_paths, read_logs
@@ -72,7 +71,6 @@ def ingest_command(
 
     All flights go to one FlightLog file (NED, SI); one summary line per flight.
     """
-    err = Console(stderr=True)
     options = {"mass_kg": mass_kg, "vehicle": vehicle, "mapping": mapping, "single": single,
                "hover_thrust": hover_thrust}
     try:
@@ -80,9 +78,10 @@ def ingest_command(
             warnings.simplefilter("always", IngestWarning)
             files = expand_paths(fmt.value, paths)
             # a bag reports progress per message, so one bag gets a bar too
-            if err.is_terminal and (len(files) > 1 or fmt.value == "rosbag"):
-                with Progress(TextColumn("reading logs"), BarColumn(), MofNCompleteColumn(),
-                              TimeElapsedColumn(), console=err, transient=True) as bar:
+            if len(files) > 1 or fmt.value == "rosbag":
+                with LoggedProgress(TextColumn("reading logs"), BarColumn(),
+                                    MofNCompleteColumn(), TimeElapsedColumn(),
+                                    transient=True) as bar:
                     task = bar.add_task("ingest", total=len(files))
 
                     def progress(done: int, total: int) -> None:

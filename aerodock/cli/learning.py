@@ -21,6 +21,7 @@ import typer
 from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
+    LoggedProgress,
     SeedOpt,
     bar_callback,
     err_console,
@@ -131,17 +132,15 @@ def train_command(
         check_trainable(ds, kind=model)
     except ValueError as err:
         fail(one_line(err, first_line=True))
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    console = Console(stderr=True)
-    with Progress(
+    with LoggedProgress(
         TextColumn("[bold]train {task.fields[kind]}"), BarColumn(),
         TextColumn("epoch {task.completed}/{task.total}"),
         TextColumn("{task.fields[loss]}"), TimeElapsedColumn(),
-        console=console, transient=True,
+        transient=True,
     ) as bar:
-        task = bar.add_task("train", total=max_epochs, kind=model, loss="")
+        task = bar.add_task(f"train {model} (epochs)", total=max_epochs, kind=model, loss="")
 
         def progress(epoch: int, total: int, train_loss: float, val_loss: float | None) -> None:
             loss = f"val RMSE {math.sqrt(val_loss):.3f} m/s²" if val_loss is not None else ""
