@@ -211,6 +211,12 @@ class RoundJetField:
         self._area_key: tuple | None = None
         self._area_cols: tuple = ()
 
+    def __setstate__(self, state: dict) -> None:
+        """A copy or an unpickled field: its offsets read-only again (a copied array is
+        writable), as the geometry's caches want them."""
+        self.__dict__.update(state)
+        self.rotor_offsets_body_m.flags.writeable = False
+
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
         """Start ``n`` trials; turbulence (the follower's shared processes, each disk's own,

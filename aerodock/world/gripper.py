@@ -106,6 +106,10 @@ class GripperState:
         # Read-only: a changed gripper is a new state (WorldState.gripper_flags keys on it).
         freeze(*(getattr(self, name) for name in _STATE_FIELDS))
 
+    def __setstate__(self, state: dict) -> None:  # a copy or an unpickled state: read-only too
+        self.__dict__.update(state)
+        self.__post_init__()
+
     @property
     def captured(self) -> np.ndarray:
         """(n,) bool."""

@@ -4,6 +4,8 @@ read-only, so a cache keyed by one of them is keyed by its numbers)."""
 
 from __future__ import annotations
 
+import copy
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -221,3 +223,14 @@ def test_the_gripper_flags_after_the_gate_is_changed_in_place(cfg):
     gate[0] = GateState.CAPTURED
     captured, any_captured, idle = state.gripper_flags()
     assert captured.tolist() == [True, False, False] and any_captured and not idle
+
+
+def test_copies_stay_read_only(cfg):
+    """A copied or unpickled field, body or gripper keeps its arrays read-only (a copied array
+    is writable): its caches still hold, and in-place writes still raise."""
+    state = _world_state(cfg)
+    for obj, name in ((RoundJetField(), "rotor_offsets_body_m"),
+                      (state.both.body, "inertia_kgm2"), (state.gripper, "gate")):
+        for copied in (copy.deepcopy(obj), pickle.loads(pickle.dumps(obj))):
+            assert not getattr(copied, name).flags.writeable, (type(obj).__name__, name)
+            np.testing.assert_array_equal(getattr(copied, name), getattr(obj, name))

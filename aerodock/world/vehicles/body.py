@@ -63,6 +63,10 @@ class VehicleBody:
     def __post_init__(self) -> None:
         freeze(*(getattr(self, f) for f in _FIELDS))
 
+    def __setstate__(self, state: dict) -> None:  # a copy or an unpickled body: read-only too
+        self.__dict__.update(state)
+        self.__post_init__()
+
     @property
     def n(self) -> int:
         """Batch size."""

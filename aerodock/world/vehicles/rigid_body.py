@@ -338,7 +338,7 @@ def _thrust_coeffs(body: VehicleBody, thrust_coeff: float,
             and is_frozen(thrust_gain)):
         return hit[2]
     coeffs = thrust_coeff * thrust_gain
-    coeffs.flags.writeable = False
+    freeze(coeffs)
     body.__dict__["_thrust_coeffs"] = (thrust_gain, thrust_coeff, coeffs)
     return coeffs
 
