@@ -55,6 +55,7 @@ import numpy as np
 
 from aerodock.downwash.base import BodyState
 from aerodock.downwash.wrench import quad_rotor_offsets_body_m
+from aerodock.frozen import is_frozen
 from aerodock.rng import standard_normal_t
 
 _LN2 = float(np.log(2.0))
@@ -177,6 +178,7 @@ class RoundJetField:
         self.follower_n_rotors = int(follower_n_rotors)
         self.rotor_offsets_body_m = quad_rotor_offsets_body_m(follower_diagonal_m,
                                                               self.follower_n_rotors)
+        self.rotor_offsets_body_m.flags.writeable = False  # the geometry's caches key on it
         self.body_area_m2 = self.body_area_ratio * self.follower_n_rotors \
             * self.follower_disk_area_m2
         self.body_radius_m = float(np.sqrt(self.body_area_m2 / np.pi))
@@ -187,8 +189,10 @@ class RoundJetField:
         self._common = np.zeros((_SHARED_ROWS, 0))
         self._own = np.zeros((0, 0))
         self._processes = np.zeros((_SHARED_ROWS, 0))  # both, stacked; the two are its views
+        # The last read-only offsets array the pair distance was computed for, and its points
+        # (see _geometry): offsets that can be written in place are compared by value.
         self._offsets_obj: np.ndarray | None = None
-        self._points: dict[int, tuple] = {}  # the disks' and the body's centres, by offsets
+        self._points: tuple | None = None  # (offsets, the disks' and the body's centres, arms)
         self._planar_key: tuple | None = None  # what _planar_scale_col was computed for
         self._planar_scale_col = np.zeros((0, 1))
         self._bar_noise = np.zeros((3, 0))
@@ -201,12 +205,17 @@ class RoundJetField:
         # bar_force_n() call of the same physics step (same leader object), then dropped.
         self._lead_key: BodyState | None = None
         self._lead_wake: tuple | None = None
-        # The force coefficients of the last follower mass array (see _force_coeff), and the
-        # per-row constants of _axial (see _area_columns).
-        self._coeff_key: np.ndarray | None = None
-        self._coeff = np.zeros((0, 0))
+        # The force coefficients of the last read-only follower mass array (see _force_coeff),
+        # and the per-row constants of _axial (see _area_columns).
+        self._coeff: tuple | None = None
         self._area_key: tuple | None = None
         self._area_cols: tuple = ()
+
+    def __setstate__(self, state: dict) -> None:
+        """A copy or an unpickled field: its offsets read-only again (a copied array is
+        writable), as the geometry's caches want them."""
+        self.__dict__.update(state)
+        self.rotor_offsets_body_m.flags.writeable = False
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -226,8 +235,7 @@ class RoundJetField:
         out = copy.copy(self)  # the parameters and the geometry caches are shared
         out._rng = rng
         out._set_processes(self._processes[:, rows])
-        if self._coeff_key is not None:  # the force coefficients of these trials' masses
-            out._coeff_key, out._coeff = self._coeff_key[rows], self._coeff[:, rows]
+        out._coeff = None  # of the whole batch's masses (keyed by that array: never these rows')
         out._bar_noise = self._bar_noise[:, rows]
         # Kept for the rest of one physics step only (keyed by the step's objects).
         out._lead_key = out._lead_wake = None
@@ -489,14 +497,15 @@ class RoundJetField:
         k = offsets.shape[0]
         n = R.shape[0]
         rt = np.ascontiguousarray(R.transpose(2, 1, 0))  # rt[j, i] = R[:, i, j], rows of n
-        points = self._points.get(id(offsets))
-        if points is None or points[0] is not offsets:
+        points = self._points
+        if points is None or points[0] is not offsets or not is_frozen(offsets):
             cols = np.zeros((k + 1, 3))
             cols[:k] = offsets
+            cols.flags.writeable = False
             points = (offsets, cols[None, :, 0:1], cols[None, :, 1:2],
                       cols[None, :, 2:3] if offsets[:, 2].any() else None,
                       _torque_arms(offsets))
-            self._points = {id(offsets): points}
+            self._points = points
         _, px, py, pz, arms = points
         rel = np.multiply(rt[0][:, None, :], px, out=np.empty((3, k + 1, n)))
         rel += rt[1][:, None, :] * py
@@ -563,11 +572,14 @@ class RoundJetField:
     def _force_coeff(self, mass_kg: np.ndarray, k: int) -> np.ndarray:
         """(k + 1, n) the force per unit of the ingest law, per disk ``c rho A v_hf^(2 - p)``
         (v_hf: the follower's own hover-induced velocity, from its mass) and for the body
-        ``rho C_d A_b / 2``; cached for the same mass array (a world passes the same one every
-        step)."""
-        if mass_kg is self._coeff_key and self._coeff.shape[0] == k + 1:
-            return self._coeff
+        ``rho C_d A_b / 2``, read-only; kept for the same read-only mass array (a world passes
+        the same one every step: its bodies' arrays are read-only) and the same parameters."""
         rho, area, p = self.air_density_kgpm3, self.follower_disk_area_m2, self.ingest_exponent
+        params = (k, rho, area, p, self.ingest_coeff, self.gravity_mps2, self.follower_n_rotors,
+                  self.body_drag_coeff, self.body_area_m2)
+        hit = self._coeff
+        if hit is not None and hit[0] is mass_kg and hit[1] == params and is_frozen(mass_kg):
+            return hit[2]
         mass = np.asarray(mass_kg, dtype=float)
         coeff = np.empty((k + 1, mass.shape[0]))
         disk = self.ingest_coeff * rho * area
@@ -577,7 +589,7 @@ class RoundJetField:
         coeff[:k] = disk
         coeff[k] = 0.5 * self.body_drag_coeff * rho * self.body_area_m2
         coeff.flags.writeable = False
-        self._coeff_key, self._coeff = mass_kg, coeff
+        self._coeff = (mass_kg, params, coeff)
         return coeff
 
     def _turbulence_time_and_share(self, geo: dict,
@@ -587,7 +599,7 @@ class RoundJetField:
         k = geo["k"]
         b_c = geo["half_width"][k]
         tau = self.turb_time_ratio * b_c / np.maximum(geo["centre"][k], 1e-6)
-        if offsets is not self._offsets_obj:
+        if offsets is not self._offsets_obj or not is_frozen(offsets):
             key = (offsets.shape, offsets.tobytes())
             if key != self._offsets_key:
                 self._offsets_key = key
@@ -749,7 +761,7 @@ def _ingest_laws(w_mps: np.ndarray, v_axial_mps: np.ndarray, p: float, k: int) -
 
 def _offsets(rotor_offsets_body_m: np.ndarray) -> np.ndarray:
     """The disks' centres as a (k, 3) float array: the array itself when it is one (the
-    geometry's caches are keyed by the object)."""
+    geometry's caches are keyed by the object when it is read-only)."""
     offsets = rotor_offsets_body_m
     if (isinstance(offsets, np.ndarray) and offsets.dtype == np.float64 and offsets.ndim == 2
             and offsets.shape[1] == 3):

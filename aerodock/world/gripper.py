@@ -18,12 +18,13 @@ it slipped through (the paper's failure mode).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import IntEnum
 
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.frozen import freeze
 from aerodock.geometry import dot_rows
 
 
@@ -101,10 +102,21 @@ class GripperState:
     close_time_s: np.ndarray  # (n,) servo travel time (inf: a jammed servo never closes)
     sensor_stuck_n: np.ndarray  # (n,) a faulty strain gauge reads this (nan: healthy)
 
+    def __post_init__(self) -> None:
+        # Read-only: a changed gripper is a new state (WorldState.gripper_flags keys on it).
+        freeze(*(getattr(self, name) for name in _STATE_FIELDS))
+
+    def __setstate__(self, state: dict) -> None:  # a copy or an unpickled state: read-only too
+        self.__dict__.update(state)
+        self.__post_init__()
+
     @property
     def captured(self) -> np.ndarray:
         """(n,) bool."""
         return self.gate == GateState.CAPTURED
+
+
+_STATE_FIELDS = tuple(f.name for f in fields(GripperState))
 
 
 def calibrated_gripper(n: int, params: GripperParams, rng: np.random.Generator) -> GripperState:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash import BodyState, DownwashField
+from aerodock.frozen import is_frozen
 from aerodock.rng import TrialRNG
 from aerodock.rows import pair_rows, take_rows
 from aerodock.world.gripper import _CAPTURED, GripperState, gripper_idle
@@ -162,15 +163,19 @@ class WorldState:
 
     def gripper_flags(self) -> tuple[np.ndarray, bool, bool]:
         """The gripper's (captured (n,) bool, read-only; any captured; idle, see
-        :func:`~aerodock.world.gripper.gripper_idle`), computed once per gripper state (states
-        are never modified in place) and read by every physics step."""
+        :func:`~aerodock.world.gripper.gripper_idle`), computed once per gripper state and read
+        by every physics step. Kept while the state's gate and servo start times (what they are
+        computed from) are the same read-only arrays (a :class:`GripperState` makes its arrays
+        read-only; a changed gripper is a new state)."""
         gripper = self.gripper
         cached = self.__dict__.get("_gripper_flags")  # not a field: not state, a view of it
-        if cached is None or cached[0] is not gripper:
-            captured = gripper.gate == _CAPTURED
-            captured.flags.writeable = False
-            cached = self.__dict__["_gripper_flags"] = (
-                gripper, captured, bool(captured.any()), gripper_idle(gripper))
+        if (cached is not None and cached[0] is gripper and is_frozen(gripper.gate)
+                and is_frozen(gripper.servo_start_s)):
+            return cached[1:]
+        captured = gripper.gate == _CAPTURED
+        captured.flags.writeable = False
+        cached = self.__dict__["_gripper_flags"] = (
+            gripper, captured, bool(captured.any()), gripper_idle(gripper))
         return cached[1:]
 
     def _split(self) -> None:

@@ -79,12 +79,13 @@ class World:
         self.leader_fixed = leader_fixed
         self.terms = step
         rigid = params.rigid
+        offsets = params.follower_fleet.params.rotor_offsets_m if rigid else np.zeros((1, 3))
+        offsets.flags.writeable = False  # the field's geometry is cached by it (read-only)
         self.constants = BatchConstants(
             bar_mass_kg=np.full(n, params.platform.bar_mass_kg),
             no_close=np.zeros(n, dtype=bool),
             gravity_mps2=np.array([0.0, 0.0, params.vehicle.gravity_mps2]),
-            rotor_offsets_m=(params.follower_fleet.params.rotor_offsets_m if rigid
-                             else np.zeros((1, 3))),
+            rotor_offsets_m=offsets,
             hover_thrust_n=np.concatenate([np.full(n, params.leader_vehicle.hover_thrust_n),
                                            np.full(n, params.vehicle.hover_thrust_n)]),
         )

@@ -13,9 +13,11 @@ from aerodock.control.profiles import controller_config
 from aerodock.mission import MissionBatch, MissionSpec, settle_trials
 from aerodock.world.state import WorldState
 
-# Kept only within one physics step or one call, keyed by the objects of that step: not state.
+# Kept only within one physics step or one call, keyed by the objects of that step, or numbers
+# derived from constants, keyed by the arrays they were computed for: not state. (A dataclass's
+# state is its fields: what else its __dict__ holds are such numbers.)
 _PER_STEP = {"_lead_key", "_lead_wake", "_body_key", "_body_force", "_points", "_offsets_obj",
-             "_mean_fn", "mean_fn"}
+             "_coeff", "_mean_fn", "mean_fn"}
 
 
 def assert_same_state(a, b, path="start"):
@@ -42,7 +44,9 @@ def assert_same_state(a, b, path="start"):
         assert type(a) is type(b), path
         if type(a).__module__.startswith("aerodock.config"):
             return  # the configuration: the same file for both
-        for k in vars(a).keys() - _PER_STEP:
+        names = ({f.name for f in dataclasses.fields(a)} if dataclasses.is_dataclass(a)
+                 else vars(a).keys())
+        for k in names - _PER_STEP:
             assert_same_state(vars(a)[k], vars(b)[k], f"{path}.{k}")
     elif isinstance(a, float | int | str | bool | np.generic) or a is None:
         assert a == b or (a != a and b != b), (path, a, b)

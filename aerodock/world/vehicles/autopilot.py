@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerodock.frozen import is_frozen
 from aerodock.geometry import rpy_to_rotmat
 
 
@@ -70,18 +71,18 @@ def attitude_target(roll_rad: np.ndarray, pitch_rad: np.ndarray,
 
 def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
                  n: int | None = None) -> tuple[np.ndarray, ...]:
-    """The loops' per-axis constants for component-major (3, n) work arrays, cached per gains
-    object: (-attitude_p / 2, rate limit, -rate limit, integral limit, -integral limit, rate_p,
-    rate_i, inertia), each a read-only (3, 1) column or, given ``n``, a (3, n) tile (the same
-    numbers in one flat loop: a broadcast runs numpy's slower general loop)."""
-    last = _GAIN_COLUMNS_LAST
-    if last[0] is gains and last[1] is inertia_kgm2 and last[2] == n:  # the step's usual call
-        return last[3]
-    key = (id(gains), np.asarray(inertia_kgm2, dtype=float).tobytes(), n)
-    hit = _GAIN_COLUMNS.get(key)
-    if hit is not None and hit[0] is gains:
-        last[:] = gains, inertia_kgm2, n, hit[1]
-        return hit[1]
+    """The loops' per-axis constants for component-major (3, n) work arrays: (-attitude_p / 2,
+    rate limit, -rate limit, integral limit, -integral limit, rate_p, rate_i, inertia), each a
+    read-only (3, 1) column or, given ``n``, a (3, n) tile (the same numbers in one flat loop: a
+    broadcast runs numpy's slower general loop).
+
+    Kept on ``gains`` for the last inertia array and ``n`` (every step asks with the same
+    ones) while the gains' and the inertia's arrays are read-only (the vehicle parameters'
+    are: :meth:`RigidBodyParams.from_config`); otherwise computed afresh."""
+    hit = gains.__dict__.get("_columns")  # not a field: numbers derived from them
+    if (hit is not None and hit[0] is inertia_kgm2 and hit[1] == n and is_frozen(inertia_kgm2)
+            and _gains_frozen(gains)):
+        return hit[2]
     limit = gains.rate_max_radps
     int_limit = gains.rate_integral_max_radps2 / np.maximum(gains.rate_i, 1e-12)
 
@@ -94,17 +95,14 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
 
     cols = tuple(col(v) for v in (-0.5 * gains.attitude_p, limit, -limit, int_limit, -int_limit,
                                   gains.rate_p, gains.rate_i, inertia_kgm2))
-    if len(_GAIN_COLUMNS) > 64:
-        _GAIN_COLUMNS.clear()
-    _GAIN_COLUMNS[key] = (gains, cols)
-    last[:] = gains, inertia_kgm2, n, cols
+    gains.__dict__["_columns"] = (inertia_kgm2, n, cols)
     return cols
 
 
-_GAIN_COLUMNS: dict[tuple[int, bytes, int | None],
-                    tuple[AutopilotGains, tuple[np.ndarray, ...]]] = {}
-# The last call's (gains, inertia object, n, columns): a step asks with the same objects.
-_GAIN_COLUMNS_LAST: list = [None, None, None, None]
+def _gains_frozen(gains: AutopilotGains) -> bool:
+    """Whether every array of ``gains`` is read-only (their numbers cannot change)."""
+    return (is_frozen(gains.attitude_p) and is_frozen(gains.rate_p) and is_frozen(gains.rate_i)
+            and is_frozen(gains.rate_max_radps))
 
 
 def rate_setpoint(R: np.ndarray, R_des: np.ndarray, yaw_rate_radps: np.ndarray,  # noqa: N803

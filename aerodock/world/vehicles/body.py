@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerodock.frozen import freeze
 from aerodock.rng import TrialRNG, standard_normal_t
 
 # A drawn relative error is kept within this many standard deviations (a physical vehicle has
@@ -41,7 +42,9 @@ class SpreadParams:
 
 @dataclass(frozen=True)
 class VehicleBody:
-    """N vehicles' true constants (batch-first; never modified in place).
+    """N vehicles' true constants (batch-first; read-only: the step's caches of numbers derived
+    from them, :func:`aerodock.world.vehicles.rigid_body._body_constants` and the downwash
+    field's force coefficients, are keyed by the arrays).
 
     Attributes:
         mass_kg: (n,) mass.
@@ -56,6 +59,13 @@ class VehicleBody:
     inertia_kgm2: np.ndarray
     torque_gain: np.ndarray
     motor_tau_s: np.ndarray
+
+    def __post_init__(self) -> None:
+        freeze(*(getattr(self, f) for f in _FIELDS))
+
+    def __setstate__(self, state: dict) -> None:  # a copy or an unpickled body: read-only too
+        self.__dict__.update(state)
+        self.__post_init__()
 
     @property
     def n(self) -> int:

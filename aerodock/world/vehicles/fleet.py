@@ -23,6 +23,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
+from aerodock.frozen import freeze
 from aerodock.world.vehicles.body import VehicleBody, body_rows, concat_bodies, nominal_body
 from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
@@ -30,7 +31,6 @@ from aerodock.world.vehicles.point_mass import (
     VehicleParams,
     VehicleState,
     command_targets,
-    forget_rotation,
     hover_state,
     step_vehicle_targets,
 )
@@ -49,14 +49,23 @@ def _field_names(cls: type) -> tuple[str, ...]:
 
 
 def _concat(cls: type, a: Any, b: Any) -> Any:
-    return cls(*[concat_bodies(getattr(a, name), getattr(b, name)) if name == "body"
-                 else np.concatenate([getattr(a, name), getattr(b, name)])
-                 for name in _field_names(cls)])
+    return _frozen(cls(*[concat_bodies(getattr(a, name), getattr(b, name)) if name == "body"
+                         else np.concatenate([getattr(a, name), getattr(b, name)])
+                         for name in _field_names(cls)]))
 
 
 def _rows(cls: type, state: Any, sl: slice | np.ndarray) -> Any:
-    return cls(*[body_rows(state.body, sl) if name == "body" else getattr(state, name)[sl]
-                 for name in _field_names(cls)])
+    return _frozen(cls(*[body_rows(state.body, sl) if name == "body" else getattr(state, name)[sl]
+                         for name in _field_names(cls)]))
+
+
+def _frozen(state: Any) -> Any:
+    """``state`` with the arrays the steps keep numbers for made read-only, as the steps make
+    them: the thrust gains (a rigid body's k_T) and a point mass's angles (its R)."""
+    freeze(state.thrust_gain)
+    if isinstance(state, VehicleState):
+        freeze(state.rpy)
+    return state
 
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:
@@ -100,8 +109,10 @@ class PointMassFleet:
         """Vehicles at rest at ``p_m`` (n, 3) with thrust gains ``gain`` (n,) and true
         constants ``body`` (default nominal)."""
         state = hover_state(self.params, p_m, yaw_rad, body=body)
+        gain = np.array(gain, dtype=float)
+        gain.flags.writeable = False
         return replace(state, thrust_cmd_state_n=state.thrust_cmd_state_n / gain,
-                       thrust_gain=np.asarray(gain, dtype=float).copy())
+                       thrust_gain=gain)
 
     def targets(self, lead: AttitudeCommand, fol: AttitudeCommand, state: VehicleState,
                 n: int, dt_s: float) -> CommandTargets:
@@ -129,11 +140,12 @@ class PointMassFleet:
         """``state`` with ``rows`` held as in ``old`` at hover thrust (a leader on a stand)."""
         state.p[rows] = old.p[rows]
         state.v[rows] = old.v[rows]
-        state.rpy[rows] = old.rpy[rows]
-        forget_rotation()  # a rotation kept for these angles is of the old ones
         np.divide(old.body.mass_kg[rows] * self.params.gravity_mps2, old.thrust_gain[rows],
                   out=state.thrust_cmd_state_n[rows])
-        return state
+        rpy = state.rpy.copy()  # the angles are read-only (VehicleState.R is kept for them)
+        rpy[rows] = old.rpy[rows]
+        rpy.flags.writeable = False
+        return replace(state, rpy=rpy)
 
 
 @dataclass(frozen=True)

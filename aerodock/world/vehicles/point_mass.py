@@ -14,6 +14,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
+from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rpy_to_rotmat
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
 
@@ -58,7 +59,12 @@ class VehicleParams:
 
 @dataclass(frozen=True)
 class VehicleState:
-    """Batch of N vehicles: position, velocity (NED), ZYX Euler angles, actual thrust."""
+    """Batch of N vehicles: position, velocity (NED), ZYX Euler angles, actual thrust.
+
+    The step makes ``rpy`` and ``thrust_gain`` read-only (:attr:`R` is kept per state for its
+    read-only angles); ``p``, ``v`` and ``thrust_cmd_state_n`` are written in place by the
+    constraints that act on a step's result (the ground, a leader's stand).
+    """
 
     p: np.ndarray  # (n, 3) m
     v: np.ndarray  # (n, 3) m/s
@@ -74,27 +80,21 @@ class VehicleState:
 
     @property
     def R(self) -> np.ndarray:  # noqa: N802 - the rotation matrix is R by convention
-        """(n, 3, 3) body-to-world rotation (of the last angles asked for, kept: a step reads
-        the same state's twice, and states are never modified in place)."""
+        """(n, 3, 3) body-to-world rotation, read-only (kept on the state while its angles are
+        the same read-only array: a step reads the same state's twice)."""
         rpy = self.rpy
-        if _LAST_ROTATION[0] is not rpy:
-            _LAST_ROTATION[:] = rpy, rpy_to_rotmat(rpy)
-        return _LAST_ROTATION[1]
+        hit = self.__dict__.get("_rotation")  # not a field: numbers derived from one
+        if hit is not None and hit[0] is rpy and is_frozen(rpy):
+            return hit[1]
+        rot = rpy_to_rotmat(rpy)
+        rot.flags.writeable = False
+        self.__dict__["_rotation"] = (rpy, rot)
+        return rot
 
     @property
     def thrust_n(self) -> np.ndarray:
         """(n,) actual collective thrust, N."""
         return self.thrust_cmd_state_n * self.thrust_gain
-
-
-# The angles (the array object) and rotation of the last VehicleState.R (see there; code that
-# changes a state's angles in place, the leader's stand, forgets it: forget_rotation).
-_LAST_ROTATION: list = [None, None]
-
-
-def forget_rotation() -> None:
-    """Drop the rotation kept by :attr:`VehicleState.R` (after changing angles in place)."""
-    _LAST_ROTATION[:] = None, None
 
 
 @dataclass(frozen=True)
@@ -123,6 +123,7 @@ def hover_state(params: VehicleParams, p_m: np.ndarray, yaw_rad: np.ndarray | fl
     gain = np.ones(n)
     if rng is not None and params.thrust_gain_sd > 0:
         gain = 1.0 + params.thrust_gain_sd * rng.standard_normal(n)
+    freeze(rpy, gain)
     return VehicleState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), rpy=rpy,
         thrust_cmd_state_n=body.mass_kg * params.gravity_mps2 / gain, thrust_gain=gain,
@@ -223,6 +224,7 @@ def step_vehicle_targets(
     yaw += np.pi
     yaw %= 2 * np.pi
     np.subtract(yaw, np.pi, out=rpy[:, 2])
+    rpy.flags.writeable = False  # the state's R is kept for these angles (VehicleState.R)
     tcs = state.thrust_cmd_state_n
     thrust_state = targets.thrust_n - tcs
     thrust_state *= alpha_thr

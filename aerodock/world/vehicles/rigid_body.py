@@ -32,6 +32,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
+from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles.autopilot import (
     AutopilotGains,
@@ -91,13 +92,19 @@ class RigidBodyParams:
         drag_sums = np.stack([columns[c] for c in _DRAG_SUM_COLUMNS], axis=1)
         mixer = np.vstack([np.ones(4), torque_map.T])
         gains = AutopilotGains(
-            attitude_p=np.asarray(a.attitude_p, dtype=float),
-            rate_p=np.asarray(a.rate_p, dtype=float), rate_i=np.asarray(a.rate_i, dtype=float),
+            attitude_p=np.array(a.attitude_p, dtype=float),
+            rate_p=np.array(a.rate_p, dtype=float), rate_i=np.array(a.rate_i, dtype=float),
             rate_integral_max_radps2=float(a.rate_integral_max_radps2),
             rate_max_radps=np.deg2rad(np.asarray(a.rate_max_dps, dtype=float)),
         )
+        inertia = np.array(v.inertia_kgm2, dtype=float)
+        mixer_inv = np.linalg.inv(mixer).T.copy()
+        # Constants, read-only: the autopilot's gain columns and the downwash field's geometry
+        # are cached by these arrays (gain_columns, RoundJetField.wrench).
+        freeze(gains.attitude_p, gains.rate_p, gains.rate_i, gains.rate_max_radps, inertia,
+               offsets, spin, torque_map, drag_sums, mixer_inv)
         return cls(
-            mass_kg=v.mass_kg, inertia_kgm2=np.asarray(v.inertia_kgm2, dtype=float),
+            mass_kg=v.mass_kg, inertia_kgm2=inertia,
             rotor_offsets_m=offsets, rotor_spin=spin, rotor_radius_m=v.rotor_radius_m,
             thrust_coeff=v.rotor_thrust_coeff, torque_ratio_m=v.rotor_torque_ratio_m,
             motor_tau_s=v.motor_tau_s, rotor_drag_coeff=v.rotor_drag_coeff,
@@ -105,7 +112,7 @@ class RigidBodyParams:
             parasitic_drag_coeff=v.parasitic_drag_coeff,
             rotor_thrust_max_n=v.thrust_max_g * v.mass_kg * g / 4.0,
             tilt_max_rad=np.deg2rad(v.tilt_max_deg), gravity_mps2=g, gains=gains,
-            mixer_inv=np.linalg.inv(mixer).T.copy(), rotor_torque_map=torque_map,
+            mixer_inv=mixer_inv, rotor_torque_map=torque_map,
             rotor_drag_sums=drag_sums,
         )
 
@@ -167,10 +174,12 @@ def hover_rigid_state(params: RigidBodyParams, p_m: np.ndarray, yaw_rad: np.ndar
     rot = np.zeros((n, 3, 3))
     rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
     omega = np.sqrt(weight / 4.0 / (params.thrust_coeff * thrust_gain))
+    gain = np.array(thrust_gain, dtype=float)
+    gain.flags.writeable = False  # constant: the step's k_T is cached by it (_thrust_coeffs)
     return RigidBodyState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), R=rot, w=np.zeros((n, 3)),
         rotor_speed=np.repeat(omega[:, None], 4, axis=1), rate_integral=np.zeros((n, 3)),
-        yaw_setpoint=yaw, thrust_gain=np.asarray(thrust_gain, dtype=float).copy(),
+        yaw_setpoint=yaw, thrust_gain=gain,
         thrust_n=weight, body=body,
     )
 
@@ -243,7 +252,7 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
         params: vehicle constants.
     """
     force, torque = _body_wrench_t(np.ascontiguousarray(np.asarray(rotor_speed, dtype=float).T),
-                                   np.asarray(thrust_gain, dtype=float),
+                                   params.thrust_coeff * np.asarray(thrust_gain, dtype=float),
                                    np.asarray(v_body_mps, dtype=float).T,
                                    np.asarray(w_radps, dtype=float).T, params)
     return force.T, torque.T
@@ -258,16 +267,17 @@ _DRAG_SUM_COLUMNS = ("1", "-y", "x", "y", "xx", "yy", "xy")
 _DRAG_MOMENT_ROWS = np.array([0, 3, 2, 3, 5, 6, 2, 6, 4])
 
 
-def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_t: np.ndarray,
+def _body_wrench_t(omega: np.ndarray, thrust_coeffs: np.ndarray, v_body_t: np.ndarray,
                    w_t: np.ndarray, params: RigidBodyParams,
                    torque_gain: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n) and component-major velocity
-    and rates (3, n) (rows may be strided views): force and torque (3, n).
+    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n), each vehicle's true k_T
+    ``thrust_coeffs`` (n,) (``params.thrust_coeff`` times its thrust gain) and component-major
+    velocity and rates (3, n) (rows may be strided views): force and torque (3, n).
 
     Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
     broadcast would call the inner loop once per vehicle)."""
     f = omega * omega  # rotor_thrusts_n, rotor-major
-    f *= _thrust_coeffs(params.thrust_coeff, thrust_gain)
+    f *= thrust_coeffs
     # Each rotor's share in one broadcast (4, 3, n), then summed over the rotors in order.
     share = np.multiply(params.rotor_torque_map[:, :, None], f[:, None, :])
     torque = share[0]
@@ -318,40 +328,39 @@ def _body_wrench_t(omega: np.ndarray, thrust_gain: np.ndarray, v_body_t: np.ndar
     return force, torque
 
 
-def _thrust_coeffs(thrust_coeff: float, thrust_gain: np.ndarray) -> np.ndarray:
-    """(n,) each vehicle's true k_T, ``thrust_coeff * thrust_gain`` (the last one kept: a step
-    asks twice with the same gain array, which states carry over unchanged)."""
-    last = _THRUST_COEFFS
-    if last[0] is not thrust_gain or last[1] != thrust_coeff:
-        last[:] = thrust_gain, thrust_coeff, thrust_coeff * thrust_gain
-    return last[2]
-
-
-_THRUST_COEFFS: list = [None, None, None]
+def _thrust_coeffs(body: VehicleBody, thrust_coeff: float,
+                   thrust_gain: np.ndarray) -> np.ndarray:
+    """(n,) each vehicle's true k_T, ``thrust_coeff * thrust_gain``, read-only: kept on
+    ``body`` (states carry both the body and the gain over unchanged, so one product serves
+    every step) while ``thrust_gain`` is the same read-only array."""
+    hit = body.__dict__.get("_thrust_coeffs")  # not a field: numbers derived from it
+    if (hit is not None and hit[0] is thrust_gain and hit[1] == thrust_coeff
+            and is_frozen(thrust_gain)):
+        return hit[2]
+    coeffs = thrust_coeff * thrust_gain
+    freeze(coeffs)
+    body.__dict__["_thrust_coeffs"] = (thrust_gain, thrust_coeff, coeffs)
+    return coeffs
 
 
 def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray | float, np.ndarray]:
-    """Per-step constants of ``body``'s vehicles (cached per body and dt): the motors'
-    first-order step factor ``1 - exp(-dt / tau)``, (n, 1) or one number when every vehicle's
-    motors are alike, and the inertia component-major with its first two rows repeated,
-    ``(J_x, J_y, J_z, J_x, J_y)`` (5, n) (the cross product's operands are then slices)."""
-    key = (id(body), dt_s)
-    hit = _BODY_CONSTANTS.get(key)
-    if hit is None or hit[0] is not body:
-        if len(_BODY_CONSTANTS) > 64:
-            _BODY_CONSTANTS.clear()
-        tau = body.motor_tau_s
-        alpha = (1.0 - np.exp(-dt_s / float(tau[0])) if np.all(tau == tau[0])
-                 else (1.0 - np.exp(-dt_s / tau))[:, None])
-        inertia = np.asarray(body.inertia_kgm2, dtype=float).T
-        rows = np.concatenate([inertia, inertia[:2]])
-        rows.flags.writeable = False
-        hit = _BODY_CONSTANTS[key] = (body, (alpha, rows))
-    return hit[1]
-
-
-_BODY_CONSTANTS: dict[tuple[int, float], tuple[VehicleBody, tuple[np.ndarray | float,
-                                                                   np.ndarray]]] = {}
+    """Per-step constants of ``body``'s vehicles: the motors' first-order step factor
+    ``1 - exp(-dt / tau)``, (n, 1) or one number when every vehicle's motors are alike, and the
+    inertia component-major with its first two rows repeated, ``(J_x, J_y, J_z, J_x, J_y)``
+    (5, n) (the cross product's operands are then slices); read-only, kept on ``body`` for the
+    last ``dt_s`` while its arrays are read-only (a :class:`VehicleBody` makes them so)."""
+    tau, inertia = body.motor_tau_s, body.inertia_kgm2
+    hit = body.__dict__.get("_step_constants")  # not a field: numbers derived from it
+    if hit is not None and hit[0] == dt_s and is_frozen(tau) and is_frozen(inertia):
+        return hit[1]
+    alpha = (1.0 - np.exp(-dt_s / float(tau[0])) if np.all(tau == tau[0])
+             else (1.0 - np.exp(-dt_s / tau))[:, None])
+    freeze(alpha)
+    inertia = np.asarray(inertia, dtype=float).T
+    rows = np.concatenate([inertia, inertia[:2]])
+    rows.flags.writeable = False
+    body.__dict__["_step_constants"] = (dt_s, (alpha, rows))
+    return alpha, rows
 
 
 def step_rigid_body(
@@ -399,7 +408,8 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     # R^T v, component-major: the rotor drag reads its rows (strided, numpy would iterate a
     # broadcast over them a few elements at a time).
     v_body_t = np.ascontiguousarray(np.matmul(v[:, None, :], rot)[:, 0].T)
-    force_body, torque = _body_wrench_t(omega_t, state.thrust_gain, v_body_t, w_t, params,
+    thrust_coeffs = _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain)
+    force_body, torque = _body_wrench_t(omega_t, thrust_coeffs, v_body_t, w_t, params,
                                         body.torque_gain)
     if ext_torque_nm is not None:
         torque += np.asarray(ext_torque_nm, dtype=float).T
@@ -437,7 +447,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n
     omega_new *= alpha
     omega_new += omega
     f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
-    f_new *= _thrust_coeffs(params.thrust_coeff, state.thrust_gain)
+    f_new *= thrust_coeffs
     thrust_new = f_new[0] + f_new[1]
     thrust_new += f_new[2]
     thrust_new += f_new[3]
