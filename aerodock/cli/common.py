@@ -72,6 +72,15 @@ class LoggedProgress(Progress):
         super().__init__(*columns, **kwargs)
         self._logged_at = time.monotonic()
 
+    def start(self) -> None:
+        """Draw the bar on a terminal; elsewhere draw nothing (Rich would end with a bare line)."""
+        if self.console.is_terminal:
+            super().start()
+
+    def stop(self) -> None:
+        if self.console.is_terminal:
+            super().stop()
+
     def update(self, task_id: TaskID, **kwargs: Any) -> None:  # type: ignore[override]
         super().update(task_id, **kwargs)
         self._log(task_id)
