@@ -94,10 +94,9 @@ class LoggedProgress(Progress):
         if self.console.is_terminal or now - self._logged_at < LOG_EVERY_S:
             return
         self._logged_at = now
-        with self._lock:
-            task = self._tasks[task_id]
-            done, total, what = task.completed, task.total, task.description or "working"
-            elapsed = task.elapsed or 0.0
+        task = next(t for t in self.tasks if t.id == task_id)
+        done, total, what = task.completed, task.total, task.description or "working"
+        elapsed = task.elapsed or 0.0
         if not total:
             share = f"{done:g}"
         elif total == 1:  # a fraction done (a campaign's progress)

@@ -28,6 +28,8 @@ import functools
 
 import numpy as np
 
+from aerodock.frozen import freeze
+
 
 def accel_to_attitude_thrust(
     accel_mps2: np.ndarray,
@@ -164,7 +166,7 @@ def _forward(roll_pitch: np.ndarray, cos_sin: np.ndarray, k: np.ndarray,
 def _down(gravity_mps2: float) -> np.ndarray:
     """(3, 1) ``g e3`` as a read-only column."""
     out = np.array([[0.0], [0.0], [gravity_mps2]])
-    out.flags.writeable = False
+    freeze(out)
     return out
 
 

@@ -55,7 +55,7 @@ import numpy as np
 
 from aerodock.downwash.base import BodyState
 from aerodock.downwash.wrench import quad_rotor_offsets_body_m
-from aerodock.frozen import is_frozen
+from aerodock.frozen import freeze, is_frozen
 from aerodock.rng import standard_normal_t
 
 _LN2 = float(np.log(2.0))
@@ -178,7 +178,7 @@ class RoundJetField:
         self.follower_n_rotors = int(follower_n_rotors)
         self.rotor_offsets_body_m = quad_rotor_offsets_body_m(follower_diagonal_m,
                                                               self.follower_n_rotors)
-        self.rotor_offsets_body_m.flags.writeable = False  # the geometry's caches key on it
+        freeze(self.rotor_offsets_body_m)  # the geometry's caches key on it
         self.body_area_m2 = self.body_area_ratio * self.follower_n_rotors \
             * self.follower_disk_area_m2
         self.body_radius_m = float(np.sqrt(self.body_area_m2 / np.pi))
@@ -215,7 +215,7 @@ class RoundJetField:
         """A copy or an unpickled field: its offsets read-only again (a copied array is
         writable), as the geometry's caches want them."""
         self.__dict__.update(state)
-        self.rotor_offsets_body_m.flags.writeable = False
+        freeze(self.rotor_offsets_body_m)
 
     # -- protocol ---------------------------------------------------------------------------
     def reset(self, n: int, rng: np.random.Generator) -> None:
@@ -501,7 +501,7 @@ class RoundJetField:
         if points is None or points[0] is not offsets or not is_frozen(offsets):
             cols = np.zeros((k + 1, 3))
             cols[:k] = offsets
-            cols.flags.writeable = False
+            freeze(cols)
             points = (offsets, cols[None, :, 0:1], cols[None, :, 1:2],
                       cols[None, :, 2:3] if offsets[:, 2].any() else None,
                       _torque_arms(offsets))
@@ -565,7 +565,7 @@ class RoundJetField:
             cols[1], cols[1, k] = 0.25 * self.follower_disk_radius_m ** 2, \
                 0.25 * self.body_radius_m ** 2
             cols[2], cols[2, k] = 2.0, 4.0
-            cols.flags.writeable = False
+            freeze(cols)
             self._area_key, self._area_cols = key, tuple(cols)
         return self._area_cols
 
@@ -588,7 +588,7 @@ class RoundJetField:
                            / (2.0 * rho * self.follower_n_rotors * area)) ** (1.0 - 0.5 * p)
         coeff[:k] = disk
         coeff[k] = 0.5 * self.body_drag_coeff * rho * self.body_area_m2
-        coeff.flags.writeable = False
+        freeze(coeff)
         self._coeff = (mass_kg, params, coeff)
         return coeff
 
@@ -773,7 +773,7 @@ def _torque_arms(offsets: np.ndarray) -> np.ndarray:
     """(4, k, 1) the disks' (y, x, x, y): the arms of the flat disks' torque."""
     x, y = offsets[:, 0], offsets[:, 1]
     arms = np.stack([y, x, x, y])[:, :, None]
-    arms.flags.writeable = False
+    freeze(arms)
     return arms
 
 

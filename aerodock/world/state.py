@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.downwash import BodyState, DownwashField
-from aerodock.frozen import is_frozen
+from aerodock.frozen import freeze, is_frozen
 from aerodock.rng import TrialRNG
 from aerodock.rows import pair_rows, take_rows
 from aerodock.world.gripper import _CAPTURED, GripperState, gripper_idle
@@ -173,7 +173,7 @@ class WorldState:
                 and is_frozen(gripper.servo_start_s)):
             return cached[1:]
         captured = gripper.gate == _CAPTURED
-        captured.flags.writeable = False
+        freeze(captured)
         cached = self.__dict__["_gripper_flags"] = (
             gripper, captured, bool(captured.any()), gripper_idle(gripper))
         return cached[1:]

@@ -24,6 +24,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.downwash import BodyState, DownwashField, build_field
 from aerodock.downwash.mean import mean_acceleration_fn
+from aerodock.frozen import freeze
 from aerodock.rng import TrialRNG
 from aerodock.rows import as_rows
 from aerodock.world import sensors
@@ -80,7 +81,7 @@ class World:
         self.terms = step
         rigid = params.rigid
         offsets = params.follower_fleet.params.rotor_offsets_m if rigid else np.zeros((1, 3))
-        offsets.flags.writeable = False  # the field's geometry is cached by it (read-only)
+        freeze(offsets)  # the field's geometry is cached by it (read-only)
         self.constants = BatchConstants(
             bar_mass_kg=np.full(n, params.platform.bar_mass_kg),
             no_close=np.zeros(n, dtype=bool),

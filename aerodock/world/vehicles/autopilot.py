@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.frozen import is_frozen
+from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rpy_to_rotmat
 
 
@@ -50,7 +50,7 @@ class AutopilotGains:
 @functools.lru_cache(maxsize=64)
 def _tiled_rows(values: bytes, n: int) -> np.ndarray:
     out = np.tile(np.frombuffer(values), (n, 1))
-    out.flags.writeable = False
+    freeze(out)
     return out
 
 
@@ -90,7 +90,7 @@ def gain_columns(gains: AutopilotGains, inertia_kgm2: np.ndarray,
         out = np.array(np.broadcast_to(np.asarray(v, dtype=float), (3,)))[:, None]
         if n is not None:
             out = np.repeat(out, n, axis=1)
-        out.flags.writeable = False
+        freeze(out)
         return out
 
     cols = tuple(col(v) for v in (-0.5 * gains.attitude_p, limit, -limit, int_limit, -int_limit,

@@ -110,7 +110,7 @@ class PointMassFleet:
         constants ``body`` (default nominal)."""
         state = hover_state(self.params, p_m, yaw_rad, body=body)
         gain = np.array(gain, dtype=float)
-        gain.flags.writeable = False
+        freeze(gain)
         return replace(state, thrust_cmd_state_n=state.thrust_cmd_state_n / gain,
                        thrust_gain=gain)
 
@@ -144,7 +144,7 @@ class PointMassFleet:
                   out=state.thrust_cmd_state_n[rows])
         rpy = state.rpy.copy()  # the angles are read-only (VehicleState.R is kept for them)
         rpy[rows] = old.rpy[rows]
-        rpy.flags.writeable = False
+        freeze(rpy)
         return replace(state, rpy=rpy)
 
 

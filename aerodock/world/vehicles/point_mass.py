@@ -87,7 +87,7 @@ class VehicleState:
         if hit is not None and hit[0] is rpy and is_frozen(rpy):
             return hit[1]
         rot = rpy_to_rotmat(rpy)
-        rot.flags.writeable = False
+        freeze(rot)
         self.__dict__["_rotation"] = (rpy, rot)
         return rot
 
@@ -224,7 +224,7 @@ def step_vehicle_targets(
     yaw += np.pi
     yaw %= 2 * np.pi
     np.subtract(yaw, np.pi, out=rpy[:, 2])
-    rpy.flags.writeable = False  # the state's R is kept for these angles (VehicleState.R)
+    freeze(rpy)  # the state's R is kept for these angles (VehicleState.R)
     tcs = state.thrust_cmd_state_n
     thrust_state = targets.thrust_n - tcs
     thrust_state *= alpha_thr

@@ -175,7 +175,7 @@ def hover_rigid_state(params: RigidBodyParams, p_m: np.ndarray, yaw_rad: np.ndar
     rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
     omega = np.sqrt(weight / 4.0 / (params.thrust_coeff * thrust_gain))
     gain = np.array(thrust_gain, dtype=float)
-    gain.flags.writeable = False  # constant: the step's k_T is cached by it (_thrust_coeffs)
+    freeze(gain)  # constant: the step's k_T is cached by it (_thrust_coeffs)
     return RigidBodyState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), R=rot, w=np.zeros((n, 3)),
         rotor_speed=np.repeat(omega[:, None], 4, axis=1), rate_integral=np.zeros((n, 3)),
@@ -358,7 +358,7 @@ def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray | float,
     freeze(alpha)
     inertia = np.asarray(inertia, dtype=float).T
     rows = np.concatenate([inertia, inertia[:2]])
-    rows.flags.writeable = False
+    freeze(rows)
     body.__dict__["_step_constants"] = (dt_s, (alpha, rows))
     return alpha, rows
 
