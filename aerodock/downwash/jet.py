@@ -286,6 +286,13 @@ class RoundJetField:
         total /= np.asarray(follower.mass_kg, dtype=float)
         return np.ascontiguousarray(total.T)
 
+    def mean_disk_torque_nm(self, leader: BodyState, follower: BodyState) -> np.ndarray:
+        """(n, 3) mean (turbulence-free) torque of the wake on the follower's rotor disks about
+        its centre of mass, N·m, body frame (FRD)."""
+        _, torque, _ = self._forces(leader, follower, self.rotor_offsets_body_m, noisy=False,
+                                    want_torque=True)
+        return torque
+
     def turbulence(self, leader: BodyState, follower: BodyState) -> dict[str, np.ndarray]:
         """The turbulence at the follower, per trial (n,): ``corr_time_s``, the processes'
         correlation time; ``disk_share``, the share of a disk's turbulence all disks have in

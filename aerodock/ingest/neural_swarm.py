@@ -82,6 +82,7 @@ _ACCEL = ("ax", "ay", "az")
 _QUAT_XYZW = ("qx", "qy", "qz", "qw")
 _MOTOR_N = ("u1", "u2", "u3", "u4")
 _RATES = ("wx", "wy", "wz")
+_TORQUES = ("torquex", "torquey", "torquez")
 _HEADER_TOKEN = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*(?:\[(?P<unit>[^\]]*)\])?\s*$")
 
 
@@ -199,6 +200,17 @@ def read_vehicle_file(path: Path, *, time_unit: str = "auto") -> VehicleTrack:
         rates = table.data[:, rate_idx]
         if np.all(np.isfinite(rates)):
             extra["body_rates_radps"] = convert_vectors(FLIP_YZ, rates)  # FLU -> FRD
+    torque_idx = [_find(index, n) for n in _TORQUES]
+    if all(i is not None for i in torque_idx):
+        torques = table.data[:, torque_idx]
+        if np.all(np.isfinite(torques)):
+            # The torque the motors' logged thrusts make (the logs' own mixer), FLU -> FRD.
+            extra["body_torque_nm"] = convert_vectors(FLIP_YZ, torques)
+    pwm_idx = [_find(index, n, "pwm") for n in _MOTOR_N]
+    if all(i is not None for i in pwm_idx):
+        pwm = table.data[:, pwm_idx]
+        if np.all(np.isfinite(pwm)):
+            extra["motor_pwm"] = pwm  # normalised 0..1, the motors in the logs' order
     return VehicleTrack(
         path=path,
         vehicle_id=vehicle_id,
@@ -366,6 +378,10 @@ def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_ma
     extra = {"leader_thrust_n": resample_linear(leader.t_s, leader.thrust_n, t)}
     if "body_rates_radps" in follower.extra:
         extra["follower_body_rates_radps"] = follower.extra["body_rates_radps"][keep]
+    if "body_torque_nm" in follower.extra:
+        extra["follower_motor_torque_nm"] = follower.extra["body_torque_nm"][keep]
+    if "motor_pwm" in follower.extra:
+        extra["follower_motor_pwm"] = follower.extra["motor_pwm"][keep]
     return FlightLog(
         t_s=t - t[0],
         leader_pos_m=resample_linear(leader.t_s, leader.pos_m, t),

@@ -300,7 +300,9 @@ def build_jet(params: dict[str, float], geometry: dict[str, float]) -> RoundJetF
         follower_diagonal_m=geometry["follower_diagonal_m"], gravity_mps2=GRAVITY_MPS2)
 
 
-def _geometry_with(flight: FlightSamples, rotor_radii_m: dict[str, float]) -> dict[str, float]:
+def geometry_with(flight: FlightSamples, rotor_radii_m: dict[str, float]) -> dict[str, float]:
+    """The flight's vehicle geometry with ``rotor_radii_m`` (by vehicle id) in place of its
+    logged rotor radii."""
     geometry = dict(flight.geometry)
     for role in ("leader", "follower"):
         vid = flight.vehicles.get(role)
@@ -312,14 +314,14 @@ def _geometry_with(flight: FlightSamples, rotor_radii_m: dict[str, float]) -> di
 def model_mean(params: dict[str, float], flight: FlightSamples,
                rotor_radii_m: dict[str, float] | None = None) -> np.ndarray:
     """(m, 3) the jet's mean acceleration at the flight's samples, m/s², NED."""
-    jet = build_jet(params, _geometry_with(flight, rotor_radii_m or {}))
+    jet = build_jet(params, geometry_with(flight, rotor_radii_m or {}))
     return jet.mean_acceleration(flight.leader, flight.follower)
 
 
 def model_turbulence(params: dict[str, float], flight: FlightSamples,
                      rotor_radii_m: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """The jet's turbulence at the flight's samples (:meth:`RoundJetField.turbulence`)."""
-    jet = build_jet(params, _geometry_with(flight, rotor_radii_m or {}))
+    jet = build_jet(params, geometry_with(flight, rotor_radii_m or {}))
     return jet.turbulence(flight.leader, flight.follower)
 
 

@@ -76,8 +76,10 @@ def synthetic_flight(t: np.ndarray, mass_kg: float = MASS_KG) -> dict[str, np.nd
 def write_ns_file(path: Path, *, t_us: np.ndarray, pos_zup: np.ndarray | None = None,
                   quat_xyzw: np.ndarray | None = None, accel_zup: np.ndarray | None = None,
                   thrust_n: np.ndarray | None = None, mass_kg: float = 0.032,
+                  torque_flu: np.ndarray | None = None, pwm: np.ndarray | None = None,
                   header: str = NS_HEADER) -> Path:
-    """Write a Neural-Swarm-format file; defaults: level hover at (0, 0, 0.5) m z-up."""
+    """Write a Neural-Swarm-format file; defaults: level hover at (0, 0, 0.5) m z-up, no
+    torque, every motor at 0.6 PWM."""
     n = len(t_us)
     pos = np.tile([0.0, 0.0, 0.5], (n, 1)) if pos_zup is None else pos_zup
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)) if quat_xyzw is None else quat_xyzw
@@ -88,8 +90,8 @@ def write_ns_file(path: Path, *, t_us: np.ndarray, pos_zup: np.ndarray | None = 
     vel = np.zeros((n, 3))
     rows = np.column_stack([
         t_us, pos, vel, accel_zup, quat, np.tile(thrust[:, None] / 4, (1, 4)),
-        np.full((n, 4), 0.6), np.full(n, 3.7), thrust / G * 1000, np.zeros((n, 3)),
-        np.zeros((n, 3)),
+        np.full((n, 4), 0.6) if pwm is None else pwm, np.full(n, 3.7), thrust / G * 1000,
+        np.zeros((n, 3)) if torque_flu is None else torque_flu, np.zeros((n, 3)),
     ])
     lines = [header] + [",".join(f"{x:.17g}" for x in row) for row in rows]
     path.write_text("\n".join(lines) + "\n")

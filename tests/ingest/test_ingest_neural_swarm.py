@@ -162,6 +162,20 @@ def test_tilted_consistent_physics_gives_zero_residual(tmp_path: Path) -> None:
     np.testing.assert_allclose(rotmat_to_quat(np.eye(3)), [1, 0, 0, 0])
 
 
+def test_motor_torque_and_commands_are_kept(tmp_path: Path) -> None:
+    """The logs' motor torque (body FLU) reaches the follower's FlightLog in FRD, its motor
+    commands unchanged: what aerodock.learning.wake_torque reads."""
+    n = 300
+    torque = np.tile([1e-3, 2e-3, -3e-4], (n, 1))
+    pwm = np.tile([0.61, 0.62, 0.63, 0.64], (n, 1))
+    write_ns_file(tmp_path / "cf1_00.csv", t_us=_times_us(n), torque_flu=torque, pwm=pwm)
+    write_ns_file(tmp_path / "cf2_00.csv", t_us=_times_us(n))
+    log = read_neural_swarm([tmp_path / "cf1_00.csv", tmp_path / "cf2_00.csv"])[0]
+    assert log.meta["follower_id"] == "cf1"
+    np.testing.assert_allclose(log.extra["follower_motor_torque_nm"], [[1e-3, -2e-3, 3e-4]] * n)
+    np.testing.assert_allclose(log.extra["follower_motor_pwm"], pwm)
+
+
 @pytest.mark.parametrize("scale, unit", [(1.0, "us"), (1e-3, "ms"), (1e-6, "s")])
 def test_time_unit_is_detected(tmp_path: Path, scale: float, unit: str) -> None:
     path = write_ns_file(tmp_path / "cf1_00.csv", t_us=_times_us() * scale)

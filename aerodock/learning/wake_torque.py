@@ -1,0 +1,191 @@
+"""The wake's torque on the follower, read from real flights, beside the jet's.
+
+A fit of the wake (:mod:`aerodock.learning.wake_fit`) sees the follower's acceleration only.
+Flights whose logs carry the torque the motors make (``follower_motor_torque_nm``, N·m, body
+FRD: the Neural-Swarm logs' own mixer of their per-motor thrusts) and the body rates
+(``follower_body_rates_radps``) also give the wake's torque, from Euler's equation:
+
+    tau_wake = J dw/dt + w x J w - (tau_motors - tau_free)
+
+``tau_free`` is the follower's median motor torque in free air in the same flight (its trim: a
+centre of mass off the middle, motors that differ); ``dw/dt`` is the logged rates' central
+difference. The part that matters is the *inward* torque, the one that pushes the follower's
+disks nearer the leader's axis down (its component along ``-(e_r x e_z)``, ``e_r`` the horizontal
+unit vector from the axis to the follower): the jet's torque at the wake's edge, the paper's
+oscillatory behaviour. Binned by the horizontal offset, it is set beside the jet's mean torque at
+the same logged states (:func:`torque_profile`).
+
+What the logged torque stands on: the per-motor thrusts are the logs' estimate from the motor
+commands (PWM and battery voltage), a still-air map. Where the motors nearest the axis run near
+their ceiling (``follower_motor_pwm``, 0..1), that map is least certain and the follower is at
+the limit of its roll authority; the profile reports those motors' median command per bin.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerodock.downwash.jet import quad_rotor_offsets_body_m
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import quat_to_rotmat
+from aerodock.learning.wake_fit import FlightSamples, WakeFitError, build_jet, geometry_with
+
+MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
+BODY_RATES_KEY = "follower_body_rates_radps"
+MOTOR_PWM_KEY = "follower_motor_pwm"
+# Free air for the trim: farther than this to the side of the leader, or above it, m.
+FREE_AIR_OFFSET_M = 0.4
+MIN_FREE_SAMPLES = 50
+MIN_BIN_SAMPLES = 20
+
+
+@dataclass(frozen=True)
+class TorqueBin:
+    """One bin of horizontal offset from the leader's axis: the inward torque, N·m."""
+
+    offset_lo_m: float
+    offset_hi_m: float
+    samples: int
+    real_nm: float
+    real_se_nm: float
+    jet_nm: float
+    ratio: float
+    lean_in_deg: float
+    """The real follower's mean lean towards the axis (its body z axis's tilt, signed)."""
+    near_motor_pwm: float | None
+    """Median command (0..1) of the motor nearest the axis, when the log has it."""
+
+
+def has_torque(log: FlightLog) -> bool:
+    """True when ``log`` carries the motor torque and the body rates this module reads."""
+    return MOTOR_TORQUE_KEY in log.extra and BODY_RATES_KEY in log.extra
+
+
+def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float]) -> np.ndarray | None:
+    """(T, 3) the wake's torque on the follower in its body frame (FRD), N·m, from Euler's
+    equation (module docstring), or None when the flight has fewer than
+    ``MIN_FREE_SAMPLES`` samples in free air (no trim to take away).
+
+    Raises:
+        WakeFitError: the log has no motor torque or body rates.
+    """
+    if not has_torque(log):
+        raise WakeFitError(f"{log.name}: the log has no {MOTOR_TORQUE_KEY} and "
+                           f"{BODY_RATES_KEY} (Neural-Swarm logs carry both)")
+    inertia = np.asarray(inertia_kgm2, dtype=float)
+    motors = np.asarray(log.extra[MOTOR_TORQUE_KEY], dtype=float)
+    rates = np.asarray(log.extra[BODY_RATES_KEY], dtype=float)
+    dp = log.follower_pos_m - log.leader_pos_m
+    free = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+    if free.sum() < MIN_FREE_SAMPLES or log.n_samples < 3:
+        return None
+    trim = np.median(motors[free], axis=0)
+    rate_dot = np.gradient(rates, log.t_s, axis=0)
+    return inertia * rate_dot + np.cross(rates, inertia * rates) - (motors - trim)
+
+
+def _inward(torque_world: np.ndarray, e_r: np.ndarray) -> np.ndarray:
+    """The torque's component that pushes the disks nearer the axis down: ``-(tau . (e_r x
+    e_z))`` in NED, ``e_r x e_z = (e_ry, -e_rx, 0)``."""
+    return -(torque_world[:, 0] * e_r[:, 1] - torque_world[:, 1] * e_r[:, 0])
+
+
+def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
+                   logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]], *,
+                   rotor_radii_m: dict[str, float] | None = None,
+                   separation_m: tuple[float, float] = (0.15, 0.45),
+                   bin_m: float = 0.02, max_offset_m: float = 0.16,
+                   ) -> dict[str, list[TorqueBin]]:
+    """Per pairing (``FlightSamples.pair``), the inward wake torque against the horizontal
+    offset from the leader's axis: the real flights' (module docstring) and the jet's with
+    ``params`` at the same logged states, over the samples ``separation_m`` below the leader.
+
+    Args:
+        params: the jet's fitted parameters (:data:`wake_fit.FITTED_PARAMS` keys).
+        flights: the fit's samples (:func:`wake_fit.prepare_flights`) of ``logs``.
+        logs: the FlightLogs (matched to ``flights`` by name); those without the motor torque
+            or without free air are left out.
+        inertia_kgm2: the follower's principal moments of inertia by vehicle id.
+        rotor_radii_m: rotor radii by vehicle id overriding the logs' (as the fit's).
+
+    Raises:
+        WakeFitError: no flight with the motor torque, or a follower without an inertia.
+    """
+    by_name = {log.name: log for log in logs}
+    parts: dict[str, list[tuple[np.ndarray, ...]]] = {}
+    for flight in flights:
+        log = by_name.get(flight.name)
+        if log is None or not has_torque(log):
+            continue
+        vehicle = flight.vehicles.get("follower")
+        if vehicle not in inertia_kgm2:
+            raise WakeFitError(f"{flight.name}: no inertia for the follower {vehicle!r}")
+        real_body = real_wake_torque_nm(log, inertia_kgm2[vehicle])
+        if real_body is None:
+            continue
+        i = flight.index
+        rot = quat_to_rotmat(log.follower_quat[i])
+        geometry = geometry_with(flight, rotor_radii_m or {})
+        jet = build_jet(params, geometry)
+        jet_body = jet.mean_disk_torque_nm(flight.leader, flight.follower)
+        dp = flight.follower.p - flight.leader.p
+        horizontal = np.hypot(dp[:, 0], dp[:, 1])
+        e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]
+        real = _inward(np.einsum("nij,nj->ni", rot, real_body[i]), e_r)
+        model = _inward(np.einsum("nij,nj->ni", rot, jet_body), e_r)
+        # The lean towards the axis: the thrust axis (-body z) tipped towards -e_r.
+        up = -rot[:, :, 2]
+        lean = np.degrees(np.arcsin(np.clip(-(up[:, 0] * e_r[:, 0] + up[:, 1] * e_r[:, 1]),
+                                            -1.0, 1.0)))
+        near_pwm = np.full(i.size, np.nan)
+        if MOTOR_PWM_KEY in log.extra:
+            offsets = quad_rotor_offsets_body_m(geometry["follower_diagonal_m"], 4)
+            motors = flight.follower.p[:, None, :2] + np.einsum(
+                "nij,kj->nki", rot, offsets)[:, :, :2]
+            nearest = np.argmin(np.linalg.norm(motors - flight.leader.p[:, None, :2], axis=2),
+                                axis=1)
+            near_pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)[
+                i, _LOG_MOTOR_ORDER[nearest]]
+        parts.setdefault(flight.pair, []).append((horizontal, dp[:, 2], real, model, lean,
+                                                  near_pwm))
+    if not parts:
+        raise WakeFitError("no flight carries the motor torque and body rates with free air "
+                           "to take the trim from")
+    out: dict[str, list[TorqueBin]] = {}
+    for pair, chunks in parts.items():
+        horizontal, sep, real, model, lean, pwm = (np.concatenate(c) for c in zip(*chunks))
+        below = (sep >= separation_m[0]) & (sep <= separation_m[1])
+        bins = []
+        for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
+            m = below & (horizontal >= lo) & (horizontal < lo + bin_m)
+            n = int(m.sum())
+            if n < MIN_BIN_SAMPLES:
+                continue
+            jet_nm = float(model[m].mean())
+            real_nm = float(real[m].mean())
+            bins.append(TorqueBin(
+                offset_lo_m=float(lo), offset_hi_m=float(lo + bin_m), samples=n,
+                real_nm=real_nm, real_se_nm=float(real[m].std() / np.sqrt(n)), jet_nm=jet_nm,
+                ratio=real_nm / jet_nm if abs(jet_nm) > 1e-12 else float("nan"),
+                lean_in_deg=float(lean[m].mean()),
+                near_motor_pwm=(float(np.nanmedian(pwm[m])) if np.isfinite(pwm[m]).any()
+                                else None)))
+        out[pair] = bins
+    return out
+
+
+# quad_rotor_offsets_body_m's disks (FRD) -> the Neural-Swarm logs' motor columns (u1..u4:
+# front right, back right, back left, front left), filled in by _motor_order below.
+def _motor_order() -> np.ndarray:
+    offsets = quad_rotor_offsets_body_m(1.0, 4)
+    logs_frd = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
+    order = np.empty(4, dtype=int)
+    for k, (x, y) in enumerate(offsets[:, :2]):
+        order[k] = int(np.argmax(logs_frd @ np.array([x, y])))
+    return order
+
+
+_LOG_MOTOR_ORDER = _motor_order()

@@ -1,0 +1,68 @@
+"""The wake's torque on the follower: the real Crazyflie flights' (from their logged motor torques
+and body rates) against the fitted jet's at the same states (aerodock/learning/wake_torque.py).
+
+    .venv/bin/python studies/wake_torque.py [--data ../shared/data/neural-swarm] [--json]
+
+The jet is examples/crazyflie_small_under_large.toml's (the fitted wake, cf101's fitted rotors);
+the inertias are that file's: the small Crazyflie's [vehicle] and the large cf101's [leader]
+(the small one's scaled by mass and the logged arm: an assumption). The samples are 0.15-0.45 m
+below the other vehicle, binned by the horizontal offset from its axis (2 cm).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from dataclasses import asdict
+from pathlib import Path
+
+from aerodock.config import load_config
+from aerodock.ingest import read_logs
+from aerodock.learning.wake_fit import prepare_flights
+from aerodock.learning.wake_torque import torque_profile
+
+ROOT = Path(__file__).resolve().parents[1]
+WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
+VEHICLES = "cf50=small,cf51=small,cf101=large"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path,
+                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    args = parser.parse_args()
+    folders = [args.data / "swap_ss", args.data / "swap_sl_2020-06-19"]
+    missing = [str(f) for f in folders if not f.is_dir()]
+    if missing:
+        print(f"error: {missing[0]}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
+        return 2
+    cfg = load_config(WORLD)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the ingest's notes on the flights' clocks
+        logs = read_logs("neural-swarm", folders, vehicle=VEHICLES)
+    params = dict(cfg.downwash.params)
+    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
+               "cf101": cfg.leader.inertia_kgm2}
+    profile = torque_profile(params, prepare_flights(logs), logs, inertia,
+                             rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
+    if args.json:
+        print(json.dumps({pair: [asdict(b) for b in bins] for pair, bins in profile.items()},
+                         indent=2))
+        return 0
+    for pair, bins in profile.items():
+        print(f"{pair} (follower under leader), inward wake torque, mN m:")
+        print("  offset [cm]  samples  real (se)       jet    real/jet  lean in [deg]  "
+              "nearest motor's PWM")
+        for b in bins:
+            pwm = "-" if b.near_motor_pwm is None else f"{b.near_motor_pwm:.2f}"
+            print(f"  {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  {b.samples:7d}  "
+                  f"{1e3 * b.real_nm:6.2f} ({1e3 * b.real_se_nm:.2f})  {1e3 * b.jet_nm:6.2f}  "
+                  f"{b.ratio:8.1f}  {b.lean_in_deg:13.1f}  {pwm:>8}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,103 @@
+"""The wake's torque read from logged motor torques (aerodock/learning/wake_torque.py): synthetic
+flights whose motors answer a known multiple of the jet's torque, and the real flights."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from wake_synth import synthetic_flights
+
+from aerodock.config import load_config
+from aerodock.downwash.base import BodyState
+from aerodock.flightlog import FlightLog
+from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
+from aerodock.learning import wake_fit as wf
+from aerodock.learning import wake_torque as wt
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+INERTIA = {vid: (1.7e-5, 1.7e-5, 3.0e-5) for vid in ("cf1", "cf2", "cf9")}
+
+
+@pytest.fixture(scope="module")
+def params():
+    cfg = load_config()
+    return {k: float(cfg.downwash.params[k]) for k in wf.FITTED_PARAMS}
+
+
+def _answering(log: FlightLog, params: dict, gain: float, trim: np.ndarray,
+               rng: np.random.Generator) -> FlightLog:
+    """``log`` with motors that hold the follower level against ``gain`` times the jet's mean
+    disk torque (their torque: the trim minus it, plus noise) and no rotation."""
+    n = log.n_samples
+    geometry = wf.log_geometry(log)
+    jet = wf.build_jet(params, geometry)
+    m_l, m_f = geometry["leader_mass_kg"], geometry["follower_mass_kg"]
+    leader = BodyState(log.leader_pos_m, log.leader_vel_mps, quat_to_rotmat(log.leader_quat),
+                       np.full(n, m_l * GRAVITY_MPS2), np.full(n, m_l))
+    follower = BodyState(log.follower_pos_m, log.follower_vel_mps,
+                         quat_to_rotmat(log.follower_quat), np.full(n, m_f * GRAVITY_MPS2),
+                         np.full(n, m_f))
+    torque = jet.mean_disk_torque_nm(leader, follower)
+    motors = trim - gain * torque + rng.normal(0.0, 2e-5, (n, 3))
+    extra = {**log.extra, wt.MOTOR_TORQUE_KEY: motors, wt.BODY_RATES_KEY: np.zeros((n, 3))}
+    return replace(log, extra=extra)
+
+
+@pytest.mark.parametrize("gain", [1.0, 3.0])
+def test_profile_recovers_a_known_torque(params, gain):
+    """Motors that answer ``gain`` times the jet's torque give ``real / jet`` = ``gain`` in every
+    bin where the jet's torque is not small, and the inward torque is positive off the axis
+    (it pushes the disks nearer the axis down); the trim is taken away."""
+    rng = np.random.default_rng(0)
+    logs = [_answering(log, params, gain, np.array([3e-4, -2e-4, 1e-4]), rng)
+            for log in synthetic_flights(params, flights_per_pair=2, seed=3)]
+    profile = wt.torque_profile(params, wf.prepare_flights(logs), logs, INERTIA,
+                                separation_m=(0.1, 0.65))
+    assert set(profile) == {"32 g under 32 g", "67 g under 32 g", "32 g under 67 g"}
+    checked = 0
+    for bins in profile.values():
+        for b in bins:
+            if b.jet_nm > 0.2 * max(x.jet_nm for x in bins):
+                assert b.ratio == pytest.approx(gain, rel=0.05), b
+                assert b.real_nm > 0
+                checked += 1
+            assert b.near_motor_pwm is None  # the synthetic logs carry no motor commands
+    assert checked >= 6
+
+
+def test_logs_without_motor_torque_are_refused(params):
+    logs = synthetic_flights(params, flights_per_pair=1, seed=3)
+    with pytest.raises(wf.WakeFitError, match="no flight carries the motor torque"):
+        wt.torque_profile(params, wf.prepare_flights(logs), logs, INERTIA)
+    with pytest.raises(wf.WakeFitError, match="follower_motor_torque_nm"):
+        wt.real_wake_torque_nm(logs[0], INERTIA["cf1"])
+
+
+def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
+    """On the real Crazyflie flights the lower vehicle's motors answer an inward torque 4-10 cm
+    off the other's axis, several times the fitted jet's disk torque (docs/crazyflie.md, "The
+    wake's torque in the logs"), with the motor nearest the axis commanded far above hover."""
+    import warnings
+
+    from aerodock.ingest import read_logs
+
+    folders = [shared_data("neural-swarm", "swap_ss"),
+               shared_data("neural-swarm", "swap_sl_2020-06-19")]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
+    cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
+    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
+               "cf101": cfg.leader.inertia_kgm2}
+    profile = wt.torque_profile(dict(cfg.downwash.params), wf.prepare_flights(logs), logs,
+                                inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
+    for pair in ("32 g under 32 g", "67 g under 32 g"):
+        mid = [b for b in profile[pair] if 0.04 <= b.offset_lo_m < 0.10]
+        assert len(mid) == 3, profile[pair]
+        for b in mid:
+            assert b.real_nm > 5 * b.real_se_nm  # inward, far beyond its standard error
+            assert b.ratio > 3.0
+            assert b.near_motor_pwm > 0.8  # hover is about 0.68
