@@ -21,7 +21,7 @@ from pathlib import Path
 from aerodock.config import load_config
 from aerodock.ingest import read_logs
 from aerodock.learning.wake_fit import prepare_flights
-from aerodock.learning.wake_torque import torque_profile
+from aerodock.learning.wake_torque import motor_command_range, torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
@@ -48,19 +48,35 @@ def main() -> int:
                "cf101": cfg.leader.inertia_kgm2}
     profile = torque_profile(params, prepare_flights(logs), logs, inertia,
                              rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
+    commands = motor_command_range(logs)
+    # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
+    ap = cfg.autopilot
+    world_nm_per_rad = float(cfg.vehicle.inertia_kgm2[0] * ap.attitude_p[0] * ap.rate_p[0])
     if args.json:
-        print(json.dumps({pair: [asdict(b) for b in bins] for pair, bins in profile.items()},
-                         indent=2))
+        print(json.dumps({
+            "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad} for b in bins]
+                        for pair, bins in profile.items()},
+            "motor_commands": commands,
+            "world_small_nm_per_rad": world_nm_per_rad}, indent=2))
         return 0
     for pair, bins in profile.items():
+        if not bins:
+            print(f"{pair} (follower under leader): no offset bin with enough samples in the band "
+                  "(flights with free air to take the trim from)")
+            continue
         print(f"{pair} (follower under leader), inward wake torque, mN m:")
         print("  offset [cm]  samples  real (se)       jet    real/jet  lean in [deg]  "
-              "nearest motor's PWM")
+              "nearest motor's PWM  real torque/lean [mN m/rad]")
         for b in bins:
             pwm = "-" if b.near_motor_pwm is None else f"{b.near_motor_pwm:.2f}"
             print(f"  {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  {b.samples:7d}  "
                   f"{1e3 * b.real_nm:6.2f} ({1e3 * b.real_se_nm:.2f})  {1e3 * b.jet_nm:6.2f}  "
-                  f"{b.ratio:8.1f}  {b.lean_in_deg:13.1f}  {pwm:>8}")
+                  f"{b.ratio:8.1f}  {b.lean_in_deg:13.1f}  {pwm:>19}  {1e3 * b.nm_per_rad:10.0f}")
+    for vid, c in commands.items():
+        print(f"{vid}'s motor commands: {c['free_air_median']:.2f} median in free air, "
+              f"{c['p99']:.2f} at the 99th percentile of every flight")
+    print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
+          f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0
 
 

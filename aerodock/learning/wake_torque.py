@@ -58,6 +58,34 @@ class TorqueBin:
     near_motor_pwm: float | None
     """Median command (0..1) of the motor nearest the axis, when the log has it."""
 
+    @property
+    def nm_per_rad(self) -> float:
+        """The real inward torque over the real lean into the axis: how stiffly the real
+        follower's attitude loop holds it (an apparent figure: the lean is the position
+        loop's too), N·m per radian."""
+        lean = np.radians(self.lean_in_deg)
+        return float(self.real_nm / lean) if abs(lean) > 1e-9 else float("nan")
+
+
+def motor_command_range(logs: Sequence[FlightLog]) -> dict[str, dict[str, float]]:
+    """Per follower vehicle id, its motor commands (0..1) over every flight that logs them:
+    ``free_air_median`` (all motors, in free air: hover and the manoeuvres) and ``p99`` (all
+    samples: the top of the range the flights use)."""
+    free: dict[str, list[np.ndarray]] = {}
+    every: dict[str, list[np.ndarray]] = {}
+    for log in logs:
+        if MOTOR_PWM_KEY not in log.extra:
+            continue
+        vid = str(log.meta.get("follower_id"))
+        pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)
+        dp = log.follower_pos_m - log.leader_pos_m
+        far = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+        free.setdefault(vid, []).append(pwm[far].ravel())
+        every.setdefault(vid, []).append(pwm.ravel())
+    return {vid: {"free_air_median": float(np.median(np.concatenate(free[vid]))),
+                  "p99": float(np.percentile(np.concatenate(every[vid]), 99.0))}
+            for vid in sorted(every)}
+
 
 def has_torque(log: FlightLog) -> bool:
     """True when ``log`` carries the motor torque and the body rates this module reads."""
