@@ -21,7 +21,7 @@ from pathlib import Path
 from aerodock.config import load_config
 from aerodock.ingest import read_logs
 from aerodock.learning.wake_fit import prepare_flights
-from aerodock.learning.wake_torque import motor_command_range, torque_profile
+from aerodock.learning.wake_torque import free_air_map_check, motor_command_range, torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
@@ -49,14 +49,16 @@ def main() -> int:
     profile = torque_profile(params, prepare_flights(logs), logs, inertia,
                              rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
     commands = motor_command_range(logs)
+    map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
     ap = cfg.autopilot
     world_nm_per_rad = float(cfg.vehicle.inertia_kgm2[0] * ap.attitude_p[0] * ap.rate_p[0])
     if args.json:
         print(json.dumps({
-            "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad} for b in bins]
+            "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad, "lever_m": b.lever_m}
+                               for b in bins]
                         for pair, bins in profile.items()},
-            "motor_commands": commands,
+            "motor_commands": commands, "free_air_map_check": map_check,
             "world_small_nm_per_rad": world_nm_per_rad}, indent=2))
         return 0
     for pair, bins in profile.items():
@@ -65,16 +67,24 @@ def main() -> int:
                   "(flights with free air to take the trim from)")
             continue
         print(f"{pair} (follower under leader), inward wake torque, mN m:")
-        print("  offset [cm]  samples  real (se)       jet    real/jet  lean in [deg]  "
-              "nearest motor's PWM  real torque/lean [mN m/rad]")
+        print("  offset [cm]  samples  real (se)       jet    real/jet  lever [cm]  "
+              "lean in [deg]  nearest motor's PWM  real torque/lean [mN m/rad]")
         for b in bins:
             pwm = "-" if b.near_motor_pwm is None else f"{b.near_motor_pwm:.2f}"
             print(f"  {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  {b.samples:7d}  "
                   f"{1e3 * b.real_nm:6.2f} ({1e3 * b.real_se_nm:.2f})  {1e3 * b.jet_nm:6.2f}  "
-                  f"{b.ratio:8.1f}  {b.lean_in_deg:13.1f}  {pwm:>19}  {1e3 * b.nm_per_rad:10.0f}")
+                  f"{b.ratio:8.1f}  {100 * b.lever_m:10.1f}  {b.lean_in_deg:13.1f}  {pwm:>19}  "
+                  f"{1e3 * b.nm_per_rad:10.0f}")
+        print(f"  (a loss of thrust on the disks alone: lever at most the half diagonal, "
+              f"{100 * bins[0].half_diagonal_m:.1f} cm)")
     for vid, c in commands.items():
         print(f"{vid}'s motor commands: {c['free_air_median']:.2f} median in free air, "
               f"{c['p99']:.2f} at the 99th percentile of every flight")
+    print("free air, the vertical residual [m/s^2, down +] by the highest motor's command:")
+    for vid, rows in map_check.items():
+        cells = ", ".join(f"{r['pwm_lo']:.2f}-{r['pwm_hi']:.2f}: "
+                          f"{r['vertical_residual_mps2']:+.3f} ({r['samples']})" for r in rows)
+        print(f"  {vid}: {cells}")
     print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
           f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0

@@ -31,6 +31,7 @@ import numpy as np
 from aerodock.downwash.jet import quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
+from aerodock.learning.labels import raw_labels
 from aerodock.learning.wake_fit import FlightSamples, WakeFitError, build_jet, geometry_with
 
 MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
@@ -53,10 +54,23 @@ class TorqueBin:
     real_se_nm: float
     jet_nm: float
     ratio: float
+    real_down_force_n: float
+    """The real wake's mean downward force on the follower (its de-biased label times its
+    mass), N."""
+    half_diagonal_m: float
+    """The follower's motors' distance from its centre, m."""
     lean_in_deg: float
     """The real follower's mean lean towards the axis (its body z axis's tilt, signed)."""
     near_motor_pwm: float | None
     """Median command (0..1) of the motor nearest the axis, when the log has it."""
+
+    @property
+    def lever_m(self) -> float:
+        """The inward torque over the downward force: where the force would have to act to make
+        the torque. A loss of thrust on the disks alone puts it at most ``half_diagonal_m``
+        from the centre; beyond that the disks away from the axis must gain thrust."""
+        force = self.real_down_force_n
+        return float(self.real_nm / force) if abs(force) > 1e-12 else float("nan")
 
     @property
     def nm_per_rad(self) -> float:
@@ -87,7 +101,41 @@ def motor_command_range(logs: Sequence[FlightLog]) -> dict[str, dict[str, float]
             for vid in sorted(every)}
 
 
-def has_torque(log: FlightLog) -> bool:
+def free_air_map_check(logs: Sequence[FlightLog],
+                       bands: Sequence[tuple[float, float]] = ((0.0, 0.75), (0.75, 0.85),
+                                                               (0.85, 0.9), (0.9, 1.0)),
+                       ) -> dict[str, list[dict[str, float]]]:
+    """Does the logs' thrust map hold at the top of its range? Per follower vehicle id and band
+    of its highest motor's command, in free air: the samples and the mean vertical residual
+    ``a_obs - (g e3 - R e3 T/m)`` (each flight's free-air median taken away), m/s², down
+    positive. A map that gave a motor near its ceiling more thrust than it makes would show as
+    a residual growing with the band."""
+    per: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    for log in logs:
+        if MOTOR_PWM_KEY not in log.extra:
+            continue
+        dp = log.follower_pos_m - log.leader_pos_m
+        far = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+        if far.sum() < MIN_FREE_SAMPLES:
+            continue
+        vertical = raw_labels(log)[:, 2]
+        vertical = vertical - np.median(vertical[far])
+        top = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float).max(axis=1)
+        per.setdefault(str(log.meta.get("follower_id")), []).append((top[far], vertical[far]))
+    out: dict[str, list[dict[str, float]]] = {}
+    for vid in sorted(per):
+        top, vertical = (np.concatenate(c) for c in zip(*per[vid]))
+        rows = []
+        for lo, hi in bands:
+            m = (top >= lo) & (top < hi)
+            rows.append({"pwm_lo": float(lo), "pwm_hi": float(hi), "samples": int(m.sum()),
+                         "vertical_residual_mps2": (float(vertical[m].mean()) if m.any()
+                                                    else float("nan"))})
+        out[vid] = rows
+    return out
+
+
+def has_motor_torque(log: FlightLog) -> bool:
     """True when ``log`` carries the motor torque and the body rates this module reads."""
     return MOTOR_TORQUE_KEY in log.extra and BODY_RATES_KEY in log.extra
 
@@ -100,7 +148,7 @@ def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float]) -> np.nda
     Raises:
         WakeFitError: the log has no motor torque or body rates.
     """
-    if not has_torque(log):
+    if not has_motor_torque(log):
         raise WakeFitError(f"{log.name}: the log has no {MOTOR_TORQUE_KEY} and "
                            f"{BODY_RATES_KEY} (Neural-Swarm logs carry both)")
     inertia = np.asarray(inertia_kgm2, dtype=float)
@@ -146,7 +194,7 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
     parts: dict[str, list[tuple[np.ndarray, ...]]] = {}
     for flight in flights:
         log = by_name.get(flight.name)
-        if log is None or not has_torque(log):
+        if log is None or not has_motor_torque(log):
             continue
         vehicle = flight.vehicles.get("follower")
         if vehicle not in inertia_kgm2:
@@ -177,14 +225,17 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                                 axis=1)
             near_pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)[
                 i, _LOG_MOTOR_ORDER[nearest]]
+        down = flight.label_mps2[:, 2] * geometry["follower_mass_kg"]
+        half = np.full(i.size, geometry["follower_diagonal_m"] / 2.0)
         parts.setdefault(flight.pair, []).append((horizontal, dp[:, 2], real, model, lean,
-                                                  near_pwm))
+                                                  near_pwm, down, half))
     if not parts:
         raise WakeFitError("no flight carries the motor torque and body rates with free air "
                            "to take the trim from")
     out: dict[str, list[TorqueBin]] = {}
     for pair, chunks in parts.items():
-        horizontal, sep, real, model, lean, pwm = (np.concatenate(c) for c in zip(*chunks))
+        horizontal, sep, real, model, lean, pwm, down, half = (np.concatenate(c)
+                                                               for c in zip(*chunks))
         below = (sep >= separation_m[0]) & (sep <= separation_m[1])
         bins = []
         for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
@@ -198,7 +249,8 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 offset_lo_m=float(lo), offset_hi_m=float(lo + bin_m), samples=n,
                 real_nm=real_nm, real_se_nm=float(real[m].std() / np.sqrt(n)), jet_nm=jet_nm,
                 ratio=real_nm / jet_nm if abs(jet_nm) > 1e-12 else float("nan"),
-                lean_in_deg=float(lean[m].mean()),
+                real_down_force_n=float(down[m].mean()),
+                half_diagonal_m=float(half[m].mean()), lean_in_deg=float(lean[m].mean()),
                 near_motor_pwm=(float(np.nanmedian(pwm[m])) if np.isfinite(pwm[m]).any()
                                 else None)))
         out[pair] = bins

@@ -68,6 +68,35 @@ def test_profile_recovers_a_known_torque(params, gain):
     assert checked >= 6
 
 
+def test_free_air_map_check_sees_a_map_that_overstates_the_top(params):
+    """A thrust map that gives a motor above 0.85 PWM 20 mN it does not make shows in free air
+    as a residual of 20 mN / m in that band and none below it; the true map shows none."""
+    logs = synthetic_flights(params, flights_per_pair=1, seed=3)
+    rng = np.random.default_rng(1)
+    made = []
+    for log in logs:
+        n = log.n_samples
+        pwm = np.clip(0.68 + rng.normal(0.0, 0.1, (n, 4)), 0.0, 1.0)
+        high = pwm.max(axis=1) > 0.85
+        mass = log.meta["follower_mass_kg"]
+        # the map's thrust is 20 mN more than the real one where a motor is high: the logged
+        # thrust says more than the vehicle makes, so a_obs - cmd points down by 0.02 / m
+        cmd = log.follower_cmd_accel_mps2.copy()
+        cmd[high, 2] -= 0.02 / mass
+        made.append(replace(log, follower_cmd_accel_mps2=cmd,
+                            extra={**log.extra, wt.MOTOR_PWM_KEY: pwm}))
+    check = wt.free_air_map_check(made)
+    for vid, rows in check.items():
+        mass = 0.067 if vid == "cf9" else 0.032
+        low = [r for r in rows if r["pwm_hi"] <= 0.85]
+        top = [r for r in rows if r["pwm_lo"] >= 0.85 and r["samples"] >= 30]
+        assert top, rows
+        for r in low:
+            assert abs(r["vertical_residual_mps2"]) < 0.1, (vid, r)
+        for r in top:
+            assert r["vertical_residual_mps2"] == pytest.approx(0.02 / mass, abs=0.1), (vid, r)
+
+
 def test_logs_without_motor_torque_are_refused(params):
     logs = synthetic_flights(params, flights_per_pair=1, seed=3)
     with pytest.raises(wf.WakeFitError, match="no flight carries the motor torque"):
@@ -96,6 +125,11 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
                                 inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
     commands = wt.motor_command_range(logs)
     assert set(commands) == {"cf50", "cf51", "cf101"}
+    # the logs' thrust map holds in free air where a motor is near the top of its range
+    for vid, rows in wt.free_air_map_check(logs).items():
+        for r in rows:
+            if r["samples"] >= 30:
+                assert abs(r["vertical_residual_mps2"]) < 0.1, (vid, r)
     for pair, follower in (("32 g under 32 g", "cf50"), ("67 g under 32 g", "cf101")):
         mid = [b for b in profile[pair] if 0.04 <= b.offset_lo_m < 0.10]
         assert len(mid) == 3, profile[pair]
@@ -103,5 +137,7 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
             assert b.real_nm > 5 * b.real_se_nm  # inward, far beyond its standard error
             assert b.ratio > 3.0
             assert b.lean_in_deg > 0  # the real follower leans into the axis
+            if b.offset_lo_m >= 0.06:  # more than a loss of thrust on the disks can make
+                assert b.lever_m > 1.3 * b.half_diagonal_m
             # the motor nearest the axis far above the vehicle's free-air median
             assert b.near_motor_pwm > commands[follower]["free_air_median"] + 0.15
