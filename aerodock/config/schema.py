@@ -171,6 +171,7 @@ class JetParams:
     planar_ratio: float = number(-10, 10)
     body_area_ratio: float = number(0, 100)
     body_drag_coeff: float = number(0, 100)
+    disk_torque_gain: float = number(0, 100)
     turb_vertical: float = number(0, 10)
     turb_lateral: float = number(0, 10)
     turb_length_ratio: float = number(0.001, 1000)

@@ -347,6 +347,39 @@ def test_wrench_torque_off_axis_tilts_the_follower_towards_the_axis(cfg, azimuth
     assert np.all(size[1:] > 0.02 * 0.135 * force[0, 2])
 
 
+@pytest.mark.parametrize("gain", [0.0, 3.0, 6.5])
+def test_disk_torque_gain_scales_the_torque_and_keeps_the_force(gain):
+    """``disk_torque_gain`` scales the mean torque of the axial forces (the whole torque without a
+    planar part) of a level or tilted follower off the axis by the gain, and leaves the net
+    force (the same turbulence draw) and the turbulence as they are."""
+    pts = [[0.05, 0.0, 0.36], [0.07, -0.04, 0.5], [0.0, 0.1, 0.3]]
+    for rpy in ((0.0, 0.0, 0.0), (0.1, -0.05, 0.7)):
+        leader, follower = _bodies(pts, fol_rpy=rpy)
+        base = RoundJetField(planar_ratio=0.0)
+        scaled = RoundJetField(planar_ratio=0.0, disk_torque_gain=gain)
+        np.testing.assert_allclose(scaled.mean_disk_torque_nm(leader, follower),
+                                   gain * base.mean_disk_torque_nm(leader, follower),
+                                   rtol=1e-9, atol=1e-15)
+        base.reset(3, np.random.default_rng(4))
+        scaled.reset(3, np.random.default_rng(4))
+        for _ in range(3):
+            f0, t0 = base.wrench(leader, follower, ROTORS, 0.002)
+            f1, t1 = scaled.wrench(leader, follower, ROTORS, 0.002)
+            np.testing.assert_allclose(f1, f0, rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(scaled.body_force_n(leader, follower),
+                                       base.body_force_n(leader, follower), rtol=1e-12)
+            assert gain == 1.0 or not np.allclose(t1, t0)
+        np.testing.assert_allclose(scaled.mean_acceleration(leader, follower),
+                                   base.mean_acceleration(leader, follower), rtol=1e-12)
+        for key, value in base.turbulence(leader, follower).items():
+            np.testing.assert_allclose(scaled.turbulence(leader, follower)[key], value)
+
+
+def test_disk_torque_gain_must_not_be_negative():
+    with pytest.raises(ValueError, match="disk_torque_gain must be >= 0"):
+        RoundJetField(disk_torque_gain=-1.0)
+
+
 def test_wrench_is_equivariant_about_the_leader_axis(cfg):
     """Rotating the whole scene (positions, velocities, attitudes) about the hovering leader's
     axis rotates the world force and leaves the body-frame torque unchanged."""
