@@ -10,8 +10,7 @@ script's ``--collect``, which flies it into C first, in the world the campaigns 
 C/models/paper (the paper's curriculum) for the paper's controller, C/models/final (the deep
 curriculum) for ours, as in the README's headline table. ``--force-at-centre`` flies the world
 with the jet's force at the follower's centre of mass (``aerodock.downwash.at_centre``: no wake
-torque), the other side of the bracket the real flights' tilt puts the torque in
-(docs/crazyflie.md).
+torque), the other side of a bracket round the jet's torque (docs/crazyflie.md).
 """
 
 from __future__ import annotations

@@ -6,8 +6,10 @@ with the previous, hand-calibrated jet, which put its whole force on the disks: 
 scale that torque tilted a follower holding station 0.3 m below a leader by 13.3 deg RMS, where
 the real swap flights measure 2.9 deg below the other vehicle (2.0 in free air); with the force
 at the centre of mass the same follower tilted 1.7 deg (``studies/crazyflie_tilt.py``,
-``docs/crazyflie.md``). The jet fitted to the real flights has about a third of that torque; the
-Crazyflie figures are to be re-measured with it. Use it as ``[downwash] field =
+``docs/crazyflie.md``). The real flights' logged motor torques later showed that the small real
+tilt is not a small torque (the wake's torque is 5-8 times the fitted jet's; a real Crazyflie's
+attitude loop holds it): the world without the torque is the other side of a bracket, not the
+truth. Use it as ``[downwash] field =
 "aerodock.downwash.at_centre:RoundJetAtCentre"`` with the jet's ``[downwash.params]`` (a new
 ``field`` takes only the parameters given with it).
 """
