@@ -1,0 +1,93 @@
+"""The learnt mean on the leader's axis across curriculum seeds: is the deep model's miss of the
+10 % check (``results.json`` -> ``targets.learnt_mean``) a bias of the pipeline or one seed's?
+
+    .venv/bin/python studies/learnt_mean_seeds.py [--seeds 0 1 2] [--config FILE]
+        [--out DIR] [--json]
+
+For each seed, the curriculum ``aerodock collect`` flies (the configuration's, as ``reproduce``
+flies it), then ``learnt_mean_check`` for the deep curriculum's model (``models/final``) and the
+paper's (``models/paper``) at 0.36 m, and the mean of the labels minus the simulator's mean field
+over the curriculum's samples within 3 cm of the axis 0.3-0.4 m below the leader (what the
+models learn from where the check looks). About a minute per seed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from aerodock.config import load_config
+from aerodock.experiments.targets import learnt_mean_check
+from aerodock.flightlog import load_flightlogs
+from aerodock.learning.curriculum import run_curriculum
+from aerodock.learning.labels import raw_labels
+from aerodock.learning.runtime import Predictor
+
+TRUE_MEAN_KEY = "true_field_mean_mps2"
+
+
+def label_minus_mean_on_axis(folder: Path, band_m: tuple[float, float] = (0.3, 0.4),
+                             radius_m: float = 0.03) -> tuple[float, int]:
+    """Mean vertical label minus the simulator's mean field (m/s², down +) over a curriculum's
+    valid samples within ``radius_m`` of the leader's axis ``band_m`` below it, and their
+    count."""
+    errs = []
+    for path in sorted(folder.glob("stage*.npz")):
+        for log in load_flightlogs(path):
+            dp = log.follower_pos_m - log.leader_pos_m
+            keep = ((np.hypot(dp[:, 0], dp[:, 1]) < radius_m) & (dp[:, 2] > band_m[0])
+                    & (dp[:, 2] < band_m[1]))
+            if "label_valid" in log.extra:
+                keep &= np.asarray(log.extra["label_valid"]).astype(bool)
+            errs.append((raw_labels(log)[:, 2] - log.extra[TRUE_MEAN_KEY][:, 2])[keep])
+    err = np.concatenate(errs) if errs else np.zeros(0)
+    return (float(err.mean()) if err.size else float("nan")), int(err.size)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--config", type=Path, help="TOML overriding aerodock's defaults")
+    parser.add_argument("--out", type=Path, help="keep each seed's curriculum in DIR/seed-N")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    cfg = load_config(args.config) if args.config else load_config()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        base = args.out if args.out is not None else Path(tmp)
+        for seed in args.seeds:
+            folder = base / f"seed-{seed}"
+            run_curriculum(cfg, folder, seed=seed, progress=lambda m: None)
+            deep = learnt_mean_check(cfg, Predictor.load(folder / "models" / "final"))[0]
+            paper_dir = folder / "models" / "paper"
+            paper = (learnt_mean_check(cfg, Predictor.load(paper_dir))[0]
+                     if paper_dir.is_dir() else None)
+            bias, samples = label_minus_mean_on_axis(folder)
+            row = {"seed": seed, "deep_relative_error": deep["relative_error"],
+                   "paper_relative_error": paper["relative_error"] if paper else None,
+                   "label_minus_mean_on_axis_mps2": bias, "axis_samples": samples}
+            rows.append(row)
+            if not args.json:
+                paper_txt = ("-" if paper is None else f"{paper['relative_error']:+.1%}")
+                print(f"seed {seed}: deep model {deep['relative_error']:+.1%}, paper's "
+                      f"{paper_txt}; labels minus the mean field on the axis 0.3-0.4 m "
+                      f"{bias:+.3f} m/s^2 ({samples} samples)", flush=True)
+    deep_all = np.array([r["deep_relative_error"] for r in rows])
+    summary = {"seeds": rows, "deep_mean_relative_error": float(deep_all.mean()),
+               "deep_sd_relative_error": float(deep_all.std(ddof=1)) if len(rows) > 1 else None}
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        sd = summary["deep_sd_relative_error"]
+        print(f"deep model over {len(rows)} seeds: {summary['deep_mean_relative_error']:+.1%} "
+              f"mean" + (f", sd {sd:.1%}" if sd is not None else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
