@@ -410,7 +410,7 @@ def turbulence_bins(params: dict[str, float], flights: Sequence[FlightSamples],
         turb = model_turbulence(params, f, rotor_radii_m)
         dp = f.offset_m
         h = np.hypot(dp[:, 0], dp[:, 1]) / f.equivalent_radius_m
-        err = _centred(f.label_mps2 - mean, h < bands[-1][1])
+        err = centred(f.label_mps2 - mean, h < bands[-1][1])
         for b, (lo, hi) in enumerate(bands):
             sel = (h >= lo) & (h < hi)
             if not sel.any():
@@ -440,7 +440,7 @@ def turbulence_bins(params: dict[str, float], flights: Sequence[FlightSamples],
     return out
 
 
-def _centred(err: np.ndarray, core: np.ndarray) -> np.ndarray:
+def centred(err: np.ndarray, core: np.ndarray) -> np.ndarray:
     """``err`` less its mean over ``core``: one flight's residual about the jet's mean, less
     that flight's own offset (a bias the free-air samples missed is not turbulence)."""
     if not core.any():
@@ -496,7 +496,7 @@ def autocorrelations(params: dict[str, float], flights: Sequence[FlightSamples],
     for f in flights:
         dp = f.offset_m
         core = np.hypot(dp[:, 0], dp[:, 1]) < CORE_RADII * f.equivalent_radius_m
-        err = _centred(f.label_mps2 - model_mean(params, f, rotor_radii_m), core)[:, 2]
+        err = centred(f.label_mps2 - model_mean(params, f, rotor_radii_m), core)[:, 2]
         series = np.zeros(int(f.index.max()) + 1)
         mask = np.zeros(series.size, dtype=bool)
         series[f.index] = err
@@ -705,18 +705,18 @@ def score_wake(params: dict[str, float], flights: Sequence[FlightSamples],
         # Turbulence sd near the axis: each flight's residual about the mean (and its own
         # offset), less the free-air noise.
         err = label - model
-        centred = np.concatenate([
-            _centred(f.label_mps2 - m, np.hypot(f.offset_m[:, 0], f.offset_m[:, 1])
-                     < CORE_RADII * f.equivalent_radius_m) for f, m in zip(group, means,
-                                                                          strict=True)])
+        about = np.concatenate([
+            centred(f.label_mps2 - m, np.hypot(f.offset_m[:, 0], f.offset_m[:, 1])
+                    < CORE_RADII * f.equivalent_radius_m) for f, m in zip(group, means,
+                                                                         strict=True)])
         free = np.concatenate([np.tile(f.free_var_mps4, (f.label_mps2.shape[0], 1))
                                for f in group])
         axial = np.concatenate([t["axial_var_mps4"] for t in turbs])
         lateral = np.concatenate([t["lateral_var_mps4"] for t in turbs])
         for name, real_var, model_var, key in (
-                ("vertical_sd", centred[core, 2].var() - free[core, 2].mean(),
+                ("vertical_sd", about[core, 2].var() - free[core, 2].mean(),
                  axial[core].mean() if core.any() else np.nan, "vertical_sd"),
-                ("lateral_sd", 0.5 * (centred[core, 0].var() + centred[core, 1].var())
+                ("lateral_sd", 0.5 * (about[core, 0].var() + about[core, 1].var())
                  - 0.5 * (free[core, 0] + free[core, 1]).mean(),
                  lateral[core].mean() if core.any() else np.nan, "lateral_sd")):
             real_sd = float(np.sqrt(real_var)) if core.sum() >= MIN_BIN_SAMPLES \

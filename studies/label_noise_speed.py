@@ -1,0 +1,76 @@
+"""The wake's turbulence read above the labels' noise at the follower's own speed, on the real
+Crazyflie flights (aerodock/learning/label_noise.py), beside the fit's pooled reading.
+
+    .venv/bin/python studies/label_noise_speed.py [--data ../shared/data/neural-swarm] [--json]
+
+The jet is examples/crazyflie_wake_fitted.toml's, the flights the fit's: swap_ss 00-04 and
+swap_sl 00-07 fitted on, swap_ss 05-06 and swap_sl 08-11 held out (docs/world.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+from aerodock.ingest import read_logs
+from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
+from aerodock.learning.wake_fit import prepare_flights, select_flights
+
+ROOT = Path(__file__).resolve().parents[1]
+FIT = ROOT / "examples" / "crazyflie_wake_fitted.toml"
+HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01]")
+ROTORS = {"cf101": 0.0239}  # the fit's estimate of cf101's rotor radius (docs/world.md)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path,
+                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    folders = [args.data / "swap_ss", args.data / "swap_sl_2020-06-19"]
+    missing = [str(f) for f in folders if not f.is_dir()]
+    if missing:
+        print(f"error: {missing[0]}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
+        return 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the ingest's notes on the flights' clocks
+        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
+    params = tomllib.loads(FIT.read_text())["downwash"]["params"]
+    noise = noise_by_speed(logs)
+    train, held = select_flights(prepare_flights(logs), HOLDOUT)
+    out = {"noise": {vid: {"edges_mps": list(t.edges_mps), "samples": t.samples.tolist(),
+                           "lateral_sd": [float((0.5 * (v[0] + v[1])) ** 0.5)
+                                          for v in t.var_mps4],
+                           "vertical_sd": [float(v[2] ** 0.5) for v in t.var_mps4]}
+                     for vid, t in noise.items()},
+           "held_out": speed_matched_turbulence(params, held, noise, rotor_radii_m=ROTORS),
+           "fitted_on": speed_matched_turbulence(params, train, noise, rotor_radii_m=ROTORS)}
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+        return 0
+    for vid, t in out["noise"].items():
+        cells = ", ".join(f"{lo:g}-{hi:g}: {lat:.3f}/{vert:.3f} ({n})" for lo, hi, lat, vert, n in
+                          zip(t["edges_mps"][:-1], t["edges_mps"][1:], t["lateral_sd"],
+                              t["vertical_sd"], t["samples"], strict=True))
+        print(f"{vid} free-air label noise sd, lateral/vertical m/s^2, by speed m/s: {cells}")
+    for part in ("held_out", "fitted_on"):
+        print(f"{part.replace('_', ' ')} flights, within one leader equivalent radius of the "
+              "axis, turbulence sd m/s^2 (real less the pooled noise / less the noise at the "
+              "follower's speed [95th pct over flights] / the jet's):")
+        for pair, r in out[part].items():
+            print(f"  {pair} ({r['samples']:.0f} samples, {r['flights']:.0f} flights, median speed "
+                  f"{r['median_speed_mps']:.2f} m/s): lateral "
+                  f"{r['lateral_pooled']:.3f} / {r['lateral_speed']:.3f} "
+                  f"[{r['lateral_speed_p95']:.3f}] / {r['lateral_model']:.3f}; vertical "
+                  f"{r['vertical_pooled']:.3f} / {r['vertical_speed']:.3f} "
+                  f"[{r['vertical_speed_p95']:.3f}] / {r['vertical_model']:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
