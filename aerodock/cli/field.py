@@ -4,7 +4,7 @@ and the default jet fitted to real flights."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import typer
@@ -19,6 +19,11 @@ from aerodock.cli.common import (
     print_json,
 )
 from aerodock.config import load_config
+
+if TYPE_CHECKING:
+    from aerodock.config import Config
+    from aerodock.flightlog import FlightLog
+    from aerodock.learning.wake_fit import FlightSamples, WakeFit
 
 
 def field_probe(
@@ -220,6 +225,7 @@ def field_fit(
         fail(one_line(err))
     scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
     fit_scores = wf.score_wake(fit.params, fitted, fit.rotor_radii_m)
+    checks = _fit_checks(cfg, fit, logs, flights, fitted, held)
     rows = wf.wake_at_separations(fit.params, cfg)
     if fit.bootstrap_draws:
         tables = [wf.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
@@ -242,12 +248,12 @@ def field_fit(
         "fitted_flights": fit.flights, "held_out_flights": held_names,
         "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
         "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
-        "world": paper, "command": command,
+        "world": paper, "command": command, **checks,
     }
     with building_dir(out, FIT_OUTPUTS) as work:
         figures = write_figures(fit, scores, fit_scores, work / "figures")
         (work / "report.md").write_text(report_markdown(
-            fit, scores, fit_scores, paper, command, [str(p) for p in figures]))
+            fit, scores, fit_scores, paper, command, [str(p) for p in figures], checks))
         (work / "wake.toml").write_text(toml_text)
         write_json(work / "fit.json", json_ready(result))
     if config_out is not None:
@@ -266,3 +272,44 @@ def field_fit(
                if entry[k]["met"]]
         typer.echo(f"  held out, {pair}: targets met: {', '.join(met) or 'none'}")
     typer.echo(f"wrote {out / 'report.md'}" + (f" and {config_out}" if config_out else ""))
+
+
+def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
+                flights: list[FlightSamples], fitted: list[FlightSamples],
+                held: list[FlightSamples]) -> dict:
+    """What the fit's report adds beside the fit: the turbulence read above the labels' noise at
+    the follower's own speed, and the wake's torque where the logs carry the motors' torque
+    (the follower's inertia scaled from the configured vehicle's by its mass and diagonal
+    squared: an assumption, for a term, J dw/dt, that averages out in the profile)."""
+    from dataclasses import asdict
+
+    from aerodock.learning import wake_fit as wf
+    from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
+    from aerodock.learning.wake_torque import has_motor_torque, torque_profile
+
+    out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None}
+    try:
+        noise = noise_by_speed(logs)
+    except wf.WakeFitError:
+        noise = None
+    if noise is not None:
+        out["turbulence_above_speed_noise"] = {
+            part: speed_matched_turbulence(fit.params, group, noise,
+                                           rotor_radii_m=fit.rotor_radii_m)
+            for part, group in (("held_out", held), ("fitted", fitted)) if group}
+    if any(has_motor_torque(log) for log in logs):
+        inertia = {}
+        for f in flights:
+            g = f.geometry
+            scale = (g["follower_mass_kg"] / cfg.vehicle.mass_kg
+                     * (g["follower_diagonal_m"] / cfg.vehicle.diagonal_m) ** 2)
+            inertia[f.vehicles.get("follower")] = [scale * j for j in cfg.vehicle.inertia_kgm2]
+        try:
+            profile = torque_profile(fit.params, flights, logs, inertia,
+                                     rotor_radii_m=fit.rotor_radii_m)
+        except wf.WakeFitError:
+            profile = None
+        if profile is not None:
+            out["wake_torque"] = {pair: [{**asdict(b), "lever_m": b.lever_m} for b in bins]
+                                  for pair, bins in profile.items()}
+    return out

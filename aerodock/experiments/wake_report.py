@@ -157,9 +157,12 @@ def _num(x: float, digits: int = 3) -> str:
 
 
 def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, Any],
-                    paper: dict[str, Any], command: str, figures: list[str]) -> str:
+                    paper: dict[str, Any], command: str, figures: list[str],
+                    checks: dict[str, Any] | None = None) -> str:
     """The report: parameters with their bootstrap spread, held-out scores against the targets,
-    the same on the fitted flights, and the wake it gives the configured world's vehicles."""
+    the same on the fitted flights, the checks beside the fit (``checks``: the turbulence above
+    the labels' noise at the follower's speed, the wake's torque), and the wake it gives the
+    configured world's vehicles."""
     lines = ["# The wake identified from real flights", "",
              f"`{command}`", "",
              f"Fitted on {len(fit.flights)} flights ({fit.samples} samples in the wake; "
@@ -216,6 +219,7 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
             lines.append(f"- {pair}: {cells or 'no bin with data'}")
         lines.append("")
         lines.append("All targets met: " + ("yes" if sc["all_met"] else "no"))
+    lines += _checks_markdown(checks or {})
     lines += ["", f"## The wake of this world's vehicles ({paper['config']})", "",
               "Directly below a hovering leader, on a level follower (the fitted dimensionless "
               "jet with this config's rotors and masses); 95 % ranges over the bootstrap refits "
@@ -241,3 +245,50 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
     lines += ["", "## Figures", ""] + [f"![{Path(f).stem}](figures/{Path(f).name})"
                                         for f in figures]
     return "\n".join(lines) + "\n"
+
+
+def _checks_markdown(checks: dict[str, Any]) -> list[str]:
+    """The report's sections for the checks beside the fit (:func:`report_markdown`)."""
+    lines = ["", "## The turbulence above the labels' noise at the follower's speed", ""]
+    noise = checks.get("turbulence_above_speed_noise")
+    if not noise:
+        lines.append("No follower vehicle has free-air samples to read its noise from.")
+    else:
+        lines += ["The targets' turbulence subtracts the follower's free-air label noise pooled "
+                  "over its free-air samples; the noise grows with its speed "
+                  "(aerodock/learning/label_noise.py). Real sd less the pooled noise / less the "
+                  "noise at each sample's speed [95th percentile over the pair's flights] / "
+                  "the jet's, m/s², within one leader equivalent radius of the axis; 0 means the "
+                  "spread is all the labels' noise.", "",
+                  "| flights | pair | samples | median speed | lateral | vertical |",
+                  "| --- | --- | --- | --- | --- | --- |"]
+        for part, rows in noise.items():
+            for pair, r in rows.items():
+                lines.append(
+                    f"| {part.replace('_', ' ')} | {pair} | {r['samples']:.0f} | "
+                    f"{r['median_speed_mps']:.2f} m/s | {_num(r['lateral_pooled'])} / "
+                    f"{_num(r['lateral_speed'])} [{_num(r['lateral_speed_p95'])}] / "
+                    f"{_num(r['lateral_model'])} | {_num(r['vertical_pooled'])} / "
+                    f"{_num(r['vertical_speed'])} [{_num(r['vertical_speed_p95'])}] / "
+                    f"{_num(r['vertical_model'])} |")
+    lines += ["", "## The wake's torque", ""]
+    torque = checks.get("wake_torque")
+    if not torque:
+        lines.append("No log carries the follower's motor torque and body rates (Neural-Swarm "
+                     "logs do), or none has free air to take its trim from.")
+        return lines
+    lines += ["The inward torque (pushing the disks nearer the leader's axis down), 0.15-0.45 m "
+              "below the leader, by offset from its axis: the logs' (Euler's equation on the "
+              "motors' torque and the body rates, aerodock/learning/wake_torque.py) and the "
+              "fitted jet's at the same states, and the lever (the torque over the real "
+              "downward force; a loss of thrust on the disks alone keeps it within half the "
+              "diagonal).", "",
+              "| pair | offset | samples | real [mN·m] | jet [mN·m] | real / jet | lever | "
+              "half diagonal |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for pair, bins in torque.items():
+        for b in bins:
+            lines.append(f"| {pair} | {100 * b['offset_lo_m']:.0f}-{100 * b['offset_hi_m']:.0f}"
+                         f" cm | {b['samples']} | {1e3 * b['real_nm']:.2f} | "
+                         f"{1e3 * b['jet_nm']:.2f} | {_num(b['ratio'], 2)} | "
+                         f"{100 * b['lever_m']:.1f} cm | {100 * b['half_diagonal_m']:.1f} cm |")
+    return lines

@@ -159,6 +159,17 @@ def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
                  "figures/turbulence.png"):
         assert (out / name).is_file(), name
     assert toml.read_text() == (out / "wake.toml").read_text()
+    # the checks beside the fit: the synthetic labels' noise does not grow with speed, so the
+    # turbulence above it is the pooled reading's; no synthetic log carries a motor torque
+    noise = result["turbulence_above_speed_noise"]
+    assert set(noise) == {"held_out", "fitted"}
+    for rows in noise.values():
+        for r in rows.values():
+            assert r["vertical_speed"] == pytest.approx(r["vertical_pooled"], rel=0.25)
+    assert result["wake_torque"] is None
+    report = (out / "report.md").read_text()
+    assert "## The turbulence above the labels' noise at the follower's speed" in report
+    assert "No log carries the follower's motor torque" in report
     # the fragment loads as a world's config, with the fitted values
     from aerodock.config import load_config
 
