@@ -13,10 +13,9 @@ import argparse
 import json
 import sys
 import tomllib
-import warnings
 from pathlib import Path
 
-from aerodock.ingest import read_logs
+from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
 from aerodock.learning.wake_fit import prepare_flights, select_flights
 
@@ -32,14 +31,11 @@ def main() -> int:
                         default=ROOT.parent / "shared" / "data" / "neural-swarm")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    folders = [args.data / "swap_ss", args.data / "swap_sl_2020-06-19"]
-    missing = [str(f) for f in folders if not f.is_dir()]
-    if missing:
-        print(f"error: {missing[0]}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
+    try:
+        logs = read_swap_flights(args.data)
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the ingest's notes on the flights' clocks
-        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
     params = tomllib.loads(FIT.read_text())["downwash"]["params"]
     noise = noise_by_speed(logs)
     train, held = select_flights(prepare_flights(logs), HOLDOUT)

@@ -14,18 +14,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from dataclasses import asdict
 from pathlib import Path
 
 from aerodock.config import load_config
-from aerodock.ingest import read_logs
+from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.learning.wake_fit import prepare_flights
 from aerodock.learning.wake_torque import free_air_map_check, motor_command_range, torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
-VEHICLES = "cf50=small,cf51=small,cf101=large"
 
 
 def main() -> int:
@@ -34,15 +32,12 @@ def main() -> int:
                         default=ROOT.parent / "shared" / "data" / "neural-swarm")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     args = parser.parse_args()
-    folders = [args.data / "swap_ss", args.data / "swap_sl_2020-06-19"]
-    missing = [str(f) for f in folders if not f.is_dir()]
-    if missing:
-        print(f"error: {missing[0]}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
+    try:
+        logs = read_swap_flights(args.data)
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
     cfg = load_config(WORLD)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the ingest's notes on the flights' clocks
-        logs = read_logs("neural-swarm", folders, vehicle=VEHICLES)
     params = dict(cfg.downwash.params)
     inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
                "cf101": cfg.leader.inertia_kgm2}

@@ -81,16 +81,11 @@ def test_real_lateral_turbulence_under_the_small_leader_is_within_the_noise(shar
     below the jet's, while the vertical stays within 20 % of the fit's pooled reading
     (docs/world.md)."""
     import tomllib
-    import warnings
     from pathlib import Path
 
-    from aerodock.ingest import read_logs
+    from aerodock.experiments.swap_flights import read_swap_flights
 
-    folders = [shared_data("neural-swarm", "swap_ss"),
-               shared_data("neural-swarm", "swap_sl_2020-06-19")]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
+    logs = read_swap_flights(shared_data("neural-swarm"))
     fitted = Path(__file__).resolve().parents[2] / "examples" / "crazyflie_wake_fitted.toml"
     params = tomllib.loads(fitted.read_text())["downwash"]["params"]
     noise = noise_by_speed(logs)

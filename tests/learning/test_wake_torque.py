@@ -109,15 +109,9 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
     """On the real Crazyflie flights the lower vehicle's motors answer an inward torque 4-10 cm
     off the other's axis, several times the fitted jet's disk torque (docs/crazyflie.md, "The
     wake's torque in the logs"), with the motor nearest the axis commanded far above hover."""
-    import warnings
+    from aerodock.experiments.swap_flights import read_swap_flights
 
-    from aerodock.ingest import read_logs
-
-    folders = [shared_data("neural-swarm", "swap_ss"),
-               shared_data("neural-swarm", "swap_sl_2020-06-19")]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
+    logs = read_swap_flights(shared_data("neural-swarm"))
     cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
     inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
                "cf101": cfg.leader.inertia_kgm2}
