@@ -31,7 +31,7 @@ import numpy as np
 from aerodock.downwash.jet import quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
-from aerodock.learning.labels import raw_labels
+from aerodock.learning.labels import free_air_mask, raw_labels
 from aerodock.learning.wake_fit import FlightSamples, WakeFitError, build_jet, geometry_with
 
 MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
@@ -92,8 +92,7 @@ def motor_command_range(logs: Sequence[FlightLog]) -> dict[str, dict[str, float]
             continue
         vid = str(log.meta.get("follower_id"))
         pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)
-        dp = log.follower_pos_m - log.leader_pos_m
-        far = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+        far = free_air_mask(log, FREE_AIR_OFFSET_M)
         free.setdefault(vid, []).append(pwm[far].ravel())
         every.setdefault(vid, []).append(pwm.ravel())
     return {vid: {"free_air_median": float(np.median(np.concatenate(free[vid]))),
@@ -114,8 +113,7 @@ def free_air_map_check(logs: Sequence[FlightLog],
     for log in logs:
         if MOTOR_PWM_KEY not in log.extra:
             continue
-        dp = log.follower_pos_m - log.leader_pos_m
-        far = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+        far = free_air_mask(log, FREE_AIR_OFFSET_M)
         if far.sum() < MIN_FREE_SAMPLES:
             continue
         vertical = raw_labels(log)[:, 2]
@@ -154,8 +152,7 @@ def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float]) -> np.nda
     inertia = np.asarray(inertia_kgm2, dtype=float)
     motors = np.asarray(log.extra[MOTOR_TORQUE_KEY], dtype=float)
     rates = np.asarray(log.extra[BODY_RATES_KEY], dtype=float)
-    dp = log.follower_pos_m - log.leader_pos_m
-    free = (np.hypot(dp[:, 0], dp[:, 1]) > FREE_AIR_OFFSET_M) | (dp[:, 2] < 0.0)
+    free = free_air_mask(log, FREE_AIR_OFFSET_M)
     if free.sum() < MIN_FREE_SAMPLES or log.n_samples < 3:
         return None
     trim = np.median(motors[free], axis=0)
