@@ -165,6 +165,10 @@ def field_fit(
     bootstrap: Annotated[int, typer.Option(
         help="Refits on flights resampled with replacement, for the uncertainty (0: none).")]
         = 20,
+    folds: Annotated[int, typer.Option(
+        help="Cross-validation over flights: every flight held out once, in this many folds, "
+             "each scored by a fit on the others; the spread a new flight should expect "
+             "(0: none).")] = 0,
     out: Annotated[Path, typer.Option(
         "--out", help="Folder for report.md, fit.json, wake.toml and figures/ (replaced as a "
                       "whole).")] = Path("out/wake_fit"),
@@ -196,6 +200,8 @@ def field_fit(
 
     if not 0 <= bootstrap <= 1000:
         fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
+    if folds == 1 or not 0 <= folds <= 100:
+        fail(f"--folds must be 0 (none) or between 2 and 100, got {folds}")
     cfg = load_config(config)
     check_output_dir(out, FIT_OUTPUTS)
     if config_out is not None:
@@ -221,6 +227,17 @@ def field_fit(
 
         fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor or [], bootstrap=bootstrap,
                           seed=seed, progress=say)
+        cross = None
+        if folds:
+            from aerodock.learning.wake_folds import cross_validate, flight_turbulence
+
+            def say_fold(done: int, total: int) -> None:
+                if not as_json:
+                    err_console.print(f"[dim]cross-validation fold {done}/{total}[/dim]")
+
+            cross = cross_validate(flights, folds, estimate_rotor_for=estimate_rotor or [],
+                                   progress=say_fold)
+            cross["per_flight"] = flight_turbulence(fit.params, flights, fit.rotor_radii_m)
     except wf.WakeFitError as err:
         fail(one_line(err))
     scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
@@ -238,6 +255,7 @@ def field_fit(
     words += [w for pattern in holdout or [] for w in ("--holdout", pattern)]
     words += [w for vid in estimate_rotor or [] for w in ("--estimate-rotor", vid)]
     words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
+    words += ["--folds", str(folds)] if folds else []
     words += ["--config", str(config)] if config is not None else []
     command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
     held_names = sorted({f.flight for f in held})
@@ -248,12 +266,13 @@ def field_fit(
         "fitted_flights": fit.flights, "held_out_flights": held_names,
         "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
         "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
-        "world": paper, "command": command, **checks,
+        "world": paper, "command": command, **checks, "cross_validation": cross,
     }
     with building_dir(out, FIT_OUTPUTS) as work:
         figures = write_figures(fit, scores, fit_scores, work / "figures")
         (work / "report.md").write_text(report_markdown(
-            fit, scores, fit_scores, paper, command, [str(p) for p in figures], checks))
+            fit, scores, fit_scores, paper, command, [str(p) for p in figures],
+            {**checks, "cross_validation": cross}))
         (work / "wake.toml").write_text(toml_text)
         write_json(work / "fit.json", json_ready(result))
     if config_out is not None:
@@ -271,6 +290,11 @@ def field_fit(
         met = [k for k in ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
                if entry[k]["met"]]
         typer.echo(f"  held out, {pair}: targets met: {', '.join(met) or 'none'}")
+    if cross is not None:
+        for pair, row in cross["summary"].items():
+            cells = ", ".join(f"{k} {r['met']}/{r['scored']} (flights' own {r['reference_met']})"
+                              for k, r in row.items())
+            typer.echo(f"  cross-validated, {pair}: folds met: {cells}")
     typer.echo(f"wrote {out / 'report.md'}" + (f" and {config_out}" if config_out else ""))
 
 

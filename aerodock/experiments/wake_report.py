@@ -249,7 +249,8 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
 
 def _checks_markdown(checks: dict[str, Any]) -> list[str]:
     """The report's sections for the checks beside the fit (:func:`report_markdown`)."""
-    lines = ["", "## The turbulence above the labels' noise at the follower's speed", ""]
+    lines = _cross_validation_markdown(checks.get("cross_validation"))
+    lines += ["", "## The turbulence above the labels' noise at the follower's speed", ""]
     noise = checks.get("turbulence_above_speed_noise")
     if not noise:
         lines.append("No follower vehicle has free-air samples to read its noise from.")
@@ -291,4 +292,36 @@ def _checks_markdown(checks: dict[str, Any]) -> list[str]:
                          f" cm | {b['samples']} | {1e3 * b['real_nm']:.2f} | "
                          f"{1e3 * b['jet_nm']:.2f} | {_num(b['ratio'], 2)} | "
                          f"{100 * b['lever_m']:.1f} cm | {100 * b['half_diagonal_m']:.1f} cm |")
+    return lines
+
+
+def _cross_validation_markdown(cross: dict[str, Any] | None) -> list[str]:
+    """The report's cross-validation section (``field fit --folds``), if it was asked for."""
+    if not cross:
+        return []
+    n = len(cross["folds"])
+    lines = ["", f"## Cross-validation over flights ({n} folds)", "",
+             "Every flight (the held-out ones too) held out once: each pair's flights in name "
+             "order dealt round-robin into the folds, each fold scored by a fit on all the "
+             "others (aerodock/learning/wake_folds.py). Per pair and target: the relative error "
+             "of each fold, and folds within the target; beside it the flights' own reference, "
+             "the fold's training flights' real figure taken as the prediction (what a model "
+             "that matched its training flights exactly would score: the flights' spread).", "",
+             "| pair | target | jet, per fold | met | training flights' real, per fold | met |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for pair, row in cross["summary"].items():
+        for key, r in row.items():
+            lines.append(f"| {pair} | {key} | {', '.join(_pct(e) for e in r['rel_errors'])} | "
+                         f"{r['met']}/{r['scored']} | "
+                         f"{', '.join(_pct(e) for e in r['reference_rel_errors'])} | "
+                         f"{r['reference_met']}/{r['scored']} |")
+    per = cross.get("per_flight") or {}
+    if per:
+        lines += ["", "Each flight alone, the real turbulence sd directly below (as the targets "
+                  "read it) beside the fitted jet's, m/s² (n/a: too few samples, or all noise):",
+                  ""]
+        for pair, rows in per.items():
+            cells = ", ".join(f"{r['flight']} {_num(r['vertical_real_mps2'])} / "
+                              f"{_num(r['vertical_fitted_mps2'])}" for r in rows)
+            lines.append(f"- {pair}, vertical: {cells}")
     return lines
