@@ -165,6 +165,11 @@ def field_fit(
     bootstrap: Annotated[int, typer.Option(
         help="Refits on flights resampled with replacement, for the uncertainty (0: none).")]
         = 20,
+    noise: Annotated[str, typer.Option(
+        help="The label noise the turbulence is read above: 'pooled' (each follower "
+             "vehicle's free-air variance over all its free-air samples) or 'speed' (its "
+             "free-air variance at the follower's speed at each sample; the noise grows with "
+             "the vehicle's own manoeuvres).")] = "pooled",
     folds: Annotated[int, typer.Option(
         help="Cross-validation over flights: every flight held out once, in this many folds, "
              "each scored by a fit on the others; the spread a new flight should expect "
@@ -200,6 +205,8 @@ def field_fit(
 
     if not 0 <= bootstrap <= 1000:
         fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
+    if noise not in ("pooled", "speed"):
+        fail(f"--noise must be 'pooled' or 'speed', got {noise!r}")
     if folds == 1 or not 0 <= folds <= 100:
         fail(f"--folds must be 0 (none) or between 2 and 100, got {folds}")
     cfg = load_config(config)
@@ -214,6 +221,10 @@ def field_fit(
             fail(one_line(err))
     try:
         flights = wf.prepare_flights(logs)
+        if noise == "speed":
+            from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
+
+            flights = with_speed_noise(flights, noise_by_speed(logs))
         fitted, held = wf.select_flights(flights, holdout or [])
         if holdout and not held:
             fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "
@@ -255,6 +266,7 @@ def field_fit(
     words += [w for pattern in holdout or [] for w in ("--holdout", pattern)]
     words += [w for vid in estimate_rotor or [] for w in ("--estimate-rotor", vid)]
     words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
+    words += ["--noise", noise] if noise != "pooled" else []
     words += ["--folds", str(folds)] if folds else []
     words += ["--config", str(config)] if config is not None else []
     command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
@@ -266,13 +278,14 @@ def field_fit(
         "fitted_flights": fit.flights, "held_out_flights": held_names,
         "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
         "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
-        "world": paper, "command": command, **checks, "cross_validation": cross,
+        "world": paper, "command": command, "noise": noise, **checks,
+        "cross_validation": cross,
     }
     with building_dir(out, FIT_OUTPUTS) as work:
         figures = write_figures(fit, scores, fit_scores, work / "figures")
         (work / "report.md").write_text(report_markdown(
             fit, scores, fit_scores, paper, command, [str(p) for p in figures],
-            {**checks, "cross_validation": cross}))
+            {**checks, "cross_validation": cross, "noise": noise}))
         (work / "wake.toml").write_text(toml_text)
         write_json(work / "fit.json", json_ready(result))
     if config_out is not None:

@@ -191,7 +191,10 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
                   f"half-magnitude radius within {100 * TARGETS['half_width']:.0f} %; vertical "
                   f"and lateral turbulence sd within {100 * TARGETS['vertical_sd']:.0f} % "
                   "(directly below; each flight's residual about the fitted mean and its own "
-                  "offset, less the free-air noise variance).", "",
+                  "offset, less the label noise variance: "
+                  + ("each sample's follower's free-air variance at its speed"
+                     if (checks or {}).get("noise") == "speed"
+                     else "the follower's free-air variance, pooled") + ").", "",
                   "| pair | flights | worst mean error | half-width real / fitted | "
                   "vertical sd real / fitted | lateral sd real / fitted | "
                   "autocorr. 50 ms real / fitted | RMSE (zero model) |",

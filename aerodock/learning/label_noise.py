@@ -8,13 +8,14 @@ and the follower crosses the wake at 0.2-1 m/s while most free-air samples are a
 pooled noise is too small where the turbulence is read, and what is left over is read as
 turbulence. This module bins the free-air noise by speed (:func:`noise_by_speed`) and reads the
 turbulence with each sample's own noise (:func:`speed_matched_turbulence`), beside the pooled
-reading, with a bootstrap over flights.
+reading, with a bootstrap over flights. :func:`with_speed_noise` gives the fit itself each
+sample's noise (``aerodock field fit --noise speed``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -95,6 +96,23 @@ def noise_by_speed(logs: Sequence[FlightLog], edges_mps: Sequence[float] = SPEED
         out[vid] = NoiseTable(edges, var, counts)
     if not out:
         raise WakeFitError("no follower vehicle has free-air samples to read its noise from")
+    return out
+
+
+def with_speed_noise(flights: Sequence[FlightSamples], noise: dict[str, NoiseTable],
+                     ) -> list[FlightSamples]:
+    """The flights with each sample's label noise the follower vehicle's free-air noise at the
+    follower's speed then (:attr:`FlightSamples.noise_var_mps4`), so that the fit and its scores
+    read the turbulence above it; a flight whose follower has no table keeps the pooled noise.
+    """
+    out = []
+    for f in flights:
+        table = noise.get(str(f.vehicles.get("follower")))
+        if table is None:
+            out.append(f)
+            continue
+        speed = np.linalg.norm(f.follower.v, axis=1)
+        out.append(replace(f, noise_var_mps4=table.at(speed)))
     return out
 
 

@@ -18,8 +18,10 @@ The labels' own noise and bias are accounted for (:mod:`aerodock.learning.labels
 flight's residual is de-biased by its free-air median (flights without free-air samples borrow
 their follower vehicle's other flights'); the free-air variance (and autocovariance) of each
 follower vehicle's residual, about that bias, is subtracted from the wake's before it is read
-as turbulence. The leader's logged thrust is scaled so that its flight median is its weight (the
-thrust estimate of a real log carries the same few-percent bias).
+as turbulence (or, given per sample, the noise at the follower's own speed:
+:func:`aerodock.learning.label_noise.with_speed_noise`, ``field fit --noise speed``). The
+leader's logged thrust is scaled so that its flight median is its weight (the thrust estimate of
+a real log carries the same few-percent bias).
 
 Scores (:func:`score_wake`) are what the issue's targets name, per vehicle pair, on any flights
 (held out from the fit): the mean vertical acceleration directly below the leader per bin of
@@ -87,6 +89,9 @@ class FlightSamples:
         dt_s: the log's median sample interval.
         free_var_mps4: (3,) the follower vehicle's free-air label variance per axis.
         free_autocov: (LAGS,) its free-air vertical autocovariance, lags 0..LAGS-1 samples.
+        noise_var_mps4: (m, 3) the label noise variance of each sample, where it is known per
+            sample (:func:`aerodock.learning.label_noise.with_speed_noise`: the free-air
+            variance at the follower's speed); None: ``free_var_mps4`` for every sample.
     """
 
     name: str
@@ -101,6 +106,14 @@ class FlightSamples:
     dt_s: float
     free_var_mps4: np.ndarray
     free_autocov: np.ndarray
+    noise_var_mps4: np.ndarray | None = None
+
+    @property
+    def sample_noise_var_mps4(self) -> np.ndarray:
+        """(m, 3) the label noise variance the turbulence is read above, per sample."""
+        if self.noise_var_mps4 is not None:
+            return self.noise_var_mps4
+        return np.broadcast_to(self.free_var_mps4, self.label_mps2.shape)
 
     @property
     def offset_m(self) -> np.ndarray:
@@ -400,7 +413,8 @@ def turbulence_bins(params: dict[str, float], flights: Sequence[FlightSamples],
                     rotor_radii_m: dict[str, float] | None = None) -> list[dict[str, Any]]:
     """Per vehicle pair and band of lateral offset near the axis (0-0.5 and 0.5-1 leader
     equivalent radii: "directly below", where the targets are scored), each flight's residual's
-    spread about the jet's mean (and its own offset), less the free-air noise (``real_*_var``),
+    spread about the jet's mean (and its own offset), less the label noise (``real_*_var``;
+    :attr:`FlightSamples.sample_noise_var_mps4`),
     beside the jet's own turbulence variance there (``model_*_var``), m²/s⁴.
     Bins with fewer than :data:`MIN_BIN_SAMPLES` samples are left out."""
     bands = ((0.0, 0.5), (0.5, 1.0))
@@ -421,8 +435,9 @@ def turbulence_bins(params: dict[str, float], flights: Sequence[FlightSamples],
             row["exy"].append(err[sel, :2])
             row["vz"].append(turb["axial_var_mps4"][sel])
             row["vl"].append(turb["lateral_var_mps4"][sel])
-            row["fz"].append(np.full(sel.sum(), f.free_var_mps4[2]))
-            row["fl"].append(np.full(sel.sum(), 0.5 * (f.free_var_mps4[0] + f.free_var_mps4[1])))
+            noise = f.sample_noise_var_mps4[sel]
+            row["fz"].append(noise[:, 2])
+            row["fl"].append(0.5 * (noise[:, 0] + noise[:, 1]))
     out = []
     for (pair, b), row in sorted(rows.items()):
         ez = np.concatenate(row["ez"])
@@ -709,8 +724,7 @@ def score_wake(params: dict[str, float], flights: Sequence[FlightSamples],
             centred(f.label_mps2 - m, np.hypot(f.offset_m[:, 0], f.offset_m[:, 1])
                     < CORE_RADII * f.equivalent_radius_m) for f, m in zip(group, means,
                                                                          strict=True)])
-        free = np.concatenate([np.tile(f.free_var_mps4, (f.label_mps2.shape[0], 1))
-                               for f in group])
+        free = np.concatenate([f.sample_noise_var_mps4 for f in group])
         axial = np.concatenate([t["axial_var_mps4"] for t in turbs])
         lateral = np.concatenate([t["lateral_var_mps4"] for t in turbs])
         for name, real_var, model_var, key in (

@@ -12,7 +12,11 @@ from aerodock.downwash.base import BodyState
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, rotmat_to_quat
 from aerodock.learning import wake_fit as wf
-from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
+from aerodock.learning.label_noise import (
+    noise_by_speed,
+    speed_matched_turbulence,
+    with_speed_noise,
+)
 
 MASS, ROTOR, DIAGONAL = 0.032, 0.0225, 0.092
 
@@ -73,6 +77,32 @@ def test_speed_matched_noise_reads_no_turbulence_where_there_is_none():
     assert row["lateral_pooled"] > 0.1 and row["vertical_pooled"] > 0.1  # spurious
     assert row["lateral_speed"] < 0.08 and row["vertical_speed"] < 0.08
     assert row["lateral_model"] == 0.0 and row["vertical_model"] == 0.0
+
+
+def test_the_fit_above_the_noise_at_speed_finds_no_turbulence_where_there_is_none():
+    """`field fit --noise speed`: each sample carries the noise at its speed, so the fit's
+    turbulence intensities, which the pooled noise inflates, come out near the wake's zero; a
+    flight whose follower has no noise table keeps the pooled noise."""
+    cfg = load_config()
+    params = {k: float(cfg.downwash.params[k]) for k in wf.FITTED_PARAMS}
+    params.update(turb_vertical=0.0, turb_lateral=0.0)
+    logs = [_flight(params, seed) for seed in range(4)]
+    noise = noise_by_speed(logs)
+    flights = wf.prepare_flights(logs)
+    matched = with_speed_noise(flights, noise)
+    for f, g in zip(flights, matched, strict=True):
+        assert f.noise_var_mps4 is None
+        np.testing.assert_array_equal(
+            g.sample_noise_var_mps4, noise["cf1"].at(np.linalg.norm(f.follower.v, axis=1)))
+    assert with_speed_noise(flights, {})[0].noise_var_mps4 is None
+    pooled = wf.fit_turbulence(params, flights)
+    speed = wf.fit_turbulence(params, matched)
+    # the pooled reading puts turbulence into a wake that has none
+    assert pooled["turb_lateral"] > 0.03 and pooled["turb_vertical"] > 0.03, pooled
+    assert speed["turb_lateral"] < 0.3 * pooled["turb_lateral"], (speed, pooled)
+    # (measured: lateral 0.059 -> 0.000, vertical 0.064 -> 0.027; the rest of the vertical is
+    # the noise table's speed bins, 0.1 m/s wide)
+    assert speed["turb_vertical"] < 0.5 * pooled["turb_vertical"], (speed, pooled)
 
 
 def test_real_lateral_turbulence_under_the_small_leader_is_within_the_noise(shared_data):

@@ -104,17 +104,20 @@ def test_the_shared_flights_cross_validated(shared_data):
         assert real.max() / real.min() > 1.4, (pair, real)
 
 
-def test_field_fit_folds(tmp_path, truth):
+def test_field_fit_folds_and_noise_at_speed(tmp_path, truth):
     data = tmp_path / "synth.npz"
     save_flightlogs(data, synthetic_flights(truth, flights_per_pair=2, seed=5))
     out = tmp_path / "fit"
     proc = aerodock("field", "fit", str(data), "--bootstrap", "0", "--folds", "2",
-                    "--out", str(out), "--json")
+                    "--noise", "speed", "--out", str(out), "--json", check=True)
     result = json.loads(proc.stdout)
+    assert result["noise"] == "speed" and "--noise speed" in result["command"]
     cross = result["cross_validation"]
     assert len(cross["folds"]) == 2
     assert set(cross["per_flight"]) == set(cross["summary"])
-    assert "## Cross-validation over flights (2 folds)" in (out / "report.md").read_text()
+    report = (out / "report.md").read_text()
+    assert "## Cross-validation over flights (2 folds)" in report
+    assert "each sample's follower's free-air variance at its speed" in report
     assert "--folds 2" in result["command"]
     for folds, message in (("1", "--folds must be 0 (none) or between 2 and 100"),
                            ("3", "folds must be between 2 and the flights of the largest pair")):
