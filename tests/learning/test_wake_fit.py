@@ -26,15 +26,6 @@ HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01
 
 
 @pytest.fixture(scope="module")
-def truth():
-    """The default world's wake (the fit to the real flights) as the known parameters."""
-    from aerodock.config import load_config
-
-    params = load_config().downwash.params
-    return {k: float(params[k]) for k in wf.FITTED_PARAMS}
-
-
-@pytest.fixture(scope="module")
 def synthetic(truth):
     return synthetic_flights(truth, flights_per_pair=4, seed=1)
 

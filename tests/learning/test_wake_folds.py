@@ -24,14 +24,6 @@ from aerodock.learning.wake_folds import assign_folds, cross_validate, flight_tu
 
 
 @pytest.fixture(scope="module")
-def truth():
-    from aerodock.config import load_config
-
-    params = load_config().downwash.params
-    return {k: float(params[k]) for k in wf.FITTED_PARAMS}
-
-
-@pytest.fixture(scope="module")
 def flights(truth):
     return wf.prepare_flights(synthetic_flights(truth, flights_per_pair=4, seed=3))
 
