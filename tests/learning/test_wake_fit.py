@@ -143,6 +143,12 @@ def test_real_fit_above_the_noise_at_speed(shared_data):
         assert shipped[key] == pooled[key], key
     assert 0.6 < shipped["turb_lateral"] / pooled["turb_lateral"] < 0.75
     assert 0.9 < shipped["turb_vertical"] / pooled["turb_vertical"] < 1.0
+    # it loads as the paper-scale world with only the turbulence changed (docs/world.md flies it)
+    from aerodock.config import load_config
+
+    default, variant = load_config().downwash.params, load_config(SPEED_FITTED).downwash.params
+    assert {k for k in default if default[k] != variant[k]} == {
+        "turb_vertical", "turb_lateral", "turb_length_ratio"}
 
 
 # -- the command ------------------------------------------------------------------------------
