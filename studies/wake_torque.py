@@ -63,13 +63,15 @@ def main() -> int:
             continue
         print(f"{pair} (follower under leader), inward wake torque, mN m:")
         print("  offset [cm]  samples  real (se)       jet    real/jet  lever [cm]  "
-              "lean in [deg]  nearest motor's PWM  real torque/lean [mN m/rad]")
+              "lean in [deg]  nearest motor's PWM  real torque/lean [mN m/rad]  "
+              "real moving in / out")
         for b in bins:
             pwm = "-" if b.near_motor_pwm is None else f"{b.near_motor_pwm:.2f}"
             print(f"  {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  {b.samples:7d}  "
                   f"{1e3 * b.real_nm:6.2f} ({1e3 * b.real_se_nm:.2f})  {1e3 * b.jet_nm:6.2f}  "
                   f"{b.ratio:8.1f}  {100 * b.lever_m:10.1f}  {b.lean_in_deg:13.1f}  {pwm:>19}  "
-                  f"{1e3 * b.nm_per_rad:10.0f}")
+                  f"{1e3 * b.nm_per_rad:10.0f}  {1e3 * b.real_moving_in_nm:17.2f} / "
+                  f"{1e3 * b.real_moving_out_nm:.2f}")
         print(f"  (a loss of thrust on the disks alone: lever at most the half diagonal, "
               f"{100 * bins[0].half_diagonal_m:.1f} cm)")
     for vid, c in commands.items():

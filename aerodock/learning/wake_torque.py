@@ -41,6 +41,7 @@ MOTOR_PWM_KEY = "follower_motor_pwm"
 FREE_AIR_OFFSET_M = 0.4
 MIN_FREE_SAMPLES = 50
 MIN_BIN_SAMPLES = 20
+RADIAL_SPEED_MPS = 0.1  # moving towards or away from the axis: faster than this along e_r
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,12 @@ class TorqueBin:
     """The real follower's mean lean towards the axis (its body z axis's tilt, signed)."""
     near_motor_pwm: float | None
     """Median command (0..1) of the motor nearest the axis, when the log has it."""
+    real_moving_in_nm: float = float("nan")
+    real_moving_out_nm: float = float("nan")
+    """The real inward torque over the samples moving towards / away from the axis (relative
+    horizontal speed along ``e_r`` beyond ``RADIAL_SPEED_MPS``; nan: fewer than
+    ``MIN_BIN_SAMPLES``): a torque of the follower's own motion through the air (blade
+    flapping, rotor drag) changes sign between them, the wake's does not."""
 
     @property
     def lever_m(self) -> float:
@@ -224,15 +231,17 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 i, _LOG_MOTOR_ORDER[nearest]]
         down = flight.label_mps2[:, 2] * geometry["follower_mass_kg"]
         half = np.full(i.size, geometry["follower_diagonal_m"] / 2.0)
+        rel_v = flight.follower.v[:, :2] - flight.leader.v[:, :2]
+        radial_v = np.sum(rel_v * e_r, axis=1)
         parts.setdefault(flight.pair, []).append((horizontal, dp[:, 2], real, model, lean,
-                                                  near_pwm, down, half))
+                                                  near_pwm, down, half, radial_v))
     if not parts:
         raise WakeFitError("no flight carries the motor torque and body rates with free air "
                            "to take the trim from")
     out: dict[str, list[TorqueBin]] = {}
     for pair, chunks in parts.items():
-        horizontal, sep, real, model, lean, pwm, down, half = (np.concatenate(c)
-                                                               for c in zip(*chunks))
+        horizontal, sep, real, model, lean, pwm, down, half, radial_v = (
+            np.concatenate(c) for c in zip(*chunks))
         below = (sep >= separation_m[0]) & (sep <= separation_m[1])
         bins = []
         for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
@@ -249,9 +258,15 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 real_down_force_n=float(down[m].mean()),
                 half_diagonal_m=float(half[m].mean()), lean_in_deg=float(lean[m].mean()),
                 near_motor_pwm=(float(np.nanmedian(pwm[m])) if np.isfinite(pwm[m]).any()
-                                else None)))
+                                else None),
+                real_moving_in_nm=_mean_if_enough(real[m & (radial_v < -RADIAL_SPEED_MPS)]),
+                real_moving_out_nm=_mean_if_enough(real[m & (radial_v > RADIAL_SPEED_MPS)])))
         out[pair] = bins
     return out
+
+
+def _mean_if_enough(x: np.ndarray) -> float:
+    return float(x.mean()) if x.size >= MIN_BIN_SAMPLES else float("nan")
 
 
 # quad_rotor_offsets_body_m's disks (FRD) -> the Neural-Swarm logs' motor columns (u1..u4:

@@ -57,15 +57,21 @@ def test_profile_recovers_a_known_torque(params, gain):
     profile = wt.torque_profile(params, wf.prepare_flights(logs), logs, INERTIA,
                                 separation_m=(0.1, 0.65))
     assert set(profile) == {"32 g under 32 g", "67 g under 32 g", "32 g under 67 g"}
-    checked = 0
+    checked = both = 0
     for bins in profile.values():
         for b in bins:
             if b.jet_nm > 0.2 * max(x.jet_nm for x in bins):
                 assert b.ratio == pytest.approx(gain, rel=0.05), b
                 assert b.real_nm > 0
+                # no torque of the follower's own motion here: the same both ways through
+                # (where the passes cross the bin fast enough each way)
+                for part in (b.real_moving_in_nm, b.real_moving_out_nm):
+                    if np.isfinite(part):
+                        assert part == pytest.approx(b.real_nm, rel=0.15), b
+                        both += 1
                 checked += 1
             assert b.near_motor_pwm is None  # the synthetic logs carry no motor commands
-    assert checked >= 6
+    assert checked >= 6 and both >= 6
 
 
 def test_free_air_map_check_sees_a_map_that_overstates_the_top(params):
@@ -130,6 +136,9 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
         for b in mid:
             assert b.real_nm > 5 * b.real_se_nm  # inward, far beyond its standard error
             assert b.ratio > 3.0
+            # not a torque of the follower's own motion (blade flapping, rotor drag: it would
+            # change sign with the direction): moving in or out, it is the wake's
+            assert min(b.real_moving_in_nm, b.real_moving_out_nm) > 3.0 * b.jet_nm, b
             assert b.lean_in_deg > 0  # the real follower leans into the axis
             if b.offset_lo_m >= 0.06:  # more than a loss of thrust on the disks can make
                 assert b.lever_m > 1.3 * b.half_diagonal_m
