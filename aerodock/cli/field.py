@@ -169,7 +169,8 @@ def field_fit(
         help="The label noise the turbulence is read above: 'pooled' (each follower "
              "vehicle's free-air variance over all its free-air samples) or 'speed' (its "
              "free-air variance at the follower's speed at each sample; the noise grows with "
-             "the vehicle's own manoeuvres).")] = "pooled",
+             "the vehicle's own manoeuvres; the correlation time is read above the pooled "
+             "noise either way).")] = "pooled",
     folds: Annotated[int, typer.Option(
         help="Cross-validation over flights: every flight held out once, in this many folds, "
              "each scored by a fit on the others; the spread a new flight should expect "
@@ -225,6 +226,12 @@ def field_fit(
             from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
 
             flights = with_speed_noise(flights, noise_by_speed(logs))
+            pooled = sorted({str(f.vehicles.get("follower")) for f in flights
+                             if f.noise_var_mps4 is None})
+            if pooled and not as_json:
+                err_console.print(f"warning: too little free air to table the noise by speed "
+                                  f"for {', '.join(pooled)}: their flights keep the pooled "
+                                  f"noise")
         fitted, held = wf.select_flights(flights, holdout or [])
         if holdout and not held:
             fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "

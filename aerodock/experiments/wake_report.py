@@ -305,8 +305,10 @@ def _cross_validation_markdown(cross: dict[str, Any] | None) -> list[str]:
     n = len(cross["folds"])
     lines = ["", f"## Cross-validation over flights ({n} folds)", "",
              "Every flight (the held-out ones too) held out once: each pair's flights in name "
-             "order dealt round-robin into the folds, each fold scored by a fit on all the "
-             "others (aerodock/learning/wake_folds.py). Per pair and target: the relative error "
+             "order dealt round-robin into the folds (the deal carried on from pair to pair), "
+             "each fold scored by a fit on all the others (aerodock/learning/wake_folds.py; the "
+             "labels' noise is each follower vehicle's, read from every flight's free air). "
+             "Per pair and target: the relative error (the mean's: its worst bin, signed) "
              "of each fold, and folds within the target; beside it the flights' own reference, "
              "the fold's training flights' real figure taken as the prediction (what a model "
              "that matched its training flights exactly would score: the flights' spread).", "",

@@ -103,7 +103,8 @@ def with_speed_noise(flights: Sequence[FlightSamples], noise: dict[str, NoiseTab
                      ) -> list[FlightSamples]:
     """The flights with each sample's label noise the follower vehicle's free-air noise at the
     follower's speed then (:attr:`FlightSamples.noise_var_mps4`), so that the fit and its scores
-    read the turbulence above it; a flight whose follower has no table keeps the pooled noise.
+    read the turbulence sd above it (the correlation time is still read above the pooled
+    free-air autocovariance); a flight whose follower has no table keeps the pooled noise.
     """
     out = []
     for f in flights:

@@ -31,12 +31,13 @@ TARGET_KEYS = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
 
 
 def assign_folds(flights: Sequence[FlightSamples], folds: int) -> dict[str, int]:
-    """Flight key -> fold: each pair's flights in name order, dealt round-robin (a flight with
-    logs in two pairs takes the fold its first pair gives it).
+    """Flight key -> fold: each pair's flights in name order, dealt round-robin, the deal
+    carried on from one pair to the next (a flight with logs in two pairs takes the fold its
+    first pair gives it). With ``folds`` no more than the largest pair's flights, every fold
+    holds out at least one flight, and fold sizes differ by at most one.
 
     Raises:
-        WakeFitError: ``folds`` below 2, or above the flights of every pair (a fold would hold
-            out no flight).
+        WakeFitError: ``folds`` below 2, or above the flights of every pair.
     """
     by_pair: dict[str, list[str]] = {}
     for f in flights:
@@ -48,9 +49,12 @@ def assign_folds(flights: Sequence[FlightSamples], folds: int) -> dict[str, int]
         raise WakeFitError(f"folds must be between 2 and the flights of the largest pair "
                            f"({most}), got {folds}")
     out: dict[str, int] = {}
+    deal = 0  # the deal goes on from one pair to the next, so the folds stay even
     for _, keys in sorted(by_pair.items()):
-        for i, key in enumerate(sorted(keys)):
-            out.setdefault(key, i % folds)
+        for key in sorted(keys):
+            if key not in out:
+                out[key] = deal % folds
+                deal += 1
     return out
 
 
@@ -103,7 +107,7 @@ def _summary(folds: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                 entry = f["pairs"].get(pair)
                 if entry is None:
                     continue
-                err = (entry[key]["worst_rel_error"] if key == "mean_vertical"
+                err = (_signed_worst(entry["separation_bins"]) if key == "mean_vertical"
                        else entry[key]["rel_error"])
                 if not np.isfinite(err):
                     continue
@@ -125,6 +129,12 @@ def _summary(folds: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                         "reference_rel_errors": ref, "reference_met": ref_met}
         out[pair] = row
     return out
+
+
+def _signed_worst(bins: list[dict[str, Any]]) -> float:
+    """The jet's relative error in its worst separation bin, with its sign."""
+    errs = [b["rel_error"] for b in bins if np.isfinite(b["rel_error"])]
+    return float(max(errs, key=abs)) if errs else float("nan")
 
 
 def _reference_error(key: str, held: dict[str, Any], train: dict[str, Any]) -> float:

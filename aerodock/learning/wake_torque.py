@@ -66,9 +66,9 @@ class TorqueBin:
     """Median command (0..1) of the motor nearest the axis, when the log has it."""
     real_moving_in_nm: float = float("nan")
     real_moving_out_nm: float = float("nan")
-    """The real inward torque over the samples moving towards / away from the axis (relative
-    horizontal speed along ``e_r`` beyond ``RADIAL_SPEED_MPS``; nan: fewer than
-    ``MIN_BIN_SAMPLES``): a torque of the follower's own motion through the air (blade
+    """The real inward torque over the samples where the follower moves towards / away from
+    the axis (its own horizontal velocity along ``e_r`` beyond ``RADIAL_SPEED_MPS``; nan: fewer
+    than ``MIN_BIN_SAMPLES``): a torque of the follower's own motion through the air (blade
     flapping, rotor drag) changes sign between them, the wake's does not."""
 
     @property
@@ -231,8 +231,7 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 i, _LOG_MOTOR_ORDER[nearest]]
         down = flight.label_mps2[:, 2] * geometry["follower_mass_kg"]
         half = np.full(i.size, geometry["follower_diagonal_m"] / 2.0)
-        rel_v = flight.follower.v[:, :2] - flight.leader.v[:, :2]
-        radial_v = np.sum(rel_v * e_r, axis=1)
+        radial_v = np.sum(flight.follower.v[:, :2] * e_r, axis=1)  # its own, through the air
         parts.setdefault(flight.pair, []).append((horizontal, dp[:, 2], real, model, lean,
                                                   near_pwm, down, half, radial_v))
     if not parts:

@@ -29,11 +29,18 @@ def flights(truth):
 
 
 def test_every_flight_is_held_out_once_round_robin_per_pair(flights):
+    """Each pair's flights dealt in name order, the deal carried on from pair to pair: every
+    pair in every fold it can fill, and the folds even."""
     folds = assign_folds(flights, 3)
     assert set(folds) == {f.flight for f in flights}
-    for pair in {f.pair for f in flights}:
+    deal = 0
+    for pair in sorted({f.pair for f in flights}):
         keys = sorted({f.flight for f in flights if f.pair == pair})
-        assert [folds[k] for k in keys] == [i % 3 for i in range(len(keys))]
+        assert [folds[k] for k in keys] == [(deal + i) % 3 for i in range(len(keys))]
+        deal += len(keys)
+        assert {folds[k] for k in keys} == {0, 1, 2}  # 4 flights a pair
+    sizes = np.bincount(list(folds.values()))
+    assert sizes.max() - sizes.min() <= 1, sizes
     with pytest.raises(wf.WakeFitError, match="folds must be between 2 and"):
         assign_folds(flights, 1)
     with pytest.raises(wf.WakeFitError, match=r"flights of the largest pair \(4\)"):
@@ -79,9 +86,19 @@ def test_the_shared_flights_cross_validated(shared_data):
     cv = cross_validate(flights, 3, estimate_rotor_for=["cf101"])
     summary = cv["summary"]
     assert set(summary) == {"32 g under 32 g", "32 g under 67 g", "67 g under 32 g"}
+    assert [len(f["held_out"]) for f in cv["folds"]] == [7, 6, 6]
+    # docs/world.md's table: 23 of the 36 pair-fold targets met by the jet, 22 by the flights'
+    # own reference; the mean 5/9 against 3/9
+    keys = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
+    jet_all = sum(r[k]["met"] for r in summary.values() for k in keys)
+    own_all = sum(r[k]["reference_met"] for r in summary.values() for k in keys)
+    assert (jet_all, own_all) == (23, 22), (jet_all, own_all)
     jet = sum(r["mean_vertical"]["met"] for r in summary.values())
     own = sum(r["mean_vertical"]["reference_met"] for r in summary.values())
-    assert jet >= own, (jet, own)
+    assert (jet, own) == (5, 3), (jet, own)
+    # the mean's worst bin is signed: the jet is low in some folds and high in others
+    signs = {e > 0 for r in summary.values() for e in r["mean_vertical"]["rel_errors"]}
+    assert signs == {True, False}
     for pair, row in summary.items():
         assert row["half_width"]["met"] >= 2, (pair, row["half_width"])
     # the one lateral intensity is too high for the equal pair in every fold (its real spread

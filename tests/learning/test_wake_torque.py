@@ -138,6 +138,7 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
             assert b.ratio > 3.0
             # not a torque of the follower's own motion (blade flapping, rotor drag: it would
             # change sign with the direction): moving in or out, it is the wake's
+            assert np.isfinite(b.real_moving_in_nm) and np.isfinite(b.real_moving_out_nm), b
             assert min(b.real_moving_in_nm, b.real_moving_out_nm) > 3.0 * b.jet_nm, b
             assert b.lean_in_deg > 0  # the real follower leans into the axis
             if b.offset_lo_m >= 0.06:  # more than a loss of thrust on the disks can make
