@@ -93,12 +93,10 @@ def test_the_fast_leader_curriculum_flies_the_targets_leader_speeds(short_cfg):
     fast = load_config(example).curriculum
     overrides = {"curriculum": {"leader_drift_max_mps": fast.leader_drift_max_mps,
                                 "drift_fraction": fast.drift_fraction}}
-    speeds = {}
-    for name, cfg in (("default", short_cfg), ("fast", short_cfg.with_overrides(overrides))):
-        logs = excitation_flights(cfg, 12, 0.6, 0.9, seed=3)
-        speeds[name] = np.array([log.meta["leader_speed_mps"] for log in logs])
-        # the logged leader flies it (its mean velocity; it also sways under its own control)
-        measured = np.array([np.linalg.norm(log.leader_vel_mps.mean(axis=0)) for log in logs])
-        np.testing.assert_allclose(measured, speeds[name], rtol=0.15, atol=0.03)
-    assert speeds["default"].max() <= 0.3
-    assert speeds["fast"].max() > 0.5 and speeds["fast"].max() <= 0.6
+    assert short_cfg.curriculum.leader_drift_max_mps == 0.3
+    logs = excitation_flights(short_cfg.with_overrides(overrides), 8, 0.6, 0.9, seed=3)
+    speeds = np.array([log.meta["leader_speed_mps"] for log in logs])
+    # the logged leader flies it (its mean velocity; it also sways under its own control)
+    measured = np.array([np.linalg.norm(log.leader_vel_mps.mean(axis=0)) for log in logs])
+    np.testing.assert_allclose(measured, speeds, rtol=0.15, atol=0.03)
+    assert speeds.max() > 0.5 and speeds.max() <= 0.6, speeds
