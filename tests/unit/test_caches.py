@@ -17,7 +17,7 @@ from aerodock.geometry import rpy_to_rotmat
 from aerodock.rng import TrialRNG
 from aerodock.world import World
 from aerodock.world.gripper import GateState
-from aerodock.world.vehicles.autopilot import AutopilotGains, gain_columns
+from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.fleet import PointMassFleet
 from aerodock.world.vehicles.point_mass import VehicleParams, hover_state
 from aerodock.world.vehicles.rigid_body import (
@@ -119,21 +119,23 @@ def _gains() -> AutopilotGains:
                           np.array([5.0, 5.0, 2.0]), 10.0, np.array([3.0, 3.0, 2.0]))
 
 
-def test_gain_columns_after_the_inertia_is_changed_in_place():
+def test_autopilot_constants_after_the_inertia_is_changed_in_place():
     gains, inertia = _gains(), np.array([0.008, 0.008, 0.014])
-    gain_columns(gains, inertia, 4)
+    autopilot_constants(gains, inertia)
     inertia *= 2.0
-    _assert_same(gain_columns(gains, inertia, 4), gain_columns(_gains(), inertia.copy(), 4))
+    np.testing.assert_array_equal(autopilot_constants(gains, inertia),
+                                  autopilot_constants(_gains(), inertia.copy()))
 
 
-def test_gain_columns_after_a_gain_is_changed_in_place():
+def test_autopilot_constants_after_a_gain_is_changed_in_place():
     gains, inertia = _gains(), np.array([0.008, 0.008, 0.014])
     inertia.flags.writeable = False
-    gain_columns(gains, inertia, 4)
+    autopilot_constants(gains, inertia)
     rate_p = gains.rate_p
     rate_p *= 2.0
     fresh = replace(_gains(), rate_p=gains.rate_p.copy())
-    _assert_same(gain_columns(gains, inertia, 4), gain_columns(fresh, inertia, 4))
+    np.testing.assert_array_equal(autopilot_constants(gains, inertia),
+                                  autopilot_constants(fresh, inertia))
 
 
 def test_the_vehicle_parameters_are_read_only(cfg):

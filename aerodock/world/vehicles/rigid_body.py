@@ -34,13 +34,8 @@ from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
 from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
-from aerodock.world.vehicles.autopilot import (
-    AutopilotGains,
-    gain_columns,
-    mix_t,
-    rate_control_t,
-    rate_setpoint_t,
-)
+from aerodock.world.vehicles import rigid_kernel
+from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
 from aerodock.world.vehicles.point_mass import AttitudeCommand
 
@@ -214,25 +209,29 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState,
     )
 
 
+_NO_ROWS = np.zeros((1, 4))  # the kernels' placeholder for an absent (n, k) input
+freeze(_NO_ROWS)
+
+
 def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
                         gyro_radps: np.ndarray, dt_s: float,
-                        attitude: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                        attitude: np.ndarray | None = None,
+                        gyro_noise_radps: np.ndarray | None = None,
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
-    gyro's rates and its attitude estimate (``attitude``; None: the true attitude)."""
+    gyro's rates (``gyro_radps`` plus ``gyro_noise_radps``) and its attitude estimate
+    (``attitude``; None: the true attitude). Compiled: :func:`rigid_kernel.autopilot_into`."""
     n = state.R.shape[0]
-    cols = gain_columns(params.gains, params.inertia_kgm2, n)
-    rot = state.R if attitude is None else attitude
-    rate_sp = rate_setpoint_t(rot, targets.R_des, targets.yaw_rate_radps, cols)
-    wrench = np.empty((4, n))  # [T, tau_x, tau_y, tau_z], component-major: the mixer's input
-    wrench[0] = targets.thrust_n
-    _, integral = rate_control_t(rate_sp, gyro_radps, state.rate_integral, cols, dt_s,
-                                 out=wrench[1:])
-    if targets.torque_ff_nm is not None:  # (n, 3) feed-forward; the loop's torque is (3, n)
-        wrench[1:] += targets.torque_ff_nm.T
-    f_cmd = mix_t(wrench, params.mixer_inv, params.rotor_thrust_max_n).T
-    # The autopilot maps thrust to speed with its nominal k_T (it cannot know the gain error).
-    speed = np.divide(f_cmd, params.thrust_coeff, out=np.empty(f_cmd.shape))  # C order
-    return np.sqrt(speed, out=speed), integral
+    cmd, integral = np.empty((n, 4)), np.empty((n, 3))
+    ff = targets.torque_ff_nm
+    rigid_kernel.autopilot_batch(
+        state.R if attitude is None else attitude, targets.R_des, targets.yaw_rate_radps,
+        targets.thrust_n, _NO_ROWS if ff is None else ff, ff is not None, gyro_radps,
+        _NO_ROWS if gyro_noise_radps is None else gyro_noise_radps,
+        gyro_noise_radps is not None, state.rate_integral,
+        autopilot_constants(params.gains, params.inertia_kgm2), params.mixer_inv,
+        params.rotor_thrust_max_n, params.thrust_coeff, dt_s, cmd, integral)
+    return cmd, integral
 
 
 def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np.ndarray,
@@ -243,6 +242,7 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
     ``H_i = -omega_i diag(k_d, k_d, k_z) (v_b + w x r_i)`` (RotorPy's H-force and induced-inflow
     terms, per rotor on its local airspeed). With the hubs in the body x-y plane the sums over
     rotors reduce to the weighted sums ``S = sum omega_i [1, x_i, y_i, x_i^2, y_i^2, x_i y_i]``.
+    Compiled: :func:`rigid_kernel.rotor_wrench`.
 
     Args:
         rotor_speed: (n, 4) rotor speeds, rad/s.
@@ -251,81 +251,19 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
         w_radps: (n, 3) body rates.
         params: vehicle constants.
     """
-    force, torque = _body_wrench_t(np.ascontiguousarray(np.asarray(rotor_speed, dtype=float).T),
-                                   params.thrust_coeff * np.asarray(thrust_gain, dtype=float),
-                                   np.asarray(v_body_mps, dtype=float).T,
-                                   np.asarray(w_radps, dtype=float).T, params)
-    return force.T, torque.T
-
-
-# The rotor drag's weighted sums S = sum_i omega_i c_i (columns c of ``rotor_drag_sums``); with
-# -y before x, the in-plane forces' (-s_y, s_x) is a slice.
-_DRAG_SUM_COLUMNS = ("1", "-y", "x", "y", "xx", "yy", "xy")
-# The sums the axial force and the roll and pitch moments read, as three blocks of rows: the
-# moment matrix sum_i omega_i (1, y, x)^T (1, y, x), row-major (it is symmetric): its columns
-# (s, s_y, s_x), (s_y, s_yy, s_xy), (s_x, s_xy, s_xx) multiply v_z, w_x and w_y.
-_DRAG_MOMENT_ROWS = np.array([0, 3, 2, 3, 5, 6, 2, 6, 4])
-
-
-def _body_wrench_t(omega: np.ndarray, thrust_coeffs: np.ndarray, v_body_t: np.ndarray,
-                   w_t: np.ndarray, params: RigidBodyParams,
-                   torque_gain: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`body_wrench` on rotor-major speeds ``omega`` (4, n), each vehicle's true k_T
-    ``thrust_coeffs`` (n,) (``params.thrust_coeff`` times its thrust gain) and component-major
-    velocity and rates (3, n) (rows may be strided views): force and torque (3, n).
-
-    Component-major work arrays: every operation runs on contiguous rows of n (a (n, 1) x (3,)
-    broadcast would call the inner loop once per vehicle)."""
-    f = omega * omega  # rotor_thrusts_n, rotor-major
-    f *= thrust_coeffs
-    # Each rotor's share in one broadcast (4, 3, n), then summed over the rotors in order.
-    share = np.multiply(params.rotor_torque_map[:, :, None], f[:, None, :])
-    torque = share[0]
-    torque += share[1]
-    torque += share[2]
-    torque += share[3]
-    if torque_gain is not None:  # each vehicle's true yaw reaction coefficient
-        torque[2] *= torque_gain
-    force = np.empty_like(torque)
-    thrust = np.add(f[0], f[1], out=force[2])
-    thrust += f[2]
-    thrust += f[3]
-    np.negative(thrust, out=force[2])
-    kd, kz = params.rotor_drag_coeff, params.rotor_drag_z_coeff
-    if kd or kz:
-        terms = np.multiply(params.rotor_drag_sums[:, :, None], omega[:, None, :])
-        sums = terms[0]  # (7, n): see _DRAG_SUM_COLUMNS
-        sums += terms[1]
-        sums += terms[2]
-        sums += terms[3]
-        vx, vy, vz = v_body_t
-        wx, wy, wz = w_t
-        # sum omega_i (u_i)_z and the moments it makes, kz ((s, s_y, s_x) v_z
-        # + w_x (s_y, s_yy, s_xy) - w_y (s_x, s_xy, s_xx)): force z, torque x, -torque y.
-        moments = sums.take(_DRAG_MOMENT_ROWS, axis=0)
-        axial = moments[0:3] * vz
-        axial += wx * moments[3:6]
-        axial -= wy * moments[6:9]
-        axial *= kz
-        force[2] -= axial[0]
-        torque[0] -= axial[1]
-        torque[1] += axial[2]
-        # The in-plane H-forces: -kd (s v_x - w_z s_y, s v_y + w_z s_x).
-        plane = sums[0] * v_body_t[:2]
-        plane += wz * sums[1:3]
-        plane *= kd
-        np.subtract(0.0, plane, out=force[:2])
-        # Their yaw moment: -kd (s_x v_y - s_y v_x + w_z (s_xx + s_yy)).
-        yaw = sums[2] * vy
-        yaw -= sums[3] * vx
-        spin = np.add(sums[4], sums[5])
-        spin *= wz
-        yaw += spin
-        yaw *= kd
-        torque[2] -= yaw
-    else:
-        force[:2] = 0.0
+    omega = np.asarray(rotor_speed, dtype=float)
+    n = omega.shape[0]
+    force, torque = np.empty((n, 3)), np.empty((n, 3))
+    rigid_kernel.wrench_batch(omega, params.thrust_coeff * np.asarray(thrust_gain, dtype=float),
+                              np.ones(n), np.asarray(v_body_mps, dtype=float),
+                              np.asarray(w_radps, dtype=float), params.rotor_torque_map,
+                              params.rotor_drag_sums, params.rotor_drag_coeff,
+                              params.rotor_drag_z_coeff, force, torque)
     return force, torque
+
+
+# The rotor drag's weighted sums S = sum_i omega_i c_i (columns c of ``rotor_drag_sums``).
+_DRAG_SUM_COLUMNS = ("1", "-y", "x", "y", "xx", "yy", "xy")
 
 
 def _thrust_coeffs(body: VehicleBody, thrust_coeff: float,
@@ -343,22 +281,19 @@ def _thrust_coeffs(body: VehicleBody, thrust_coeff: float,
     return coeffs
 
 
-def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray | float, np.ndarray]:
+def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     """Per-step constants of ``body``'s vehicles: the motors' first-order step factor
-    ``1 - exp(-dt / tau)``, (n, 1) or one number when every vehicle's motors are alike, and the
-    inertia component-major with its first two rows repeated, ``(J_x, J_y, J_z, J_x, J_y)``
-    (5, n) (the cross product's operands are then slices); read-only, kept on ``body`` for the
-    last ``dt_s`` while its arrays are read-only (a :class:`VehicleBody` makes them so)."""
+    ``1 - exp(-dt / tau)`` (NumPy's exp: (n,), or (1,) when every vehicle's motors are alike)
+    and the inertia (n, 3), C-ordered; read-only, kept on ``body`` for the last ``dt_s`` while
+    its arrays are read-only (a :class:`VehicleBody` makes them so)."""
     tau, inertia = body.motor_tau_s, body.inertia_kgm2
     hit = body.__dict__.get("_step_constants")  # not a field: numbers derived from it
     if hit is not None and hit[0] == dt_s and is_frozen(tau) and is_frozen(inertia):
         return hit[1]
-    alpha = (1.0 - np.exp(-dt_s / float(tau[0])) if np.all(tau == tau[0])
-             else (1.0 - np.exp(-dt_s / tau))[:, None])
-    freeze(alpha)
-    inertia = np.asarray(inertia, dtype=float).T
-    rows = np.concatenate([inertia, inertia[:2]])
-    freeze(rows)
+    alpha = (np.array([1.0 - np.exp(-dt_s / float(tau[0]))]) if np.all(tau == tau[0])
+             else 1.0 - np.exp(-dt_s / tau))
+    rows = np.ascontiguousarray(inertia, dtype=float)
+    freeze(alpha, rows)
     body.__dict__["_step_constants"] = (dt_s, (alpha, rows))
     return alpha, rows
 
@@ -390,68 +325,23 @@ def step_rigid_body(
 def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
                  ext_torque_nm: np.ndarray | None, params: RigidBodyParams,
                  dt_s: float) -> tuple[np.ndarray, ...]:
-    """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel); vectors are
-    computed component-major (3, n) and stored C-ordered (n, 3) like the state's."""
+    """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel), from the
+    compiled :func:`rigid_kernel.step_vehicles`."""
     body = state.body
-    rot = state.R
-    omega = state.rotor_speed
-    v = state.v
-    n = v.shape[0]
+    n = state.p.shape[0]
     alpha, inertia = _body_constants(body, dt_s)
-    # The body rates component-major with the first two repeated, (w_x, w_y, w_z, w_x, w_y):
-    # the cross product's (w_y, w_z, w_x) and (w_z, w_x, w_y) are then slices.
-    w5 = np.empty((5, n))
-    w_t = w5[:3]
-    np.copyto(w_t, state.w.T)
-    w5[3:] = w5[:2]
-    omega_t = np.ascontiguousarray(omega.T)
-    # R^T v, component-major: the rotor drag reads its rows (strided, numpy would iterate a
-    # broadcast over them a few elements at a time).
-    v_body_t = np.ascontiguousarray(np.matmul(v[:, None, :], rot)[:, 0].T)
-    thrust_coeffs = _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain)
-    force_body, torque = _body_wrench_t(omega_t, thrust_coeffs, v_body_t, w_t, params,
-                                        body.torque_gain)
-    if ext_torque_nm is not None:
-        torque += np.asarray(ext_torque_nm, dtype=float).T
-    accel = np.matmul(rot, force_body.T[:, :, None])[:, :, 0]
-    accel_t = accel.T
-    if params.parasitic_drag_coeff:
-        sq = v * v
-        speed = sq[:, 0] + sq[:, 1]
-        speed += sq[:, 2]
-        np.sqrt(speed, out=speed)
-        speed *= params.parasitic_drag_coeff
-        accel_t -= v.T * speed
-    accel += ext_force_n
-    accel /= body.mass_rows_kg
-    accel[:, 2] += params.gravity_mps2
-    # Euler's equations with diagonal inertia: J dw = tau - w x (J w), the cross product's
-    # components (w_y (Jw)_z - w_z (Jw)_y, ...) as two products of slices.
-    jw = w5 * inertia
-    gyro = w5[1:4] * jw[2:5]
-    gyro -= w5[2:5] * jw[1:4]
-    torque -= gyro
-    torque /= inertia[:3]  # the angular acceleration
-    torque *= dt_s
-    w_new = np.empty((n, 3))
-    w_new_t = np.add(w_t, torque, out=w_new.T)
-    v_new = accel * dt_s
-    v_new += v
-    mean = v + v_new
-    mean *= 0.5 * dt_s
-    p_new = np.add(state.p, mean, out=mean)
-    phi = np.add(w_t, w_new_t, out=torque)
-    phi *= 0.5 * dt_s
-    rot_new = _rotate_t(rot, phi)
-    omega_new = rotor_speed_cmd - omega
-    omega_new *= alpha
-    omega_new += omega
-    f_new = omega_new.T * omega_new.T  # rotor_thrusts_n, rotor-major
-    f_new *= thrust_coeffs
-    thrust_new = f_new[0] + f_new[1]
-    thrust_new += f_new[2]
-    thrust_new += f_new[3]
-    return p_new, v_new, rot_new, w_new, omega_new, thrust_new, accel
+    out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
+           np.empty((n, 4)), np.empty(n), np.empty((n, 3)))
+    rigid_kernel.step_vehicles(
+        state.p, state.v, state.R, state.w, state.rotor_speed,
+        _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain), body.torque_gain,
+        body.mass_rows_kg, inertia, alpha, np.asarray(rotor_speed_cmd, dtype=float),
+        np.asarray(ext_force_n, dtype=float),
+        _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
+        ext_torque_nm is not None, params.rotor_torque_map, params.rotor_drag_sums,
+        params.rotor_drag_coeff, params.rotor_drag_z_coeff, params.parasitic_drag_coeff,
+        params.gravity_mps2, dt_s, *out)
+    return out
 
 
 def step_with_autopilot(
@@ -468,14 +358,13 @@ def step_with_autopilot(
     (true rates plus ``gyro_noise_radps``; or, given ``sensed = (rates (n, 3), attitude
     (n, 3, 3))``, what the flight computer's IMU chain and estimator give), commands the rotors,
     then :func:`step_rigid_body`. Returns (state, acceleration (n, 3))."""
-    attitude = None
+    attitude = noise = None
     if sensed is not None:
         gyro, attitude = sensed
-    elif gyro_noise_radps is None:
-        gyro = state.w
-    else:  # component-major (a (3, n) array's .T from the world: contiguous rows)
-        gyro = np.add(state.w.T, np.asarray(gyro_noise_radps).T, out=np.empty((3, state.n))).T
-    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s, attitude)
+    else:
+        gyro, noise = state.w, gyro_noise_radps
+    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s, attitude,
+                                              noise)
     p, v, rot, w, omega, thrust, accel = _step_arrays(state, speed_cmd, ext_force_n,
                                                       ext_torque_nm, params, dt_s)
     yaw_sp = targets.yaw_rate_radps * dt_s
@@ -493,38 +382,8 @@ def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 def _rotate_t(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """:func:`_rotate` with component-major rotation vectors ``phi`` (3, n)."""
-    sq = phi * phi
-    theta2 = sq[0] + sq[1]
-    theta2 += sq[2]
-    theta = np.sqrt(theta2)
-    if _fmin(theta2) < 1e-12:  # (near) zero rotation: the series of sin(t)/t and (1 - cos t)/t^2
-        small = theta2 < 1e-12
-        safe = np.where(small, 1.0, theta)
-        a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-        b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    else:
-        a = np.sin(theta)
-        a /= theta
-        b = np.cos(theta)
-        np.subtract(1.0, b, out=b)
-        b /= theta * theta
-    # exp = I + a K + b K^2 with K^2 = phi phi^T - theta^2 I, built component-major (3, 3, n)
-    # so that every operation runs on a contiguous row of n: b p_i p_j, plus the rows of
-    # (a p_x, a p_y, a p_z, -a p_x, -a p_y, -a p_z, 1 - b theta^2) that the entries i, j take
-    # (the diagonal, then [a p]x's: adding -x is subtracting x, bit for bit).
-    n = phi.shape[1]
-    bp = np.multiply(phi, b, out=sq)
-    d = np.multiply(bp[:, None, :], phi, out=np.empty((3, 3, n)))  # b p_i p_j
-    signed = np.empty((7, n))
-    np.multiply(phi, a, out=signed[:3])
-    np.negative(signed[:3], out=signed[3:6])
-    diag = np.multiply(b, theta2, out=signed[6])
-    np.subtract(1.0, diag, out=diag)
-    d.reshape(9, n)[...] += signed.take(_EXP_ROWS, axis=0)
-    return np.matmul(rot, d.transpose(2, 0, 1))
-
-
-# Which row of _rotate_t's ``signed`` each entry of exp([phi]x) adds (row-major 3 x 3).
-_EXP_ROWS = np.array([6, 5, 1, 2, 6, 3, 4, 0, 6])
-_fmin = np.fmin.reduce  # min ignoring NaN: "any element < x", without a boolean array
+    """:func:`_rotate` with component-major rotation vectors ``phi`` (3, n); compiled
+    (:func:`rigid_kernel.rotate_into`)."""
+    out = np.empty((rot.shape[0], 3, 3))
+    rigid_kernel.rotate_batch(rot, phi, out)
+    return out
