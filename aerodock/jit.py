@@ -16,6 +16,7 @@ where :func:`fma` is involved (plain Python rounds twice there).
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from typing import Any
@@ -24,6 +25,7 @@ if os.environ.get("AERODOCK_JIT", "1") == "0":  # before numba reads its configu
     os.environ.setdefault("NUMBA_DISABLE_JIT", "1")
 
 import numba  # noqa: E402
+import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
 from numba.core import cgutils, types  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
@@ -56,3 +58,168 @@ else:  # the plain-Python run of the kernels: a * b + c, rounded twice
     def fma(a: float, b: float, c: float) -> float:
         """``a * b + c`` (rounded twice without the compiler)."""
         return a * b + c
+
+
+# -- NumPy's own elementwise loops, called from compiled code ----------------------------------
+# NumPy computes exp, log, power and arctan2 with its own SIMD code (AVX-512 where the processor
+# has it), whose last bit differs from the C library's in a few per cent of arguments. So that a
+# kernel's numbers equal NumPy's, kernels call NumPy's inner loops themselves: the loop of each
+# ufunc for float64 is read from the ufunc object (``PyUFuncObject.functions``, NumPy's public C
+# struct) and called through its address, over a whole row of the batch at a time. The addresses
+# are checked against the ufuncs' own results when this module loads; should a NumPy release
+# lay the struct out otherwise, the kernels use the C library's functions instead (the same
+# numbers to the last bit or two; ``NUMPY_LOOPS_OK`` says which).
+
+LOOP_EXP, LOOP_LOG, LOOP_POWER, LOOP_ARCTAN2 = 0, 1, 2, 3
+
+
+def _ufunc_loop(ufunc: Any, types_: str) -> int:
+    """The address of ``ufunc``'s inner loop for the type characters ``types_`` (e.g. 'dd'
+    followed by the output's 'd'), 0 when it cannot be read."""
+    import ctypes
+
+    import numpy as np
+
+    try:
+        addr = id(ufunc)
+        ptr = ctypes.c_void_p.from_address
+        functions = ptr(addr + 32).value  # PyObject_HEAD, then nin, nout, nargs, identity
+        ntypes = ctypes.c_int.from_address(addr + 48).value
+        names = ptr(addr + 64).value
+        nargs = ufunc.nargs
+        if not functions or not names or nargs != len(types_) or not 0 < ntypes < 256:
+            return 0
+        raw = ctypes.string_at(names, ntypes * nargs)
+        want = bytes(np.dtype(c).num for c in types_)
+        for i in range(ntypes):
+            if raw[i * nargs:(i + 1) * nargs] == want:
+                return int(ptr(functions + 8 * i).value or 0)
+    except (ValueError, OSError):  # pragma: no cover - a NumPy without the legacy struct
+        return 0
+    return 0
+
+
+@intrinsic
+def _call_loop(typingctx: Any, fn: Any, args: Any, dims: Any, steps: Any) -> Any:
+    """Call a NumPy inner loop ``void loop(char **args, npy_intp *dims, npy_intp *steps,
+    void *data)`` at the address ``fn``, with the addresses of its three arrays."""
+    sig = types.void(types.intp, types.intp, types.intp, types.intp)
+
+    def codegen(context: Any, builder: Any, signature: Any, llargs: Any) -> Any:
+        i8p = ir.IntType(8).as_pointer()
+        i64p = ir.IntType(64).as_pointer()
+        fnty = ir.FunctionType(ir.VoidType(), [i8p.as_pointer(), i64p, i64p, i8p])
+        fnptr = builder.inttoptr(llargs[0], fnty.as_pointer())
+        builder.call(fnptr, [builder.inttoptr(llargs[1], i8p.as_pointer()),
+                             builder.inttoptr(llargs[2], i64p),
+                             builder.inttoptr(llargs[3], i64p), ir.Constant(i8p, None)])
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+def _numpy_loops() -> tuple[Any, bool]:
+    import numpy as np
+
+    loops = np.array([_ufunc_loop(np.exp, "dd"), _ufunc_loop(np.log, "dd"),
+                      _ufunc_loop(np.power, "ddd"), _ufunc_loop(np.arctan2, "ddd")],
+                     dtype=np.int64)
+    return loops, bool(loops.all())
+
+
+def _check_loops(loops: Any) -> bool:
+    """Whether each address gives its ufunc's numbers (called through ctypes on test rows)."""
+    import ctypes
+
+    import numpy as np
+
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                             ctypes.c_void_p)
+    x = np.linspace(-7.3, 9.1, 101)
+    y = np.linspace(0.01, 5.3, 101)
+    for addr, ufunc, args in ((loops[LOOP_EXP], np.exp, (x,)), (loops[LOOP_LOG], np.log, (y,)),
+                              (loops[LOOP_POWER], np.power, (y, x / 7.0)),
+                              (loops[LOOP_ARCTAN2], np.arctan2, (x, y - 2.0))):
+        if not addr:
+            return False
+        out = np.empty_like(x)
+        arrays = [*args, out]
+        ptrs = np.array([a.ctypes.data for a in arrays], dtype=np.intp)
+        dims = np.array([x.size], dtype=np.intp)
+        steps = np.array([a.strides[0] for a in arrays], dtype=np.intp)
+        proto(int(addr))(ptrs.ctypes.data, dims.ctypes.data, steps.ctypes.data, None)
+        if not np.array_equal(out, ufunc(*args)):
+            return False
+    return True
+
+
+NUMPY_LOOPS, NUMPY_LOOPS_OK = _numpy_loops()
+if NUMPY_LOOPS_OK and not _check_loops(NUMPY_LOOPS):  # pragma: no cover - another NumPy layout
+    NUMPY_LOOPS_OK = False
+if not NUMPY_LOOPS_OK:  # pragma: no cover
+    NUMPY_LOOPS[:] = 0
+NUMPY_LOOPS.flags.writeable = False
+"""The loops' addresses, (4,) int64 (``LOOP_*`` index them), passed to every kernel that calls
+them (an address is data, not code: the compiled kernels stay cacheable); zeros when NumPy's
+loops could not be read (the kernels then use the C library's functions)."""
+
+
+@njit
+def np_exp(loops: Any, x: Any, out: Any) -> None:
+    """``np.exp(x, out=out)`` on 1-D float64 rows, from compiled code."""
+    fn = loops[LOOP_EXP]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = math.exp(x[i])
+        return
+    buf = np.empty(5, np.intp)
+    buf[0], buf[1], buf[2] = x.ctypes.data, out.ctypes.data, x.shape[0]
+    buf[3], buf[4] = x.strides[0], out.strides[0]
+    a = buf.ctypes.data
+    _call_loop(fn, a, a + 16, a + 24)
+
+
+@njit
+def np_log(loops: Any, x: Any, out: Any) -> None:
+    """``np.log(x, out=out)`` on 1-D float64 rows, from compiled code."""
+    fn = loops[LOOP_LOG]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = math.log(x[i]) if x[i] > 0 else (-math.inf if x[i] == 0 else math.nan)
+        return
+    buf = np.empty(5, np.intp)
+    buf[0], buf[1], buf[2] = x.ctypes.data, out.ctypes.data, x.shape[0]
+    buf[3], buf[4] = x.strides[0], out.strides[0]
+    a = buf.ctypes.data
+    _call_loop(fn, a, a + 16, a + 24)
+
+
+@njit
+def _binary(fn: int, x: Any, y: Any, out: Any) -> None:
+    buf = np.empty(7, np.intp)
+    buf[0], buf[1], buf[2], buf[3] = x.ctypes.data, y.ctypes.data, out.ctypes.data, x.shape[0]
+    buf[4], buf[5], buf[6] = x.strides[0], y.strides[0], out.strides[0]
+    a = buf.ctypes.data
+    _call_loop(fn, a, a + 24, a + 32)
+
+
+@njit
+def np_power(loops: Any, x: Any, y: Any, out: Any) -> None:
+    """``np.power(x, y, out=out)`` on 1-D float64 rows, from compiled code."""
+    fn = loops[LOOP_POWER]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = x[i] ** y[i]
+        return
+    _binary(fn, x, y, out)
+
+
+@njit
+def np_arctan2(loops: Any, y: Any, x: Any, out: Any) -> None:
+    """``np.arctan2(y, x, out=out)`` on 1-D float64 rows, from compiled code."""
+    fn = loops[LOOP_ARCTAN2]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = math.atan2(y[i], x[i])
+        return
+    _binary(fn, y, x, out)

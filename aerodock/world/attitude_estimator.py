@@ -18,11 +18,13 @@ source's delay. Rotations stay orthonormal (the exact Rodrigues step of the rigi
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.world.vehicles.rigid_body import _rotate_t
+from aerodock.jit import NUMPY_LOOPS, fma, njit, np_arctan2
+from aerodock.world.vehicles.rigid_kernel import rotate_into
 
 
 @dataclass(frozen=True)
@@ -36,7 +38,7 @@ class AttitudeEstimatorParams:
 def estimate_step(rot_hat: np.ndarray, gyro_t: np.ndarray, accel_t: np.ndarray,
                   accel_comp_world: np.ndarray, yaw_ext_rad: np.ndarray,
                   params: AttitudeEstimatorParams, dt_s: float) -> np.ndarray:
-    """One sample's new estimate.
+    """One sample's new estimate (compiled: :func:`estimate_into`).
 
     Args:
         rot_hat: (m, 3, 3) the current estimate, body to world.
@@ -50,29 +52,50 @@ def estimate_step(rot_hat: np.ndarray, gyro_t: np.ndarray, accel_t: np.ndarray,
     Returns:
         (m, 3, 3) the estimate after ``dt_s``.
     """
-    # Gravity in the body, as the accelerometer sees it once the known acceleration is removed:
-    # f = R^T (a - g e3), so -(f - R^T a) = g R^T e3.
-    comp_body = np.matmul(accel_comp_world[:, None, :], rot_hat)[:, 0]  # R_hat^T a_comp
-    # Both factors of the cross product meas x est with their first two rows repeated (5, m):
-    # (meas_y est_z - meas_z est_y, ...) is then two products of slices.
+    out = np.empty((rot_hat.shape[0], 3, 3))
+    estimate_into(NUMPY_LOOPS, rot_hat, gyro_t, accel_t, accel_comp_world, yaw_ext_rad,
+                  params.accel_gain_radps, params.heading_gain_radps, dt_s, out)
+    return out
+
+
+@njit
+def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
+                  accel_t: np.ndarray, comp: np.ndarray, yaw_ext: np.ndarray, k_p: float,
+                  k_yaw: float, dt: float, out: np.ndarray) -> None:
+    """:func:`estimate_step` into ``out``: per vehicle, gravity as measured
+    ``g_b = -(f - R^T a_comp) / |.|`` (the norm floored at 1e-6), the error
+    ``g_b x (R^T e3)`` plus the heading's about the world's down axis, and the exact rotation
+    by ``(w_gyro + k_p e + k_yaw yaw_err R^T e3) dt``."""
     m = rot_hat.shape[0]
-    meas5, est5 = np.empty((5, m)), np.empty((5, m))
-    meas = np.subtract(comp_body.T, accel_t, out=meas5[:3])
-    sq = meas * meas
-    norm = np.add(sq[0], sq[1], out=sq[0])
-    norm += sq[2]
-    np.sqrt(norm, out=norm)
-    meas /= np.maximum(norm, 1e-6)
-    meas5[3:] = meas5[:2]
-    est = est5[:3]  # R_hat^T e3: the estimate's down axis in the body, (3, m)
-    np.copyto(est, rot_hat[:, 2, :].T)
-    est5[3:] = est5[:2]
-    err = meas5[1:4] * est5[2:5]  # meas x est
-    err -= meas5[2:5] * est5[1:4]
-    omega = gyro_t + params.accel_gain_radps * err
-    if params.heading_gain_radps:
-        yaw_hat = np.arctan2(rot_hat[:, 1, 0], rot_hat[:, 0, 0])
-        yaw_err = (yaw_ext_rad - yaw_hat + np.pi) % (2 * np.pi) - np.pi
-        # About the world's down axis, expressed in the body: R_hat^T e3 * yaw error.
-        omega += params.heading_gain_radps * yaw_err * est
-    return _rotate_t(rot_hat, omega * dt_s)
+    yaw_err = np.zeros(m)
+    if k_yaw != 0.0:
+        yaw_hat = np.empty(m)
+        np_arctan2(loops, rot_hat[:, 1, 0], rot_hat[:, 0, 0], yaw_hat)
+        for i in range(m):
+            e = yaw_ext[i] - yaw_hat[i]
+            e += math.pi
+            e %= 2 * math.pi
+            yaw_err[i] = e - math.pi
+    for i in range(m):
+        r = rot_hat[i]
+        c0, c1, c2 = comp[i, 0], comp[i, 1], comp[i, 2]
+        m0 = fma(c2, r[2, 0], fma(c1, r[1, 0], c0 * r[0, 0])) - accel_t[0, i]
+        m1 = fma(c2, r[2, 1], fma(c1, r[1, 1], c0 * r[0, 1])) - accel_t[1, i]
+        m2 = fma(c2, r[2, 2], fma(c1, r[1, 2], c0 * r[0, 2])) - accel_t[2, i]
+        norm = m0 * m0 + m1 * m1
+        norm += m2 * m2
+        norm = math.sqrt(norm)
+        norm = norm if (norm >= 1e-6 or norm != norm) else 1e-6
+        m0 /= norm
+        m1 /= norm
+        m2 /= norm
+        e0, e1, e2 = r[2, 0], r[2, 1], r[2, 2]  # R_hat^T e3: the estimate's down axis
+        w0 = gyro_t[0, i] + k_p * (m1 * e2 - m2 * e1)
+        w1 = gyro_t[1, i] + k_p * (m2 * e0 - m0 * e2)
+        w2 = gyro_t[2, i] + k_p * (m0 * e1 - m1 * e0)
+        if k_yaw != 0.0:
+            y = k_yaw * yaw_err[i]
+            w0 += y * e0
+            w1 += y * e1
+            w2 += y * e2
+        rotate_into(r, w0 * dt, w1 * dt, w2 * dt, out[i])

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerodock.jit import fma, njit
+
 
 @dataclass(frozen=True)
 class ImuChainParams:
@@ -81,18 +83,15 @@ class FilterState:
 
 
 def filter_sample(state: FilterState, sample: np.ndarray, biquad: Biquad | None) -> np.ndarray:
-    """Filter one sample (3, m) and return what comes out of the delay line (in place)."""
+    """Filter one sample (3, m) and return what comes out of the delay line (in place; the
+    compiled low-pass of the world's chain, :func:`imu_samples`)."""
     if biquad is None:
         out = sample
     else:
-        forward = biquad.b0 * sample
-        out = forward + state.z1
-        z1 = biquad.b1 * sample
-        z1 -= biquad.a1 * out
-        z1 += state.z2
-        # b2 x: the low-pass's b2 is b0, whose product is at hand.
-        z2 = forward if biquad.b2 == biquad.b0 else biquad.b2 * sample
-        z2 -= biquad.a2 * out
+        sample = np.asarray(sample, dtype=float)
+        out = np.empty(sample.shape)
+        z1, z2 = np.empty(sample.shape), np.empty(sample.shape)
+        _filter_rows(sample, biquad_coeffs(biquad), state.z1, state.z2, out, z1, z2)
         state.z1, state.z2 = z1, z2
     if state.delay:
         state.delay.append(out)
@@ -157,3 +156,81 @@ def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: fl
         attitude=attitude.copy(), accel_ring=[np.zeros((m, 3)) for _ in range(ring_steps)],
         nav_accel_mps2=np.zeros((m, 3)), gyro_radps=np.zeros((m, 3)), accel_t=force,
     )
+
+
+# -- the compiled chain -------------------------------------------------------------------------
+def biquad_coeffs(biquad: Biquad | None) -> np.ndarray:
+    """(6,) ``(on, b0, b1, b2, a1, a2)`` for the kernels (``on`` 0: samples pass through)."""
+    if biquad is None:
+        return np.zeros(6)
+    return np.array([1.0, biquad.b0, biquad.b1, biquad.b2, biquad.a1, biquad.a2])
+
+
+@njit
+def _biquad(x: float, c: np.ndarray, z1: np.ndarray, z2: np.ndarray, row: int, col: int,
+            z1_new: np.ndarray, z2_new: np.ndarray) -> float:
+    """One sample through the transposed direct form (``c`` of :func:`biquad_coeffs`)."""
+    if c[0] == 0.0:
+        return x
+    forward = c[1] * x
+    out = forward + z1[row, col]
+    a = c[2] * x
+    a -= c[4] * out
+    z1_new[row, col] = a + z2[row, col]
+    b = forward if c[3] == c[1] else c[3] * x  # the low-pass's b2 is b0: its product is at hand
+    z2_new[row, col] = b - c[5] * out
+    return out
+
+
+@njit
+def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
+                gyro_range: float, gyro_c: np.ndarray, gz1: np.ndarray, gz2: np.ndarray,
+                lead_accel: np.ndarray, fol_accel: np.ndarray, gravity: float,
+                rot: np.ndarray, bias: np.ndarray, thrust: np.ndarray, hover: np.ndarray,
+                accel_noise_sq: float, vibration: float, accel_draws: np.ndarray,
+                accel_range: float, accel_c: np.ndarray, az1: np.ndarray, az2: np.ndarray,
+                noise: np.ndarray, gyro_out: np.ndarray, gz1_new: np.ndarray,
+                gz2_new: np.ndarray, accel_out: np.ndarray, az1_new: np.ndarray,
+                az2_new: np.ndarray, ring: np.ndarray) -> None:
+    """Both vehicles' IMU samples at the step's start (2n rows, leaders first; the draws
+    (6, n) per trial: the leader's three, then the follower's): the gyro's rates plus noise
+    ``noise`` (3, 2n; none when ``gyro_sd`` is 0), clipped and low-passed (``gyro_out``,
+    3, 2n, before the delay line); the specific force ``R^T (a - g e3)`` plus the residual bias,
+    white noise and vibration (its sd growing with the thrust), clipped and low-passed
+    (``accel_out``); the true acceleration for the navigation's ring (``ring``, 2n x 3)."""
+    for j in range(2 * n):
+        h, i = (0, j) if j < n else (1, j - n)
+        acc = lead_accel[i] if h == 0 else fol_accel[i]
+        for c in range(3):
+            x = w[j, c]
+            if gyro_sd != 0.0:
+                e = gyro_draws[3 * h + c, i] * gyro_sd
+                noise[c, j] = e
+                x = x + e
+            x = max(x, -gyro_range) if x == x else x
+            x = min(x, gyro_range) if x == x else x
+            gyro_out[c, j] = _biquad(x, gyro_c, gz1, gz2, c, j, gz1_new, gz2_new)
+        a0, a1, a2 = acc[0], acc[1], acc[2] - gravity
+        load = thrust[j] / hover[j]
+        vib = vibration * load
+        sd = math.sqrt(accel_noise_sq + vib * vib)
+        r = rot[j]
+        for c in range(3):
+            f = fma(a2, r[2, c], fma(a1, r[1, c], a0 * r[0, c]))
+            f += bias[j, c]
+            f = f + accel_draws[3 * h + c, i] * sd
+            f = max(f, -accel_range) if f == f else f
+            f = min(f, accel_range) if f == f else f
+            accel_out[c, j] = _biquad(f, accel_c, az1, az2, c, j, az1_new, az2_new)
+        ring[j, 0] = a0 + 0.0
+        ring[j, 1] = a1 + 0.0
+        ring[j, 2] = a2 + gravity
+
+
+@njit
+def _filter_rows(sample: np.ndarray, c: np.ndarray, z1: np.ndarray, z2: np.ndarray,
+                 out: np.ndarray, z1_new: np.ndarray, z2_new: np.ndarray) -> None:
+    """:func:`_biquad` over a (3, m) sample."""
+    for row in range(sample.shape[0]):
+        for col in range(sample.shape[1]):
+            out[row, col] = _biquad(sample[row, col], c, z1, z2, row, col, z1_new, z2_new)

@@ -16,7 +16,7 @@ from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, fo
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
-from aerodock.world.imu import filter_sample
+from aerodock.world.imu import FilterState, ImuState, biquad_coeffs, imu_samples
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
 from aerodock.world.state import StepFrame, WorldState
@@ -119,44 +119,45 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """What the flight computers sense at the step's start: the gyros' noise and, with the
     filtered chain, each IMU's samples (range, low-pass, latency) and the attitude estimate from
-    them (:mod:`aerodock.world.imu`, :mod:`aerodock.world.attitude_estimator`). Random draws:
-    the gyros' noise (per trial, the leader's then the follower's), then with the filtered chain
-    the accelerometers' noise (the same order)."""
+    them (:mod:`aerodock.world.imu`, :mod:`aerodock.world.attitude_estimator`; compiled).
+    Random draws: the gyros' noise (per trial, the leader's then the follower's), then with the
+    filtered chain the accelerometers' noise (the same order)."""
     n = state.n
     both = frame.both
     gyro_sd = params.imu.gyro_noise_radps if params.rigid else 0.0
-    if gyro_sd:
-        draw = standard_normal_t(state.rng, n, 6)
-        noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
-        np.multiply(draw.reshape(2, 3, n), gyro_sd, out=_halves(noise, n))
-        frame.gyro_noise_radps = noise.T
     ims = state.imu
+    gyro_draws = standard_normal_t(state.rng, n, 6) if gyro_sd else _NO_DRAWS
     if ims is None:
+        if gyro_sd:
+            noise = np.empty((3, 2 * n))  # component-major: both halves are contiguous rows
+            np.multiply(gyro_draws.reshape(2, 3, n), gyro_sd, out=_halves(noise, n))
+            frame.gyro_noise_radps = noise.T
         return
     chain = params.imu.chain
-    # The rates: truth and noise, clipped to the range, low-passed, delayed.
-    rates = both.w.T if frame.gyro_noise_radps is None else both.w.T + frame.gyro_noise_radps.T
-    np.maximum(rates, -chain.gyro_range_radps, out=rates)  # np.clip's values, without its
-    np.minimum(rates, chain.gyro_range_radps, out=rates)  # wrapper's cost
-    gyro_t = filter_sample(ims.gyro, rates, ims.gyro_filter)
-    # The specific force R^T (a - g e3) of the last step's acceleration, bias, white noise and
-    # the motors' vibration (its sd grows with the thrust), clipped, low-passed, delayed.
-    accel = np.concatenate([state.leader_accel, state.follower_accel])
-    accel[:, 2] -= params.vehicle.gravity_mps2
-    force = np.matmul(accel[:, None, :], frame.rot)[:, 0]
-    force += ims.bias_body_mps2
-    load = both.thrust_n / state.constants.hover_thrust_n
-    sd = np.sqrt(params.vehicle.accel_noise_mps2 ** 2
-                 + (params.imu.accel_vibration_mps2 * load) ** 2)
-    draw = standard_normal_t(state.rng, n, 6)
-    force_t = np.empty((3, 2 * n))
-    np.add(_halves(force.T, n), draw.reshape(2, 3, n) * sd.reshape(2, 1, n),
-           out=_halves(force_t, n))
-    np.maximum(force_t, -chain.accel_range_mps2, out=force_t)
-    np.minimum(force_t, chain.accel_range_mps2, out=force_t)
-    ims.accel_t = filter_sample(ims.accel, force_t, ims.accel_filter)
+    m = 2 * n
+    noise = np.empty((3, m))
+    gyro_t, accel_t = np.empty((3, m)), np.empty((3, m))
+    gz1, gz2, az1, az2 = np.empty((3, m)), np.empty((3, m)), np.empty((3, m)), np.empty((3, m))
+    ring = np.empty((m, 3))
+    # The specific force's noise is drawn after the gyros' (both drawn before the kernel).
+    accel_draws = standard_normal_t(state.rng, n, 6)
+    gyro_c, accel_c = _imu_coeffs(ims)
+    imu_samples(n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, ims.gyro.z1,
+                ims.gyro.z2, state.leader_accel, state.follower_accel,
+                params.vehicle.gravity_mps2, frame.rot, ims.bias_body_mps2, both.thrust_n,
+                state.constants.hover_thrust_n, params.vehicle.accel_noise_mps2 ** 2,
+                params.imu.accel_vibration_mps2, accel_draws, chain.accel_range_mps2, accel_c,
+                ims.accel.z1, ims.accel.z2, noise, gyro_t, gz1, gz2, accel_t, az1, az2, ring)
+    if gyro_sd:
+        frame.gyro_noise_radps = noise.T
+    if ims.gyro_filter is not None:
+        ims.gyro.z1, ims.gyro.z2 = gz1, gz2
+    if ims.accel_filter is not None:
+        ims.accel.z1, ims.accel.z2 = az1, az2
+    gyro_t = _delayed(ims.gyro, gyro_t)
+    ims.accel_t = _delayed(ims.accel, accel_t)
     # The navigation's acceleration: the mean over one control period, motion-capture late.
-    ims.accel_ring.append(accel + state.constants.gravity_mps2)
+    ims.accel_ring.append(ring)
     ims.accel_ring.pop(0)
     if state.step_index % params.substeps == 0:
         ims.nav_accel_mps2 = np.mean(ims.accel_ring[:params.substeps], axis=0)
@@ -170,6 +171,26 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
                                  params.imu.estimator, params.dt_s)
     ims.gyro_radps = gyro_t.T
     frame.gyro_radps, frame.attitude_est = ims.gyro_radps, ims.attitude
+
+
+_NO_DRAWS = np.zeros((6, 0))
+
+
+def _imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
+    """The chain's two low-passes as the kernel reads them (kept on the state)."""
+    hit = ims.__dict__.get("_coeffs")
+    if hit is None:
+        hit = (biquad_coeffs(ims.gyro_filter), biquad_coeffs(ims.accel_filter))
+        ims.__dict__["_coeffs"] = hit
+    return hit
+
+
+def _delayed(chain: FilterState, sample: np.ndarray) -> np.ndarray:
+    """``sample`` into the chain's delay line, and what comes out of it."""
+    if chain.delay:
+        chain.delay.append(sample)
+        return chain.delay.pop(0)
+    return sample
 
 
 def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
