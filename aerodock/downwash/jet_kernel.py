@@ -431,6 +431,7 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
                 x = draws[r, i] * innov
                 noise[r, i] = x + dc * noise[r, i]
     half_v, lat, drag = bar_consts[0], bar_consts[1], bar_consts[2]
+    u = np.empty(3)
     for i in range(n):
         s = speed[i]
         along = half_v * noise[0, i]
@@ -439,7 +440,6 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
         scale = lat * s
         n1 = noise[1, i] * scale
         n2 = noise[2, i] * scale
-        u = np.empty(3)
         for c in range(3):
             x = axis[c, i] * along
             x += lead_r[i, c, 0] * n1

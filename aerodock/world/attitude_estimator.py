@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.jit import NUMPY_LOOPS, fma, njit, np_arctan2
-from aerodock.world.vehicles.rigid_kernel import rotate_into
+from aerodock.world.vehicles.rigid_kernel import exp_so3, load3x3, mat3_mul, store3x3
 
 
 @dataclass(frozen=True)
@@ -98,4 +98,4 @@ def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
             w0 += y * e0
             w1 += y * e1
             w2 += y * e2
-        rotate_into(r, w0 * dt, w1 * dt, w2 * dt, out[i])
+        store3x3(out, i, mat3_mul(load3x3(rot_hat, i), exp_so3(w0 * dt, w1 * dt, w2 * dt)))

@@ -167,19 +167,18 @@ def biquad_coeffs(biquad: Biquad | None) -> np.ndarray:
 
 
 @njit
-def _biquad(x: float, c: np.ndarray, z1: np.ndarray, z2: np.ndarray, row: int, col: int,
-            z1_new: np.ndarray, z2_new: np.ndarray) -> float:
-    """One sample through the transposed direct form (``c`` of :func:`biquad_coeffs`)."""
-    if c[0] == 0.0:
-        return x
-    forward = c[1] * x
-    out = forward + z1[row, col]
-    a = c[2] * x
-    a -= c[4] * out
-    z1_new[row, col] = a + z2[row, col]
-    b = forward if c[3] == c[1] else c[3] * x  # the low-pass's b2 is b0: its product is at hand
-    z2_new[row, col] = b - c[5] * out
-    return out
+def _biquad(x: float, on: bool, b0: float, b1: float, b2: float, a1: float, a2: float,
+            z1: float, z2: float) -> tuple[float, float, float]:
+    """One sample through the transposed direct form: (output, new z1, new z2); ``on`` False:
+    the sample passes through (the states unchanged)."""
+    if not on:
+        return x, z1, z2
+    forward = b0 * x
+    out = forward + z1
+    a = b1 * x
+    a -= a1 * out
+    b = forward if b2 == b0 else b2 * x  # the low-pass's b2 is b0: its product is at hand
+    return out, a + z2, b - a2 * out
 
 
 @njit
@@ -200,7 +199,10 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
     (``accel_out``); the true acceleration for the navigation's ring (``ring``, 2n x 3)."""
     for j in range(2 * n):
         h, i = (0, j) if j < n else (1, j - n)
-        acc = lead_accel[i] if h == 0 else fol_accel[i]
+        if h == 0:
+            a0, a1, a2 = lead_accel[i, 0], lead_accel[i, 1], lead_accel[i, 2] - gravity
+        else:
+            a0, a1, a2 = fol_accel[i, 0], fol_accel[i, 1], fol_accel[i, 2] - gravity
         for c in range(3):
             x = w[j, c]
             if gyro_sd != 0.0:
@@ -209,19 +211,21 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
                 x = x + e
             x = max(x, -gyro_range) if x == x else x
             x = min(x, gyro_range) if x == x else x
-            gyro_out[c, j] = _biquad(x, gyro_c, gz1, gz2, c, j, gz1_new, gz2_new)
-        a0, a1, a2 = acc[0], acc[1], acc[2] - gravity
+            gyro_out[c, j], gz1_new[c, j], gz2_new[c, j] = _biquad(
+                x, gyro_c[0] != 0.0, gyro_c[1], gyro_c[2], gyro_c[3], gyro_c[4], gyro_c[5],
+                gz1[c, j], gz2[c, j])
         load = thrust[j] / hover[j]
         vib = vibration * load
         sd = math.sqrt(accel_noise_sq + vib * vib)
-        r = rot[j]
         for c in range(3):
-            f = fma(a2, r[2, c], fma(a1, r[1, c], a0 * r[0, c]))
+            f = fma(a2, rot[j, 2, c], fma(a1, rot[j, 1, c], a0 * rot[j, 0, c]))
             f += bias[j, c]
             f = f + accel_draws[3 * h + c, i] * sd
             f = max(f, -accel_range) if f == f else f
             f = min(f, accel_range) if f == f else f
-            accel_out[c, j] = _biquad(f, accel_c, az1, az2, c, j, az1_new, az2_new)
+            accel_out[c, j], az1_new[c, j], az2_new[c, j] = _biquad(
+                f, accel_c[0] != 0.0, accel_c[1], accel_c[2], accel_c[3], accel_c[4],
+                accel_c[5], az1[c, j], az2[c, j])
         ring[j, 0] = a0 + 0.0
         ring[j, 1] = a1 + 0.0
         ring[j, 2] = a2 + gravity
@@ -233,4 +237,6 @@ def _filter_rows(sample: np.ndarray, c: np.ndarray, z1: np.ndarray, z2: np.ndarr
     """:func:`_biquad` over a (3, m) sample."""
     for row in range(sample.shape[0]):
         for col in range(sample.shape[1]):
-            out[row, col] = _biquad(sample[row, col], c, z1, z2, row, col, z1_new, z2_new)
+            out[row, col], z1_new[row, col], z2_new[row, col] = _biquad(
+                sample[row, col], c[0] != 0.0, c[1], c[2], c[3], c[4], c[5], z1[row, col],
+                z2[row, col])

@@ -90,12 +90,15 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
     ``mixer_inv`` (4, k) maps ``[T, tau_x, tau_y, tau_z]`` to rotor thrusts. Saturation: the
     collective part is shifted (down when a rotor exceeds its maximum, up when one would go below
     zero) so that the torque differences survive, then every rotor is clipped to
-    ``[0, rotor_thrust_max_n]`` (compiled: :func:`rigid_kernel.mix_into`, which the autopilot
-    runs).
+    ``[0, rotor_thrust_max_n]`` (compiled: :func:`rigid_kernel.mix`, which the autopilot runs).
     """
     torque = np.asarray(torque_nm, dtype=float)
     thrust = np.broadcast_to(np.asarray(thrust_n, dtype=float), (torque.shape[0],))
-    out = np.empty((torque.shape[0], mixer_inv.shape[1]))
-    rigid_kernel.mix_batch(thrust, torque, np.asarray(mixer_inv, dtype=float),
+    mixer_inv = np.asarray(mixer_inv, dtype=float)
+    if mixer_inv.shape != (4, 4):
+        raise ValueError(f"the mixer maps [T, tau] to four rotors: mixer_inv must be (4, 4), "
+                         f"got {mixer_inv.shape}")
+    out = np.empty((torque.shape[0], 4))
+    rigid_kernel.mix_batch(thrust, torque, rigid_kernel.as_tuple(mixer_inv),
                            float(rotor_thrust_max_n), out)
     return out

@@ -213,6 +213,20 @@ _NO_ROWS = np.zeros((1, 4))  # the kernels' placeholder for an absent (n, k) inp
 freeze(_NO_ROWS)
 
 
+def kernel_constants(params: RigidBodyParams) -> tuple[tuple[float, ...], ...]:
+    """The vehicle's constant matrices as the kernels take them (tuples, row-major): the
+    autopilot's loop constants, the mixer, the torque map and the rotor drag's sums (kept on
+    ``params``)."""
+    hit = params.__dict__.get("_kernel_constants")
+    if hit is None:
+        hit = (rigid_kernel.as_tuple(autopilot_constants(params.gains, params.inertia_kgm2)),
+               rigid_kernel.as_tuple(params.mixer_inv),
+               rigid_kernel.as_tuple(params.rotor_torque_map),
+               rigid_kernel.as_tuple(params.rotor_drag_sums))
+        params.__dict__["_kernel_constants"] = hit
+    return hit
+
+
 def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: RigidBodyParams,
                         gyro_radps: np.ndarray, dt_s: float,
                         attitude: np.ndarray | None = None,
@@ -220,16 +234,16 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                         ) -> tuple[np.ndarray, np.ndarray]:
     """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
     gyro's rates (``gyro_radps`` plus ``gyro_noise_radps``) and its attitude estimate
-    (``attitude``; None: the true attitude). Compiled: :func:`rigid_kernel.autopilot_into`."""
+    (``attitude``; None: the true attitude). Compiled: :func:`rigid_kernel.autopilot`."""
     n = state.R.shape[0]
     cmd, integral = np.empty((n, 4)), np.empty((n, 3))
     ff = targets.torque_ff_nm
+    consts, mixer, _, _ = kernel_constants(params)
     rigid_kernel.autopilot_batch(
         state.R if attitude is None else attitude, targets.R_des, targets.yaw_rate_radps,
         targets.thrust_n, _NO_ROWS if ff is None else ff, ff is not None, gyro_radps,
         _NO_ROWS if gyro_noise_radps is None else gyro_noise_radps,
-        gyro_noise_radps is not None, state.rate_integral,
-        autopilot_constants(params.gains, params.inertia_kgm2), params.mixer_inv,
+        gyro_noise_radps is not None, state.rate_integral, consts, mixer,
         params.rotor_thrust_max_n, params.thrust_coeff, dt_s, cmd, integral)
     return cmd, integral
 
@@ -254,11 +268,11 @@ def body_wrench(rotor_speed: np.ndarray, thrust_gain: np.ndarray, v_body_mps: np
     omega = np.asarray(rotor_speed, dtype=float)
     n = omega.shape[0]
     force, torque = np.empty((n, 3)), np.empty((n, 3))
+    _, _, torque_map, drag_sums = kernel_constants(params)
     rigid_kernel.wrench_batch(omega, params.thrust_coeff * np.asarray(thrust_gain, dtype=float),
                               np.ones(n), np.asarray(v_body_mps, dtype=float),
-                              np.asarray(w_radps, dtype=float), params.rotor_torque_map,
-                              params.rotor_drag_sums, params.rotor_drag_coeff,
-                              params.rotor_drag_z_coeff, force, torque)
+                              np.asarray(w_radps, dtype=float), torque_map, drag_sums,
+                              params.rotor_drag_coeff, params.rotor_drag_z_coeff, force, torque)
     return force, torque
 
 
@@ -316,32 +330,53 @@ def step_rigid_body(
         params: vehicle constants.
         dt_s: physics step.
     """
-    p, v, rot, w, omega, thrust, accel = _step_arrays(state, rotor_speed_cmd, ext_force_n,
-                                                      ext_torque_nm, params, dt_s)
+    p, v, rot, w, omega, thrust, accel, _, _ = _step_arrays(state, rotor_speed_cmd,
+                                                            ext_force_n, ext_torque_nm, params,
+                                                            dt_s)
     return RigidBodyState(p, v, rot, w, omega, state.rate_integral, state.yaw_setpoint,
                           state.thrust_gain, thrust, state.body), accel
 
 
-def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
-                 ext_torque_nm: np.ndarray | None, params: RigidBodyParams,
-                 dt_s: float) -> tuple[np.ndarray, ...]:
-    """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel), from the
-    compiled :func:`rigid_kernel.step_vehicles`."""
+def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
+                 ext_force_n: np.ndarray, ext_torque_nm: np.ndarray | None,
+                 params: RigidBodyParams, dt_s: float, targets: RigidTargets | None = None,
+                 gyro: np.ndarray | None = None, gyro_noise: np.ndarray | None = None,
+                 attitude: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+    """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel, rate integral,
+    yaw setpoint) from the compiled :func:`rigid_kernel.step_vehicles`: under the rotor speed
+    commands ``rotor_speed_cmd``, or (None) flown by the autopilot to ``targets`` on ``gyro``
+    (plus ``gyro_noise``) and ``attitude`` (None: the true one)."""
     body = state.body
     n = state.p.shape[0]
     alpha, inertia = _body_constants(body, dt_s)
+    consts, mixer, torque_map, drag_sums = kernel_constants(params)
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
-           np.empty((n, 4)), np.empty(n), np.empty((n, 3)))
+           np.empty((n, 4)), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n))
+    flown = targets is not None
+    ff = targets.torque_ff_nm if flown else None
     rigid_kernel.step_vehicles(
         state.p, state.v, state.R, state.w, state.rotor_speed,
         _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain), body.torque_gain,
-        body.mass_rows_kg, inertia, alpha, np.asarray(rotor_speed_cmd, dtype=float),
-        np.asarray(ext_force_n, dtype=float),
+        body.mass_rows_kg, inertia, alpha, flown,
+        _NO_ROWS if flown else np.asarray(rotor_speed_cmd, dtype=float),
+        _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
+        targets.R_des if flown else _NO_ATTITUDE,
+        targets.yaw_rate_radps if flown else _NO_VALUES,
+        targets.thrust_n if flown else _NO_VALUES, _NO_ROWS if ff is None else ff,
+        ff is not None, state.w if gyro is None else gyro,
+        _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
+        state.rate_integral, state.yaw_setpoint, consts, mixer, params.rotor_thrust_max_n,
+        params.thrust_coeff, np.asarray(ext_force_n, dtype=float),
         _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
-        ext_torque_nm is not None, params.rotor_torque_map, params.rotor_drag_sums,
-        params.rotor_drag_coeff, params.rotor_drag_z_coeff, params.parasitic_drag_coeff,
-        params.gravity_mps2, dt_s, *out)
+        ext_torque_nm is not None, torque_map, drag_sums, params.rotor_drag_coeff,
+        params.rotor_drag_z_coeff, params.parasitic_drag_coeff, params.gravity_mps2, dt_s,
+        *out)
     return out
+
+
+_NO_ATTITUDE = np.zeros((0, 3, 3))
+_NO_VALUES = np.zeros(0)
+freeze(_NO_ATTITUDE, _NO_VALUES)
 
 
 def step_with_autopilot(
@@ -363,15 +398,8 @@ def step_with_autopilot(
         gyro, attitude = sensed
     else:
         gyro, noise = state.w, gyro_noise_radps
-    speed_cmd, integral = rotor_speed_command(targets, state, params, gyro, dt_s, attitude,
-                                              noise)
-    p, v, rot, w, omega, thrust, accel = _step_arrays(state, speed_cmd, ext_force_n,
-                                                      ext_torque_nm, params, dt_s)
-    yaw_sp = targets.yaw_rate_radps * dt_s
-    yaw_sp += state.yaw_setpoint
-    yaw_sp += np.pi
-    yaw_sp %= 2 * np.pi
-    yaw_sp -= np.pi
+    p, v, rot, w, omega, thrust, accel, integral, yaw_sp = _step_arrays(
+        state, None, ext_force_n, ext_torque_nm, params, dt_s, targets, gyro, noise, attitude)
     return RigidBodyState(p, v, rot, w, omega, integral, yaw_sp, state.thrust_gain,
                           thrust, state.body), accel
 
@@ -383,7 +411,7 @@ def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 def _rotate_t(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """:func:`_rotate` with component-major rotation vectors ``phi`` (3, n); compiled
-    (:func:`rigid_kernel.rotate_into`)."""
+    (:func:`rigid_kernel.rotate_batch`)."""
     out = np.empty((rot.shape[0], 3, 3))
     rigid_kernel.rotate_batch(rot, phi, out)
     return out

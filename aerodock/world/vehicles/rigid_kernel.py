@@ -13,6 +13,11 @@ in OpenBLAS's order (:func:`aerodock.jit.fma`):
 
 Maxima and minima follow NumPy's (``np.maximum`` keeps its first argument when it is NaN or
 when the two are equal), so a NaN propagates as it did.
+
+The helpers take and return numbers and tuples of numbers, never arrays: a compiled call with
+array arguments pays for their reference counts (tens of nanoseconds a call, more than the
+arithmetic here), so the loops over the batch index the arrays themselves. Constant matrices
+travel as tuples, row-major (:func:`as_tuple`).
 """
 
 from __future__ import annotations
@@ -22,6 +27,11 @@ import math
 import numpy as np
 
 from aerodock.jit import fma, njit
+
+
+def as_tuple(values: np.ndarray) -> tuple[float, ...]:
+    """A constant array as the kernels take it: its numbers, row-major, as a tuple."""
+    return tuple(float(x) for x in np.asarray(values, dtype=float).ravel())
 
 
 @njit
@@ -37,161 +47,160 @@ def _min(a: float, b: float) -> float:
 
 
 @njit
-def _vecmat(v0: float, v1: float, v2: float, m: np.ndarray, k: int) -> float:
-    """Column ``k`` of ``v^T m`` (3 x 3 ``m``), rounded as OpenBLAS's ``v @ m``."""
-    return fma(v2, m[2, k], fma(v1, m[1, k], v0 * m[0, k]))
-
-
-@njit
-def _matvec(m: np.ndarray, r: int, f0: float, f1: float, f2: float) -> float:
-    """Row ``r`` of ``m f`` (3 x 3 ``m``), rounded as OpenBLAS's ``m @ f``."""
-    return fma(m[r, 2], f2, fma(m[r, 0], f0, m[r, 1] * f1))
-
-
-@njit
-def rotate_into(rot: np.ndarray, phi0: float, phi1: float, phi2: float,
-                out: np.ndarray) -> None:
-    """``out = rot exp([phi]x)`` for one 3 x 3 ``rot`` and a body rotation vector (Rodrigues;
-    below theta^2 = 1e-12 the series of sin(t)/t and (1 - cos t)/t^2)."""
+def exp_so3(phi0: float, phi1: float, phi2: float) -> tuple:
+    """``exp([phi]x)`` row-major (Rodrigues; below theta^2 = 1e-12 the series of sin(t)/t and
+    (1 - cos t)/t^2): ``b p p^T + (1 - b theta^2) I + a [p]x``."""
     theta2 = phi0 * phi0 + phi1 * phi1
     theta2 += phi2 * phi2
-    theta = math.sqrt(theta2)
     if theta2 < 1e-12:
         a = 1.0 - theta2 / 6.0
         b = 0.5 - theta2 / 24.0
     else:
+        theta = math.sqrt(theta2)
         a = math.sin(theta) / theta
         b = (1.0 - math.cos(theta)) / (theta * theta)
     bp0, bp1, bp2 = phi0 * b, phi1 * b, phi2 * b
     ap0, ap1, ap2 = phi0 * a, phi1 * a, phi2 * a
     diag = 1.0 - b * theta2
-    # exp = I + a K + b K^2 = b p p^T + (1 - b theta^2) I + a [p]x
-    e00 = bp0 * phi0 + diag
-    e01 = bp0 * phi1 + (-ap2)
-    e02 = bp0 * phi2 + ap1
-    e10 = bp1 * phi0 + ap2
-    e11 = bp1 * phi1 + diag
-    e12 = bp1 * phi2 + (-ap0)
-    e20 = bp2 * phi0 + (-ap1)
-    e21 = bp2 * phi1 + ap0
-    e22 = bp2 * phi2 + diag
-    for r in range(3):
-        r0, r1, r2 = rot[r, 0], rot[r, 1], rot[r, 2]
-        out[r, 0] = fma(r2, e20, fma(r1, e10, r0 * e00))
-        out[r, 1] = fma(r2, e21, fma(r1, e11, r0 * e01))
-        out[r, 2] = fma(r2, e22, fma(r1, e12, r0 * e02))
+    return (bp0 * phi0 + diag, bp0 * phi1 + (-ap2), bp0 * phi2 + ap1,
+            bp1 * phi0 + ap2, bp1 * phi1 + diag, bp1 * phi2 + (-ap0),
+            bp2 * phi0 + (-ap1), bp2 * phi1 + ap0, bp2 * phi2 + diag)
 
 
 @njit
-def autopilot_into(att: np.ndarray, rd: np.ndarray, yaw_rate: float, thrust_cmd: float,
-                   ff: np.ndarray, has_ff: bool, g0: float, g1: float, g2: float,
-                   integral: np.ndarray, consts: np.ndarray, mixer_inv: np.ndarray,
-                   rotor_thrust_max: float, thrust_coeff: float, dt: float,
-                   cmd: np.ndarray, integral_new: np.ndarray) -> None:
-    """One vehicle's autopilot: attitude P (geometric error ``vee(R_d^T R - R^T R_d) / 2``
-    times the angle gain, plus the yaw rate feed-forward), rate PI on the gyro ``g`` (with
-    anti-windup), times the nominal inertia, plus the torque feed-forward; the airmode mixer
-    (the collective shifted so the torques keep priority, each rotor clipped); rotor speed
-    commands ``cmd`` (4,) through the nominal k_T, and the new rate integral (3,).
-
-    ``consts`` (6, 3): rows -attitude_p / 2, the rate limit, the integral limit, rate_p,
-    rate_i, the nominal inertia.
-    """
-    m21 = fma(rd[2, 2], att[2, 1], fma(rd[1, 2], att[1, 1], rd[0, 2] * att[0, 1]))
-    m12 = fma(rd[2, 1], att[2, 2], fma(rd[1, 1], att[1, 2], rd[0, 1] * att[0, 2]))
-    m02 = fma(rd[2, 0], att[2, 2], fma(rd[1, 0], att[1, 2], rd[0, 0] * att[0, 2]))
-    m20 = fma(rd[2, 2], att[2, 0], fma(rd[1, 2], att[1, 0], rd[0, 2] * att[0, 0]))
-    m10 = fma(rd[2, 1], att[2, 0], fma(rd[1, 1], att[1, 0], rd[0, 1] * att[0, 0]))
-    m01 = fma(rd[2, 0], att[2, 1], fma(rd[1, 0], att[1, 1], rd[0, 0] * att[0, 1]))
-    sp0 = (m21 - m12) * consts[0, 0]
-    sp1 = (m02 - m20) * consts[0, 1]
-    sp2 = (m10 - m01) * consts[0, 2]
-    sp2 += yaw_rate
-    tau0 = _rate_loop(sp0, g0, 0, integral, consts, dt, integral_new)
-    tau1 = _rate_loop(sp1, g1, 1, integral, consts, dt, integral_new)
-    tau2 = _rate_loop(sp2, g2, 2, integral, consts, dt, integral_new)
-    if has_ff:
-        tau0 += ff[0]
-        tau1 += ff[1]
-        tau2 += ff[2]
-    mix_into(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max, cmd)
-    for j in range(4):
-        cmd[j] = math.sqrt(cmd[j] / thrust_coeff)
+def mat3_mul(r: tuple, e: tuple) -> tuple:
+    """``r e`` for row-major 3 x 3 tuples, rounded as OpenBLAS's ``np.matmul``."""
+    return (fma(r[2], e[6], fma(r[1], e[3], r[0] * e[0])),
+            fma(r[2], e[7], fma(r[1], e[4], r[0] * e[1])),
+            fma(r[2], e[8], fma(r[1], e[5], r[0] * e[2])),
+            fma(r[5], e[6], fma(r[4], e[3], r[3] * e[0])),
+            fma(r[5], e[7], fma(r[4], e[4], r[3] * e[1])),
+            fma(r[5], e[8], fma(r[4], e[5], r[3] * e[2])),
+            fma(r[8], e[6], fma(r[7], e[3], r[6] * e[0])),
+            fma(r[8], e[7], fma(r[7], e[4], r[6] * e[1])),
+            fma(r[8], e[8], fma(r[7], e[5], r[6] * e[2])))
 
 
 @njit
-def mix_into(thrust: float, tau0: float, tau1: float, tau2: float, mixer_inv: np.ndarray,
-             rotor_thrust_max: float, out: np.ndarray) -> None:
-    """The airmode mixer: rotor thrusts ``out`` (k,) from ``[T, tau_x, tau_y, tau_z]`` through
-    ``mixer_inv`` (4, k); the collective shifted (down when a rotor exceeds its maximum, up
-    when one would go below zero) so the torque differences survive, then every rotor clipped
-    to ``[0, rotor_thrust_max]``."""
-    k = mixer_inv.shape[1]
-    lo = math.inf
-    hi = -math.inf
-    for j in range(k):
-        fj = mixer_inv[0, j] * thrust + mixer_inv[1, j] * tau0
-        fj += mixer_inv[2, j] * tau1
-        fj += mixer_inv[3, j] * tau2
-        out[j] = fj
-        lo = fj if j == 0 else _min(lo, fj)
-        hi = fj if j == 0 else _max(hi, fj)
-    lo = -lo
-    hi = rotor_thrust_max - hi
+def load3x3(a: np.ndarray, i: int) -> tuple:
+    """Row ``i`` of an (m, 3, 3) array as a row-major tuple."""
+    return (a[i, 0, 0], a[i, 0, 1], a[i, 0, 2], a[i, 1, 0], a[i, 1, 1], a[i, 1, 2],
+            a[i, 2, 0], a[i, 2, 1], a[i, 2, 2])
+
+
+@njit
+def store3x3(out: np.ndarray, i: int, m: tuple) -> None:
+    """A row-major tuple into row ``i`` of an (m, 3, 3) array."""
+    out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = m[0], m[1], m[2]
+    out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = m[3], m[4], m[5]
+    out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = m[6], m[7], m[8]
+
+
+@njit
+def mix(thrust: float, tau0: float, tau1: float, tau2: float, mixer_inv: tuple,
+        rotor_thrust_max: float) -> tuple:
+    """The airmode mixer of a quadrotor: four rotor thrusts from ``[T, tau_x, tau_y, tau_z]``
+    through ``mixer_inv`` (4 x 4, row-major: row j multiplies the wrench's j-th entry); the
+    collective shifted (down when a rotor exceeds its maximum, up when one would go below
+    zero) so the torque differences survive, then every rotor clipped to
+    ``[0, rotor_thrust_max]``."""
+    f0 = mixer_inv[0] * thrust + mixer_inv[4] * tau0
+    f0 += mixer_inv[8] * tau1
+    f0 += mixer_inv[12] * tau2
+    f1 = mixer_inv[1] * thrust + mixer_inv[5] * tau0
+    f1 += mixer_inv[9] * tau1
+    f1 += mixer_inv[13] * tau2
+    f2 = mixer_inv[2] * thrust + mixer_inv[6] * tau0
+    f2 += mixer_inv[10] * tau1
+    f2 += mixer_inv[14] * tau2
+    f3 = mixer_inv[3] * thrust + mixer_inv[7] * tau0
+    f3 += mixer_inv[11] * tau1
+    f3 += mixer_inv[15] * tau2
+    lo = -_min(_min(_min(f0, f1), f2), f3)
+    hi = rotor_thrust_max - _max(_max(_max(f0, f1), f2), f3)
     shift = _min(_max(lo, 0.0), hi)
     if lo > hi:
         shift = (lo + hi) * 0.5
-    for j in range(k):
-        out[j] = _min(_max(out[j] + shift, 0.0), rotor_thrust_max)
+    return (_min(_max(f0 + shift, 0.0), rotor_thrust_max),
+            _min(_max(f1 + shift, 0.0), rotor_thrust_max),
+            _min(_max(f2 + shift, 0.0), rotor_thrust_max),
+            _min(_max(f3 + shift, 0.0), rotor_thrust_max))
 
 
 @njit
-def mix_batch(thrust: np.ndarray, torque: np.ndarray, mixer_inv: np.ndarray,
-              rotor_thrust_max: float, out: np.ndarray) -> None:
-    """:func:`mix_into` for ``n`` vehicles: collective (n,), torques (n, 3) -> (n, k)."""
-    for i in range(thrust.shape[0]):
-        mix_into(thrust[i], torque[i, 0], torque[i, 1], torque[i, 2], mixer_inv,
-                 rotor_thrust_max, out[i])
-
-
-@njit
-def _rate_loop(sp: float, gyro: float, k: int, integral: np.ndarray, consts: np.ndarray,
-               dt: float, integral_new: np.ndarray) -> float:
-    """Axis ``k`` of the rate loop: the setpoint clipped to the rate limit, PI on the gyro with
-    the integral clipped (anti-windup), times the nominal inertia; the torque, N m."""
-    sp = _min(_max(sp, -consts[1, k]), consts[1, k])
+def _rate_loop(sp: float, gyro: float, integral: float, limit: float, int_limit: float,
+               rate_p: float, rate_i: float, inertia: float, dt: float) -> tuple:
+    """One axis of the rate loop: the setpoint clipped to the rate limit, PI on the gyro with
+    the integral clipped (anti-windup), times the nominal inertia: (torque N m, integral)."""
+    sp = _min(_max(sp, -limit), limit)
     err = sp - gyro
     acc = err * dt
-    acc += integral[k]
-    acc = _min(_max(acc, -consts[2, k]), consts[2, k])
-    integral_new[k] = acc
-    t = err * consts[3, k]
-    t += acc * consts[4, k]
-    return t * consts[5, k]
+    acc += integral
+    acc = _min(_max(acc, -int_limit), int_limit)
+    t = err * rate_p
+    t += acc * rate_i
+    return t * inertia, acc
 
 
 @njit
-def rotor_wrench(omega: np.ndarray, kc: float, torque_gain: float, vb0: float, vb1: float,
-                 vb2: float, wx: float, wy: float, wz: float, torque_map: np.ndarray,
-                 drag_sums: np.ndarray, kd: float, kz: float,
-                 sums: np.ndarray) -> tuple[float, float, float, float, float, float]:
+def autopilot(att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff: bool,
+              ff0: float, ff1: float, ff2: float, g0: float, g1: float, g2: float, i0: float,
+              i1: float, i2: float, consts: tuple, mixer_inv: tuple, rotor_thrust_max: float,
+              thrust_coeff: float, dt: float) -> tuple:
+    """One vehicle's autopilot: attitude P (geometric error ``vee(R_d^T R - R^T R_d) / 2``
+    times the angle gain, plus the yaw rate feed-forward), rate PI on the gyro ``g`` (integral
+    ``i``), times the nominal inertia, plus the torque feed-forward ``ff``; the mixer; rotor
+    speed commands through the nominal k_T. Returns the four commands (rad/s) and the new
+    integral.
+
+    ``consts`` (18,): rows -attitude_p / 2, the rate limit, the integral limit, rate_p, rate_i,
+    the nominal inertia, each (x, y, z).
+    """
+    m21 = fma(rd[8], att[7], fma(rd[5], att[4], rd[2] * att[1]))
+    m12 = fma(rd[7], att[8], fma(rd[4], att[5], rd[1] * att[2]))
+    m02 = fma(rd[6], att[8], fma(rd[3], att[5], rd[0] * att[2]))
+    m20 = fma(rd[8], att[6], fma(rd[5], att[3], rd[2] * att[0]))
+    m10 = fma(rd[7], att[6], fma(rd[4], att[3], rd[1] * att[0]))
+    m01 = fma(rd[6], att[7], fma(rd[3], att[4], rd[0] * att[1]))
+    sp2 = (m10 - m01) * consts[2]
+    sp2 += yaw_rate
+    tau0, n0 = _rate_loop((m21 - m12) * consts[0], g0, i0, consts[3], consts[6], consts[9],
+                          consts[12], consts[15], dt)
+    tau1, n1 = _rate_loop((m02 - m20) * consts[1], g1, i1, consts[4], consts[7], consts[10],
+                          consts[13], consts[16], dt)
+    tau2, n2 = _rate_loop(sp2, g2, i2, consts[5], consts[8], consts[11], consts[14],
+                          consts[17], dt)
+    if has_ff:
+        tau0 += ff0
+        tau1 += ff1
+        tau2 += ff2
+    f0, f1, f2, f3 = mix(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max)
+    return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
+            math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff), n0, n1, n2)
+
+
+@njit
+def rotor_wrench(o0: float, o1: float, o2: float, o3: float, kc: float, torque_gain: float,
+                 vb0: float, vb1: float, vb2: float, wx: float, wy: float, wz: float,
+                 tm: tuple, ds: tuple, kd: float, kz: float) -> tuple:
     """One vehicle's rotor force and torque, body FRD: thrust and yaw reaction of each rotor
-    (k_T ``kc``), and rotor drag at each hub (RotorPy's H-force and induced-inflow terms on
-    the local airspeed ``v_b + w x r_i``, through the weighted sums of ``drag_sums``).
-    ``sums`` (7,) is scratch. Returns (force x, y, z, torque x, y, z)."""
-    f0 = omega[0] * omega[0] * kc
-    f1 = omega[1] * omega[1] * kc
-    f2 = omega[2] * omega[2] * kc
-    f3 = omega[3] * omega[3] * kc
-    tq0 = torque_map[0, 0] * f0 + torque_map[1, 0] * f1
-    tq0 += torque_map[2, 0] * f2
-    tq0 += torque_map[3, 0] * f3
-    tq1 = torque_map[0, 1] * f0 + torque_map[1, 1] * f1
-    tq1 += torque_map[2, 1] * f2
-    tq1 += torque_map[3, 1] * f3
-    tq2 = torque_map[0, 2] * f0 + torque_map[1, 2] * f1
-    tq2 += torque_map[2, 2] * f2
-    tq2 += torque_map[3, 2] * f3
+    (k_T ``kc``; ``tm`` the (4, 3) torque map), and rotor drag at each hub (RotorPy's H-force
+    and induced-inflow terms on the local airspeed ``v_b + w x r_i``, through the speeds'
+    weighted sums of the (4, 7) ``ds``: columns 1, -y, x, y, xx, yy, xy). Returns (force x, y,
+    z, torque x, y, z)."""
+    f0 = o0 * o0 * kc
+    f1 = o1 * o1 * kc
+    f2 = o2 * o2 * kc
+    f3 = o3 * o3 * kc
+    tq0 = tm[0] * f0 + tm[3] * f1
+    tq0 += tm[6] * f2
+    tq0 += tm[9] * f3
+    tq1 = tm[1] * f0 + tm[4] * f1
+    tq1 += tm[7] * f2
+    tq1 += tm[10] * f3
+    tq2 = tm[2] * f0 + tm[5] * f1
+    tq2 += tm[8] * f2
+    tq2 += tm[11] * f3
     tq2 *= torque_gain
     thrust = f0 + f1
     thrust += f2
@@ -200,38 +209,40 @@ def rotor_wrench(omega: np.ndarray, kc: float, torque_gain: float, vb0: float, v
     fb1 = 0.0
     fb2 = -thrust
     if kd != 0.0 or kz != 0.0:
-        for c in range(7):
-            s = drag_sums[0, c] * omega[0] + drag_sums[1, c] * omega[1]
-            s += drag_sums[2, c] * omega[2]
-            s += drag_sums[3, c] * omega[3]
-            sums[c] = s
-        # sums: (1, -y, x, y, xx, yy, xy) weighted by the rotor speeds
-        ax0 = sums[0] * vb2
-        ax0 += wx * sums[3]
-        ax0 -= wy * sums[2]
+        s0 = _drag_sum(o0, o1, o2, o3, ds, 0)
+        s1 = _drag_sum(o0, o1, o2, o3, ds, 1)
+        s2 = _drag_sum(o0, o1, o2, o3, ds, 2)
+        s3 = _drag_sum(o0, o1, o2, o3, ds, 3)
+        s4 = _drag_sum(o0, o1, o2, o3, ds, 4)
+        s5 = _drag_sum(o0, o1, o2, o3, ds, 5)
+        s6 = _drag_sum(o0, o1, o2, o3, ds, 6)
+        # the axial force and the roll and pitch moments: rows (0, 3, 2 | 3, 5, 6 | 2, 6, 4)
+        ax0 = s0 * vb2
+        ax0 += wx * s3
+        ax0 -= wy * s2
         ax0 *= kz
-        ax1 = sums[3] * vb2
-        ax1 += wx * sums[5]
-        ax1 -= wy * sums[6]
+        ax1 = s3 * vb2
+        ax1 += wx * s5
+        ax1 -= wy * s6
         ax1 *= kz
-        ax2 = sums[2] * vb2
-        ax2 += wx * sums[6]
-        ax2 -= wy * sums[4]
+        ax2 = s2 * vb2
+        ax2 += wx * s6
+        ax2 -= wy * s4
         ax2 *= kz
         fb2 -= ax0
         tq0 -= ax1
         tq1 += ax2
-        pl0 = sums[0] * vb0
-        pl0 += wz * sums[1]
+        pl0 = s0 * vb0
+        pl0 += wz * s1
         pl0 *= kd
-        pl1 = sums[0] * vb1
-        pl1 += wz * sums[2]
+        pl1 = s0 * vb1
+        pl1 += wz * s2
         pl1 *= kd
         fb0 = 0.0 - pl0
         fb1 = 0.0 - pl1
-        yaw = sums[2] * vb1
-        yaw -= sums[3] * vb0
-        spin = sums[4] + sums[5]
+        yaw = s2 * vb1
+        yaw -= s3 * vb0
+        spin = s4 + s5
         spin *= wz
         yaw += spin
         yaw *= kd
@@ -240,42 +251,88 @@ def rotor_wrench(omega: np.ndarray, kc: float, torque_gain: float, vb0: float, v
 
 
 @njit
+def _drag_sum(o0: float, o1: float, o2: float, o3: float, ds: tuple, c: int) -> float:
+    """Column ``c`` of the rotor drag's weighted sums, ``sum_i omega_i ds[i, c]`` in order."""
+    s = ds[c] * o0 + ds[7 + c] * o1
+    s += ds[14 + c] * o2
+    s += ds[21 + c] * o3
+    return s
+
+
+@njit
 def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
                   omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
                   mass_rows: np.ndarray, inertia: np.ndarray, alpha: np.ndarray,
-                  omega_cmd: np.ndarray, ext_force: np.ndarray, ext_torque: np.ndarray,
-                  has_ext_torque: bool, torque_map: np.ndarray, drag_sums: np.ndarray,
-                  kd: float, kz: float, c_drag: float, gravity: float, dt: float,
-                  p_new: np.ndarray, v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
-                  omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray) -> None:
-    """One physics step of ``n`` rigid bodies under rotor speed commands ``omega_cmd``
-    (n, 4), external forces (n, 3, world NED) and torques (n, 3, body FRD), written into the
-    ``*_new`` arrays and ``accel`` (the step's acceleration, NED).
+                  autopilot_on: bool, omega_cmd: np.ndarray, att: np.ndarray, use_att: bool,
+                  r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                  torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                  noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts: tuple,
+                  mixer_inv: tuple, rotor_thrust_max: float, thrust_coeff: float,
+                  ext_force: np.ndarray, ext_torque: np.ndarray, has_ext_torque: bool,
+                  torque_map: tuple, drag_sums: tuple, kd: float, kz: float, c_drag: float,
+                  gravity: float, dt: float, p_new: np.ndarray, v_new: np.ndarray,
+                  rot_new: np.ndarray, w_new: np.ndarray, omega_new: np.ndarray,
+                  thrust_new: np.ndarray, accel: np.ndarray, integral_new: np.ndarray,
+                  yaw_sp_new: np.ndarray) -> None:
+    """One physics step of ``n`` rigid bodies, written into the ``*_new`` arrays and ``accel``
+    (the step's acceleration, NED).
+
+    With ``autopilot_on`` each vehicle's autopilot (:func:`autopilot`) flies its held targets
+    (``r_des``, ``yaw_rate``, ``thrust_cmd``, ``torque_ff``) on the gyro (``gyro`` plus
+    ``gyro_noise`` when ``noisy``) and the attitude ``att`` (when ``use_att``, else the true
+    one), and the yaw setpoint advances by the yaw rate; without it the rotors are commanded
+    ``omega_cmd`` (n, 4). External forces (n, 3, world NED) and torques (n, 3, body FRD) act at
+    the centre of mass.
 
     Velocity and body rates by explicit Euler on the current derivatives; position and
     attitude on the mean of old and new rates (the attitude by the exact Rodrigues
     exponential); the motors by their exact first-order step (``alpha``: ``1 - exp(-dt/tau)``,
     (n,) or one number in a (1,) array).
     """
-    sums = np.empty(7)
     per_vehicle_alpha = alpha.shape[0] > 1
     half = 0.5 * dt
     for i in range(p.shape[0]):
-        r = rot[i]
+        r = load3x3(rot, i)
+        if autopilot_on:
+            g0, g1, g2 = gyro[i, 0], gyro[i, 1], gyro[i, 2]
+            if noisy:
+                g0 += gyro_noise[i, 0]
+                g1 += gyro_noise[i, 1]
+                g2 += gyro_noise[i, 2]
+            ff0 = ff1 = ff2 = 0.0
+            if has_ff:
+                ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
+            c0, c1, c2, c3, n0, n1, n2 = autopilot(
+                load3x3(att, i) if use_att else r, load3x3(r_des, i), yaw_rate[i],
+                thrust_cmd[i], has_ff, ff0, ff1, ff2, g0, g1, g2, integral[i, 0], integral[i, 1],
+                integral[i, 2], consts, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
+            integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = n0, n1, n2
+            y = yaw_rate[i] * dt
+            y += yaw_sp[i]
+            y += math.pi
+            y %= 2 * math.pi
+            yaw_sp_new[i] = y - math.pi
+        else:
+            c0, c1, c2, c3 = omega_cmd[i, 0], omega_cmd[i, 1], omega_cmd[i, 2], omega_cmd[i, 3]
         vx, vy, vz = v[i, 0], v[i, 1], v[i, 2]
         wx, wy, wz = w[i, 0], w[i, 1], w[i, 2]
+        o0, o1, o2, o3 = omega[i, 0], omega[i, 1], omega[i, 2], omega[i, 3]
         kc = thrust_coeffs[i]
-        fb0, fb1, fb2, tq0, tq1, tq2 = rotor_wrench(
-            omega[i], kc, torque_gain[i], _vecmat(vx, vy, vz, r, 0), _vecmat(vx, vy, vz, r, 1),
-            _vecmat(vx, vy, vz, r, 2), wx, wy, wz, torque_map, drag_sums, kd, kz, sums)
+        # v^T R: the velocity in the body frame
+        vb0 = fma(vz, r[6], fma(vy, r[3], vx * r[0]))
+        vb1 = fma(vz, r[7], fma(vy, r[4], vx * r[1]))
+        vb2 = fma(vz, r[8], fma(vy, r[5], vx * r[2]))
+        fb0, fb1, fb2, tq0, tq1, tq2 = rotor_wrench(o0, o1, o2, o3, kc, torque_gain[i], vb0,
+                                                    vb1, vb2, wx, wy, wz, torque_map,
+                                                    drag_sums, kd, kz)
         if has_ext_torque:
             tq0 += ext_torque[i, 0]
             tq1 += ext_torque[i, 1]
             tq2 += ext_torque[i, 2]
-        # translation
-        a0 = _matvec(r, 0, fb0, fb1, fb2)
-        a1 = _matvec(r, 1, fb0, fb1, fb2)
-        a2 = _matvec(r, 2, fb0, fb1, fb2)
+        # translation: R f_b, parasitic drag, external force, gravity
+        a0 = fma(r[2], fb2, fma(r[0], fb0, r[1] * fb1))
+        a1 = fma(r[5], fb2, fma(r[3], fb0, r[4] * fb1))
+        a2 = fma(r[8], fb2, fma(r[6], fb0, r[7] * fb1))
         if c_drag != 0.0:
             speed = vx * vx + vy * vy
             speed += vz * vz
@@ -287,9 +344,7 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
         a1 = (a1 + ext_force[i, 1]) / mass_rows[i, 1]
         a2 = (a2 + ext_force[i, 2]) / mass_rows[i, 2]
         a2 += gravity
-        accel[i, 0] = a0
-        accel[i, 1] = a1
-        accel[i, 2] = a2
+        accel[i, 0], accel[i, 1], accel[i, 2] = a0, a1, a2
         # rotation: Euler's equations with diagonal inertia, J dw = tau - w x (J w)
         jx, jy, jz = inertia[i, 0], inertia[i, 1], inertia[i, 2]
         jwx, jwy, jwz = wx * jx, wy * jy, wz * jz
@@ -299,58 +354,74 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
         wn0 = wx + tq0 / jx * dt
         wn1 = wy + tq1 / jy * dt
         wn2 = wz + tq2 / jz * dt
-        w_new[i, 0] = wn0
-        w_new[i, 1] = wn1
-        w_new[i, 2] = wn2
-        for k in range(3):
-            vk = v[i, k]
-            vn = accel[i, k] * dt + vk
-            v_new[i, k] = vn
-            p_new[i, k] = p[i, k] + (vk + vn) * half
-        rotate_into(r, (wx + wn0) * half, (wy + wn1) * half, (wz + wn2) * half, rot_new[i])
+        w_new[i, 0], w_new[i, 1], w_new[i, 2] = wn0, wn1, wn2
+        vn0 = a0 * dt + vx
+        vn1 = a1 * dt + vy
+        vn2 = a2 * dt + vz
+        v_new[i, 0], v_new[i, 1], v_new[i, 2] = vn0, vn1, vn2
+        p_new[i, 0] = p[i, 0] + (vx + vn0) * half
+        p_new[i, 1] = p[i, 1] + (vy + vn1) * half
+        p_new[i, 2] = p[i, 2] + (vz + vn2) * half
+        store3x3(rot_new, i, mat3_mul(r, exp_so3((wx + wn0) * half, (wy + wn1) * half,
+                                                 (wz + wn2) * half)))
         # the motors' first-order lag, and the thrust they give
         al = alpha[i] if per_vehicle_alpha else alpha[0]
-        thrust = 0.0
-        for j in range(4):
-            o = (omega_cmd[i, j] - omega[i, j]) * al + omega[i, j]
-            omega_new[i, j] = o
-            fj = o * o * kc
-            thrust = fj if j == 0 else thrust + fj
-        thrust_new[i] = thrust
+        n0 = (c0 - o0) * al + o0
+        n1 = (c1 - o1) * al + o1
+        n2 = (c2 - o2) * al + o2
+        n3 = (c3 - o3) * al + o3
+        omega_new[i, 0], omega_new[i, 1], omega_new[i, 2], omega_new[i, 3] = n0, n1, n2, n3
+        tn = n0 * n0 * kc + n1 * n1 * kc
+        tn += n2 * n2 * kc
+        tn += n3 * n3 * kc
+        thrust_new[i] = tn
 
 
 @njit
 def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
                     thrust_cmd: np.ndarray, torque_ff: np.ndarray, has_ff: bool,
                     gyro: np.ndarray, gyro_noise: np.ndarray, noisy: bool,
-                    integral: np.ndarray, consts: np.ndarray, mixer_inv: np.ndarray,
+                    integral: np.ndarray, consts: tuple, mixer_inv: tuple,
                     rotor_thrust_max: float, thrust_coeff: float, dt: float,
                     cmd: np.ndarray, integral_new: np.ndarray) -> None:
-    """:func:`autopilot_into` for ``n`` vehicles: rotor speed commands ``cmd`` (n, 4) and new
+    """:func:`autopilot` for ``n`` vehicles: rotor speed commands ``cmd`` (n, 4) and new
     integrals (n, 3). The gyro reads ``gyro`` (plus ``gyro_noise`` when ``noisy``)."""
     for i in range(att.shape[0]):
+        g0, g1, g2 = gyro[i, 0], gyro[i, 1], gyro[i, 2]
         if noisy:
-            g0 = gyro[i, 0] + gyro_noise[i, 0]
-            g1 = gyro[i, 1] + gyro_noise[i, 1]
-            g2 = gyro[i, 2] + gyro_noise[i, 2]
-        else:
-            g0, g1, g2 = gyro[i, 0], gyro[i, 1], gyro[i, 2]
-        autopilot_into(att[i], r_des[i], yaw_rate[i], thrust_cmd[i], torque_ff[i], has_ff,
-                       g0, g1, g2, integral[i], consts, mixer_inv, rotor_thrust_max,
-                       thrust_coeff, dt, cmd[i], integral_new[i])
+            g0 += gyro_noise[i, 0]
+            g1 += gyro_noise[i, 1]
+            g2 += gyro_noise[i, 2]
+        ff0 = ff1 = ff2 = 0.0
+        if has_ff:
+            ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
+        out = autopilot(load3x3(att, i), load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff,
+                        ff0, ff1, ff2, g0, g1, g2, integral[i, 0], integral[i, 1], integral[i, 2],
+                        consts, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
+        cmd[i, 0], cmd[i, 1], cmd[i, 2], cmd[i, 3] = out[0], out[1], out[2], out[3]
+        integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = out[4], out[5], out[6]
+
+
+@njit
+def mix_batch(thrust: np.ndarray, torque: np.ndarray, mixer_inv: tuple,
+              rotor_thrust_max: float, out: np.ndarray) -> None:
+    """:func:`mix` for ``n`` vehicles: collective (n,), torques (n, 3) -> (n, 4)."""
+    for i in range(thrust.shape[0]):
+        f = mix(thrust[i], torque[i, 0], torque[i, 1], torque[i, 2], mixer_inv,
+                rotor_thrust_max)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = f[0], f[1], f[2], f[3]
 
 
 @njit
 def wrench_batch(omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
-                 v_body: np.ndarray, w: np.ndarray, torque_map: np.ndarray,
-                 drag_sums: np.ndarray, kd: float, kz: float, force: np.ndarray,
-                 torque: np.ndarray) -> None:
+                 v_body: np.ndarray, w: np.ndarray, torque_map: tuple, drag_sums: tuple,
+                 kd: float, kz: float, force: np.ndarray, torque: np.ndarray) -> None:
     """:func:`rotor_wrench` for ``n`` vehicles (body-frame velocities ``v_body``)."""
-    sums = np.empty(7)
     for i in range(omega.shape[0]):
-        out = rotor_wrench(omega[i], thrust_coeffs[i], torque_gain[i], v_body[i, 0],
-                           v_body[i, 1], v_body[i, 2], w[i, 0], w[i, 1], w[i, 2], torque_map,
-                           drag_sums, kd, kz, sums)
+        out = rotor_wrench(omega[i, 0], omega[i, 1], omega[i, 2], omega[i, 3],
+                           thrust_coeffs[i], torque_gain[i], v_body[i, 0], v_body[i, 1],
+                           v_body[i, 2], w[i, 0], w[i, 1], w[i, 2], torque_map, drag_sums, kd,
+                           kz)
         force[i, 0], force[i, 1], force[i, 2] = out[0], out[1], out[2]
         torque[i, 0], torque[i, 1], torque[i, 2] = out[3], out[4], out[5]
 
@@ -359,4 +430,4 @@ def wrench_batch(omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.n
 def rotate_batch(rot: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
     """``out[i] = rot[i] exp([phi[:, i]]x)`` for component-major rotation vectors (3, n)."""
     for i in range(rot.shape[0]):
-        rotate_into(rot[i], phi[0, i], phi[1, i], phi[2, i], out[i])
+        store3x3(out, i, mat3_mul(load3x3(rot, i), exp_so3(phi[0, i], phi[1, i], phi[2, i])))
