@@ -18,6 +18,7 @@ it slipped through (the paper's failure mode).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from enum import IntEnum
 
@@ -25,7 +26,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.frozen import freeze
-from aerodock.geometry import dot_rows
+from aerodock.jit import njit
 
 
 def _armed_any(flag: bool | np.ndarray) -> bool:
@@ -155,40 +156,65 @@ def contact_in_gripper(
     cos_sin: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
     """:func:`bar_in_gripper` with None for the force when no bar touches an arm (the usual
-    step: the caller then has nothing to add)."""
-    up = np.negative(follower_R[:, :, 2])
-    arm = up * params.mount_height_m
-    arm += follower_p
-    rel = bar_p - arm
-    height = dot_rows(rel, up)
-    horizontal = rel - height[:, None] * up
-    # The bar's axis is horizontal: (cos yaw, sin yaw, 0).
+    step: the caller then has nothing to add). Compiled: :func:`contact_kernel`."""
+    n = follower_p.shape[0]
     c, s = (np.cos(bar_yaw_rad), np.sin(bar_yaw_rad)) if cos_sin is None else cos_sin
-    # (The axis has no z: the terms of h2 with its zero component add nothing but a zero.)
-    h0, h1, h2 = horizontal[:, 0], horizontal[:, 1], horizontal[:, 2]
-    along = h0 * c
-    along += h1 * s
-    d0 = h0 - along * c
-    d1 = h1 - along * s
-    perp = d0 * d0
-    perp += d1 * d1
-    perp += h2 * h2
-    np.sqrt(perp, out=perp)
-    # The bar (radius r) fits through the mouth only with its whole section: centre within
-    # aperture/2 - r of the axis; the closed gate holds it between the arm (a bar pressed more
-    # than its radius into the arm's contact spring has passed below it) and the gate's top.
-    r = params.bar_radius_m
-    in_mouth = (perp <= params.aperture_m / 2.0 - r) & (np.abs(along) <= params.bar_half_length_m)
-    inside = in_mouth & (height <= params.gate_height_m - r) & (height > -r)
-    penetration = params.bar_radius_m - height
-    touching = in_mouth & (penetration > 0)
-    if not touching.any():
-        return None, inside, up
-    rate = -dot_rows(bar_v - follower_v, up)
-    force = params.contact_stiffness_npm * penetration + params.contact_damping_nspm * rate
-    force = np.where(touching, np.maximum(force, 0.0), 0.0)
-    return force, inside, up
+    force, inside, up = np.empty(n), np.empty(n, dtype=bool), np.empty((n, 3))
+    touching = contact_kernel(follower_p, follower_R, follower_v, bar_p, bar_v, c, s,
+                              params.mount_height_m, params.bar_radius_m, params.aperture_m,
+                              params.bar_half_length_m, params.gate_height_m,
+                              params.contact_stiffness_npm, params.contact_damping_nspm, force,
+                              inside, up)
+    return (force if touching else None), inside, up
 
+
+@njit
+def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
+                   bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                   mount_height: float, bar_radius: float, aperture: float,
+                   bar_half_length: float, gate_height: float, stiffness: float,
+                   damping: float, force: np.ndarray, inside: np.ndarray,
+                   up: np.ndarray) -> bool:
+    """The bar against each follower's contact arm: the force magnitude ``force`` (n,), the
+    bar inside the gate ``inside`` (n,) and the follower's up axis ``up`` (n, 3); whether any
+    bar touches an arm.
+
+    The arm sits ``mount_height`` up the follower's axis; the bar (its axis horizontal,
+    ``(cos yaw, sin yaw, 0)``, radius ``r``) fits through the mouth only with its whole
+    section: centre within ``aperture/2 - r`` of the axis; the closed gate holds it between the
+    arm (a bar pressed more than its radius into the arm's contact spring has passed below it)
+    and the gate's top. Contact is a spring-damper, pushing only."""
+    any_touching = False
+    mouth = aperture / 2.0 - bar_radius
+    for i in range(fol_p.shape[0]):
+        u0, u1, u2 = -fol_r[i, 0, 2], -fol_r[i, 1, 2], -fol_r[i, 2, 2]
+        up[i, 0], up[i, 1], up[i, 2] = u0, u1, u2
+        r0 = bar_p[i, 0] - (u0 * mount_height + fol_p[i, 0])
+        r1 = bar_p[i, 1] - (u1 * mount_height + fol_p[i, 1])
+        r2 = bar_p[i, 2] - (u2 * mount_height + fol_p[i, 2])
+        height = r0 * u0 + r1 * u1 + r2 * u2
+        h0, h1, h2 = r0 - height * u0, r1 - height * u1, r2 - height * u2
+        c, s = cos_yaw[i], sin_yaw[i]
+        along = h0 * c
+        along += h1 * s
+        d0 = h0 - along * c
+        d1 = h1 - along * s
+        perp = d0 * d0
+        perp += d1 * d1
+        perp += h2 * h2
+        perp = math.sqrt(perp)
+        in_mouth = perp <= mouth and abs(along) <= bar_half_length
+        inside[i] = in_mouth and height <= gate_height - bar_radius and height > -bar_radius
+        penetration = bar_radius - height
+        if in_mouth and penetration > 0:
+            any_touching = True
+            rate = -((bar_v[i, 0] - fol_v[i, 0]) * u0 + (bar_v[i, 1] - fol_v[i, 1]) * u1
+                     + (bar_v[i, 2] - fol_v[i, 2]) * u2)
+            f = stiffness * penetration + damping * rate
+            force[i] = f if (f >= 0.0 or f != f) else 0.0
+        else:
+            force[i] = 0.0
+    return any_touching
 
 
 def gripper_idle(state: GripperState) -> bool:

@@ -10,15 +10,14 @@ the follower hangs from the bar and the same constraint carries its weight to th
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.geometry import dot_rows, norm_rows
-
-_min = np.minimum.reduce  # NaN if any element is NaN: "min >= x" is then False, as elementwise
+from aerodock.jit import njit
 
 
 @dataclass(frozen=True)
@@ -108,58 +107,105 @@ def step_bar(
         params: platform constants.
         dt_s: physics step.
     """
-    length = params.cable_length_m
-    rel = bar.p - anchor_p
-    rel_v = bar.v - anchor_v
-    dist = norm_rows(rel)
-    unit = rel / np.maximum(dist, 1e-9)[:, None]
-    free = force_n / mass_kg[:, None]
-    free -= params.swing_damping * rel_v
-    free[:, 2] += params.gravity_mps2
-    # Taut-cable constraint |rel| = L: tension per unit mass (>= 0: cables only pull).
-    radial_v = dot_rows(rel_v, unit)
-    tangential_v2 = dot_rows(rel_v, rel_v) - radial_v**2
-    lam = dot_rows(unit, free - anchor_a)
-    lam += tangential_v2 / length
-    np.maximum(lam, 0.0, out=lam)
-    if not _min(dist) >= length - 1e-6:  # a slack cable somewhere (or a NaN): no tension there
-        lam = np.where(dist >= length - 1e-6, lam, 0.0)
-    accel = free - lam[:, None] * unit
-    cable_force = (mass_kg * lam)[:, None] * unit
-    v = accel * dt_s
-    v += bar.v
-    p = v * dt_s
-    p += bar.p
+    n = bar.p.shape[0]
+    p, v, yaw, yaw_rate, cable = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n),
+                                  np.empty((n, 3)))
+    step_bar_kernel(bar.p, bar.v, bar.yaw_rad, bar.yaw_rate_radps,
+                    np.asarray(anchor_p, dtype=float), np.asarray(anchor_v, dtype=float),
+                    np.asarray(anchor_a, dtype=float), np.asarray(anchor_p_next, dtype=float),
+                    np.asarray(leader_yaw_rad, dtype=float), np.asarray(force_n, dtype=float),
+                    np.broadcast_to(np.asarray(mass_kg, dtype=float), (n,)),
+                    params.cable_length_m, params.swing_damping, params.gravity_mps2,
+                    params.yaw_omega2, params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
+    return BarState(p, v, yaw, yaw_rate), cable
+
+
+@njit
+def step_bar_kernel(bar_p: np.ndarray, bar_v: np.ndarray, bar_yaw: np.ndarray,
+                    bar_yaw_rate: np.ndarray, anchor_p: np.ndarray, anchor_v: np.ndarray,
+                    anchor_a: np.ndarray, anchor_p_next: np.ndarray, leader_yaw: np.ndarray,
+                    force: np.ndarray, mass: np.ndarray, length: float, swing_damping: float,
+                    gravity: float, yaw_omega2: float, yaw_damping: float, dt: float,
+                    p_new: np.ndarray, v_new: np.ndarray, yaw_new: np.ndarray,
+                    yaw_rate_new: np.ndarray, cable: np.ndarray) -> None:
+    """:func:`step_bar` for ``n`` bars: the spherical pendulum under its forces with the
+    taut-cable constraint (tension per unit mass ``lam >= 0``: cables only pull; none on a
+    slack cable), explicit Euler, then a bar under tension (or past the cable length) put back
+    on the sphere about the moved anchor with no radial velocity relative to it; the bifilar
+    yaw mode towards the leader's yaw."""
+    n = bar_p.shape[0]
+    lam = np.empty(n)
+    every_tense = True
+    for i in range(n):
+        rel0, rel1, rel2 = (bar_p[i, 0] - anchor_p[i, 0], bar_p[i, 1] - anchor_p[i, 1],
+                            bar_p[i, 2] - anchor_p[i, 2])
+        rv0, rv1, rv2 = (bar_v[i, 0] - anchor_v[i, 0], bar_v[i, 1] - anchor_v[i, 1],
+                         bar_v[i, 2] - anchor_v[i, 2])
+        dist = rel0 * rel0 + rel1 * rel1
+        dist += rel2 * rel2
+        dist = math.sqrt(dist)
+        floor = dist if (dist >= 1e-9 or dist != dist) else 1e-9
+        e0, e1, e2 = rel0 / floor, rel1 / floor, rel2 / floor
+        m = mass[i]
+        f0 = force[i, 0] / m - swing_damping * rv0
+        f1 = force[i, 1] / m - swing_damping * rv1
+        f2 = force[i, 2] / m - swing_damping * rv2
+        f2 += gravity
+        radial_v = rv0 * e0 + rv1 * e1 + rv2 * e2
+        tangential_v2 = (rv0 * rv0 + rv1 * rv1 + rv2 * rv2) - radial_v * radial_v
+        la = e0 * (f0 - anchor_a[i, 0]) + e1 * (f1 - anchor_a[i, 1]) \
+            + e2 * (f2 - anchor_a[i, 2])
+        la += tangential_v2 / length
+        la = la if (la >= 0.0 or la != la) else 0.0
+        if not dist >= length - 1e-6:  # a slack cable (or a NaN): no tension
+            la = 0.0
+        lam[i] = la
+        if not la > 0:
+            every_tense = False
+        a0, a1, a2 = f0 - la * e0, f1 - la * e1, f2 - la * e2
+        ml = m * la
+        cable[i, 0], cable[i, 1], cable[i, 2] = ml * e0, ml * e1, ml * e2
+        vn0 = a0 * dt + bar_v[i, 0]
+        vn1 = a1 * dt + bar_v[i, 1]
+        vn2 = a2 * dt + bar_v[i, 2]
+        v_new[i, 0], v_new[i, 1], v_new[i, 2] = vn0, vn1, vn2
+        p_new[i, 0] = vn0 * dt + bar_p[i, 0]
+        p_new[i, 1] = vn1 * dt + bar_p[i, 1]
+        p_new[i, 2] = vn2 * dt + bar_p[i, 2]
     # Inextensible cables: a bar under tension (or past the cable length) is put back on the
     # sphere and keeps no radial velocity relative to the anchor.
-    rel = p - anchor_p_next
-    dist = norm_rows(rel)
-    every_tense = _min(lam) > 0  # the usual case: every cable pulls, skip the selections
-    tense = None if every_tense else lam > 0
-    hold = None if every_tense else (dist > length) | tense
-    if every_tense or hold.any():
-        every = every_tense or hold.all()
-        unit_new = rel / np.maximum(dist, 1e-9)[:, None]
-        on_sphere = unit_new * length
-        on_sphere += anchor_p_next
-        p = on_sphere if every else np.where(hold[:, None], on_sphere, p)
-        radial = dot_rows(v - anchor_v, unit_new)
-        if not every_tense and not tense.all():
-            radial = np.where(tense, radial, np.maximum(radial, 0.0))
-        no_radial = v - radial[:, None] * unit_new
-        v = no_radial if every else np.where(hold[:, None], no_radial, v)
-    yaw_err = bar.yaw_rad - leader_yaw_rad
-    yaw_err += np.pi
-    yaw_err %= 2 * np.pi
-    yaw_err -= np.pi
-    yaw_acc = -params.yaw_omega2 * np.sin(yaw_err)
-    yaw_acc -= params.yaw_damping * bar.yaw_rate_radps
-    yaw_rate = yaw_acc * dt_s
-    yaw_rate += bar.yaw_rate_radps
-    yaw = yaw_rate * dt_s
-    yaw += bar.yaw_rad
-    return BarState(p, v, yaw, yaw_rate), cable_force
-
+    for i in range(n):
+        rel0 = p_new[i, 0] - anchor_p_next[i, 0]
+        rel1 = p_new[i, 1] - anchor_p_next[i, 1]
+        rel2 = p_new[i, 2] - anchor_p_next[i, 2]
+        dist = rel0 * rel0 + rel1 * rel1
+        dist += rel2 * rel2
+        dist = math.sqrt(dist)
+        tense = lam[i] > 0
+        if every_tense or dist > length or tense:
+            floor = dist if (dist >= 1e-9 or dist != dist) else 1e-9
+            u0, u1, u2 = rel0 / floor, rel1 / floor, rel2 / floor
+            p_new[i, 0] = u0 * length + anchor_p_next[i, 0]
+            p_new[i, 1] = u1 * length + anchor_p_next[i, 1]
+            p_new[i, 2] = u2 * length + anchor_p_next[i, 2]
+            vn0, vn1, vn2 = v_new[i, 0], v_new[i, 1], v_new[i, 2]
+            radial = (vn0 - anchor_v[i, 0]) * u0 + (vn1 - anchor_v[i, 1]) * u1 \
+                + (vn2 - anchor_v[i, 2]) * u2
+            if not every_tense and not tense:
+                radial = radial if (radial >= 0.0 or radial != radial) else 0.0
+            v_new[i, 0] = vn0 - radial * u0
+            v_new[i, 1] = vn1 - radial * u1
+            v_new[i, 2] = vn2 - radial * u2
+    for i in range(n):
+        err = bar_yaw[i] - leader_yaw[i]
+        err += math.pi
+        err %= 2 * math.pi
+        err -= math.pi
+        acc = -yaw_omega2 * math.sin(err)
+        acc -= yaw_damping * bar_yaw_rate[i]
+        rate = acc * dt + bar_yaw_rate[i]
+        yaw_rate_new[i] = rate
+        yaw_new[i] = rate * dt + bar_yaw[i]
 
 
 def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,
