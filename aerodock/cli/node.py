@@ -29,6 +29,8 @@ from aerodock.node.core import (
 CONTEXT_SETTINGS = {"allow_extra_args": True, "ignore_unknown_options": True}
 """How ``aerodock node`` is registered (:mod:`aerodock.cli.app`): Click keeps the words it does
 not know in ``ctx.args``, where ``--ros-args ...`` is taken and anything else refused."""
+OPTIONS_METAVAR = "[OPTIONS] [--ros-args ...]"
+"""The usage line of ``aerodock node --help``."""
 
 
 class OutputFrame(StrEnum):

@@ -255,3 +255,30 @@ def test_a_long_run_of_garbage_keeps_the_bookkeeping_bounded():
     assert all(len(value) <= RECENT_REFUSALS * (MAX_REASON_CHARS + 3)
                for value in log.values().values())
     count("node-garbage", n)
+
+
+def test_random_ros_arguments_are_taken_or_refused_in_one_line():
+    """``aerodock node --ros-args ...``: whatever follows, rcl takes it or the node refuses it
+    with one line of its own (never an exception, never rcl's file and line)."""
+    pytest.importorskip("rclpy")
+    import random
+
+    from aerodock.node.ros import ros_args_error
+
+    rng = random.Random(103)
+    flags = ["-r", "--remap", "-p", "--param", "--params-file", "--log-level", "-e",
+             "--enclave", "--disable-rosout-logs", "--enable-stdout-logs", "--", "--bogus",
+             "-x", "--ros-args"]
+    words = ["a:=b", "__ns:=/bravo", "__node:=f_ext_hat", "/aerodock/f_ext:=/x", "bad", ":=",
+             "use_sim_time:=true", "p:=[1,", "q:={a: 1}", "/nonexistent.yaml", "", "é", "warn",
+             "rcl:=debug", "1e-300", "__ns:=relative", "-1", "a b:=c"]
+    taken = refused = 0
+    for _ in range(n_cases(300)):
+        args = ["--ros-args"] + [rng.choice(flags if rng.random() < 0.5 else words)
+                                 for _ in range(rng.randint(0, 6))]
+        why = ros_args_error(args)
+        assert why is None or (isinstance(why, str) and why and "\n" not in why
+                               and ", at /" not in why), (args, why)
+        taken, refused = taken + (why is None), refused + (why is not None)
+        count("node-ros-args")
+    assert taken > 10 and refused > 10

@@ -481,3 +481,19 @@ def test_node_refuses_a_leader_aware_model_without_scales(tmp_path):
     assert res.returncode == 2
     assert "needs the vehicles' wake scales" in res.stderr and "--config" in res.stderr
     assert "Traceback" not in res.stderr
+
+
+def test_help_says_where_ros_arguments_go_and_the_frame_rule(capsys, tmp_path):
+    from aerodock.cli.app import run
+
+    assert run(["node", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "Usage: aerodock node [OPTIONS] [--ros-args ...]" in text
+    assert "ROS's own arguments go last, after --ros-args" in text
+    assert "nav_msgs/Odometry: the mapping's frame, ENU by default (REP 103)" in " ".join(
+        text.replace("│", " ").split())
+    # words before --ros-args that the command does not know are refused, before any ROS
+    model = random_model(tmp_path / "m")
+    assert run(["node", "--model", str(model), "--rat", "5", "--ros-args", "-r", "a:=b"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: no such option: '--rat'") and err.count("\n") == 1
