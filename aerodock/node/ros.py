@@ -352,10 +352,6 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
     return PredictorNode()
 
 
-ROS_ARGS = "--ros-args"
-"""Where ROS's own arguments start on the command line (rcl's flag)."""
-
-
 def ros_args_error(ros_args: list[str]) -> str | None:
     """Why rclpy would refuse ``ros_args`` (``--ros-args`` and what follows it), or None.
 
