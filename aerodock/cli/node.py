@@ -2,6 +2,10 @@
 
 An error's text is folded onto one line (every run of whitespace, newlines included, becomes
 one space), so a message quoting a path or a ``--state-type`` value with two spaces shows one.
+
+ROS's own arguments come last, after ``--ros-args`` (remapping, ``-p use_sim_time:=true``, the
+log level), as for any ROS 2 node: the command takes the words it does not know
+(:data:`CONTEXT_SETTINGS`), refuses any before ``--ros-args`` and hands the rest to rclpy.
 """
 
 from __future__ import annotations
@@ -22,6 +26,12 @@ from aerodock.node.core import (
     PublishMode,
 )
 
+CONTEXT_SETTINGS = {"allow_extra_args": True, "ignore_unknown_options": True}
+"""How ``aerodock node`` is registered (:mod:`aerodock.cli.app`): Click keeps the words it does
+not know in ``ctx.args``, where ``--ros-args ...`` is taken and anything else refused."""
+OPTIONS_METAVAR = "[OPTIONS] [--ros-args ...]"
+"""The usage line of ``aerodock node --help``."""
+
 
 class OutputFrame(StrEnum):
     """World frame of the published f_ext."""
@@ -32,6 +42,7 @@ class OutputFrame(StrEnum):
 
 
 def node_command(
+    ctx: typer.Context,
     model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
     mapping: Annotated[Path | None, typer.Option(
         "--mapping", help="Topic mapping TOML (the bag reader's; default: Freyja's alpha/bravo).",
@@ -54,9 +65,11 @@ def node_command(
         "--diagnostics-topic", help="Diagnostics topic (diagnostic_msgs/DiagnosticArray).",
     )] = "/aerodock/diagnostics",
     output_frame: Annotated[OutputFrame, typer.Option(
-        "--output-frame", help="f_ext world frame; auto: the follower's --state-type decides "
-                               "(Odometry: the mapping's frame), else the mapping file's frame, "
-                               "else NED (Freyja's default mapping). Decided once at start.",
+        "--output-frame", help="f_ext world frame; auto: from the follower's state type, "
+                               "decided once it is known (--state-type, or found on the ROS "
+                               "graph; no f_ext before): nav_msgs/Odometry: the mapping's "
+                               "frame, ENU by default (REP 103); Freyja's CurrentState and "
+                               "PX4's VehicleOdometry: NED. On the diagnostics (output_frame).",
     )] = OutputFrame.auto,
     state_type: Annotated[list[str] | None, typer.Option(
         "--state-type", help="TOPIC=TYPE (e.g. /bravo/odom=nav_msgs/msg/Odometry) instead of "
@@ -72,14 +85,24 @@ def node_command(
                          "(the leader hovering) instead of its training flights'.",
     )] = None,
 ) -> None:
-    """Run a trained downwash model as a ROS 2 node next to Freyja or PX4 (the ros extra)."""
+    """Run a trained downwash model as a ROS 2 node next to Freyja or PX4 (the ros extra).
+
+    ROS's own arguments go last, after --ros-args (remapping, parameters, log level), and are
+    passed to rclpy: aerodock node --model DIR --ros-args -r __ns:=/bravo -p use_sim_time:=true
+    """
+    ros_args = list(ctx.args)
+    if ros_args and ros_args[0] != "--ros-args":
+        word = ros_args[0]
+        what = "no such option" if word.startswith("-") else "unexpected argument"
+        fail(one_line(f"{what}: {word!r} (ROS's own arguments go last, after --ros-args; "
+                      "see 'aerodock node --help')"))
     from aerodock.config import ConfigError, load_config
     from aerodock.ingest.errors import IngestError
     from aerodock.ingest.rosbag import load_mapping
     from aerodock.learning.compatibility import model_warnings
     from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
-    from aerodock.node.core import STATE_TYPES, configured_wake_scales
+    from aerodock.node.core import STATE_TYPES, configured_wake_scales, output_frame_choice
 
     if not (rate > 0 and rate <= 1000):
         fail(f"--rate must be in (0, 1000] Hz, got {rate}")
@@ -97,7 +120,7 @@ def node_command(
     try:
         predictor = Predictor.load(model)
         cfg = load_config(config)
-        merged, explicit = load_mapping(mapping)
+        merged, _ = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
         fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
     aware = getattr(predictor, "needs_wake_scales", False)  # a leader-aware kind
@@ -108,7 +131,11 @@ def node_command(
         import rclpy  # noqa: F401
     except ImportError:
         fail("the ROS 2 node needs rclpy: pip install 'aerodock[ros]'")
-    from aerodock.node.ros import NodeSettings, run_node, topic_name_error
+    from aerodock.node.ros import NodeSettings, ros_args_error, run_node, topic_name_error
+
+    why_not = ros_args_error(ros_args) if ros_args else None
+    if why_not is not None:
+        fail(one_line(f"--ros-args: {why_not}"))
 
     topics = {"--output-topic": output_topic, "--diagnostics-topic": diagnostics_topic,
               **{f"--mapping {role}.state": merged[role]["state"]
@@ -135,15 +162,22 @@ def node_command(
         mapping=merged, rate_hz=rate, publish=publish, max_age_s=max_age, output_topic=output_topic,
         diagnostics_topic=diagnostics_topic,
         output_frame=None if output_frame == OutputFrame.auto else output_frame.value,
-        frame_set="frame" in explicit, state_types=types,
+        state_types=types,
         wake_scales=None if scales is None else tuple(float(v) for v in scales),
     )
     typer.echo(f"aerodock node: {predictor.kind} model {model}, publish {publish.value} "
                f"({rate:g} Hz {'watchdog' if publish == PublishMode.ON_FOLLOWER else 'timer'}), "
                f"{merged['leader']['state']} + {merged['follower']['state']} -> {output_topic} "
                f"(ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')})", err=True)
+    frame, rule = output_frame_choice(settings.output_frame, merged["frame"],
+                                      types.get(merged["follower"]["state"]))
+    typer.echo(f"aerodock node: f_ext in {frame.upper()}: {rule}" if frame else
+               "aerodock node: f_ext frame decided when the follower's state type is found on "
+               f"the graph (nav_msgs/Odometry: {merged['frame'].upper()}, the mapping's frame; "
+               "Freyja, PX4: NED); no f_ext before", err=True)
     try:
-        outputs = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes)
+        outputs = run_node(predictor, settings, duration_s=duration, warnings_to_log=notes,
+                           ros_args=ros_args)
     except RuntimeError as err:
         fail(one_line(str(err)))
     typer.echo(f"aerodock node: stopped after {outputs} outputs", err=True)

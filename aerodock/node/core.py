@@ -20,12 +20,22 @@ whether the data is new is judged on the data itself:
   identical to the previous one (a relay repeating it, a stuck publisher) make that vehicle's
   input unusable until a good message arrives;
 - :func:`stale_reasons` adds the stateless rules: missing, older than ``max_age_s``, not finite,
-  or beyond the plausible range (:data:`MAX_POSITION_M`, :data:`MAX_SPEED_MPS`).
+  beyond the plausible range (:data:`MAX_POSITION_M`, :data:`MAX_SPEED_MPS`), or an attitude
+  that is no rotation: a quaternion whose norm is not 1 within :data:`QUAT_NORM_TOLERANCE`
+  (zero, not finite, or overflowing like (1e200, 1e200, 0, 0)), an Euler angle beyond
+  :data:`MAX_ANGLE_RAD` (:func:`quaternion_attitude`, :func:`euler_attitude`);
+- :class:`RefusalLog` keeps the node's account of refused messages bounded: counts per kind of
+  reason (at most :data:`MAX_REFUSAL_KINDS`) and the last :data:`RECENT_REFUSALS`.
 
 The rule for unusable inputs (:func:`prediction_step`): the node publishes **zero**, sets the
 stale flag and says why (``StepResult.reason``, the diagnostics' ``stale_reason``). It never
-repeats an old prediction. The converters raise no NumPy warnings for NaN or zero quaternions:
-such a state is simply not finite, hence stale.
+repeats an old prediction. The converters raise no NumPy warnings for NaN, zero or overflowing
+quaternions: such a state carries the converter's reason (``VehicleState.fault``), hence stale.
+
+The output frame (:func:`output_frame_choice`) follows the follower's state type, once it is
+known: ``nav_msgs/Odometry`` in the mapping's frame (ENU unless the mapping says ``"ned"``:
+REP 103), Freyja's and PX4's states in NED. The model works in NED; the node converts once, at
+its boundary.
 
 When the node publishes (:class:`PublishMode`, :func:`output_trigger`): on each follower state
 message (the prediction is for that state, out as soon as it is in), with the fixed-rate timer
@@ -37,6 +47,8 @@ triggered it, is one :func:`prediction_step` on the newest states.
 from __future__ import annotations
 
 import math
+import re
+from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -139,9 +151,59 @@ MAX_SPEED_MPS = 100.0
 model is meant for and 100 times a docking approach; faster is a units error or garbage, and
 the model was never trained anywhere near it."""
 
+QUAT_NORM_TOLERANCE = 0.01
+"""Largest accepted ``| |q| - 1 |`` of a message's attitude quaternion. Senders publish unit
+quaternions (rounding leaves ~1e-7 in float32, as PX4's ``q``); a norm off by more than 1 % is
+not a rotation anyone meant: zero, garbage, or a norm that overflows (1e200, 1e200, 0, 0),
+which a plain normalisation read as level."""
+MAX_ANGLE_RAD = 2.0 * math.pi
+"""Largest accepted |roll|, |pitch|, |yaw| of Freyja's ``state_vector``, rad: one full turn.
+Estimators publish wrapped angles (within [-pi, pi], or [0, 2 pi)); beyond a turn is degrees
+sent as radians, or garbage (a roll of 1e300 rad has a sine, but not a meaningful one)."""
+
 _QUIET = {"divide": "ignore", "invalid": "ignore", "over": "ignore"}
-"""``np.errstate`` settings of the converters: a NaN or zero quaternion gives a non-finite state
-(stale, with a reason), not a NumPy warning on stderr."""
+"""``np.errstate`` settings of the converters: a NaN, zero or overflowing attitude gives a state
+that carries its reason (stale), not a NumPy warning on stderr."""
+_NAN_ROTATION = np.full((3, 3), np.nan)
+
+
+def quaternion_attitude(quat_wxyz: Sequence[float]) -> tuple[np.ndarray, str | None]:
+    """A message's quaternion (w, x, y, z) as a rotation matrix, or why it is none.
+
+    The norm is taken of the quaternion scaled by its largest component (no overflow for
+    1e200, no underflow for 1e-200); a quaternion that is not finite, zero, or whose norm is
+    not 1 within :data:`QUAT_NORM_TOLERANCE` is refused.
+
+    Returns:
+        ``(R, None)`` with ``R`` (3, 3) from the normalised quaternion, or ``(NaN (3, 3),
+        reason)``.
+    """
+    q = np.asarray(quat_wxyz, dtype=float).reshape(4)
+    if not np.isfinite(q).all():
+        return _NAN_ROTATION.copy(), "attitude quaternion not finite"
+    scale = float(np.abs(q).max())
+    if scale == 0.0:
+        return _NAN_ROTATION.copy(), "attitude quaternion is zero"
+    with np.errstate(**_QUIET):
+        norm = scale * float(np.linalg.norm(q / scale))  # inf when it overflows
+    if not abs(norm - 1.0) <= QUAT_NORM_TOLERANCE:
+        return _NAN_ROTATION.copy(), (f"attitude quaternion norm {norm:.3g}, not 1 "
+                                      f"(tolerance {QUAT_NORM_TOLERANCE:g})")
+    return quat_to_rotmat(q / norm), None
+
+
+def euler_attitude(roll_rad: float, pitch_rad: float, yaw_rad: float
+                   ) -> tuple[np.ndarray, str | None]:
+    """ZYX Euler angles as a rotation matrix, or why they are none (not finite, or beyond
+    :data:`MAX_ANGLE_RAD`): ``(R, None)`` or ``(NaN (3, 3), reason)``."""
+    for name, angle in (("roll", roll_rad), ("pitch", pitch_rad), ("yaw", yaw_rad)):
+        value = float(angle)
+        if not math.isfinite(value):
+            return _NAN_ROTATION.copy(), f"{name} not finite"
+        if abs(value) > MAX_ANGLE_RAD:
+            return _NAN_ROTATION.copy(), (f"{name} {value:.3g} rad beyond "
+                                          f"{MAX_ANGLE_RAD:.3g} rad (one turn)")
+    return euler_to_rotmat(float(roll_rad), float(pitch_rad), float(yaw_rad)), None
 
 
 @dataclass(frozen=True)
@@ -155,6 +217,9 @@ class VehicleState:
         received_s: when the node received it (its monotonic clock), s.
         stamp_s: the message's own stamp, s (``header.stamp``, or PX4's µs since boot), or
             None when it has none.
+        fault: why the message's own data is no state, found by its converter (an attitude
+            that is no rotation: :func:`quaternion_attitude`, :func:`euler_attitude`; ``R``
+            is then NaN), or None.
     """
 
     p_m: np.ndarray
@@ -162,6 +227,7 @@ class VehicleState:
     R: np.ndarray
     received_s: float
     stamp_s: float | None = None
+    fault: str | None = None
 
     def is_finite(self) -> bool:
         """True when position, velocity and attitude are all finite."""
@@ -196,13 +262,13 @@ def odometry_state(position: Sequence[float], quat_wxyz: Sequence[float],
     world, body = frames_for(frame)
     if twist not in ("body", "world"):
         raise ValueError(f"twist {twist!r}: use 'body' or 'world'")
+    rot_src, fault = quaternion_attitude(quat_wxyz)
     with np.errstate(**_QUIET):
-        rot_src = quat_to_rotmat(np.asarray(quat_wxyz, dtype=float))
         lin = np.asarray(linear, dtype=float)
         if twist == "body":
             lin = rot_src @ lin
         return VehicleState(world @ np.asarray(position, dtype=float), world @ lin,
-                            world @ rot_src @ body.T, received_s, stamp_s)
+                            world @ rot_src @ body.T, received_s, stamp_s, fault)
 
 
 def current_state(state_vector: Sequence[float], *, received_s: float,
@@ -211,9 +277,8 @@ def current_state(state_vector: Sequence[float], *, received_s: float,
     sv = np.asarray(state_vector, dtype=float)
     if sv.shape[0] < 9:
         raise ValueError(f"state_vector has {sv.shape[0]} values, expected at least 9")
-    with np.errstate(**_QUIET):
-        rot = euler_to_rotmat(sv[6], sv[7], sv[8])
-    return VehicleState(sv[0:3].copy(), sv[3:6].copy(), rot, received_s, stamp_s)
+    rot, fault = euler_attitude(sv[6], sv[7], sv[8])
+    return VehicleState(sv[0:3].copy(), sv[3:6].copy(), rot, received_s, stamp_s, fault)
 
 
 def px4_odometry_state(position: Sequence[float], q_wxyz: Sequence[float],
@@ -226,13 +291,13 @@ def px4_odometry_state(position: Sequence[float], q_wxyz: Sequence[float],
     """
     if velocity_frame not in (PX4_VELOCITY_NED, PX4_VELOCITY_FRD, PX4_VELOCITY_BODY_FRD):
         raise ValueError(f"VehicleOdometry velocity_frame {velocity_frame}: unknown frame")
+    rot, fault = quaternion_attitude(q_wxyz)
     with np.errstate(**_QUIET):
-        rot = quat_to_rotmat(np.asarray(q_wxyz, dtype=float))
         vel = np.asarray(velocity, dtype=float)
         if velocity_frame == PX4_VELOCITY_BODY_FRD:
             vel = rot @ vel
     stamp = None if timestamp_us is None else timestamp_us * 1e-6
-    return VehicleState(np.asarray(position, dtype=float), vel, rot, received_s, stamp)
+    return VehicleState(np.asarray(position, dtype=float), vel, rot, received_s, stamp, fault)
 
 
 def input_age_s(state: VehicleState | None, now_s: float) -> float:
@@ -241,10 +306,14 @@ def input_age_s(state: VehicleState | None, now_s: float) -> float:
 
 
 def implausible(state: VehicleState) -> str | None:
-    """Why ``state``'s data cannot be a vehicle's (not finite, out of range), or None.
+    """Why ``state``'s data cannot be a vehicle's, or None: the converter's ``fault`` first (an
+    attitude that is no rotation; a body-frame velocity turned by it is NaN too), then values
+    not finite, then a position or velocity out of range.
 
     Components are compared, not norms: a norm of 1e300 would overflow (and warn).
     """
+    if state.fault:
+        return state.fault
     if not state.is_finite():
         return "not finite"
     p_max, v_max = float(np.abs(state.p_m).max()), float(np.abs(state.v_mps).max())
@@ -334,26 +403,88 @@ def is_stale(leader: VehicleState | None, follower: VehicleState | None, now_s: 
     return bool(stale_reasons(leader, follower, now_s, max_age_s))
 
 
-def resolve_output_frame(requested: str | None, mapping_frame: str, *, frame_set: bool,
-                         follower_type: str | None = None) -> str:
-    """The output world frame, decided once at start (never changed by type discovery).
+UNDECIDED = "undecided"
+"""The diagnostics' ``output_frame`` before the follower's state type is known (no f_ext yet)."""
+
+
+def output_frame_choice(requested: str | None, mapping_frame: str,
+                        follower_type: str | None) -> tuple[str | None, str]:
+    """The output world frame and the rule that chose it (the diagnostics' ``output_frame`` and
+    ``output_frame_rule``).
 
     Args:
         requested: ``--output-frame`` (``"ned"``/``"enu"``), or None for automatic.
-        mapping_frame: the mapping's ``frame``.
-        frame_set: the mapping file sets ``frame`` itself (not the default's ``"enu"``).
-        follower_type: the follower's state type when given up front (``--state-type``).
+        mapping_frame: the mapping's ``frame`` (``"enu"`` unless the mapping file says ``"ned"``).
+        follower_type: the follower's state type, None while it is not known (given by
+            ``--state-type``, else found on the ROS graph).
 
-    Automatic: a known follower type decides (Odometry: the mapping's frame; Freyja and PX4:
-    NED); else the mapping's ``frame`` when the file sets it; else NED (the default mapping is
-    Freyja's, whose states are NED).
+    Automatic: ``nav_msgs/Odometry`` input gives the mapping's frame, ENU by default as ROS's
+    REP 103 has it; Freyja's ``CurrentState`` and PX4's ``VehicleOdometry`` give NED, their
+    world frame. While the follower's type is unknown the frame is None (undecided: the node
+    publishes no f_ext then, so the frame it publishes in never changes).
     """
     if requested is not None:
         frames_for(requested)  # checks the name
-        return requested
-    if follower_type is not None:
-        return mapping_frame if follower_type == ODOMETRY else "ned"
-    return mapping_frame if frame_set else "ned"
+        return requested, f"--output-frame {requested}"
+    if follower_type is None:
+        return None, "the follower's state type is not known yet (--state-type, or the ROS graph)"
+    if follower_type == ODOMETRY:
+        return mapping_frame, (f"{ODOMETRY} input: the mapping's frame ({mapping_frame}; "
+                               "ENU unless the mapping sets frame = \"ned\", REP 103)")
+    return "ned", f"{follower_type} input: NED, its world frame"
+
+
+MAX_REFUSAL_KINDS = 16
+"""Kinds of refusal counted apart (per vehicle and reason, numbers left out); the rest count
+under ``"other"``. The node's account of refused messages stays this size however long it runs
+and whatever its inputs send."""
+RECENT_REFUSALS = 5
+"""Refusals kept word for word (the newest)."""
+MAX_REASON_CHARS = 200
+"""A kept reason is cut to this many characters."""
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|[-+]?\b(?:nan|inf)\b",
+                     re.IGNORECASE)
+
+
+def refusal_kind(reason: str) -> str:
+    """A reason with its numbers as ``#`` (``"stamp frozen at 12.3"`` -> ``"stamp frozen at
+    #"``), cut to :data:`MAX_REASON_CHARS`: what :class:`RefusalLog` counts by."""
+    return _NUMBER.sub("#", reason)[:MAX_REASON_CHARS]
+
+
+class RefusalLog:
+    """Bounded bookkeeping of the messages the node refused, for its diagnostics.
+
+    :meth:`record` counts each refusal under ``"role: kind"`` (:func:`refusal_kind`; after
+    :data:`MAX_REFUSAL_KINDS` kinds, new ones count as ``"other"``) and keeps the last
+    :data:`RECENT_REFUSALS` reasons word for word (cut to :data:`MAX_REASON_CHARS`). Memory is
+    bounded whatever the messages are and however many arrive.
+    """
+
+    def __init__(self) -> None:
+        self.total = 0
+        self.counts: dict[str, int] = {}
+        self.recent: deque[str] = deque(maxlen=RECENT_REFUSALS)
+        self._values: dict[str, str] | None = None
+
+    def record(self, role: str, reason: str) -> None:
+        """Count one refused message of ``role`` (``"leader"``/``"follower"``) for ``reason``."""
+        kind = f"{role}: {refusal_kind(reason)}"
+        if kind not in self.counts and len(self.counts) >= MAX_REFUSAL_KINDS:
+            kind = "other"
+        self.counts[kind] = self.counts.get(kind, 0) + 1
+        self.total += 1
+        self.recent.append(f"{role}: {reason}"[:MAX_REASON_CHARS])
+        self._values = None
+
+    def values(self) -> dict[str, str]:
+        """The diagnostics' entries: ``refused_total``, ``refused_recent`` (the kept reasons,
+        oldest first, ``" | "``-joined) and one ``"refused <role>: <kind>"`` count per kind."""
+        if self._values is None:
+            self._values = {"refused_total": str(self.total),
+                            "refused_recent": " | ".join(self.recent),
+                            **{f"refused {kind}": str(n) for kind, n in self.counts.items()}}
+        return self._values
 
 
 def model_inputs(leader: VehicleState, follower: VehicleState) -> tuple[np.ndarray, np.ndarray]:

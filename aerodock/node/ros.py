@@ -8,7 +8,9 @@ at ``rate_hz`` (``timer``; :class:`aerodock.node.core.PublishMode`):
 
 - ``f_ext`` (``geometry_msgs/msg/Vector3Stamped``): the predicted downwash acceleration on the
   follower, m/s², in the consumer's world frame (NED for Freyja and PX4, the mapping's frame for
-  Odometry), stamped with the node's clock when published; zero when the inputs are stale;
+  Odometry: ENU by default, REP 103), stamped with the node's clock when published; zero when
+  the inputs are stale; none before the follower's state type is known (the frame is then
+  undecided);
 - diagnostics (``diagnostic_msgs/msg/DiagnosticArray``, one status named ``aerodock f_ext``):
   ``trigger`` (``follower``, ``timer`` or ``watchdog``: :func:`aerodock.node.core.output_trigger`),
   ``latency_ms`` (the trigger, message callback or tick, to the output's stamp, taken just
@@ -17,14 +19,22 @@ at ``rate_hz`` (``timer``; :class:`aerodock.node.core.PublishMode`):
   callback; ``nan`` otherwise), ``compute_ms`` (predictor), ``leader_age_ms``,
   ``follower_age_ms`` (since each state was received), ``stale`` (``true``/``false``),
   ``stale_reason`` (why, ``""`` when fresh), ``leader_stamp``, ``follower_stamp`` (the states'
-  own stamps, s), ``tick`` (the output's sequence number) and ``output_frame``. The level is
-  OK, or STALE when the output is zero for unusable inputs (the status message is then the
-  reason).
+  own stamps, s), ``tick`` (the output's sequence number), ``output_frame`` (``ned``, ``enu``
+  or ``undecided``) and ``output_frame_rule`` (why), and the refused messages
+  (:class:`aerodock.node.core.RefusalLog`: ``refused_total``, ``refused_recent``, a
+  ``refused <role>: <kind>`` count per kind, bounded). The level is OK, or STALE when the output
+  is zero for unusable inputs (the status message is then the reason) or not published.
 
 Each vehicle's messages pass an :class:`aerodock.node.core.InputMonitor` (stamps that are zero,
-go backwards or freeze; a message repeated by a relay). The output frame and its ``frame_id``
-are decided once at start (:func:`aerodock.node.core.resolve_output_frame`): discovering the
-follower's type later never changes them.
+go backwards or freeze; a message repeated by a relay); a message refused (by the monitor, the
+plausibility rules or its converter) is counted in a :class:`aerodock.node.core.RefusalLog`. The
+output frame and its ``frame_id`` are decided once, when the follower's state type is known
+(:func:`aerodock.node.core.output_frame_choice`): at start with ``--state-type`` or
+``--output-frame``, else when the type is found on the graph; no f_ext goes out before, so the
+frame never changes while the node runs.
+
+ROS's own arguments (``--ros-args``: remapping, parameters such as ``use_sim_time``, the log
+level) go to ``rclpy.init``; :func:`ros_args_error` checks them first.
 """
 
 from __future__ import annotations
@@ -46,16 +56,19 @@ from aerodock.node.core import (
     STATE_TYPES,
     TICK_EVENT,
     TRIGGER_FOLLOWER,
+    UNDECIDED,
     InputMonitor,
     PublishMode,
+    RefusalLog,
     StepResult,
     VehicleState,
     current_state,
+    implausible,
     odometry_state,
+    output_frame_choice,
     output_trigger,
     prediction_step,
     px4_odometry_state,
-    resolve_output_frame,
 )
 
 STATUS_NAME = "aerodock f_ext"
@@ -76,9 +89,8 @@ class NodeSettings:
         max_age_s: oldest accepted input (older: zero output, stale flag).
         output_topic: f_ext topic.
         diagnostics_topic: diagnostics topic.
-        output_frame: ``"ned"``, ``"enu"``, or ``None``: automatic, decided once at start by
-            :func:`aerodock.node.core.resolve_output_frame`.
-        frame_set: the mapping file sets ``frame`` (the automatic output frame follows it).
+        output_frame: ``"ned"``, ``"enu"``, or ``None``: automatic, decided once the follower's
+            type is known by :func:`aerodock.node.core.output_frame_choice`.
         state_types: topic -> ROS type name, for topics whose type is not to be discovered.
         frame_ids: output ``header.frame_id`` per output frame.
         wake_scales: a leader-aware model's wake scales (k,) for the flown vehicles
@@ -93,7 +105,6 @@ class NodeSettings:
     output_topic: str = "/aerodock/f_ext"
     diagnostics_topic: str = "/aerodock/diagnostics"
     output_frame: str | None = None
-    frame_set: bool = False
     state_types: dict[str, str] = field(default_factory=dict)
     frame_ids: dict[str, str] = field(default_factory=lambda: {"ned": "map_ned", "enu": "map"})
     wake_scales: tuple[float, ...] | None = None
@@ -187,15 +198,15 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
                            for role in ("leader", "follower")}
             self.types: dict[str, str] = {}
             self.monitors = {role: InputMonitor() for role in self.topics}
-            self.output_frame = resolve_output_frame(
-                settings.output_frame, settings.mapping["frame"], frame_set=settings.frame_set,
-                follower_type=settings.state_types.get(self.topics["follower"]))
-            self.frame_id = settings.frame_ids[self.output_frame]
+            self.output_frame: str | None = None
+            self.frame_rule = ""
+            self.frame_id = ""
+            self._decide_frame(settings.state_types.get(self.topics["follower"]))
             self.publish_mode = PublishMode(settings.publish)
             self.period_s = 1.0 / settings.rate_hz
             self.last_follower_output_s: float | None = None
             self.tick = 0  # outputs published
-            self.errors: list[str] = []
+            self.refusals = RefusalLog()
             self.pub = self.create_publisher(Vector3Stamped, settings.output_topic, 10)
             self.diag_pub = self.create_publisher(DiagnosticArray, settings.diagnostics_topic, 10)
             # best effort as sensor data (PX4 publishes so), keeping only the newest message:
@@ -210,6 +221,18 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
             self.timer = self.create_timer(1.0 / settings.rate_hz, self._on_tick)
             if len(self.types) < 2:
                 self.graph_timer = self.create_timer(0.1, self._connect)
+
+        def _decide_frame(self, follower_type: str | None) -> None:
+            """Fix the output frame once it can be decided (see the module docstring)."""
+            if self.output_frame is not None:
+                return
+            frame, self.frame_rule = output_frame_choice(
+                self.settings.output_frame, self.settings.mapping["frame"], follower_type)
+            if frame is not None:
+                self.output_frame = frame
+                self.frame_id = self.settings.frame_ids[frame]
+                self.get_logger().info(f"f_ext in {frame.upper()} ({self.frame_id}): "
+                                       f"{self.frame_rule}")
 
         def _connect(self) -> None:
             """Subscribe to the state topics whose type is known or now on the graph."""
@@ -228,14 +251,8 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
                 self._subs.append(self.create_subscription(
                     cls, topic, self._callback(role, type_name), self._qos))
                 self.get_logger().info(f"{role} state: {topic} ({type_name})")
-                if role == "follower" and self.settings.output_frame is None:
-                    natural = resolve_output_frame(None, self.settings.mapping["frame"],
-                                                   frame_set=True, follower_type=type_name)
-                    if natural != self.output_frame:
-                        self.get_logger().warning(
-                            f"f_ext is published in {self.output_frame.upper()} "
-                            f"({self.frame_id}) as decided at start; {type_name} suggests "
-                            f"{natural.upper()}: set --output-frame or the mapping's frame")
+                if role == "follower":
+                    self._decide_frame(type_name)
             if len(self.types) == 2 and hasattr(self, "graph_timer"):
                 self.graph_timer.cancel()
 
@@ -247,11 +264,13 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
                 try:
                     state = state_from_message(type_name, msg, mapping, received)
                 except ValueError as err:  # a message we cannot use: the input goes stale
-                    self.errors.append(str(err))
-                    self.monitors[role].verdict = f"unusable message ({err})"
+                    why: str | None = f"unusable message ({err})"
+                    self.monitors[role].verdict = why
                 else:
-                    self.monitors[role].receive(state)
+                    why = self.monitors[role].receive(state) or implausible(state)
                     self.states[role] = state
+                if why:
+                    self.refusals.record(role, why)
                 if role != "follower":
                     return
                 trigger = output_trigger(self.publish_mode, FOLLOWER_EVENT, received,
@@ -271,15 +290,20 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
                 self._publish(trigger, now, float("nan"))
 
         def _publish(self, trigger: str, start: float, queue_s: float) -> None:
-            """One :func:`prediction_step` on the newest states, published with diagnostics."""
+            """One :func:`prediction_step` on the newest states, published with diagnostics
+            (the diagnostics only, while the output frame is undecided)."""
             result = prediction_step(self.predictor, self.states["leader"],
                                      self.states["follower"], start,
                                      max_age_s=self.settings.max_age_s,
-                                     output_frame=self.output_frame,
+                                     output_frame=self.output_frame or "ned",
                                      faults={r: m.verdict for r, m in self.monitors.items()},
                                      wake_scales=self.wake_scales)
             stamp = self.get_clock().now().to_msg()
             latency_ms = (time.monotonic() - start) * 1e3  # trigger to the output's stamp
+            if self.output_frame is None:
+                self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger,
+                                                        queue_s))
+                return
             out = Vector3Stamped()
             out.header.stamp = stamp
             out.header.frame_id = self.frame_id
@@ -300,6 +324,9 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
             status.hardware_id = node_name
             status.level = DiagnosticStatus.STALE if result.stale else DiagnosticStatus.OK
             status.message = (f"publishing zero: {result.reason}" if result.stale else "ok")
+            if self.output_frame is None:
+                status.level = DiagnosticStatus.STALE
+                status.message = f"publishing no f_ext: {self.frame_rule}"
             values = {
                 "trigger": trigger,
                 "latency_ms": f"{latency_ms:.4f}",
@@ -312,7 +339,9 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
                 "leader_stamp": repr(result.leader_stamp_s),
                 "follower_stamp": repr(result.follower_stamp_s),
                 "tick": str(self.tick),
-                "output_frame": self.output_frame,
+                "output_frame": self.output_frame or UNDECIDED,
+                "output_frame_rule": self.frame_rule,
+                **self.refusals.values(),
             }
             status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
             array = DiagnosticArray()
@@ -323,13 +352,42 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
     return PredictorNode()
 
 
+def ros_args_error(ros_args: list[str]) -> str | None:
+    """Why rclpy would refuse ``ros_args`` (``--ros-args`` and what follows it), or None.
+
+    They are parsed by rcl in a context of its own, its error log silenced, so that a refusal
+    (an unknown flag, a remap or parameter rule rcl cannot parse) is one line of ours.
+    """
+    import rclpy.logging
+    from rclpy.context import Context
+
+    quiet, unset = rclpy.logging.LoggingSeverity.FATAL, rclpy.logging.LoggingSeverity.UNSET
+    rclpy.logging.set_logger_level("rcl", quiet)
+    context = Context()
+    try:
+        context.init([NODE_NAME, *ros_args], initialize_logging=False)
+    except Exception as err:  # noqa: BLE001 - rclpy's pybind11 errors have no common base
+        text = str(err).removeprefix("failed to initialize rcl: ").split(". Error:")[0]
+        if type(err).__name__ == "UnknownROSArgsError":
+            text = f"unknown ROS arguments {text}"
+        return text.split(", at /")[0]
+    finally:
+        rclpy.logging.set_logger_level("rcl", unset)
+        context.try_shutdown()
+    return None
+
+
 def run_node(predictor: Any, settings: NodeSettings, *, duration_s: float | None = None,
-             warnings_to_log: list[str] | None = None) -> int:
-    """Run the node until interrupted (or for ``duration_s``); returns the number of outputs."""
+             warnings_to_log: list[str] | None = None, ros_args: list[str] | None = None) -> int:
+    """Run the node until interrupted (or for ``duration_s``); returns the number of outputs.
+
+    ``ros_args``: ``--ros-args ...`` for ``rclpy.init`` (remapping, parameters, log level;
+    check them with :func:`ros_args_error` first).
+    """
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
-    rclpy.init()
+    rclpy.init(args=[NODE_NAME, *(ros_args or [])])
     node = make_node(predictor, settings, warnings_to_log=warnings_to_log)
     executor = SingleThreadedExecutor()
     executor.add_node(node)

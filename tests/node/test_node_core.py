@@ -14,24 +14,32 @@ from aerodock.node.core import (
     CURRENT_STATE,
     DEFAULT_PUBLISH_MODE,
     FOLLOWER_EVENT,
+    MAX_ANGLE_RAD,
     MAX_POSITION_M,
+    MAX_REFUSAL_KINDS,
     MAX_SPEED_MPS,
     ODOMETRY,
     PX4_ODOMETRY,
+    QUAT_NORM_TOLERANCE,
+    RECENT_REFUSALS,
     TICK_EVENT,
     InputMonitor,
     PublishMode,
+    RefusalLog,
     VehicleState,
     current_state,
+    euler_attitude,
     implausible,
     is_stale,
     model_inputs,
     odometry_fields,
     odometry_state,
+    output_frame_choice,
     output_trigger,
     prediction_step,
     px4_odometry_state,
-    resolve_output_frame,
+    quaternion_attitude,
+    refusal_kind,
     stale_reasons,
     to_output_frame,
 )
@@ -249,20 +257,62 @@ def test_every_reason_is_listed():
     assert not is_stale(lead, fol, 1.01, 0.05)
 
 
-@pytest.mark.parametrize("quat", [(np.nan, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)])
-def test_nan_or_zero_quaternions_give_stale_without_numpy_warnings(quat):
+@pytest.mark.parametrize(("quat", "why"), [
+    ((np.nan, 0.0, 0.0, 0.0), "attitude quaternion not finite"),
+    ((0.0, 0.0, 0.0, 0.0), "attitude quaternion is zero"),
+    ((1e200, 1e200, 0.0, 0.0), "attitude quaternion norm 1.41e+200, not 1 (tolerance 0.01)"),
+    ((1.5e308, -1.5e308, 0.0, 0.0), "attitude quaternion norm inf, not 1 (tolerance 0.01)"),
+    ((1e-200, 0.0, 0.0, 0.0), "attitude quaternion norm 1e-200, not 1 (tolerance 0.01)"),
+    ((0.0, 0.0, 2.0, 0.0), "attitude quaternion norm 2, not 1 (tolerance 0.01)"),
+])
+def test_quaternions_that_are_no_rotation_are_refused_without_numpy_warnings(quat, why):
+    # (1e200, 1e200, 0, 0) overflowed the norm and was read as level; now every converter
+    # that takes a quaternion refuses it with the reason, and the step publishes zero
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # any NumPy RuntimeWarning fails the test
         with np.errstate(all="warn"):  # even when the caller's NumPy would warn
-            s = odometry_state((np.nan, 0, 0), quat, (0.1, 0, 0), frame="enu", twist="body",
+            s = odometry_state((0, 0, 2), quat, (0.1, 0, 0), frame="enu", twist="body",
                                received_s=1.0, stamp_s=1.0)
             px4 = px4_odometry_state((0, 0, 0), quat, (1, 0, 0), 3, received_s=1.0,
                                      timestamp_us=1)
-            fr = current_state([np.nan] * 9, received_s=1.0, stamp_s=1.0)
-            reasons = [implausible(x) for x in (s, px4, fr)]
-    assert reasons == ["not finite"] * 3
+            reasons = [implausible(x) for x in (s, px4)]
+            lead, _ = _fresh_pair()
+            out = prediction_step(_Counting(None), lead, _with(s, received_s=1.0), 1.0,
+                                  max_age_s=0.05)
+    assert reasons == [why, why]
+    assert out.stale and out.reason == f"follower: {why}" and not out.f_ext_mps2.any()
+    assert not np.isfinite(s.R).any()  # no rotation kept that anything could use
+
+
+def test_a_unit_quaternion_within_the_tolerance_is_a_rotation():
+    rot = euler_to_rotmat(0.3, -0.2, 1.1)
+    q = rotmat_to_quat(rot)
+    for scale in (1.0 - QUAT_NORM_TOLERANCE, 1.0 + 0.99 * QUAT_NORM_TOLERANCE):
+        got, why = quaternion_attitude(q * scale)
+        assert why is None
+        np.testing.assert_allclose(got, rot, atol=1e-14)  # normalised, not scaled
+    assert quaternion_attitude(q * (1.0 + 1.01 * QUAT_NORM_TOLERANCE))[1] is not None
+
+
+@pytest.mark.parametrize(("angles", "why"), [
+    ((1e300, 0.0, 0.0), "roll 1e+300 rad beyond 6.28 rad (one turn)"),
+    ((0.0, -7.0, 0.0), "pitch -7 rad beyond 6.28 rad (one turn)"),
+    ((0.0, 0.0, 90.0), "yaw 90 rad beyond 6.28 rad (one turn)"),  # degrees sent as radians
+    ((np.nan, 0.0, 0.0), "roll not finite"),
+    ((0.0, 0.0, -np.inf), "yaw not finite"),
+])
+def test_implausible_euler_angles_are_refused(angles, why, recwarn):
+    # a roll of 1e300 rad was accepted (its sine is finite, and meaningless)
+    s = current_state([0, 0, -2, 0, 0, 0, *angles], received_s=1.0, stamp_s=1.0)
+    assert implausible(s) == why and s.fault == why
+    assert MAX_ANGLE_RAD == pytest.approx(2 * np.pi)
+    edge = current_state([0, 0, -2, 0, 0, 0, MAX_ANGLE_RAD, -MAX_ANGLE_RAD, np.pi],
+                         received_s=1.0)
+    assert implausible(edge) is None
+    np.testing.assert_allclose(edge.R, euler_attitude(0.0, 0.0, np.pi)[0], atol=1e-12)
+    assert not recwarn.list
 
 
 def test_nan_poses_in_the_cli_process_print_nothing(tmp_path):
@@ -294,19 +344,49 @@ def test_nan_poses_in_the_cli_process_print_nothing(tmp_path):
     assert (proc.stdout, proc.stderr) == ("", "")
 
 
-@pytest.mark.parametrize(("requested", "frame", "frame_set", "follower_type", "want"), [
-    ("enu", "ned", True, CURRENT_STATE, "enu"),  # --output-frame wins
-    (None, "enu", False, ODOMETRY, "enu"),  # a given Odometry follower: the mapping's frame
-    (None, "enu", True, CURRENT_STATE, "ned"),  # Freyja states are NED
-    (None, "enu", True, PX4_ODOMETRY, "ned"),
-    (None, "enu", True, None, "enu"),  # type unknown at start: the mapping file's frame
-    (None, "ned", True, None, "ned"),
-    (None, "enu", False, None, "ned"),  # the default (Freyja) mapping: NED
+@pytest.mark.parametrize(("requested", "frame", "follower_type", "want", "rule"), [
+    ("enu", "ned", CURRENT_STATE, "enu", "--output-frame enu"),  # --output-frame wins
+    ("ned", "enu", None, "ned", "--output-frame ned"),
+    # Odometry: ENU by default (REP 103; the mapping's default frame), a NED mapping's NED
+    (None, "enu", ODOMETRY, "enu", "nav_msgs/msg/Odometry input: the mapping's frame (enu;"),
+    (None, "ned", ODOMETRY, "ned", "nav_msgs/msg/Odometry input: the mapping's frame (ned;"),
+    (None, "enu", CURRENT_STATE, "ned", "freyja_msgs/msg/CurrentState input: NED"),
+    (None, "enu", PX4_ODOMETRY, "ned", "px4_msgs/msg/VehicleOdometry input: NED"),
+    # the type not known yet (to be found on the graph): undecided, whatever the mapping says
+    (None, "enu", None, None, "the follower's state type is not known yet"),
+    (None, "ned", None, None, "the follower's state type is not known yet"),
 ])
-def test_output_frame_is_decided_from_the_configuration(requested, frame, frame_set,
-                                                        follower_type, want):
-    assert resolve_output_frame(requested, frame, frame_set=frame_set,
-                                follower_type=follower_type) == want
+def test_output_frame_follows_the_follower_type(requested, frame, follower_type, want, rule):
+    got, why = output_frame_choice(requested, frame, follower_type)
+    assert got == want and why.startswith(rule)
+
+
+def test_refusal_log_counts_by_kind_and_keeps_the_last_few():
+    log = RefusalLog()
+    assert log.values() == {"refused_total": "0", "refused_recent": ""}
+    for k in range(40):
+        log.record("follower", f"stamp frozen at {1.0 + k * 0.01!r}")
+    log.record("leader", "attitude quaternion norm 1.41e+200, not 1 (tolerance 0.01)")
+    values = log.values()
+    assert values["refused_total"] == "41"
+    assert values["refused follower: stamp frozen at #"] == "40"
+    assert values["refused leader: attitude quaternion norm #, not # (tolerance #)"] == "1"
+    recent = values["refused_recent"].split(" | ")
+    assert len(recent) == RECENT_REFUSALS and recent[-1].startswith("leader: attitude")
+    assert recent[0] == f"follower: stamp frozen at {1.0 + 36 * 0.01!r}"
+    assert refusal_kind("stamp went backwards (12.31 -> -1e-05)") == "stamp went backwards (# -> #)"
+
+
+def test_refusal_log_stays_bounded_whatever_the_reasons():
+    log = RefusalLog()
+    for k in range(3 * MAX_REFUSAL_KINDS):
+        log.record("leader", f"unusable message (reason number {chr(65 + k % 26) * (k + 1)})")
+    log.record("follower", "x" * 10_000)
+    assert len(log.counts) == MAX_REFUSAL_KINDS + 1  # the kinds, and "other"
+    assert log.counts["other"] == 2 * MAX_REFUSAL_KINDS + 1
+    assert sum(log.counts.values()) == log.total == 3 * MAX_REFUSAL_KINDS + 1
+    assert all(len(text) <= 200 for text in log.recent)
+    assert all(len(key) <= 220 for key in log.values())
 
 
 def test_mapping_reports_an_explicit_frame(tmp_path):
@@ -401,3 +481,19 @@ def test_node_refuses_a_leader_aware_model_without_scales(tmp_path):
     assert res.returncode == 2
     assert "needs the vehicles' wake scales" in res.stderr and "--config" in res.stderr
     assert "Traceback" not in res.stderr
+
+
+def test_help_says_where_ros_arguments_go_and_the_frame_rule(capsys, tmp_path):
+    from aerodock.cli.app import run
+
+    assert run(["node", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "Usage: aerodock node [OPTIONS] [--ros-args ...]" in text
+    assert "ROS's own arguments go last, after --ros-args" in text
+    assert "nav_msgs/Odometry: the mapping's frame, ENU by default (REP 103)" in " ".join(
+        text.replace("│", " ").split())
+    # words before --ros-args that the command does not know are refused, before any ROS
+    model = random_model(tmp_path / "m")
+    assert run(["node", "--model", str(model), "--rat", "5", "--ros-args", "-r", "a:=b"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: no such option: '--rat'") and err.count("\n") == 1

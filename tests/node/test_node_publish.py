@@ -1,5 +1,7 @@
 """What makes ``aerodock node`` publish: each follower message (``on-follower``), the watchdog
-when they stop, the timer alone (``timer``).
+when they stop, the timer alone (``timer``); in which frame (Odometry found on the graph: ENU;
+nothing before the follower's type is known); what it does with garbage (refused, counted on
+the diagnostics, the count bounded).
 
 The node runs in this process with a client node on one executor, on a localhost ROS domain of
 this test run; the client sends one state at a time and waits for what comes back (lock step),
@@ -45,7 +47,9 @@ WAIT_S = 60.0  # generous: a failure to answer, not slowness, is what fails
 class Harness:
     """The node under test and a client that sends states and records the node's outputs."""
 
-    def __init__(self, tmp_path, publish: PublishMode, rate_hz: float) -> None:
+    def __init__(self, tmp_path, publish: PublishMode, rate_hz: float, *,
+                 state_types: dict[str, str] | None = None, mapping_text: str | None = None
+                 ) -> None:
         import rclpy
         from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import Vector3Stamped
@@ -53,10 +57,14 @@ class Harness:
         from rclpy.executors import SingleThreadedExecutor
 
         self.predictor = Predictor.load(random_model(tmp_path / "model"))
-        mapping, _ = load_mapping(write_mapping(tmp_path / "mapping.toml", LEADER, FOLLOWER))
-        settings = NodeSettings(mapping=mapping, rate_hz=rate_hz, publish=publish,
-                                max_age_s=MAX_AGE_S, frame_set=True,
-                                state_types={LEADER: ODOMETRY, FOLLOWER: ODOMETRY})
+        path = write_mapping(tmp_path / "mapping.toml", LEADER, FOLLOWER)
+        if mapping_text is not None:
+            path.write_text(mapping_text)
+        mapping, _ = load_mapping(path)
+        settings = NodeSettings(
+            mapping=mapping, rate_hz=rate_hz, publish=publish, max_age_s=MAX_AGE_S,
+            state_types={LEADER: ODOMETRY, FOLLOWER: ODOMETRY} if state_types is None
+            else state_types)
         self.node = make_node(self.predictor, settings, node_name="aerodock_under_test")
         self.client = rclpy.create_node("aerodock_test_client")
         self.odometry = Odometry
@@ -65,9 +73,11 @@ class Harness:
         self.vectors: dict[float, np.ndarray] = {}
         self.diagnostics: dict[float, dict[str, str]] = {}
         self.order: list[float] = []  # output stamps as the diagnostics arrived
+        self.frame_ids: set[str] = set()
 
         def on_output(msg):
             self.vectors[_stamp(msg)] = np.array([msg.vector.x, msg.vector.y, msg.vector.z])
+            self.frame_ids.add(msg.header.frame_id)
 
         def on_diag(msg):
             self.diagnostics[_stamp(msg)] = {kv.key: kv.value for kv in msg.status[0].values}
@@ -95,8 +105,12 @@ class Harness:
         return [(s, self.vectors[s], self.diagnostics[s]) for s in self.order
                 if s in self.vectors]
 
-    def send(self, role: str, state: VehicleState) -> None:
+    def send(self, role: str, state: VehicleState, quat_wxyz=None) -> None:
+        """Send ``state`` as ENU Odometry (``quat_wxyz``: this attitude instead, as is)."""
         msg = odometry_message(self.odometry, state, state.stamp_s, "enu", "body")
+        if quat_wxyz is not None:
+            o = msg.pose.pose.orientation
+            o.w, o.x, o.y, o.z = (float(v) for v in quat_wxyz)
         self.pubs[role].publish(msg)
 
     def close(self) -> None:
@@ -216,3 +230,91 @@ def test_timer_mode_publishes_on_ticks_only(ros, tmp_path):
     f_ext, values = next((f, v) for _, f, v in harness.outputs()
                          if _stamp_value(v["follower_stamp"]) == stamp)
     np.testing.assert_allclose(f_ext, _want(harness, sample), rtol=0, atol=1e-12)
+
+
+def test_odometry_found_on_the_graph_is_published_in_enu(ros, tmp_path):
+    # The audit's case: Odometry topics in a mapping that does not say `frame`, their type found
+    # on the graph (no --state-type). The frame was decided at start as NED; now it is decided
+    # when the follower's type is found: ENU (REP 103), the diagnostics saying so.
+    mapping = f'[leader]\nstate = "{LEADER}"\n\n[follower]\nstate = "{FOLLOWER}"\n'
+    harness = Harness(tmp_path, PublishMode.ON_FOLLOWER, rate_hz=5.0, state_types={},
+                      mapping_text=mapping)
+    ros.append(harness)
+    sample = _states(1)[0]
+    _send_pair(harness, sample)
+    stamp = sample["follower"].stamp_s
+    harness.spin_until(lambda: any(_stamp_value(v["follower_stamp"]) == stamp
+                                   for _, _, v in harness.outputs()), "the answer")
+    f_ext, values = next((f, v) for _, f, v in harness.outputs()
+                         if _stamp_value(v["follower_stamp"]) == stamp)
+    np.testing.assert_allclose(f_ext, _want(harness, sample), rtol=0, atol=1e-12)  # ENU
+    assert harness.frame_ids == {"map"}  # every f_ext, from the first one
+    assert {v["output_frame"] for _, _, v in harness.outputs()} == {"enu"}
+    assert values["output_frame_rule"].startswith("nav_msgs/msg/Odometry input")
+
+
+def test_no_f_ext_before_the_follower_type_is_known(ros, tmp_path):
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Vector3Stamped
+    from rclpy.executors import SingleThreadedExecutor
+
+    mapping, _ = load_mapping(write_mapping(tmp_path / "m.toml", "/nobody/a", "/nobody/b"))
+    node = make_node(Predictor.load(random_model(tmp_path / "model")),
+                     NodeSettings(mapping=mapping, rate_hz=20.0), node_name="aerodock_undecided")
+    client = rclpy.create_node("aerodock_undecided_client")
+    seen: dict[str, list] = {"f_ext": [], "diagnostics": []}
+    client.create_subscription(Vector3Stamped, "/aerodock/f_ext",
+                               lambda m: seen["f_ext"].append(m), 100)
+    client.create_subscription(DiagnosticArray, "/aerodock/diagnostics",
+                               lambda m: seen["diagnostics"].append(m.status[0]), 100)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    executor.add_node(client)
+    try:
+        deadline = time.monotonic() + WAIT_S
+        while len(seen["diagnostics"]) < 3:
+            assert time.monotonic() < deadline, "no diagnostics"
+            executor.spin_once(timeout_sec=0.01)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        client.destroy_node()
+    assert seen["f_ext"] == [] and node.tick == 0
+    for status in seen["diagnostics"]:
+        values = {kv.key: kv.value for kv in status.values}
+        assert values["output_frame"] == "undecided" and values["stale"] == "true"
+        assert status.message.startswith("publishing no f_ext: the follower's state type")
+
+
+def test_garbage_is_refused_with_its_reason_and_counted_within_bounds(ros, tmp_path):
+    from aerodock.node.core import MAX_REFUSAL_KINDS, RECENT_REFUSALS
+
+    harness = Harness(tmp_path, PublishMode.ON_FOLLOWER, rate_hz=5.0)
+    ros.append(harness)
+    samples = _states(31)
+    _send_pair(harness, samples[0])
+    garbage = [((1e200, 1e200, 0.0, 0.0), "attitude quaternion norm 1.41e+200"),
+               ((0.0, 0.0, 0.0, 0.0), "attitude quaternion is zero"),
+               ((1.5e308, 1.5e308, 0.0, 0.0), "attitude quaternion norm inf"),
+               ((0.0, 3.0, 0.0, 0.0), "attitude quaternion norm 3")]
+    for k, sample in enumerate(samples[1:]):
+        quat, why = garbage[k % len(garbage)]
+        stamp = sample["follower"].stamp_s
+        harness.send("follower", sample["follower"], quat_wxyz=quat)
+        harness.spin_until(lambda s=stamp: any(_stamp_value(v["follower_stamp"]) == s
+                                               for _, _, v in harness.outputs()),
+                           f"the answer to garbage {k}")
+        f_ext, values = next((f, v) for _, f, v in harness.outputs()
+                             if _stamp_value(v["follower_stamp"]) == stamp)
+        assert values["stale"] == "true" and not f_ext.any()  # zero, never read as level
+        assert values["stale_reason"].startswith(f"follower: {why}"), values["stale_reason"]
+        assert values["refused_total"] == str(k + 1)
+    refused = {key: int(v) for key, v in values.items() if key.startswith("refused ")}
+    # counted by kind, the numbers left out: 30 messages, two kinds
+    assert refused == {"refused follower: attitude quaternion is zero": 8,
+                       "refused follower: attitude quaternion norm #, not # (tolerance #)": 22}
+    assert len(refused) <= MAX_REFUSAL_KINDS + 1
+    recent = values["refused_recent"].split(" | ")
+    assert len(recent) == RECENT_REFUSALS and recent[-1].startswith("follower: attitude")
+    assert harness.node.refusals.total == 30 and len(harness.node.refusals.recent) == 5

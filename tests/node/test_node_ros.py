@@ -71,9 +71,10 @@ def test_output_equals_the_offline_predictor(run):
         errors.append(np.abs(np.asarray(row[2:]) - want).max())
         assert values["output_frame"] == "enu"
     assert max(errors) < 1e-9
-    # one frame_id from the first message on: decided at start from the mapping (frame =
-    # "enu"), not switched from map_ned to map when the follower's type is discovered
+    # one frame_id from the first message on: decided once, when the follower's type is found
+    # on the graph (Odometry: the mapping's frame, ENU), never switched afterwards
     assert rec.frame_ids == {"map"}
+    assert all(v["output_frame_rule"].startswith("nav_msgs/msg/Odometry input") for _, v in fresh)
     assert all(v["stale_reason"] == "" for _, v in fresh)
     assert np.median([np.linalg.norm(row[2:]) for row, _ in fresh]) > 0.1  # not trivially 0
 
@@ -164,3 +165,43 @@ def test_a_topic_ros_would_refuse_is_one_line_and_exit_2(tmp_path, option, topic
     assert proc.stderr.startswith("error: ") and proc.stderr.count("\n") == 1
     assert needle in proc.stderr and option in proc.stderr
     assert topic_name_error("/aerodock/f_ext") is None and topic_name_error("~/f_ext") is None
+
+
+@pytest.mark.parametrize(("extra", "needle"), [
+    (["--ros-args", "-r", "bad"], "error: --ros-args: Couldn't parse remap rule: '-r bad'"),
+    (["--ros-args", "-p", "use_sim_time"], "error: --ros-args: Couldn't parse parameter"),
+    (["--ros-args", "--no-such-flag"], "error: --ros-args: unknown ROS arguments"),
+    (["--rat", "5"], "error: no such option: '--rat'"),
+    (["stray", "--ros-args"], "error: unexpected argument: 'stray'"),
+])
+def test_ros_args_rcl_or_we_refuse_are_one_line_and_exit_2(tmp_path, extra, needle):
+    """Only ``--ros-args ...`` passes the words ``aerodock node`` does not know; what rcl would
+    refuse is refused before the node starts, in one line (rcl's own log stays quiet)."""
+    model = random_model(tmp_path / "model")
+    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", "node",
+                           "--model", str(model), "--duration", "0.3", *extra],
+                          capture_output=True, text=True, timeout=60,
+                          env=ros_env(free_domain_id()))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith(needle) and proc.stderr.count("\n") == 1, proc.stderr
+
+
+@pytest.mark.parametrize("level", ["info", "warn"])
+def test_ros_args_are_accepted(tmp_path, level):
+    # remapping, node name, parameters and the log level: rclpy takes them (the namespace and a
+    # parameter read back from the running node: test_launch_example.py)
+    model = random_model(tmp_path / "model")
+    mapping = write_mapping(tmp_path / "mapping.toml", "/alpha/odom", "/bravo/odom")
+    proc = subprocess.run([sys.executable, "-c", "from aerodock.cli import main; main()", "node",
+                           "--model", str(model), "--mapping", str(mapping), "--duration", "0.3",
+                           "--state-type", "/bravo/odom=nav_msgs/msg/Odometry", "--ros-args",
+                           "-r", "__node:=f_ext_hat", "-r", "/aerodock/f_ext:=/bravo/f_ext_hat",
+                           "-p", "use_sim_time:=true", "--log-level", level],
+                          capture_output=True, text=True, timeout=60,
+                          env=ros_env(free_domain_id()))
+    assert proc.returncode == 0, proc.stderr
+    # the follower's type given: the frame is decided at start, said on the command line and
+    # in the node's log (under the remapped node name) unless the log level hides it
+    assert "aerodock node: f_ext in ENU: nav_msgs/msg/Odometry input" in proc.stderr
+    logged = "[f_ext_hat]: f_ext in ENU (map): nav_msgs/msg/Odometry input" in proc.stderr
+    assert logged == (level == "info"), proc.stderr
