@@ -20,6 +20,7 @@ $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/python -m pip install --quiet $(TORCH_PIP_ARGS) "torch==2.13.0"
 	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS)]"
 	$(BIN)/python -m pip install --quiet --no-deps rotorpy  # peer-validation tests (its simulator needs only NumPy/SciPy)
+	$(BIN)/python -m aerodock.mission.warm  # compile the world's kernels once (numba's disk cache)
 	rm -f $(VENV)/.installed-* && touch $(STAMP)
 
 demo: $(STAMP)

@@ -504,9 +504,10 @@ def _rows3(values: np.ndarray) -> np.ndarray:
 
 def _leader_arrays(leader: BodyState) -> tuple[np.ndarray, ...]:
     """The leader's attitude (n, 3, 3), thrust (n,), velocity and position (n, 3)."""
-    return (np.asarray(leader.R, dtype=float),
-            np.broadcast_to(np.asarray(leader.thrust_n, dtype=float), (leader.n,)),
-            _rows3(leader.v), _rows3(leader.p))
+    thrust = np.asarray(leader.thrust_n, dtype=float)
+    if thrust.shape != (leader.n,):
+        thrust = np.broadcast_to(thrust, (leader.n,))
+    return np.asarray(leader.R, dtype=float), thrust, _rows3(leader.v), _rows3(leader.p)
 
 
 def _offsets(rotor_offsets_body_m: np.ndarray) -> np.ndarray:

@@ -114,10 +114,16 @@ def step_bar(
                     np.asarray(anchor_p, dtype=float), np.asarray(anchor_v, dtype=float),
                     np.asarray(anchor_a, dtype=float), np.asarray(anchor_p_next, dtype=float),
                     np.asarray(leader_yaw_rad, dtype=float), np.asarray(force_n, dtype=float),
-                    np.broadcast_to(np.asarray(mass_kg, dtype=float), (n,)),
+                    _per_bar(mass_kg, n),
                     params.cable_length_m, params.swing_damping, params.gravity_mps2,
                     params.yaw_omega2, params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
     return BarState(p, v, yaw, yaw_rate), cable
+
+
+def _per_bar(values: np.ndarray | float, n: int) -> np.ndarray:
+    """(n,) float values, one per bar (the array itself when it is one)."""
+    values = np.asarray(values, dtype=float)
+    return values if values.shape == (n,) else np.broadcast_to(values, (n,))
 
 
 @njit
