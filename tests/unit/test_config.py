@@ -44,7 +44,8 @@ def test_user_file_overrides_a_subset(tmp_path):
         ("[vehicle]\nmass_kg = \"heavy\"\n", "'vehicle.mass_kg' must be a number"),
         ("[gripper]\ntrigger = \"psychic\"\n", "'gripper.trigger' must be one of"),
         ("[control]\nq_diag = [1, 2]\n", "'control.q_diag' must be 7"),
-        ("[downwash]\nfield = \"no_such_pkg.mod:Field\"\n", "cannot be imported"),
+        ("[downwash]\nfield = \"no_such_pkg.mod:Field\"\n", "names code outside aerodock"),
+        ("[downwash]\nfield = \"aerodock.no_such:Field\"\n", "cannot be imported"),
         ("[downwash]\nfield = \"aerodock.downwash.jet:Nope\"\n", "has no attribute 'Nope'"),
         ("[downwash]\nfield = \"nocolon\"\n", "package.module:factory"),
         ("[sim]\nphysics_rate_hz = 330\n", "multiple of"),
@@ -109,10 +110,24 @@ def test_plugin_with_bad_params_names_the_file(tmp_path):
     assert str(path) in str(err.value)
 
 
-def test_plugin_that_is_not_a_field(tmp_path):
+def test_plugin_that_is_not_a_field_factory_is_refused_uncalled(tmp_path, monkeypatch):
+    """A trusted module's plain function is not a factory: refused as the config loads."""
+    monkeypatch.setenv("AERODOCK_TRUST_PLUGINS", "numpy")
     path = _write(tmp_path, '[downwash]\nfield = "numpy:zeros"\n[downwash.params]\nshape = 3\n')
+    with pytest.raises(ConfigError, match="numpy:zeros is not a field factory"):
+        load_config(path)
+
+
+def test_factory_that_builds_no_field(tmp_path, monkeypatch):
+    """A marked factory whose result lacks the protocol is refused when it is built."""
+    (tmp_path / "plug_nofield.py").write_text(
+        "from aerodock.downwash import field_factory\n\n"
+        "@field_factory\ndef F(**kw):\n    return object()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    path = _write(tmp_path, '[downwash]\nfield = "plug_nofield:F"\n')
+    cfg = load_config(path, trusted=["plug_nofield"])
     with pytest.raises(ConfigError, match="does not build a field"):
-        build_field(load_config(path))
+        build_field(cfg)
 
 
 def test_with_overrides_validates(cfg):
@@ -166,16 +181,20 @@ def test_plugin_without_params_gets_none_of_the_jets(tmp_path):
     assert back.data["downwash"]["params"] == load_config().data["downwash"]["params"]
 
 
+_MARK = "from aerodock.downwash import field_factory\n@field_factory\n"
+
+
 @pytest.mark.parametrize(("body", "needle"), [
     ("raise RuntimeError('boom')\n", "failed on import (RuntimeError: boom)"),
     ("import sys\nsys.exit(3)\n", "failed on import (SystemExit: 3)"),
-    ("def F(**kw):\n    raise KeyError('k')\n", "failed to build (KeyError"),
-    ("def F(**kw):\n    import sys\n    sys.exit(4)\n", "failed to build (SystemExit: 4)"),
+    (_MARK + "def F(**kw):\n    raise KeyError('k')\n", "failed to build (KeyError"),
+    (_MARK + "def F(**kw):\n    import sys\n    sys.exit(4)\n", "failed to build (SystemExit: 4)"),
 ])
 def test_plugin_failures_are_config_errors(tmp_path, monkeypatch, body, needle):
     name = f"plug_{abs(hash(body))}"
     (tmp_path / f"{name}.py").write_text(body)
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("AERODOCK_TRUST_PLUGINS", name)
     path = _write(tmp_path, f'[downwash]\nfield = "{name}:F"\n')
     with pytest.raises(ConfigError) as err:
         build_field(load_config(path))
