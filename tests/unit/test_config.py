@@ -208,3 +208,43 @@ def test_integral_float_is_refused_for_an_integer_key(tmp_path):
         load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6.0\n"))
     cfg = load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6\n"))
     assert cfg.vehicle.n_rotors == 6 and isinstance(cfg.vehicle.n_rotors, int)
+
+
+def test_an_installed_packages_declared_field_needs_no_trust(tmp_path, monkeypatch):
+    """A field declared in the ``aerodock.fields`` entry-point group loads as a built-in does;
+    another attribute of the same module is not declared, so it is refused unimported."""
+    from importlib.metadata import EntryPoint
+
+    from aerodock.config import plugins
+
+    monkeypatch.delenv("AERODOCK_TRUST_PLUGINS", raising=False)
+    (tmp_path / "declared_fields.py").write_text(
+        "from aerodock.downwash.template import UniformColumnField as Column\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    points = [EntryPoint("column", "declared_fields:Column", plugins.ENTRY_POINT_GROUP)]
+    monkeypatch.setattr(plugins.metadata, "entry_points",
+                        lambda group: points if group == plugins.ENTRY_POINT_GROUP else [])
+    cfg = load_config(_write(tmp_path, '[downwash]\nfield = "declared_fields:Column"\n'))
+    assert type(build_field(cfg)).__name__ == "UniformColumnField"
+    with pytest.raises(ConfigError, match="names code outside aerodock"):
+        load_config(_write(tmp_path, '[downwash]\nfield = "declared_fields:Other"\n'))
+
+
+def test_set_applies_after_the_file_and_before_the_checks(tmp_path):
+    """--set wins over the file; the rules between keys see the result (a file that alone
+    breaks one is rescued by a --set, and the other way round)."""
+    path = _write(tmp_path, "[platform]\ncable_length_m = 0.64\n[vehicle]\nmass_kg = 0.8\n")
+    cfg = load_config(path, sets=["platform.cable_length_m=0.5", "vehicle.n_rotors=6"])
+    assert (cfg.platform.cable_length_m, cfg.vehicle.mass_kg, cfg.vehicle.n_rotors) == (0.5, 0.8, 6)
+    assert isinstance(cfg.platform.cable_length_m, float)  # 0.5 typed as the key's default
+    bad = _write(tmp_path, "[gripper]\naperture_m = 0.008\n")
+    assert load_config(bad, sets=["platform.bar_diameter_m=0.005"]).gripper.aperture_m == 0.008
+    with pytest.raises(ConfigError, match=r"\+ --set: 'gripper.aperture_m'"):
+        load_config(sets=["gripper.aperture_m=0.008"])
+
+
+def test_plugin_params_by_set_merge_into_the_files(tmp_path):
+    text = ('[downwash]\nfield = "aerodock.downwash.template:UniformColumnField"\n'
+            '[downwash.params]\naccel_mps2 = 2.0\nradius_m = 0.2\n')
+    cfg = load_config(_write(tmp_path, text), sets=["downwash.params.radius_m=0.3"])
+    assert cfg.data["downwash"]["params"] == {"accel_mps2": 2.0, "radius_m": 0.3}
