@@ -247,7 +247,12 @@ def test_code_naming_configs_run_nothing(tmp_path, monkeypatch):
         path = tmp_path / f"evil{i}.toml"
         path.write_text(_toml_config(field, params))
         args = _commands(rng, path)
-        if i % 3 == 2:  # the same field by --set, on top of a harmless file
+        if i % 7 == 3:  # a sweep specification's config
+            spec = tmp_path / f"spec{i}.toml"
+            spec.write_text(f'[sweep]\ntrials = 1\nconfig = "{path.name}"\n'
+                            "[axes]\ncable_length_m = [0.36, 0.64]\n")
+            args = ["sweep", spec, "--out", tmp_path / "swept", "--jobs", "1"]
+        elif i % 3 == 2:  # the same field by --set, on top of a harmless file
             path.write_text("[platform]\ncable_length_m = 0.5\n")
             args += ["--set", f"downwash.field={field}"]
             args += [f"--set=downwash.params.{k}={toml_value(v)}" for k, v in params.items()]
@@ -256,6 +261,7 @@ def test_code_naming_configs_run_nothing(tmp_path, monkeypatch):
         assert res.rc == 2, (args, res.err)
         assert "names code outside aerodock" in res.err or "not a field factory" in res.err, res.err
         _nothing_ran(names)
+        assert not (tmp_path / "swept").exists()
     assert_clean(results)
 
 
