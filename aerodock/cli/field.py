@@ -284,6 +284,7 @@ def field_fit(
     words += ["--noise", noise] if noise != "pooled" else []
     words += ["--folds", str(folds)] if folds else []
     words += ["--config", str(config)] if config is not None else []
+    words += [w for text in sets or [] for w in ("--set", text)]
     command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
     held_names = sorted({f.flight for f in held})
     toml_text = config_fragment(fit, held_names, command)
