@@ -16,9 +16,7 @@ A config that names a plug-in field names code: it is imported only from a trust
 from __future__ import annotations
 
 import copy
-import json
 import math
-import re
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -46,6 +44,7 @@ from aerodock.config.schema import (
     SimSection,
     VehicleSection,
 )
+from aerodock.config.toml_text import dumps_toml
 from aerodock.fileio import read_toml
 
 DEFAULTS_NAME = "defaults.toml"
@@ -149,7 +148,7 @@ class Config:
 
     def to_toml(self) -> str:
         """The values as TOML text that :func:`load_config` reads back to the same config."""
-        return _toml_tables(self.data, "")
+        return dumps_toml(self.data)
 
     def with_overrides(self, overrides: Mapping[str, Any], source: str = "overrides") -> Config:
         """A new validated config with ``overrides`` (nested tables) applied."""
@@ -158,38 +157,6 @@ class Config:
         # A field other than this config's own needs the same trust as one read from a file.
         _validate(merged, source, (*self.trusted, self.data["downwash"]["field"]))
         return Config(merged, self.source, self.trusted)
-
-
-def _toml_key(key: Any) -> str:
-    key = str(key)
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)  # inf and nan are TOML too
-    if isinstance(value, str):
-        return json.dumps(value)  # a JSON string is a TOML basic string
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}"
-                               for k, v in value.items()) + "}"
-    raise ConfigError(f"cannot write {value!r} as TOML")
-
-
-def _toml_tables(table: Mapping[str, Any], prefix: str) -> str:
-    """``table``'s plain keys, then each sub-table as ``[prefix.key]``."""
-    lines = [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()
-             if not isinstance(v, Mapping)]
-    text = "\n".join(lines) + ("\n" if lines else "")
-    for key, value in table.items():
-        if isinstance(value, Mapping):
-            name = f"{prefix}{_toml_key(key)}"
-            text += f"\n[{name}]\n" + _toml_tables(value, f"{name}.")
-    return text
 
 
 def _defaults() -> dict[str, Any]:
