@@ -20,9 +20,15 @@ def dumps_toml(table: Mapping[str, Any]) -> str:
     return _toml_tables(table, "")
 
 
+def _toml_string(text: str) -> str:
+    # JSON's escapes are TOML's, but not its surrogate pairs: non-ASCII stays as it is; DEL, raw
+    # in JSON, is escaped as TOML wants.
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
 def _toml_key(key: Any) -> str:
     key = str(key)
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else _toml_string(key)
 
 
 def _toml_value(value: Any) -> str:
@@ -31,7 +37,7 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, int | float):
         return repr(value)  # inf and nan are TOML too
     if isinstance(value, str):
-        return json.dumps(value)  # a JSON string is a TOML basic string
+        return _toml_string(value)
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, Mapping):

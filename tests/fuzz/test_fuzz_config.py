@@ -405,3 +405,28 @@ def test_set_values_are_typed_by_the_schema():
             ["abc", "[1]", "true"])
         with pytest.raises(ConfigError, match=f"--set {section}.{key}: '{section}.{key}'"):
             load_config(sets=[f"{section}.{key}={wrong}"])
+
+
+def test_resolved_config_written_as_toml_loads_back(tmp_path):
+    """What bench's children and a re-run read (``Config.to_toml``): random valid configs, and a
+    plug-in's parameters holding any text, load back to the same values."""
+    rng = random.Random(2041)
+    path, again = tmp_path / "user.toml", tmp_path / "again.toml"
+    loaded = 0
+    for i in range(n_cases(300)):
+        path.write_text(_random_toml(rng))
+        try:
+            cfg = load_config(path)
+        except ConfigError:
+            continue
+        if i % 2:
+            text = "".join(chr(rng.choice([rng.randrange(0, 128), rng.randrange(0xe000, 0x10ffff)]))
+                           for _ in range(rng.randrange(0, 12)))
+            cfg = cfg.with_overrides({"downwash": {
+                "field": "aerodock.downwash.template:UniformColumnField",
+                "params": {"label": text, text or "k": [1, 2.5], "nested": {"t": text}}}})
+        again.write_text(cfg.to_toml(), encoding="utf-8")
+        assert load_config(again).data == cfg.data
+        loaded += 1
+        count("config-toml")
+    assert loaded > 0
