@@ -15,7 +15,9 @@ file by file, whether the bytes are identical; the exit status is 0 only when al
 ``results.json`` records how long each stage took (wall-clock seconds) and where it wrote its
 files: the reproduction always runs in the same folder (``RUN_DIR``), and the comparison blanks
 the wall-clock fields (``WALL_CLOCK_KEYS``, and everything under ``timings_s``) and that folder's
-name in both files before comparing the bytes of the rest.
+name in both files before comparing the bytes of the rest. It also leaves out the run's
+provenance (``PROVENANCE_KEYS`` of ``aerodock_reproduce``: the resolved config, aerodock's
+version and git commit), which differs between two versions by design: only numbers are compared.
 """
 
 from __future__ import annotations
@@ -46,6 +48,9 @@ CAMPAIGNS: dict[str, list[str]] = {
 _POINT_MASS_TOML = '[vehicle]\nmodel = "point-mass"\n'
 RUN_DIR = Path(tempfile.gettempdir()) / "aerodock-same-numbers" / "reproduce"
 WALL_CLOCK_KEYS = frozenset({"fly_s", "train_s", "wall_s", "train_time_s"})
+# Under "aerodock_reproduce": where the run came from, not what it computed (older files hold
+# "config": "defaults"; newer ones the resolved values, the version and the commit).
+PROVENANCE_KEYS = frozenset({"config", "config_source", "version", "git_commit", "git_dirty"})
 
 
 def _aerodock() -> str:
@@ -98,7 +103,12 @@ def _masked(path: Path) -> bytes:
     if path.name != "results.json":
         return data
     folders = (str(RUN_DIR), str(path.parent))  # where the run wrote (older captures: in place)
-    return json.dumps(_blank(json.loads(data), folders), indent=2).encode()
+    doc = json.loads(data)
+    meta = doc.get("aerodock_reproduce") if isinstance(doc, dict) else None
+    if isinstance(meta, dict):
+        for key in PROVENANCE_KEYS:
+            meta.pop(key, None)
+    return json.dumps(_blank(doc, folders), indent=2).encode()
 
 
 def compare(a: Path, b: Path) -> bool:

@@ -9,8 +9,16 @@ from rich.console import Console
 from rich.table import Table
 
 from aerodock.bench import PARTS, run_all, table_rows
-from aerodock.cli.common import ConfigOpt, JsonOpt, fail, print_json
-from aerodock.config import load_config
+from aerodock.cli.common import (
+    ConfigOpt,
+    JsonOpt,
+    SetOpt,
+    TrustOpt,
+    config_for_children,
+    fail,
+    load_cli_config,
+    print_json,
+)
 from aerodock.fileio import json_ready
 
 
@@ -19,6 +27,8 @@ def bench_command(
         "--quick", help="Fewer, shorter repetitions; skips `reproduce --quick`.")] = False,
     as_json: JsonOpt = False,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     only: Annotated[str | None, typer.Option(
         "--only", help=f"Measure one part alone: {', '.join(PARTS)}.")] = None,
 ) -> None:
@@ -27,16 +37,17 @@ def bench_command(
     if only is not None and only not in PARTS:
         fail(f"unknown --only {only!r}; choose one of {', '.join(PARTS)}")
 
+    cfg = load_cli_config(config, sets, trust)
     err = Console(stderr=True)
-    with err.status("benchmarking") as status:
+    with config_for_children(cfg, config, sets, trust) as child_config, \
+            err.status("benchmarking") as status:
         def progress(msg: str) -> None:
             if err.is_terminal:
                 status.update(f"benchmarking: {msg}")
             else:
                 err.print(f"bench: {msg}", highlight=False)
 
-        doc = run_all(load_config(config), quick=quick, progress=progress, config_path=config,
-                      only=only)
+        doc = run_all(cfg, quick=quick, progress=progress, config_path=child_config, only=only)
     if as_json:
         print_json(json_ready(doc))  # a figure that could not be computed is null
         return

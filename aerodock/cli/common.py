@@ -3,11 +3,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 from rich.console import Console
@@ -15,13 +18,30 @@ from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedCo
 
 from aerodock.fileio import dumps_json
 
+if TYPE_CHECKING:
+    from aerodock.config import Config
+
 ConfigOpt = Annotated[
     Path | None, typer.Option("--config", help="TOML file overriding aerodock's defaults.")
 ]
+SetOpt = Annotated[list[str] | None, typer.Option(
+    "--set", metavar="SECTION.KEY=VALUE",
+    help="Set a config key after --config, e.g. platform.cable_length_m=0.64 (repeatable).")]
+TrustOpt = Annotated[list[str] | None, typer.Option(
+    "--trust-plugin", metavar="MODULE",
+    help="Trust the config's plug-in field from MODULE: it runs that code (repeatable).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print the numbers as JSON.")]
 SeedOpt = Annotated[int, typer.Option("--seed", help="Random seed.")]
 
 err_console = Console(stderr=True)
+
+
+def load_cli_config(config: Path | None, sets: list[str] | None = None,
+                    trust: list[str] | None = None) -> Config:
+    """The config of ``--config``, ``--set`` and ``--trust-plugin`` (ConfigError: one line)."""
+    from aerodock.config import load_config
+
+    return load_config(config, sets or (), trust or ())
 
 
 def fail(message: str, code: int = 2) -> NoReturn:
@@ -57,6 +77,30 @@ def check_number(option: str, value: float | None, low: float, high: float) -> N
     if not low <= value <= high:
         fail(f"{option} must be between {low:g} and {high:g}, got {value!r}")
 
+
+@contextlib.contextmanager
+def config_for_children(cfg: Config, config: Path | None, sets: list[str] | None,
+                        trust: list[str] | None) -> Iterator[Path | None]:
+    """The ``--config`` file a child process is to read: the user's own, or (with ``--set``)
+    ``cfg`` written to a temporary file; ``--trust-plugin`` is added to the children's
+    ``AERODOCK_TRUST_PLUGINS`` meanwhile (restored after)."""
+    from aerodock.config.plugins import TRUST_ENV
+
+    saved = os.environ.get(TRUST_ENV)
+    with tempfile.TemporaryDirectory(prefix="aerodock-config-") as tmp:
+        path = config
+        if sets:
+            path = Path(tmp) / "resolved.toml"
+            path.write_text(cfg.to_toml())
+        if trust:
+            os.environ[TRUST_ENV] = ",".join([*trust, *([saved] if saved else [])])
+        try:
+            yield path
+        finally:
+            if saved is None:
+                os.environ.pop(TRUST_ENV, None)
+            else:
+                os.environ[TRUST_ENV] = saved
 
 LOG_EVERY_S = 30.0
 """Without a terminal (a log file, a pipe, a batch job), how often a progress line is printed."""

@@ -13,10 +13,13 @@ from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
     SeedOpt,
+    SetOpt,
+    TrustOpt,
     bar_callback,
     check_number,
     err_console,
     fail,
+    load_cli_config,
     print_json,
     progress_bar,
 )
@@ -53,13 +56,14 @@ def evaluate_compensation_command(
         "--figure", help="Also draw the residual against each compensation along a held-out "
                          "pass to this PNG file.")] = None,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
     """Score the compensations on real flights: none, the paper's bias observer (Freyja's, at
     the paper's rates), our accelerometer observer, the learnt model, and each observer with the
     model, replayed causally over held-out flights (swap_ss 05-06, swap_sl 08-11)."""
-    from aerodock.config import load_config
     from aerodock.experiments.compensation_study import (
         compensation_study,
         table_rows,
@@ -80,7 +84,7 @@ def evaluate_compensation_command(
     if not root.is_dir():
         fail(f"{root}: no such folder (give --data, the Neural-Swarm folder holding swap_ss and "
              "swap_sl_2020-06-19)")
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
 
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")

@@ -13,12 +13,14 @@ from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
     SeedOpt,
+    SetOpt,
+    TrustOpt,
     check_number,
     fail,
+    load_cli_config,
     print_json,
     progress_bar,
 )
-from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
 
 
@@ -50,6 +52,8 @@ def dock(
     seed: SeedOpt = 0,
     save_logs: Annotated[Path | None, typer.Option(help="Write the FlightLogs to DIR.")] = None,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Fly a docking campaign and report success (Wilson 95 %), errors, slips, aborts."""
@@ -64,7 +68,7 @@ def dock(
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     try:
-        cfg = controller_config(load_config(config), controller)
+        cfg = controller_config(load_cli_config(config, sets, trust), controller)
     except ValueError as exc:
         fail(str(exc))
     injected = tuple(load_faults(faults)) if faults is not None else ()
@@ -133,6 +137,8 @@ def faults_command(
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
     seed: SeedOpt = 0,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     markdown: Annotated[bool, typer.Option(help="Print the table as Markdown.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -142,7 +148,7 @@ def faults_command(
     from aerodock.mission.faults import load_faults
     from aerodock.mission.limits import check_campaign_size
 
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     if not 1 <= trials <= 4096:
         fail(f"--trials must be in 1..4096, got {trials}")
     check_campaign_size(cfg, trials)

@@ -12,13 +12,15 @@ from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
     SeedOpt,
+    SetOpt,
+    TrustOpt,
     bar_callback,
     err_console,
     fail,
+    load_cli_config,
     print_json,
     progress_bar,
 )
-from aerodock.config import load_config
 
 TARGETS_OUTPUTS = ("data", "targets.json")
 """What ``targets --out`` holds: the folder is replaced as a whole by the next run."""
@@ -31,6 +33,8 @@ def reproduce(
              "end to end; no figure worth quoting).")] = False,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("out/reproduce"),
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     real_data: Annotated[bool, typer.Option(
         help="Run the real-data study (step 5; it reads ../shared/data and does not depend on "
@@ -40,7 +44,7 @@ def reproduce(
     from aerodock.experiments.reproduce import run_reproduce
     from aerodock.mission.limits import check_campaign_size
 
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     # Its docking campaigns come after minutes of curriculum: a trial the limits refuse is
     # refused now, not there (each campaign checks its own trials x steps as it starts).
     check_campaign_size(cfg, 1)
@@ -67,6 +71,8 @@ def targets_command(
     ] = None,
     trials: Annotated[int, typer.Option(help="Trials per scenario and row.")] = 100,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -81,7 +87,7 @@ def targets_command(
 
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     check_campaign_size(cfg, trials)
 
     def say(msg: str) -> None:

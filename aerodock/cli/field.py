@@ -13,12 +13,14 @@ from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
     SeedOpt,
+    SetOpt,
+    TrustOpt,
     check_number,
     err_console,
     fail,
+    load_cli_config,
     print_json,
 )
-from aerodock.config import load_config
 
 if TYPE_CHECKING:
     from aerodock.config import Config
@@ -37,6 +39,8 @@ def field_probe(
     bar: Annotated[bool, typer.Option(
         "--bar", help="Probe the force on the docking bar (held still, hovering leader).")] = False,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -50,7 +54,7 @@ def field_probe(
     check_number("--radial", radial, -100.0, 100.0)
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_mass = cfg.leader.mass_kg
     dt = 1.0 / cfg.sim.physics_rate_hz
@@ -118,6 +122,8 @@ def field_plot(
     leader_speed: Annotated[float, typer.Option(help="Leader speed towards north, m/s.")] = 0.0,
     model: Annotated[Path | None, typer.Option(help="Plot a trained model DIR instead.")] = None,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
 ) -> None:
     """Draw the field's mean (or a learnt model) as a vertical slice through the wake; a field
     without mean_acceleration() is drawn from an estimate of its mean (said in the title)."""
@@ -128,7 +134,7 @@ def field_plot(
 
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     check_writable_target(out)
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     if model is not None:
         from aerodock.learning.runtime import Predictor
         from aerodock.mission.params import fly_on_configured_rotors
@@ -182,6 +188,8 @@ def field_fit(
         "--config-out", help="Also write the fitted TOML fragment here (a world loads it with "
                              "--config).")] = None,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -210,7 +218,7 @@ def field_fit(
         fail(f"--noise must be 'pooled' or 'speed', got {noise!r}")
     if folds == 1 or not 0 <= folds <= 100:
         fail(f"--folds must be 0 (none) or between 2 and 100, got {folds}")
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     check_output_dir(out, FIT_OUTPUTS)
     if config_out is not None:
         check_writable_target(config_out)
@@ -276,6 +284,7 @@ def field_fit(
     words += ["--noise", noise] if noise != "pooled" else []
     words += ["--folds", str(folds)] if folds else []
     words += ["--config", str(config)] if config is not None else []
+    words += [w for text in sets or [] for w in ("--set", text)]
     command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
     held_names = sorted({f.flight for f in held})
     toml_text = config_fragment(fit, held_names, command)

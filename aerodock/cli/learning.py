@@ -23,13 +23,15 @@ from aerodock.cli.common import (
     JsonOpt,
     LoggedProgress,
     SeedOpt,
+    SetOpt,
+    TrustOpt,
     bar_callback,
     err_console,
     fail,
+    load_cli_config,
     print_json,
     progress_bar,
 )
-from aerodock.config import load_config
 from aerodock.fileio import one_line
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
@@ -341,6 +343,8 @@ def collect(
     out: Annotated[Path, typer.Option(help="Folder for the FlightLogs and stage models.")],
     model: Annotated[str | None, typer.Option(help="Model kind trained at each stage.")] = None,
     config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -348,7 +352,7 @@ def collect(
     closer (0.3 m by default)."""
     from aerodock.learning.curriculum import run_curriculum
 
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     if model is not None and model not in COLLECTABLE:
         fail(f"--model must be {', '.join(COLLECTABLE[:-1])} or {COLLECTABLE[-1]}, got {model!r}")
 

@@ -17,7 +17,7 @@ from typing import Annotated
 
 import typer
 
-from aerodock.cli.common import fail
+from aerodock.cli.common import SetOpt, TrustOpt, fail
 from aerodock.fileio import one_line
 from aerodock.node.core import (
     DEFAULT_MAX_AGE_S,
@@ -84,6 +84,8 @@ def node_command(
                          "from them "
                          "(the leader hovering) instead of its training flights'.",
     )] = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
 ) -> None:
     """Run a trained downwash model as a ROS 2 node next to Freyja or PX4 (the ros extra).
 
@@ -119,7 +121,7 @@ def node_command(
         types[topic] = type_name
     try:
         predictor = Predictor.load(model)
-        cfg = load_config(config)
+        cfg = load_config(config, sets or (), trust or ())
         merged, _ = load_mapping(mapping)
     except (ModelFileError, ConfigError, IngestError) as err:
         fail(one_line(str(err)))  # str(): an empty text stays empty, no type name

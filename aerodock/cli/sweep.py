@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from aerodock.cli.common import fail, print_json, progress_bar
+from aerodock.cli.common import TrustOpt, fail, print_json, progress_bar
 
 OUTPUTS = ("results.csv", "results.parquet", "summary.json", "figures")
 """What ``sweep --out`` holds: the folder is replaced as a whole by the next sweep into it."""
@@ -32,6 +32,7 @@ def sweep_command(
     jobs: Annotated[int | None, typer.Option(
         help="Parallel workers (default: all CPUs).")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    trust: TrustOpt = None,
 ) -> None:
     """A grid or random study of docking campaigns (cable length x leader speed x noise x fault
     x compensation x seed): results.csv (+ results.parquet with pyarrow), summary.json and
@@ -48,7 +49,7 @@ def sweep_command(
     spec = load_spec(spec_path)
     if address is not None and backend != Backend.RAY:
         fail("--address needs --backend ray")
-    cfg = load_config(spec.config)
+    cfg = load_config(spec.config, trusted=trust or ())  # the spec's config: same trust rules
     check_against_config(spec, cfg)  # every cell as dock would check it, before any runs
     check_output_dir(out, OUTPUTS)  # refused now, not after the study has run
     started = time.perf_counter()

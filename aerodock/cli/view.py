@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from aerodock.cli.common import fail, progress_bar
+from aerodock.cli.common import SetOpt, TrustOpt, fail, load_cli_config, progress_bar
 
 
 def view_command(
@@ -25,15 +25,16 @@ def view_command(
     = None,
     config: Annotated[Path | None, typer.Option(
         "--config", help="TOML file overriding aerodock's defaults (bar geometry).")] = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
 ) -> None:
     """Watch a trial: both vehicles, the bar and its cables, the gate's state and the predicted
     force, in a side and a top view."""
-    from aerodock.config import load_config
     from aerodock.fileio import check_writable_target
     from aerodock.flightlog import load_flightlogs
     from aerodock.view.render import render_animation, track_from_flightlog
 
-    cfg = load_config(config)
+    cfg = load_cli_config(config, sets, trust)
     if rerun is not None:  # an output: refused now (a FIFO would block), not after rendering
         check_writable_target(rerun)
     logs = load_flightlogs(log)

@@ -7,22 +7,26 @@ type of its default and satisfy the key's rule. Errors name the key and the file
     cfg = load_config("my.toml")
     cfg.vehicle.mass_kg          # 0.7
     cfg2 = cfg.with_overrides({"platform": {"cable_length_m": 0.64}})
+    cfg3 = load_config("my.toml", sets=["platform.cable_length_m=0.64"])  # --set
+
+A config that names a plug-in field names code: it is imported only from a trusted source
+(:mod:`aerodock.config.plugins`; ``trusted`` below, ``--trust-plugin`` on the command line).
 """
 
 from __future__ import annotations
 
 import copy
-import importlib
 import math
-import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from aerodock.config.errors import ConfigError
+from aerodock.config.plugins import resolve_factory
 from aerodock.config.schema import (
     LEADER_FIXED_KEYS,
     RULES,
@@ -40,24 +44,29 @@ from aerodock.config.schema import (
     SimSection,
     VehicleSection,
 )
+from aerodock.config.toml_text import dumps_toml
 from aerodock.fileio import read_toml
 
 DEFAULTS_NAME = "defaults.toml"
 _DEFAULT_FIELD = "aerodock.downwash.jet:RoundJetField"
-_FIELD_PATH = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*")
 
-
-class ConfigError(ValueError):
-    """A configuration value is invalid; the message names the key and the file."""
+__all__ = ["Config", "ConfigError", "load_config", "parse_set", "resolve_factory"]
 
 
 @dataclass(frozen=True)
 class Config:
     """Validated configuration: one typed, read-only section per TOML table
-    (``cfg.vehicle.mass_kg``; see :mod:`aerodock.config.schema`)."""
+    (``cfg.vehicle.mass_kg``; see :mod:`aerodock.config.schema`).
+
+    ``trusted`` holds the plug-in modules the user trusted when it was loaded
+    (:func:`load_config`); :meth:`with_overrides` passes them on. Its own ``downwash.field`` was
+    checked when it was read from text, so building it needs no trust again (a ``Config`` made
+    in Python from a dict is the program's own choice).
+    """
 
     data: dict[str, Any]
     source: str = "defaults"
+    trusted: tuple[str, ...] = ()
 
     def _section(self, name: str) -> Any:
         return SECTIONS[name](**self.data[name])
@@ -137,12 +146,17 @@ class Config:
         """A deep copy of the values, e.g. for recording in results.json."""
         return copy.deepcopy(self.data)
 
+    def to_toml(self) -> str:
+        """The values as TOML text that :func:`load_config` reads back to the same config."""
+        return dumps_toml(self.data)
+
     def with_overrides(self, overrides: Mapping[str, Any], source: str = "overrides") -> Config:
         """A new validated config with ``overrides`` (nested tables) applied."""
         merged = copy.deepcopy(self.data)
         _merge(merged, overrides, _defaults(), source, prefix="")
-        _validate(merged, source)
-        return Config(merged, self.source)
+        # A field other than this config's own needs the same trust as one read from a file.
+        _validate(merged, source, (*self.trusted, self.data["downwash"]["field"]))
+        return Config(merged, self.source, self.trusted)
 
 
 def _defaults() -> dict[str, Any]:
@@ -234,8 +248,10 @@ def _merge_downwash(target: dict, user: Any, reference: dict, source: str) -> No
         if params is not None:
             _merge(base, params, reference["params"], source, "downwash.params.")
     else:
-        # Plug-in parameters are the factory's own keyword arguments (checked when it is built).
-        base = dict(params) if params is not None else ({} if changed else target["params"])
+        # Plug-in parameters are the factory's own keyword arguments (checked when it is built);
+        # a new field starts from none, the same field keeps those not given again.
+        base = {} if changed else dict(target["params"])
+        base.update(params or {})
     target["field"] = field_path
     target["params"] = base
 
@@ -269,7 +285,7 @@ def _check_plugin_params(params: Mapping[str, Any], source: str, prefix: str) ->
             raise ConfigError(f"{source}: '{dotted}' must be a finite number, got {value!r}")
 
 
-def _validate(data: dict[str, Any], source: str) -> None:
+def _validate(data: dict[str, Any], source: str, trusted: Iterable[str] = ()) -> None:
     for section, values in data.items():
         for key, value in values.items():
             dotted = f"{section}.{key}"
@@ -305,8 +321,8 @@ def _validate(data: dict[str, Any], source: str) -> None:
             elif _is_number(value):
                 _check_number(value, dotted, source, bounds)
     _check_consistency(data, source)
-    # Fail now, not mid-run, on an unknown or broken plug-in.
-    resolve_factory(data["downwash"]["field"], source)
+    # Fail now, not mid-run, on an untrusted, unknown or broken plug-in (nothing is called).
+    resolve_factory(data["downwash"]["field"], source, trusted)
 
 
 def _validate_leader_key(key: str, value: Any, source: str) -> None:
@@ -379,42 +395,58 @@ def _check_consistency(data: dict[str, Any], source: str) -> None:
         )
 
 
-def resolve_factory(path: str, source: str = "config") -> Any:
-    """Import ``"package.module:attr"`` and return the attribute (a field factory).
+def _lookup_default(parts: list[str]) -> Any:
+    node: Any = _defaults()
+    for part in parts:
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return node
+
+
+def parse_set(text: str) -> dict[str, Any]:
+    """``"section.key=value"`` (``--set``) as a nested override table.
+
+    The value is read as a TOML value (``0.64``, ``4``, ``true``, ``[0.5, 0.8]``, ``"text"``);
+    where that fails, or where the key's default is a string, it is the text as written
+    (``vehicle.model=point-mass``). Types and ranges are checked by the loader as a file's are.
 
     Raises:
-        ConfigError: a malformed path, or a module that cannot be imported (whatever it raises,
-            including ``SystemExit``), or a missing attribute.
+        ConfigError: not ``key=value``, or an empty part in the key.
     """
-    if not isinstance(path, str) or not _FIELD_PATH.fullmatch(path):
-        raise ConfigError(
-            f"{source}: 'downwash.field' must look like 'package.module:factory', got {path!r}"
-        )
-    module_name, _, attr = path.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as err:
-        raise ConfigError(
-            f"{source}: 'downwash.field' plug-in module {module_name!r} cannot be imported ({err})"
-        ) from None
-    except (Exception, SystemExit) as err:  # a plug-in's own code failed while importing
-        raise ConfigError(
-            f"{source}: 'downwash.field' plug-in module {module_name!r} failed on import "
-            f"({type(err).__name__}: {err})"
-        ) from None
-    try:
-        return getattr(module, attr)
-    except AttributeError:
-        raise ConfigError(
-            f"{source}: 'downwash.field' plug-in {module_name!r} has no attribute {attr!r}"
-        ) from None
+    key, eq, raw = text.partition("=")
+    key, raw = key.strip(), raw.strip()
+    parts = key.split(".")
+    if not eq or len(parts) < 2 or not all(p.strip() for p in parts):
+        raise ConfigError(f"--set {text!r}: must be section.key=value "
+                          "(e.g. --set platform.cable_length_m=0.64)")
+    parts = [p.strip() for p in parts]
+    value: Any = raw
+    quoted = raw[:1] in ("'", '"')
+    if quoted or not isinstance(_lookup_default(parts), str):
+        try:
+            value = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            if quoted:
+                raise ConfigError(f"--set {key}: {raw} is not a valid quoted string") from None
+    table: dict[str, Any] = {parts[-1]: value}
+    for part in reversed(parts[:-1]):
+        table = {part: table}
+    return table
 
 
-def load_config(path: str | Path | None = None) -> Config:
-    """Load the defaults and apply the user TOML file at ``path`` (if any).
+def load_config(path: str | Path | None = None, sets: Iterable[str] = (),
+                trusted: Iterable[str] = ()) -> Config:
+    """Load the defaults, apply the user TOML file at ``path`` (if any), then each
+    ``section.key=value`` of ``sets`` (``--set``, :func:`parse_set`), and check the result.
+
+    ``trusted``: module prefixes (or ``module:factory`` paths) whose fields the config may name
+    besides aerodock's own, installed packages' declared ones and ``AERODOCK_TRUST_PLUGINS``
+    (:mod:`aerodock.config.plugins`); any other is refused before it is imported.
 
     Raises:
-        ConfigError: unreadable file, TOML syntax error, unknown key, wrong type or range.
+        ConfigError: unreadable file, TOML syntax error, unknown key, wrong type or range, a bad
+            ``--set``, an untrusted plug-in or one that is not a field factory.
     """
     data = _defaults()
     source = "defaults"
@@ -422,5 +454,12 @@ def load_config(path: str | Path | None = None) -> Config:
         source = str(path)
         user = read_toml(path, "config file", ConfigError)
         _merge(data, user, _defaults(), source, prefix="")
-    _validate(data, source)
-    return Config(data, source)
+    sets = list(sets)
+    for text in sets:
+        table = parse_set(text)
+        _merge(data, table, _defaults(), f"--set {text.partition('=')[0].strip()}", prefix="")
+    if sets:
+        source = f"{source} + --set"
+    trusted = tuple(trusted)
+    _validate(data, source, trusted)
+    return Config(data, source, trusted)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-from aerodock.config import Config, ConfigError, resolve_factory
+from aerodock.config import Config, ConfigError, field_factory, resolve_factory
 from aerodock.downwash.base import BodyState, DownwashField
 from aerodock.downwash.mean import mean_acceleration_fn
 from aerodock.downwash.wrench import (
@@ -17,7 +17,7 @@ from aerodock.downwash.wrench import (
     quad_rotor_offsets_body_m,
 )
 
-__all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field",
+__all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "field_factory",
            "follower_body_force_n", "follower_wrench", "mean_acceleration_fn",
            "quad_rotor_offsets_body_m"]
 
@@ -34,13 +34,15 @@ def build_field(cfg: Config) -> DownwashField:
 
     Only the configured field's own parameters are passed (the config never carries the
     default field's parameters over to a plug-in), plus the world constants its signature names.
+    The factory is checked to be one (:func:`aerodock.config.plugins.is_field_factory`) before
+    it is called; the config's own field was checked for trust when the config was read.
 
     Raises:
-        ConfigError: unknown plug-in, bad parameters, a factory that fails (whatever it raises,
-            including ``SystemExit``), or an object that is not a field.
+        ConfigError: unknown plug-in, not a field factory, bad parameters, a factory that fails
+            (whatever it raises, including ``SystemExit``), or an object that is not a field.
     """
     path = cfg.downwash.field
-    factory = resolve_factory(path, cfg.source)
+    factory = resolve_factory(path, cfg.source, (*cfg.trusted, path))
     params: dict[str, Any] = dict(cfg.data["downwash"].get("params", {}))
     try:
         accepted = inspect.signature(factory).parameters

@@ -3,7 +3,10 @@
 A field is any object with ``reset`` and ``acceleration`` (:class:`DownwashField`); it is loaded
 from the config by import path (``[downwash] field = "package.module:factory"``) with
 ``[downwash.params]`` passed to the factory as keyword arguments. See
-``aerodock/downwash/template.py`` for a minimal example.
+``aerodock/downwash/template.py`` for a minimal example. A config that names a module outside
+aerodock runs its code, so it loads only from an installed package's ``aerodock.fields`` entry
+point or a module the user trusts (:mod:`aerodock.config.plugins`); the factory is a class with
+``reset`` and ``acceleration`` or a function marked with :func:`aerodock.downwash.field_factory`.
 
 Five methods are optional; every command works without them:
 

@@ -300,7 +300,7 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
     lines = ["# aerodock reproduce: report", "",
              f"Run: {'smoke' if meta.get('smoke') else 'quick' if meta['quick'] else 'full'}, "
              f"seed {meta['seed']}, "
-             f"config `{meta['config']}`, {meta['machine']}; "
+             f"config `{meta.get('config_source', meta['config'])}`, {meta['machine']}; "
              f"total {r['timings_s']['total_s']:.0f} s. Every number below is computed by "
              "`aerodock reproduce` and stored in `results.json`; the paper's numbers are quoted "
              "beside ours. The reproduction flies the paper's controller as its flight stack "

@@ -40,6 +40,7 @@ from aerodock.experiments.controller_costs import (
     controller_costs,
 )
 from aerodock.experiments.paper_counts import paper_outcome_probabilities
+from aerodock.experiments.provenance import provenance
 from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
@@ -310,6 +311,7 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
 
     quick = quick or smoke
     size = SMOKE if smoke else QUICK if quick else FULL
+    given = provenance(cfg)  # the config as resolved from --config and --set, the code's version
     if size.overrides:
         cfg = cfg.with_overrides(size.overrides, source="reproduce's run size")
     out_dir = Path(out_dir)
@@ -320,7 +322,7 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     traces: dict[str, Any] = {}
     results: dict[str, Any] = {
         "aerodock_reproduce": {"quick": quick, "smoke": smoke, "seed": seed,
-                               "config": cfg.source, "size_overrides": size.overrides,
+                               **given, "size_overrides": size.overrides,
                                "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
                                           f"Python {platform.python_version()}"},
         "units": {"errors": "m", "integrals_over_0.5s": "m*s (errors), m/s (force)",

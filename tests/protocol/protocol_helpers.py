@@ -14,6 +14,8 @@ from typing import Any
 from short_mission import short_mission_toml
 
 HERE = Path(__file__).resolve().parent
+TRUST = {"AERODOCK_TRUST_PLUGINS": "protocol_fields"}
+"""The user's word that the config's plug-in module may run (a config names code only so)."""
 FIELDS = ("MinimalField", "OutwardThrustAxisField", "NoWakeField")
 # Only these have no mean_acceleration(): their mean is estimated or reported unavailable.
 WITHOUT_MEAN = ("MinimalField", "NoWakeField")
@@ -47,8 +49,8 @@ def write_config(folder: Path, name: str, deep: bool = True) -> Path:
 
 
 def subprocess_env() -> dict[str, str]:
-    """The environment of a user whose plug-in module is on PYTHONPATH."""
-    env = dict(os.environ)
+    """The environment of a user whose plug-in module is on PYTHONPATH and trusted."""
+    env = {**os.environ, **TRUST}
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(HERE), env.get("PYTHONPATH")) if p)
     return env
 
@@ -61,14 +63,15 @@ def aerodock_process(args: list[str], cwd: Path) -> subprocess.Popen:
 
 
 def run_cli(*args: str) -> Any:
-    """``aerodock ARGS`` in this process (no interpreter start-up); asserts exit code 0."""
+    """``aerodock ARGS`` in this process (no interpreter start-up), the plug-in module trusted
+    for the call; asserts exit code 0."""
     from typer.testing import CliRunner
 
     from aerodock.cli.app import app
 
     if str(HERE) not in sys.path:
         sys.path.insert(0, str(HERE))
-    result = CliRunner().invoke(app, list(args))
+    result = CliRunner().invoke(app, list(args), env=TRUST)
     assert result.exit_code == 0, (args, result.output, result.exception)
     return result
 

@@ -44,7 +44,8 @@ def test_user_file_overrides_a_subset(tmp_path):
         ("[vehicle]\nmass_kg = \"heavy\"\n", "'vehicle.mass_kg' must be a number"),
         ("[gripper]\ntrigger = \"psychic\"\n", "'gripper.trigger' must be one of"),
         ("[control]\nq_diag = [1, 2]\n", "'control.q_diag' must be 7"),
-        ("[downwash]\nfield = \"no_such_pkg.mod:Field\"\n", "cannot be imported"),
+        ("[downwash]\nfield = \"no_such_pkg.mod:Field\"\n", "names code outside aerodock"),
+        ("[downwash]\nfield = \"aerodock.no_such:Field\"\n", "cannot be imported"),
         ("[downwash]\nfield = \"aerodock.downwash.jet:Nope\"\n", "has no attribute 'Nope'"),
         ("[downwash]\nfield = \"nocolon\"\n", "package.module:factory"),
         ("[sim]\nphysics_rate_hz = 330\n", "multiple of"),
@@ -109,10 +110,24 @@ def test_plugin_with_bad_params_names_the_file(tmp_path):
     assert str(path) in str(err.value)
 
 
-def test_plugin_that_is_not_a_field(tmp_path):
+def test_plugin_that_is_not_a_field_factory_is_refused_uncalled(tmp_path, monkeypatch):
+    """A trusted module's plain function is not a factory: refused as the config loads."""
+    monkeypatch.setenv("AERODOCK_TRUST_PLUGINS", "numpy")
     path = _write(tmp_path, '[downwash]\nfield = "numpy:zeros"\n[downwash.params]\nshape = 3\n')
+    with pytest.raises(ConfigError, match="numpy:zeros is not a field factory"):
+        load_config(path)
+
+
+def test_factory_that_builds_no_field(tmp_path, monkeypatch):
+    """A marked factory whose result lacks the protocol is refused when it is built."""
+    (tmp_path / "plug_nofield.py").write_text(
+        "from aerodock.downwash import field_factory\n\n"
+        "@field_factory\ndef F(**kw):\n    return object()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    path = _write(tmp_path, '[downwash]\nfield = "plug_nofield:F"\n')
+    cfg = load_config(path, trusted=["plug_nofield"])
     with pytest.raises(ConfigError, match="does not build a field"):
-        build_field(load_config(path))
+        build_field(cfg)
 
 
 def test_with_overrides_validates(cfg):
@@ -166,16 +181,20 @@ def test_plugin_without_params_gets_none_of_the_jets(tmp_path):
     assert back.data["downwash"]["params"] == load_config().data["downwash"]["params"]
 
 
+_MARK = "from aerodock.downwash import field_factory\n@field_factory\n"
+
+
 @pytest.mark.parametrize(("body", "needle"), [
     ("raise RuntimeError('boom')\n", "failed on import (RuntimeError: boom)"),
     ("import sys\nsys.exit(3)\n", "failed on import (SystemExit: 3)"),
-    ("def F(**kw):\n    raise KeyError('k')\n", "failed to build (KeyError"),
-    ("def F(**kw):\n    import sys\n    sys.exit(4)\n", "failed to build (SystemExit: 4)"),
+    (_MARK + "def F(**kw):\n    raise KeyError('k')\n", "failed to build (KeyError"),
+    (_MARK + "def F(**kw):\n    import sys\n    sys.exit(4)\n", "failed to build (SystemExit: 4)"),
 ])
 def test_plugin_failures_are_config_errors(tmp_path, monkeypatch, body, needle):
     name = f"plug_{abs(hash(body))}"
     (tmp_path / f"{name}.py").write_text(body)
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("AERODOCK_TRUST_PLUGINS", name)
     path = _write(tmp_path, f'[downwash]\nfield = "{name}:F"\n')
     with pytest.raises(ConfigError) as err:
         build_field(load_config(path))
@@ -189,3 +208,43 @@ def test_integral_float_is_refused_for_an_integer_key(tmp_path):
         load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6.0\n"))
     cfg = load_config(_write(tmp_path, "[vehicle]\nn_rotors = 6\n"))
     assert cfg.vehicle.n_rotors == 6 and isinstance(cfg.vehicle.n_rotors, int)
+
+
+def test_an_installed_packages_declared_field_needs_no_trust(tmp_path, monkeypatch):
+    """A field declared in the ``aerodock.fields`` entry-point group loads as a built-in does;
+    another attribute of the same module is not declared, so it is refused unimported."""
+    from importlib.metadata import EntryPoint
+
+    from aerodock.config import plugins
+
+    monkeypatch.delenv("AERODOCK_TRUST_PLUGINS", raising=False)
+    (tmp_path / "declared_fields.py").write_text(
+        "from aerodock.downwash.template import UniformColumnField as Column\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    points = [EntryPoint("column", "declared_fields:Column", plugins.ENTRY_POINT_GROUP)]
+    monkeypatch.setattr(plugins.metadata, "entry_points",
+                        lambda group: points if group == plugins.ENTRY_POINT_GROUP else [])
+    cfg = load_config(_write(tmp_path, '[downwash]\nfield = "declared_fields:Column"\n'))
+    assert type(build_field(cfg)).__name__ == "UniformColumnField"
+    with pytest.raises(ConfigError, match="names code outside aerodock"):
+        load_config(_write(tmp_path, '[downwash]\nfield = "declared_fields:Other"\n'))
+
+
+def test_set_applies_after_the_file_and_before_the_checks(tmp_path):
+    """--set wins over the file; the rules between keys see the result (a file that alone
+    breaks one is rescued by a --set, and the other way round)."""
+    path = _write(tmp_path, "[platform]\ncable_length_m = 0.64\n[vehicle]\nmass_kg = 0.8\n")
+    cfg = load_config(path, sets=["platform.cable_length_m=0.5", "vehicle.n_rotors=6"])
+    assert (cfg.platform.cable_length_m, cfg.vehicle.mass_kg, cfg.vehicle.n_rotors) == (0.5, 0.8, 6)
+    assert isinstance(cfg.platform.cable_length_m, float)  # 0.5 typed as the key's default
+    bad = _write(tmp_path, "[gripper]\naperture_m = 0.008\n")
+    assert load_config(bad, sets=["platform.bar_diameter_m=0.005"]).gripper.aperture_m == 0.008
+    with pytest.raises(ConfigError, match=r"\+ --set: 'gripper.aperture_m'"):
+        load_config(sets=["gripper.aperture_m=0.008"])
+
+
+def test_plugin_params_by_set_merge_into_the_files(tmp_path):
+    text = ('[downwash]\nfield = "aerodock.downwash.template:UniformColumnField"\n'
+            '[downwash.params]\naccel_mps2 = 2.0\nradius_m = 0.2\n')
+    cfg = load_config(_write(tmp_path, text), sets=["downwash.params.radius_m=0.3"])
+    assert cfg.data["downwash"]["params"] == {"accel_mps2": 2.0, "radius_m": 0.3}
