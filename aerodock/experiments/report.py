@@ -353,9 +353,9 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
     for w, m in zip(cs["without_model"], cs["with_model"], strict=True):
         pw, pm = PAPER_CABLE[m["offset_m"]]
         lines.append(
-            f"| {m['offset_m']} | {w['err_down_int_0p5s_ms']:.3f} [{pw[0]}] | "
-            f"{w['err_3d_int_0p5s_ms']:.3f} [{pw[1]}] | {w['docked']}/{w['trials']} [{pw[2]}] | "
-            f"{m['err_down_int_0p5s_ms']:.3f} [{pm[0]}] | {m['err_3d_int_0p5s_ms']:.3f} "
+            f"| {m['offset_m']} | {w['err_down_int_0p5s_m_s']:.3f} [{pw[0]}] | "
+            f"{w['err_3d_int_0p5s_m_s']:.3f} [{pw[1]}] | {w['docked']}/{w['trials']} [{pw[2]}] | "
+            f"{m['err_down_int_0p5s_m_s']:.3f} [{pm[0]}] | {m['err_3d_int_0p5s_m_s']:.3f} "
             f"[{pm[1]}] | {m['ff_down_int_0p5s_mps']:.2f} [{pm[2]}] | "
             f"{m['docked']}/{m['trials']} [{pm[3]}] |")
     docks_with = sum(m["result"] == "dock" for m in cs["with_model"])

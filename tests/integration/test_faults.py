@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from aerodock.control.compensation import Compensation
-from aerodock.experiments.faults import fault_campaign
+from aerodock.experiments.faults import (
+    OUTCOME_COLUMNS,
+    fault_campaign,
+    rows_markdown,
+    table_cells,
+    table_headers,
+)
 from aerodock.mission import AbortReason, MissionSpec, run_campaign
 from aerodock.mission.faults import Fault, FaultFileError, load_faults, parse_faults
 
@@ -50,6 +56,17 @@ def test_fault_campaign_is_safe_and_counts_what_each_fault_does(cfg):
     jam = by["servo jammed"]
     assert jam["docked"] == 0 and jam["abort_reasons"]["gate_fault"] == 0
     assert jam["sensed_misses"] >= 4 and jam["clearance_violations"] == 0
+    # ... and the table says so in a column of its own: every struck trial has one outcome
+    assert jam["not_held"] >= 4 and jam["missed_or_slipped"] == 0
+    for r in rows:
+        assert sum(r[key] for key, _ in OUTCOME_COLUMNS) == r["struck"], r
+    table = rows_markdown(rows).splitlines()
+    assert table[0].count("|") - 1 == len(table_headers()) == 2 + len(OUTCOME_COLUMNS) + 3
+    assert "not held (gate never shut)" in table[0]
+    jam_line = next(line for line in table if line.startswith("| servo jammed |"))
+    cells = [c.strip() for c in jam_line.strip("|").split("|")]
+    assert cells == table_cells(jam)
+    assert cells[table_headers().index("not held (gate never shut)")] == str(jam["not_held"])
 
 
 def test_a_servo_that_reports_its_position_tells_a_jammed_gate(cfg):
