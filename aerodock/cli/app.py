@@ -78,9 +78,9 @@ field_app.command("fit")(field.field_fit)
 
 
 def as_written(text: str | None) -> str | None:
-    """A help text as Rich's help should show it, as written: RST and Markdown code quotes
-    (````x````, ```x```) become ``'x'``, and brackets are escaped so that Rich does not take
-    ``[[fault]]`` or ``aerodock[viz]`` for markup and drop them."""
+    """A help text as Rich's help should show it, as written: code quoted in double or single
+    backticks (RST, Markdown) is quoted in single quotes instead, and brackets are escaped so
+    that Rich does not take ``[[fault]]`` or ``aerodock[viz]`` for markup and drop them."""
     if not text:
         return text
     text = re.sub(r"``([^`]+)``", r"'\1'", text)
