@@ -70,8 +70,8 @@ def paper_outcome_probabilities(hover_with: dict[str, Any], hover_without: dict[
             rates = [r["success_rate"] for r in cable[key]]
             rec = cable_pattern_probability(rates, all_docked)
             if len(rates) != PAPER_CABLE_OFFSETS:
-                rec["note"] = (f"{len(rates)} of the paper's {PAPER_CABLE_OFFSETS} offsets flown: "
-                               f"the probability of its pattern at these {len(rates)}")
+                rec["note"] = (f"only {len(rates)} of the paper's {PAPER_CABLE_OFFSETS} offsets "
+                               "flown here; the probability is over those")
             out[f"cable_{key}"] = rec
     out["all_consistent"] = all(v["consistent"] for v in out.values())
     return out

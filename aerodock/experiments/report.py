@@ -496,5 +496,5 @@ def figures_markdown(figs: list[str]) -> list[str]:
     lines = ["## Figures", ""]
     for k, f in enumerate(figs, 1):
         caption = figure_caption(f)
-        lines += [f"![Figure {k}: {caption}]({f})", "", f"*Figure {k}: {caption}*", ""]
+        lines += [f"![Figure {k}]({f})", "", f"*Figure {k}: {caption}*", ""]
     return lines

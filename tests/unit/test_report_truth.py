@@ -30,7 +30,7 @@ def test_the_papers_cable_counts_are_quoted_as_the_paper_gives_them():
     assert out["cable_with_model"]["paper"] == "6/6"
     assert out["cable_without_model"]["paper"] == "0/6"
     assert out["cable_with_model"]["probability"] == pytest.approx(0.125)
-    assert "3 of the paper's 6 offsets" in out["cable_with_model"]["note"]
+    assert "only 3 of the paper's 6 offsets" in out["cable_with_model"]["note"]
     lines = "\n".join(report._paper_counts_markdown(out))
     assert "| 6/6 |" in lines and "| 0/6 |" in lines and "3/3" not in lines
     assert "3 of the paper's 6 offsets flown" in lines
@@ -59,7 +59,7 @@ def test_every_figure_the_report_can_list_has_a_caption():
     md = report.figures_markdown(["figures/cable_trajectories.png", "figures/new_one.png"])
     text = "\n".join(md)
     assert f"*Figure 1: {report.FIGURE_CAPTIONS['cable_trajectories.png']}*" in text
-    assert "(figures/cable_trajectories.png)" in text
+    assert "![Figure 1](figures/cable_trajectories.png)" in text
     assert "*Figure 2: new_one.png*" in text  # a figure without a caption is still named
 
 
