@@ -134,7 +134,7 @@ def dock(
     table.add_row("terminal error 3D, median", f"{summary['terminal_err_3d_median_m']:.3f} m")
     table.add_row("slip-throughs", str(summary["slip_throughs"]))
     table.add_row("missed (gate closed empty)", str(summary["missed"]))
-    table.add_row("not held after closing (backed off)", str(summary["sensed_misses"]))
+    table.add_row("sensed not held, backed off (missed included)", str(summary["sensed_misses"]))
     table.add_row("aborts", aborts_text(summary))
     table.add_row("clearance violations", str(summary["clearance_violations"]))
     table.add_row("rotor strikes / ground contacts",
