@@ -79,3 +79,16 @@ def test_observer_bandwidth_labels_stay_inside_the_frame(monkeypatch, tmp_path):
         box = ax.get_tightbbox(renderer)
         assert (box.x0 >= frame.x0 - 0.5 and box.x1 <= frame.x1 + 0.5
                 and box.y0 >= frame.y0 - 0.5 and box.y1 <= frame.y1 + 0.5), (box, frame)
+
+
+def test_a_saved_figure_takes_in_a_label_longer_than_its_layout(tmp_path):
+    """No layout at all and an x label far wider than the axes: the PNG grows to hold it."""
+    import struct
+
+    from aerodock.plots import _plt, _save
+
+    fig, ax = _plt().subplots(figsize=(3.0, 2.0))
+    ax.set_xlabel("a label that is much, much longer than a figure three inches wide can hold")
+    path = _save(fig, tmp_path / "long.png")
+    width_px = struct.unpack(">I", path.read_bytes()[16:20])[0]  # the PNG header's width
+    assert width_px > 3.0 * 110 * 1.3
