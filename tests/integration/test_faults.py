@@ -91,3 +91,18 @@ def test_a_fault_strikes_only_the_drawn_trials(short_cfg):
     assert np.array_equal(res.fault_hit, again.fault_hit)
     assert np.array_equal(res.success, again.success)
     assert not (res.abort_reason == AbortReason.GATE_FAULT).any()
+
+
+def test_the_docs_fault_table_has_the_commands_columns():
+    """docs/research-tools.md quotes `aerodock faults --markdown`: its table has the same
+    header, and a row per fault of examples/faults.toml (and the baseline)."""
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[2] / "docs" / "research-tools.md").read_text().splitlines()
+    header = rows_markdown([]).splitlines()[0]
+    start = doc.index(header) + 2  # after the header and its rule
+    end = next(i for i in range(start, len(doc)) if not doc[i].startswith("|"))
+    rows = doc[start:end]
+    names = [r.strip("|").split("|")[0].strip() for r in rows]
+    assert names == ["no fault", *(f.name for f in load_faults("examples/faults.toml"))]
+    assert all(r.count("|") == header.count("|") for r in rows)
