@@ -160,7 +160,9 @@ def aborts_text(summary: dict[str, Any]) -> str:
 def faults_command(
     fault_file: Annotated[Path, typer.Argument(help="TOML file of [[fault]] entries.")],
     trials: Annotated[int, typer.Option(help="Trials per fault (one batch each).")] = 40,
-    compensation: Annotated[Compensation, typer.Option(help=COMPENSATION_HELP)] = (
+    compensation: Annotated[Compensation, typer.Option(
+        help="What the follower subtracts before inversion (as in 'aerodock dock --help'); "
+             "oracle by default, so that the fault, not the wake, decides.")] = (
         Compensation.ORACLE),
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
     seed: SeedOpt = 0,
