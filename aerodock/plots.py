@@ -17,9 +17,12 @@ def _plt():
 
 
 def _save(fig, path: Path) -> Path:
+    """Write ``fig`` as a PNG at ``path`` and close it. The saved frame takes in every label,
+    title and legend (``bbox_inches="tight"``): a label longer than the layout left room for
+    is never cut."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight", pad_inches=0.08)
     _plt().close(fig)
     return path
 

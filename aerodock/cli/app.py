@@ -10,12 +10,15 @@ dependencies (PyTorch, rclpy, Ray, rerun) are imported inside the commands that 
 
 from __future__ import annotations
 
+import inspect
 import os
+import re
 import signal
 import sys
-from typing import Any
+from typing import Annotated, Any
 
 import typer
+from rich.markup import escape
 
 from aerodock.cli import (
     bench,
@@ -36,6 +39,23 @@ app = typer.Typer(
     help="Docking two multirotors in close proximity with learnt downwash models.",
 )
 field_app = typer.Typer(no_args_is_help=True, help="Inspect a downwash field or a learnt model.")
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        import aerodock
+
+        typer.echo(f"aerodock {aerodock.__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: Annotated[bool, typer.Option(
+        "--version", callback=_print_version, is_eager=True,
+        help="Print aerodock's version and exit.")] = False) -> None:
+    pass  # the options of ``aerodock`` itself (before a command)
+
+
 app.add_typer(field_app, name="field")
 
 app.command("dock")(dock.dock)
@@ -56,6 +76,38 @@ app.command("targets")(experiments.targets_command)
 field_app.command("probe")(field.field_probe)
 field_app.command("plot")(field.field_plot)
 field_app.command("fit")(field.field_fit)
+
+
+def as_written(text: str | None) -> str | None:
+    """A help text as Rich's help should show it, as written: code quoted in double or single
+    backticks (RST, Markdown) is quoted in single quotes instead, and brackets are escaped so
+    that Rich does not take ``[[fault]]`` or ``aerodock[viz]`` for markup and drop them."""
+    if not text:
+        return text
+    text = re.sub(r"``([^`]+)``", r"'\1'", text)
+    text = re.sub(r"`([^`]+)`", r"'\1'", text)
+    return escape(text)
+
+
+def _readable(command: Any) -> Any:
+    """``command`` (a Click command or group) with every help text of it and of its
+    subcommands and parameters passed through :func:`as_written`, and its line in a group's
+    list of commands the help's first paragraph as one line; returns ``command``."""
+    if not getattr(command, "short_help", None) and getattr(command, "help", None):
+        command.short_help = " ".join(inspect.cleandoc(command.help).split("\n\n")[0].split())
+    for attr in ("help", "short_help", "epilog"):
+        setattr(command, attr, as_written(getattr(command, attr, None)))
+    for param in getattr(command, "params", []):
+        if hasattr(param, "help"):
+            param.help = as_written(param.help)
+    for sub in getattr(command, "commands", {}).values():
+        _readable(sub)
+    return command
+
+
+def command() -> Any:
+    """The whole command line as a Click group, its help texts readable (:func:`_readable`)."""
+    return _readable(typer.main.get_command(app))
 
 
 def _click_exceptions() -> Any:
@@ -117,8 +169,7 @@ def run(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     try:
         args = _expand_repeatable(args)
-        rv = typer.main.get_command(app).main(args=args, prog_name="aerodock",
-                                              standalone_mode=False)
+        rv = command().main(args=args, prog_name="aerodock", standalone_mode=False)
         return rv if isinstance(rv, int) else 0
     except getattr(click, "NoArgsIsHelpError", ()) as err:
         typer.echo(err.ctx.get_help())

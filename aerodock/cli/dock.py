@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -24,6 +25,22 @@ from aerodock.cli.common import (
 from aerodock.control.compensation import Compensation
 
 
+class Controller(StrEnum):
+    """The follower's controller profile (:mod:`aerodock.control.profiles`)."""
+
+    PAPER = "paper"
+    TUNED = "tuned"
+    OURS = "ours"
+
+
+COMPENSATION_HELP = (
+    "What the follower subtracts before inversion. none: nothing, every observer off (plain LQR; "
+    "with --controller ours that turns off the accelerometer observer too, so it is not 'ours "
+    "without model'); observer: the bias observer, and with ours its accelerometer observer "
+    "(the paper's 'without model'); model: observer + the learnt model ('with model'); "
+    "oracle: observer + the simulator's true mean field (an upper bound).")
+
+
 def _load_predictor(model: Path | None, comp: Compensation):
     if comp != Compensation.MODEL:
         return None
@@ -39,14 +56,14 @@ def dock(
     offset: Annotated[float | None, typer.Option(help="Cable length d_p, m.")] = None,
     leader_speed: Annotated[float, typer.Option(help="Leader speed (north), m/s.")] = 0.0,
     leader_fixed: Annotated[bool, typer.Option(help="Leader on a rigid stand.")] = False,
-    compensation: Annotated[Compensation, typer.Option(help="Follower compensation.")] = (
+    compensation: Annotated[Compensation, typer.Option(help=COMPENSATION_HELP)] = (
         Compensation.OBSERVER),
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
-    controller: Annotated[str, typer.Option(
+    controller: Annotated[Controller, typer.Option(
         help="paper: as its flight stack (Freyja) publishes it: its LQR weights in every phase, "
              "its bias estimator and state filter, 50 Hz, no reference feed-forward; tuned: the "
              "config's weights (stiffer terminal phase by default); ours: tuned + the "
-             "accelerometer observer.")] = "tuned",
+             "accelerometer observer (on unless --compensation none).")] = Controller.TUNED,
     faults: Annotated[Path | None, typer.Option(
         help="TOML file of [[fault]] entries injected into every trial (see examples/).")] = None,
     seed: SeedOpt = 0,
@@ -68,9 +85,13 @@ def dock(
     if trials < 1:
         fail(f"--trials must be >= 1, got {trials}")
     try:
-        cfg = controller_config(load_cli_config(config, sets, trust), controller)
+        cfg = controller_config(load_cli_config(config, sets, trust), controller.value)
     except ValueError as exc:
         fail(str(exc))
+    if controller == Controller.OURS and compensation == Compensation.NONE:
+        typer.echo("warning: --compensation none turns off every observer, the accelerometer "
+                   "observer of 'ours' too (plain LQR); ours without a model is --compensation "
+                   "observer", err=True)
     injected = tuple(load_faults(faults)) if faults is not None else ()
     spec = MissionSpec(trials=trials, offset_m=offset, leader_speed_mps=leader_speed,
                        leader_fixed=leader_fixed, compensation=compensation, seed=seed,
@@ -93,7 +114,7 @@ def dock(
                               record="full" if save_logs is not None else "summary",
                               progress=lambda f: bar.update(task, completed=f))
     summary = result.summary()
-    summary.update({"compensation": compensation.value, "controller": controller,
+    summary.update({"compensation": compensation.value, "controller": controller.value,
                     "offset_m": offset
                     or cfg.platform.cable_length_m, "leader_speed_mps": leader_speed,
                     "leader_fixed": leader_fixed, "seed": seed})
@@ -102,7 +123,9 @@ def dock(
                                result.logs)
         summary["logs"] = str(path)
     if as_json:
-        print_json(summary)
+        from aerodock.mission.outcome import DEPRECATED_KEYS
+
+        print_json({**summary, "deprecated_keys": DEPRECATED_KEYS})
         return
     table = Table(title=f"docking, d_p = {summary['offset_m']:g} m, {compensation.value}, "
                         f"{controller} controller")
@@ -115,7 +138,8 @@ def dock(
     table.add_row("terminal error 3D, median", f"{summary['terminal_err_3d_median_m']:.3f} m")
     table.add_row("slip-throughs", str(summary["slip_throughs"]))
     table.add_row("missed (gate closed empty)", str(summary["missed"]))
-    table.add_row("aborts", f"{summary['aborts']} {summary['abort_reasons']}")
+    table.add_row("sensed not held, backed off (missed included)", str(summary["sensed_misses"]))
+    table.add_row("aborts", aborts_text(summary))
     table.add_row("clearance violations", str(summary["clearance_violations"]))
     table.add_row("rotor strikes / ground contacts",
                   f"{summary['rotor_strikes']} / {summary['ground_contacts']}")
@@ -129,10 +153,20 @@ def dock(
         typer.echo(f"wrote {summary['logs']}")
 
 
+def aborts_text(summary: dict[str, Any]) -> str:
+    """A campaign summary's aborts as a person reads them: ``3 (timeout 2, leader lost 1)``, or
+    ``0``."""
+    reasons = ", ".join(f"{reason.replace('_', ' ')} {count}"
+                        for reason, count in summary["abort_reasons"].items() if count)
+    return f"{summary['aborts']} ({reasons})" if reasons else str(summary["aborts"])
+
+
 def faults_command(
     fault_file: Annotated[Path, typer.Argument(help="TOML file of [[fault]] entries.")],
     trials: Annotated[int, typer.Option(help="Trials per fault (one batch each).")] = 40,
-    compensation: Annotated[Compensation, typer.Option(help="Follower compensation.")] = (
+    compensation: Annotated[Compensation, typer.Option(
+        help="What the follower subtracts before inversion (as in 'aerodock dock --help'); "
+             "oracle by default, so that the fault, not the wake, decides.")] = (
         Compensation.ORACLE),
     model: Annotated[Path | None, typer.Option(help="Trained model DIR (for 'model').")] = None,
     seed: SeedOpt = 0,
@@ -142,8 +176,9 @@ def faults_command(
     markdown: Annotated[bool, typer.Option(help="Print the table as Markdown.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Fly one docking campaign per injected fault (and one without): docks, safe aborts,
-    clearance violations, collisions and NaN among the trials each fault struck."""
+    """Fly one docking campaign per injected fault (and one without): how each trial the fault
+    struck ended (docked, missed, not held, safe or unsafe abort, other), and its clearance
+    violations, collisions and NaN."""
     from aerodock.experiments.faults import fault_campaign, rows_markdown
     from aerodock.mission.faults import load_faults
     from aerodock.mission.limits import check_campaign_size
@@ -166,13 +201,11 @@ def faults_command(
     elif markdown:
         typer.echo(rows_markdown(rows))
     else:
+        from aerodock.experiments.faults import table_cells, table_headers
+
         table = Table(title=f"fault campaign, {trials} trials per fault, {compensation.value}")
-        for col in ("fault", "struck", "docked", "missed", "safe aborts", "clearance viol.",
-                    "collisions", "NaN"):
+        for col in table_headers():
             table.add_column(col, justify="left" if col == "fault" else "right")
         for r in rows:
-            table.add_row(r["fault"], str(r["struck"]), str(r["docked"]),
-                          str(r["missed_or_slipped"]), str(r["safe_aborts"]),
-                          str(r["clearance_violations"]), str(r["collisions"]),
-                          str(r["nan_trials"]))
+            table.add_row(*table_cells(r))
         Console().print(table)

@@ -39,9 +39,13 @@ def hover_count_probability(paper: tuple[int, int], docked: int, trials: int) ->
 
 def cable_pattern_probability(rates: list[float], all_docked: bool) -> dict[str, Any]:
     """How likely the paper's cable-study pattern (all offsets docked, or none) is when each
-    offset docks at its own measured rate (one attempt per offset, as in the paper)."""
+    offset docks at its own measured rate (one attempt per offset, as in the paper).
+
+    ``paper`` quotes the paper's count as the paper gives it (6/6 or 0/6), whatever the number
+    of offsets flown here; the probability is the pattern's over the offsets flown.
+    """
     p = prod(rates) if all_docked else prod(1.0 - r for r in rates)
-    n = len(rates)
+    n = PAPER_CABLE_OFFSETS
     return {"paper": f"{n if all_docked else 0}/{n}", "rates": list(rates),
             "probability": float(p), "consistent": p >= CONSISTENT_AT}
 
@@ -66,7 +70,8 @@ def paper_outcome_probabilities(hover_with: dict[str, Any], hover_without: dict[
             rates = [r["success_rate"] for r in cable[key]]
             rec = cable_pattern_probability(rates, all_docked)
             if len(rates) != PAPER_CABLE_OFFSETS:
-                rec["note"] = f"{len(rates)} of the paper's {PAPER_CABLE_OFFSETS} offsets flown"
+                rec["note"] = (f"only {len(rates)} of the paper's {PAPER_CABLE_OFFSETS} offsets "
+                               "flown here; the probability is over those")
             out[f"cable_{key}"] = rec
     out["all_consistent"] = all(v["consistent"] for v in out.values())
     return out

@@ -45,7 +45,8 @@ def fig_observer_bandwidth(costs: dict[str, Any], fig_dir: Path) -> Path | None:
     if not points:
         return None
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    # constrained layout: the long axis label stays inside the frame
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     for key, label, colour in (("hover_with_model", "with model", "tab:green"),
                                ("hover_without_model", "without model", "tab:red")):
         pts = [p for p in points if key in p]
@@ -257,16 +258,21 @@ def _transfer_table(tr: dict[str, Any]) -> list[str]:
 
 
 def _se_table(se: dict[str, Any], title: str) -> list[str]:
+    """The sample-efficiency table: held-out RMSE, mean ± sd over the seeds, or the one seed's
+    figure when one seed ran (an sd over one seed is no spread)."""
     kinds = list(se["models"])
-    lines = [f"### {title}", "", "| minutes | region | " + " | ".join(kinds) + " | zero |",
+    one_seed = len(se.get("seeds", ())) == 1
+    spread = "one seed" if one_seed else "mean ± sd over seeds"
+    lines = [f"### {title} (held-out RMSE, m/s², {spread})", "",
+             "| minutes | region | " + " | ".join(kinds) + " | zero |",
              "|---|---|" + "---|" * (len(kinds) + 1)]
     for region in ("all", "interaction"):
         for k, mins in enumerate(se["minutes"]):
             row = [f"{mins:g}", region]
             for kind in kinds:
                 m = se["models"][kind]
-                row.append(f"{_fmt(m[f'rmse_{region}_mean'][k])} ± "
-                           f"{_fmt(m[f'rmse_{region}_sd'][k])}")
+                mean = _fmt(m[f"rmse_{region}_mean"][k])
+                row.append(mean if one_seed else f"{mean} ± {_fmt(m[f'rmse_{region}_sd'][k])}")
             row.append(_fmt(se["zero"][region]))
             lines.append("| " + " | ".join(row) + " |")
     if se.get("skipped_minutes"):
@@ -290,8 +296,9 @@ def _paper_counts_markdown(pc: dict[str, Any] | None) -> list[str]:
         if key in pc:
             p = pc[key]["probability"]
             text = f"{p:.3f}" if p >= 0.001 else "< 0.001"
+            note = f"; {pc[key]['note']}" if pc[key].get("note") else ""
             lines.append(f"| {name} | {pc[key]['paper']} | {text}"
-                         f"{'' if pc[key]['consistent'] else ' (inconsistent)'} |")
+                         f"{'' if pc[key]['consistent'] else ' (inconsistent)'}{note} |")
     return lines + [""]
 
 
@@ -332,8 +339,7 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
               f"Mean field used for the floor: {lrn.get('error_floor_source', 'the field')}.", ""]
     se = r.get("sample_efficiency")
     if se:
-        lines += _se_table(se, "Sample efficiency, simulated (held-out RMSE, m/s², mean ± sd "
-                           "over seeds)")
+        lines += _se_table(se, "Sample efficiency, simulated")
     # Cable study
     cs = r["cable_study"]
     lines += ["## Cable-length study (leader on a rigid stand)", "",
@@ -347,15 +353,16 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
     for w, m in zip(cs["without_model"], cs["with_model"], strict=True):
         pw, pm = PAPER_CABLE[m["offset_m"]]
         lines.append(
-            f"| {m['offset_m']} | {w['err_down_int_0p5s_ms']:.3f} [{pw[0]}] | "
-            f"{w['err_3d_int_0p5s_ms']:.3f} [{pw[1]}] | {w['docked']}/{w['trials']} [{pw[2]}] | "
-            f"{m['err_down_int_0p5s_ms']:.3f} [{pm[0]}] | {m['err_3d_int_0p5s_ms']:.3f} "
+            f"| {m['offset_m']} | {w['err_down_int_0p5s_m_s']:.3f} [{pw[0]}] | "
+            f"{w['err_3d_int_0p5s_m_s']:.3f} [{pw[1]}] | {w['docked']}/{w['trials']} [{pw[2]}] | "
+            f"{m['err_down_int_0p5s_m_s']:.3f} [{pm[0]}] | {m['err_3d_int_0p5s_m_s']:.3f} "
             f"[{pm[1]}] | {m['ff_down_int_0p5s_mps']:.2f} [{pm[2]}] | "
             f"{m['docked']}/{m['trials']} [{pm[3]}] |")
     docks_with = sum(m["result"] == "dock" for m in cs["with_model"])
     docks_without = sum(w["result"] == "dock" for w in cs["without_model"])
     n_off = len(cs["with_model"])
-    lines += ["", f"Offsets docked (majority of repetitions): with model {docks_with}/{n_off} "
+    lines += ["", "Offsets docked (more than half of the repetitions docked; a tie is a miss): "
+              f"with model {docks_with}/{n_off} "
               f"(paper 6/6), without {docks_without}/{n_off} (paper 0/6)."]
     if docks_without > 0:
         lines.append(f"Unlike the paper, the baseline docks at {docks_without} offset(s) here: in "
@@ -424,5 +431,70 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
                   "own rate, one control period late: the disturbance it leaves (m/s²) and the "
                   "share of the uncompensated RMS it removes.", ""]
         lines += compensation_markdown(r["compensation"])
-    lines += ["## Figures", ""] + [f"- ![{Path(f).stem}]({f})" for f in figs] + [""]
+    lines += figures_markdown(figs)
     return "\n".join(lines)
+
+
+FIGURE_CAPTIONS = {
+    "cable_trajectories.png":
+        "Cable-length study, leader on a rigid stand: the follower's mean altitude at each cable "
+        "length with the model (solid) and without it (dashed), its reference dotted, the "
+        "leader's altitude in black.",
+    "cable_vertical_error.png":
+        "Cable-length study: the follower's vertical tracking error pooled over every offset, "
+        "mean ± sd over the trials, with the model and without it (LQG); dotted, the planned "
+        "arrival.",
+    "hover_trajectories.png":
+        "Hover docking with the model at d_p 0.36 m: every trial's follower path from the side "
+        "and from above (green: docked, red: not), the leader's mean position with its spread.",
+    "hover_planar_forces.png":
+        "One docked hover trial: the follower's path from above with the learnt model's "
+        "predicted planar force as arrows, and the predicted vertical and planar compensation "
+        "along the approach.",
+    "hover_docking.gif":
+        "The first docked hover trial with the model, animated (aerodock view): both vehicles, "
+        "the bar on its cables, the gate and the predicted force.",
+    "hover_altitudes.png":
+        "Altitude of both vehicles in a docked attempt with the model and an attempt without "
+        "it that did not dock: after a dock the leader dips as it carries the follower.",
+    "moving_altitude_error.png":
+        "Leader moving at 0.25 m/s: the follower's altitude error against its target on the "
+        "leader's path, mean ± sd over the trials, with and without the model; shaded, the "
+        "entry into the wake before the meeting; dotted, the end of the formation hold.",
+    "observer_bandwidth.png":
+        "The paper's controller in hover at d_p 0.36 m across its bias observer's rise time "
+        "(log scale), with and without the model, Wilson 95 % intervals; a star marks Freyja's "
+        "estimator as published, dotted lines the paper's 8/10 and 0/10.",
+    "sample_efficiency.png":
+        "Simulated flights: held-out RMSE against minutes of training data for each model kind "
+        "(error bars: sd over the seeds, none with one seed), the zero model and the error "
+        "floor as horizontal lines.",
+    "real_sample_efficiency.png":
+        "Real Neural-Swarm flights: held-out RMSE against minutes of training data for each "
+        "model kind (error bars: sd over the seeds, none with one seed), the zero model as a "
+        "horizontal line.",
+    "real_heldout_vertical.png":
+        "The held-out real flight with the most samples below the other vehicle: the measured "
+        "vertical residual and the SO(2) model's and the MLP's predictions; shaded, below the "
+        "other vehicle.",
+    "compensation_replay.png":
+        "A held-out real pass: the vertical residual with each compensation replayed causally "
+        "against it (top) and what each leaves (bottom); shaded, below the other vehicle.",
+}
+"""A caption per figure ``write_report`` can list, by file name."""
+
+
+def figure_caption(path: str | Path) -> str:
+    """The caption of a report figure (:data:`FIGURE_CAPTIONS`); a figure without one is named
+    by its file, so that a new figure never stops the report."""
+    name = Path(path).name
+    return FIGURE_CAPTIONS.get(name, name)
+
+
+def figures_markdown(figs: list[str]) -> list[str]:
+    """The report's figures section: each figure with its caption in italics below it."""
+    lines = ["## Figures", ""]
+    for k, f in enumerate(figs, 1):
+        caption = figure_caption(f)
+        lines += [f"![Figure {k}]({f})", "", f"*Figure {k}: {caption}*", ""]
+    return lines

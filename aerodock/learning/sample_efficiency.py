@@ -176,7 +176,8 @@ def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:
     ax.set_xlabel("training data, minutes of flight")
     region = "all held-out samples" if metric == "all" else "interaction region"
     ax.set_ylabel(f"held-out RMSE, m/s² ({region})")
-    ax.set_title("Sample efficiency (mean ± sd over seeds)")
+    one_seed = len(result.get("seeds", ())) == 1  # an sd over one seed is no spread
+    ax.set_title(f"Sample efficiency ({'one seed' if one_seed else 'mean ± sd over seeds'})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()

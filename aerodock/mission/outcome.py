@@ -11,6 +11,13 @@ import numpy as np
 from aerodock.flightlog import FlightLog
 from aerodock.mission.spec import AbortReason, MissionSpec
 
+DEPRECATED_KEYS = {
+    "err_down_int_0p5s_ms": "err_down_int_0p5s_m_s",
+    "err_3d_int_0p5s_ms": "err_3d_int_0p5s_m_s",
+}
+"""Summary keys kept one more release under their old names (old: new): the integrals of the
+tracking error are metre-seconds, which ``_ms`` misread as milliseconds."""
+
 
 @dataclass
 class CampaignResult:
@@ -90,6 +97,9 @@ class CampaignResult:
             "terminal_err_down_mean_m": float(np.mean(self.err_down_m)),
             "terminal_err_3d_median_m": float(np.median(self.err_3d_m)),
             "terminal_err_3d_mean_m": float(np.mean(self.err_3d_m)),
+            "err_down_int_0p5s_m_s": float(np.mean(self.err_down_int_ms)),  # m·s
+            "err_3d_int_0p5s_m_s": float(np.mean(self.err_3d_int_ms)),
+            # deprecated: the same figures under their old names (DEPRECATED_KEYS)
             "err_down_int_0p5s_ms": float(np.mean(self.err_down_int_ms)),
             "err_3d_int_0p5s_ms": float(np.mean(self.err_3d_int_ms)),
             "ff_down_int_0p5s_mps": float(np.mean(self.ff_down_int_mps)),

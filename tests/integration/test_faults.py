@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from aerodock.control.compensation import Compensation
-from aerodock.experiments.faults import fault_campaign
+from aerodock.experiments.faults import (
+    OUTCOME_COLUMNS,
+    fault_campaign,
+    rows_markdown,
+    table_cells,
+    table_headers,
+)
 from aerodock.mission import AbortReason, MissionSpec, run_campaign
 from aerodock.mission.faults import Fault, FaultFileError, load_faults, parse_faults
 
@@ -50,6 +56,17 @@ def test_fault_campaign_is_safe_and_counts_what_each_fault_does(cfg):
     jam = by["servo jammed"]
     assert jam["docked"] == 0 and jam["abort_reasons"]["gate_fault"] == 0
     assert jam["sensed_misses"] >= 4 and jam["clearance_violations"] == 0
+    # ... and the table says so in a column of its own: every struck trial has one outcome
+    assert jam["not_held"] >= 4 and jam["missed_or_slipped"] == 0
+    for r in rows:
+        assert sum(r[key] for key, _ in OUTCOME_COLUMNS) == r["struck"], r
+    table = rows_markdown(rows).splitlines()
+    assert table[0].count("|") - 1 == len(table_headers()) == 2 + len(OUTCOME_COLUMNS) + 3
+    assert "not held (gate never shut)" in table[0]
+    jam_line = next(line for line in table if line.startswith("| servo jammed |"))
+    cells = [c.strip() for c in jam_line.strip("|").split("|")]
+    assert cells == table_cells(jam)
+    assert cells[table_headers().index("not held (gate never shut)")] == str(jam["not_held"])
 
 
 def test_a_servo_that_reports_its_position_tells_a_jammed_gate(cfg):
@@ -74,3 +91,18 @@ def test_a_fault_strikes_only_the_drawn_trials(short_cfg):
     assert np.array_equal(res.fault_hit, again.fault_hit)
     assert np.array_equal(res.success, again.success)
     assert not (res.abort_reason == AbortReason.GATE_FAULT).any()
+
+
+def test_the_docs_fault_table_has_the_commands_columns():
+    """docs/research-tools.md quotes `aerodock faults --markdown`: its table has the same
+    header, and a row per fault of examples/faults.toml (and the baseline)."""
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[2] / "docs" / "research-tools.md").read_text().splitlines()
+    header = rows_markdown([]).splitlines()[0]
+    start = doc.index(header) + 2  # after the header and its rule
+    end = next(i for i in range(start, len(doc)) if not doc[i].startswith("|"))
+    rows = doc[start:end]
+    names = [r.strip("|").split("|")[0].strip() for r in rows]
+    assert names == ["no fault", *(f.name for f in load_faults("examples/faults.toml"))]
+    assert all(r.count("|") == header.count("|") for r in rows)
