@@ -6,7 +6,7 @@ follower's controller (``paper``, ``tuned`` or ``ours``), ``MissionSpec`` says w
 trial at once, batch-first. ``Predictor.load`` reads a trained model for ``--compensation
 model``. The same campaign as ``aerodock dock`` with the same options (tested).
 
-    python examples/fly_campaign.py                        # 50 trials, ours, observer: ~1 min
+    python examples/fly_campaign.py                        # 50 trials, ours, observer: seconds
     python examples/fly_campaign.py --controller paper --compensation model --model out/model
     python examples/fly_campaign.py --smoke --json         # 4 trials: seconds (the tests)
 """
