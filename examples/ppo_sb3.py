@@ -17,7 +17,7 @@ episodes that ended in each rollout (the learning curve), and ``--tensorboard DI
 (``rollout/ep_rew_mean``) for TensorBoard.
 
     python examples/ppo_sb3.py                          # 20,480 steps, 32 episodes: ~1 min
-    python examples/ppo_sb3.py --steps 204800           # 320 episodes: ~10 min on 2 cores
+    python examples/ppo_sb3.py --steps 204800           # 320 episodes: ten times as long
     python examples/ppo_sb3.py --smoke                  # 1,792 steps, 2 episodes: seconds
     python examples/ppo_sb3.py --tensorboard out/tb     # then: tensorboard --logdir out/tb
     python examples/ppo_sb3.py --backend make-vec-env   # the same through make_vec_env

@@ -56,8 +56,8 @@ class DataDir:
         """One line saying why a named location cannot be used (None when it can, or when it
         was not named: a missing fallback is not an error)."""
         if self.named and self.path is not None and not self.path.is_dir():
-            return f"{self.source} {self.path}: no such folder (the data location holding " \
-                   f"{NEURAL_SWARM}/; see docs/real-logs.md)"
+            return (f"{self.source} {self.path}: no such folder (the data location holding "
+                    f"{NEURAL_SWARM}/; see docs/real-logs.md)")
         return None
 
     def neural_swarm(self) -> Path | None:
