@@ -2,7 +2,7 @@
 world, with the jet's force on the rotor disks (its wake torque) and at the centre of mass.
 
     .venv/bin/python studies/crazyflie_tilt.py [--config examples/crazyflie.toml]
-        [--depth 0.3] [--trials 16] [--data ../shared/data/neural-swarm/swap_ss] [--json]
+        [--depth 0.3] [--trials 16] [--data $AERODOCK_DATA_DIR/neural-swarm/swap_ss] [--json]
 
 Real: the tilt (angle of the body z axis from the vertical) of every sample of the swap_ss
 flights with the follower 0.25-0.35 m below the other vehicle and within 3 cm of its axis, and
@@ -25,11 +25,14 @@ from aerodock.control.controller import PositionController, Reference
 from aerodock.downwash import build_field
 from aerodock.geometry import quat_to_rotmat
 from aerodock.ingest import read_logs
+from aerodock.ingest.data_dir import find_data_dir
 from aerodock.mission.settle import settle
 from aerodock.rng import TrialRNG
 from aerodock.world import World
 
 ROOT = Path(__file__).resolve().parents[1]
+# The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 AT_CENTRE = "aerodock.downwash.at_centre:RoundJetAtCentre"
 
 
@@ -80,7 +83,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--config", type=Path, default=ROOT / "examples" / "crazyflie.toml")
     parser.add_argument("--data", type=Path,
-                        default=ROOT.parent / "shared" / "data" / "neural-swarm" / "swap_ss")
+                        default=DATA_DIR / "neural-swarm" / "swap_ss")
     parser.add_argument("--depth", type=float, default=0.3)
     parser.add_argument("--trials", type=int, default=16)
     parser.add_argument("--seed", type=int, default=0)

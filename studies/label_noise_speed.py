@@ -1,7 +1,7 @@
 """The wake's turbulence read above the labels' noise at the follower's own speed, on the real
 Crazyflie flights (aerodock/learning/label_noise.py), beside the fit's pooled reading.
 
-    .venv/bin/python studies/label_noise_speed.py [--data ../shared/data/neural-swarm] [--json]
+    .venv/bin/python studies/label_noise_speed.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
 
 The jet is examples/crazyflie_wake_fitted.toml's, the flights the fit's: swap_ss 00-04 and
 swap_sl 00-07 fitted on, swap_ss 05-06 and swap_sl 08-11 held out (docs/world.md).
@@ -16,10 +16,13 @@ import tomllib
 from pathlib import Path
 
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.ingest.data_dir import find_data_dir
 from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
 from aerodock.learning.wake_fit import prepare_flights, select_flights
 
 ROOT = Path(__file__).resolve().parents[1]
+# The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 FIT = ROOT / "examples" / "crazyflie_wake_fitted.toml"
 HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01]")
 ROTORS = {"cf101": 0.0239}  # the fit's estimate of cf101's rotor radius (docs/world.md)
@@ -28,7 +31,7 @@ ROTORS = {"cf101": 0.0239}  # the fit's estimate of cf101's rotor radius (docs/w
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path,
-                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+                        default=DATA_DIR / "neural-swarm")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     try:

@@ -2,7 +2,7 @@
 
     .venv/bin/python studies/sample_efficiency.py --part sim --size full --out runs/se-sim
     .venv/bin/python studies/sample_efficiency.py --part real --out runs/se-real \
-        [--real-folder ../shared/data/neural-swarm/swap_ss]
+        [--real-folder $AERODOCK_DATA_DIR/neural-swarm/swap_ss]
 
 ``sim``: step 1 of ``aerodock reproduce`` (the curriculum's flights and models, held-out
 excitation flights, the sample-efficiency pool: :func:`aerodock.experiments.reproduce.
@@ -32,10 +32,13 @@ from aerodock.config import load_config
 from aerodock.experiments import real_data
 from aerodock.experiments.reproduce import FULL, QUICK, learning_data
 from aerodock.fileio import json_ready, write_json
+from aerodock.ingest.data_dir import find_data_dir
 from aerodock.learning.dataset import build_dataset
 from aerodock.learning.sample_efficiency import sample_efficiency
 
 ROOT = Path(__file__).resolve().parents[1]
+# The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 KINDS = ("so2", "so2-ext", "mlp")
 
 
@@ -83,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="seeds (replace the size's)")
     parser.add_argument("--seed", type=int, default=0, help="sim: the reproduction's --seed")
     parser.add_argument("--real-folder", type=Path,
-                        default=ROOT.parent / "shared" / "data" / "neural-swarm" / "swap_ss")
+                        default=DATA_DIR / "neural-swarm" / "swap_ss")
     parser.add_argument("--out", type=Path, required=True, help="output folder")
     args = parser.parse_args(argv)
     if args.minutes is not None and min(args.minutes) <= 0:

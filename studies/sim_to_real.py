@@ -3,7 +3,7 @@ worlds, judged on the real Neural-Swarm flights beside the zero model and a mode
 flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judged).
 
     .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
-        [--pair small_under_small|small_under_large] [--data ../shared/data/neural-swarm]
+        [--pair small_under_small|small_under_large] [--data $AERODOCK_DATA_DIR/neural-swarm]
         [--out sim_to_real.json] [--json]
 
 The worlds are examples/crazyflie.toml (small under small) and
@@ -20,8 +20,11 @@ from pathlib import Path
 from aerodock.config import load_config
 from aerodock.experiments.sim_to_real import PAIRS, sim_to_real_study
 from aerodock.fileio import write_json
+from aerodock.ingest.data_dir import find_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
+# The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 WORLDS = {"small_under_small": ROOT / "examples" / "crazyflie.toml",
           "small_under_large": ROOT / "examples" / "crazyflie_small_under_large.toml"}
 
@@ -29,7 +32,7 @@ WORLDS = {"small_under_small": ROOT / "examples" / "crazyflie.toml",
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path,
-                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+                        default=DATA_DIR / "neural-swarm")
     parser.add_argument("--pair", choices=sorted(PAIRS), action="append",
                         help="a pairing to judge (repeatable; default: both)")
     parser.add_argument("--model", default="so2", choices=("so2", "so2-ext", "mlp"))

@@ -1,7 +1,7 @@
 """The wake's torque on the follower: the real Crazyflie flights' (from their logged motor torques
 and body rates) against the fitted jet's at the same states (aerodock/learning/wake_torque.py).
 
-    .venv/bin/python studies/wake_torque.py [--data ../shared/data/neural-swarm] [--json]
+    .venv/bin/python studies/wake_torque.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
 
 The jet is examples/crazyflie_small_under_large.toml's (the fitted wake, cf101's fitted rotors);
 the inertias are that file's: the small Crazyflie's [vehicle] and the large cf101's [leader]
@@ -19,17 +19,20 @@ from pathlib import Path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.ingest.data_dir import find_data_dir
 from aerodock.learning.wake_fit import prepare_flights
 from aerodock.learning.wake_torque import free_air_map_check, motor_command_range, torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
+# The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path,
-                        default=ROOT.parent / "shared" / "data" / "neural-swarm")
+                        default=DATA_DIR / "neural-swarm")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     args = parser.parse_args()
     try:

@@ -22,8 +22,12 @@ import pytest
 from short_mission import short_config
 
 from aerodock.config import load_config
+from aerodock.ingest.data_dir import find_data_dir
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+# The real flights: AERODOCK_DATA_DIR, else ../shared/data beside the clone (aerodock.ingest.
+# data_dir); the tests that read them skip when the location does not hold them.
+DATA_DIR = find_data_dir(cwd=Path(__file__).resolve().parents[1]).path or SHARED / "data"
 
 # Under xdist (``--dist loadfile``: each file runs on one worker, so a module- or session-scoped
 # fixture is built once per file rather than once per worker) the files with the long
@@ -79,10 +83,11 @@ def rng():
 
 @pytest.fixture
 def shared_data():
-    """``shared_data(*parts)``: a path into ../shared/data; skips when absent (a user's clone)."""
+    """``shared_data(*parts)``: a path into the data location (``AERODOCK_DATA_DIR``, else
+    ../shared/data); skips when absent (a user's clone without the flights)."""
 
     def get(*parts: str) -> Path:
-        path = SHARED.joinpath("data", *parts)
+        path = DATA_DIR.joinpath(*parts)
         if not path.exists():
             pytest.skip(f"shared data not present: {path}")
         return path

@@ -29,17 +29,27 @@ KINDS = ("so2", "so2-ext", "so2-leader", "so2-pair", "mlp")
 """Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
 
 
-def default_data_root() -> Path:
-    """``../shared/data/neural-swarm`` beside the working folder, else beside the repository."""
-    here = Path.cwd().parent / "shared" / "data" / "neural-swarm"
-    repo = Path(__file__).resolve().parents[3] / "shared" / "data" / "neural-swarm"
-    return here if here.is_dir() else repo
+def default_data_root(data_dir: Path | None = None) -> Path:
+    """``neural-swarm`` in the data location (:func:`aerodock.ingest.data_dir.find_data_dir`:
+    ``--data-dir``, ``$AERODOCK_DATA_DIR``, else ``../shared/data`` in this repository)."""
+    from aerodock.ingest.data_dir import NEURAL_SWARM, find_data_dir
+
+    located = find_data_dir(data_dir)
+    if located.problem():
+        fail(located.problem())
+    if located.path is None:
+        fail("no Neural-Swarm flights: give --data (the neural-swarm folder) or --data-dir, or "
+             "set AERODOCK_DATA_DIR (docs/real-logs.md says where to get them)")
+    return located.path / NEURAL_SWARM
 
 
 def evaluate_compensation_command(
     data: Annotated[Path | None, typer.Option(
         "--data", help="Neural-Swarm folder holding swap_ss and swap_sl_2020-06-19 (default: "
-                       "../shared/data/neural-swarm).")] = None,
+                       "neural-swarm in the data location).")] = None,
+    data_dir: Annotated[Path | None, typer.Option(
+        "--data-dir", help="The data location holding neural-swarm/ (default: $AERODOCK_DATA_DIR, "
+                           "else ../shared/data in this repository; docs/real-logs.md).")] = None,
     model: Annotated[Path | None, typer.Option(
         "--model", help="A trained model DIR to fly (default: train one on swap_ss 00-04 and "
                         "swap_sl 00-07).")] = None,
@@ -80,7 +90,10 @@ def evaluate_compensation_command(
         fail(f"{figure}: is a directory; give a file name such as compensation.png")
     if model is not None and not model.is_dir():
         fail(f"--model {model}: no such model directory")
-    root = data if data is not None else default_data_root()
+    if data is not None and data_dir is not None:
+        fail("give --data (the neural-swarm folder) or --data-dir (the folder holding it), "
+             "not both")
+    root = data if data is not None else default_data_root(data_dir)
     if not root.is_dir():
         fail(f"{root}: no such folder (give --data, the Neural-Swarm folder holding swap_ss and "
              "swap_sl_2020-06-19)")

@@ -37,8 +37,11 @@ def reproduce(
     trust: TrustOpt = None,
     seed: SeedOpt = 0,
     real_data: Annotated[bool, typer.Option(
-        help="Run the real-data study (step 5; it reads ../shared/data and does not depend on "
-             "--config).")] = True,
+        help="Run the real-data study (step 5: the Neural-Swarm flights in the data location; it "
+             "does not depend on --config).")] = True,
+    data_dir: Annotated[Path | None, typer.Option(
+        "--data-dir", help="The data location holding neural-swarm/ (default: $AERODOCK_DATA_DIR, "
+                           "else ../shared/data in this repository; docs/real-logs.md).")] = None,
 ) -> None:
     """The paper's experiments end to end: results.json, report.md and figures/."""
     from aerodock.experiments.reproduce import run_reproduce
@@ -48,10 +51,12 @@ def reproduce(
     # Its docking campaigns come after minutes of curriculum: a trial the limits refuse is
     # refused now, not there (each campaign checks its own trials x steps as it starts).
     check_campaign_size(cfg, 1)
-    # ../shared/data beside the repository (this file is REPO/aerodock/cli/experiments.py)
-    shared = Path(__file__).resolve().parents[3] / "shared" / "data"
-    here = Path.cwd().parent / "shared" / "data"
-    data = (here if here.is_dir() else shared) if real_data else None
+    from aerodock.ingest.data_dir import find_data_dir
+
+    located = find_data_dir(data_dir)
+    if real_data and located.problem():
+        fail(located.problem())
+    data = located.path if real_data else None
 
     def say(msg: str) -> None:
         err_console.print(msg)

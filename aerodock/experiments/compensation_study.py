@@ -256,7 +256,8 @@ def table_title(result: dict[str, Any], region: str, axis: str) -> str:
 def compensation_markdown(result: dict[str, Any] | None) -> list[str]:
     """The study as markdown lines: the vertical and planar tables of both regions."""
     if not result:
-        return ["The compensations were not scored on real flights (no shared data)."]
+        return ["The compensations were not scored on real flights (no Neural-Swarm flights in "
+                "the data location: AERODOCK_DATA_DIR or --data-dir, docs/real-logs.md)."]
     lines = []
     for region in ("interaction", "all"):
         for axis in ("vertical", "planar"):

@@ -423,6 +423,11 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
             lines += _transfer_table(rd["transfer"])
         if rd.get("sample_efficiency"):
             lines += _se_table(rd["sample_efficiency"], "Sample efficiency, real data")
+    else:
+        lines += ["## Real data (Neural-Swarm swap flights)", "",
+                  "Not run: no Neural-Swarm flights in the data location (`--no-real-data`, or "
+                  "neither `--data-dir` nor `AERODOCK_DATA_DIR` names a folder holding "
+                  "`neural-swarm/swap_ss`; docs/real-logs.md says where to get them).", ""]
     if "compensation" in r:
         from aerodock.experiments.compensation_study import compensation_markdown
 

@@ -6,7 +6,8 @@
    and without the model);
 3. docking with the leader hovering (d_p = 0.36 m, four start locations);
 4. the leader in motion at 0.25 m/s (meet at 6 s, hold formation for 5 s);
-5. the real-data study on the Neural-Swarm flights, when ``../shared/data`` is present;
+5. the real-data study on the Neural-Swarm flights, when the data location holds them
+   (:mod:`aerodock.ingest.data_dir`);
 then ``results.json``, ``report.md`` and ``figures/`` (:mod:`aerodock.experiments.report`).
 
 "Without model" is the paper's LQG baseline (bias observer); "with model" adds the learnt model's
@@ -460,7 +461,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
             say("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)")
             results["compensation"] = None
     else:
-        why = "not asked for" if shared_data is None else "../shared/data/neural-swarm not found"
+        why = ("no data location: --no-real-data, or neither --data-dir nor AERODOCK_DATA_DIR"
+               if shared_data is None else f"{real_dir} not found")
         say(f"5/5 real-data study skipped ({why})")
         results["real_data"] = results["compensation"] = None
     timings["real_data_s"] = time.perf_counter() - t0

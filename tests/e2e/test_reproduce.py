@@ -110,7 +110,7 @@ def test_reproduce_writes_results_report_and_figures(tmp_path):
     # the docking animation shows a docked trial (smoke: 4 trials, which may all fail)
     docked = res["hover_docking"]["with_model"]["docked"] > 0
     assert ("figures/hover_docking.gif" in res["figures"]) == docked
-    if res["real_data"] is not None:  # ../shared/data present (CI): the real-flight steps ran
+    if res["real_data"] is not None:  # the data location holds the flights: they ran
         assert res["compensation"]["scores"]
         assert "figures/compensation_replay.png" in res["figures"]
         assert "The compensations scored on real flights" in report
@@ -123,6 +123,9 @@ def test_reproduce_writes_results_report_and_figures(tmp_path):
             # another size (docs/results.md, seeds 0-2: 61.8-68.2 % and 48.1-54.0 %)
             assert pairing["models"]["so2"]["vertical_reduction"] > 0.2
         assert "Transfer to a pair of other sizes" in report
+    else:  # no flights in the data location: the report says so, and where to get them
+        assert "Not run: no Neural-Swarm flights in the data location" in report
+        assert "docs/real-logs.md" in report
     assert "Cable-length study" in report and "8/10" in report
     assert "The paper's controller and ours, side by side" in report
     assert "What each lever costs" in report

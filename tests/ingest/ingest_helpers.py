@@ -13,10 +13,13 @@ from typing import Any
 import numpy as np
 
 from aerodock.geometry import E3, euler_to_rotmat, rotmat_to_quat
+from aerodock.ingest.data_dir import find_data_dir
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared"
-NEURAL_SWARM_DIR = SHARED / "data" / "neural-swarm" / "swap_ss"
-ULOG_SAMPLE = SHARED / "data" / "px4-ulog" / "sample_log_small.ulg"
+# The data location: AERODOCK_DATA_DIR, else ../shared/data beside the clone.
+DATA_DIR = find_data_dir(cwd=Path(__file__).resolve().parents[2]).path or SHARED / "data"
+NEURAL_SWARM_DIR = DATA_DIR / "neural-swarm" / "swap_ss"
+ULOG_SAMPLE = DATA_DIR / "px4-ulog" / "sample_log_small.ulg"
 G = 9.81
 MASS_KG = 0.7
 DISTURBANCE = np.array([0.1, -0.2, 0.5])
