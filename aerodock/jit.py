@@ -24,6 +24,9 @@ from typing import Any
 if os.environ.get("AERODOCK_JIT", "1") == "0":  # before numba reads its configuration
     os.environ.setdefault("NUMBA_DISABLE_JIT", "1")
 
+import hashlib  # noqa: E402
+from pathlib import Path  # noqa: E402
+
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
@@ -31,6 +34,35 @@ from numba.core import cgutils, types  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
 
 JIT_ENABLED = not numba.config.DISABLE_JIT
+
+
+def _kernel_sources_digest() -> str:
+    """A digest of every package module that holds compiled code (and of numba's version).
+
+    numba keeps a kernel's machine code keyed by its own file only: a kernel that inlines a
+    helper from another module would go on running the helper's old code after the helper
+    changed. So the cache lives in a folder named by this digest, and any change to any
+    kernel's source starts a fresh one."""
+    digest = hashlib.sha256(numba.__version__.encode())
+    root = Path(__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        text = path.read_bytes()
+        if b"njit" in text:
+            digest.update(str(path.relative_to(root)).encode())
+            digest.update(text)
+    return digest.hexdigest()[:16]
+
+
+def cache_dir() -> Path:
+    """Where the compiled kernels are kept: ``$AERODOCK_CACHE_DIR`` (default: the user's cache,
+    ``~/.cache/aerodock``), in a folder per version of the kernels' sources."""
+    base = os.environ.get("AERODOCK_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "aerodock")
+    return Path(base) / f"kernels-{_kernel_sources_digest()}"
+
+
+if "NUMBA_CACHE_DIR" not in os.environ:  # the user's own choice stands
+    numba.config.CACHE_DIR = str(cache_dir())
 
 
 def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -156,7 +188,7 @@ def _check_loops(loops: Any) -> bool:
 NUMPY_LOOPS, NUMPY_LOOPS_OK = _numpy_loops()
 if NUMPY_LOOPS_OK and not _check_loops(NUMPY_LOOPS):  # pragma: no cover - another NumPy layout
     NUMPY_LOOPS_OK = False
-if not NUMPY_LOOPS_OK:  # pragma: no cover
+if not NUMPY_LOOPS_OK or not JIT_ENABLED:  # pragma: no cover - plain Python calls no loop
     NUMPY_LOOPS[:] = 0
 NUMPY_LOOPS.flags.writeable = False
 """The loops' addresses, (4,) int64 (``LOOP_*`` index them), passed to every kernel that calls
