@@ -18,7 +18,7 @@ leader_dropout_s = ["none", [3.0, 1.0]]  # fault: leader state lost from 3 s for
 compensation = ["observer", "oracle"]    # none | observer | model | oracle
 controller = ["paper", "tuned", "ours"]  # the profile, as dock --controller
 downwash.params.turb_vertical = [0.15, 0.25]  # any config key, by its dotted name
-control.terminal_s = {min = 0.5, max = 1.5}   # (random only: a range of a numeric key)
+mission.terminal_s = {min = 0.5, max = 1.5}   # (random only: a range of a numeric key)
 ```
 
 Axes left out keep the config's value (compensation: ``observer``; controller: ``tuned``; no
@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.config.schema import LEADER_FIXED_KEYS, RULES
+from aerodock.config.schema import RULES
 from aerodock.control.compensation import Compensation
 from aerodock.control.profiles import PROFILES, controller_config
 from aerodock.fileio import read_toml
@@ -198,7 +198,7 @@ def config_axis_kind(source: str, axis: str) -> str:
     Raises:
         SweepSpecError: not a key an axis can set; the message lists the named axes.
     """
-    known = f"(named axes: {', '.join(AXES)}; or a config key such as control.terminal_s)"
+    known = f"(named axes: {', '.join(AXES)}; or a config key such as mission.terminal_s)"
     if axis == "downwash.field":
         raise _fail(source, "axes.downwash.field: the field names code; it is not a sweep axis "
                     "(set it in the sweep's config file)")
@@ -206,7 +206,7 @@ def config_axis_kind(source: str, axis: str) -> str:
         raise _fail(source, "axes.platform.cable_length_m: the cable length is the "
                     "cable_length_m axis")
     section, _, key = axis.partition(".")
-    if section == "leader" and key not in LEADER_FIXED_KEYS:
+    if section == "leader":  # a [vehicle] key for the leader (the loader refuses the fixed)
         rule = RULES.get(f"vehicle.{key}")
     else:
         rule = RULES.get(axis)

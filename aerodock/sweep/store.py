@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import shutil
 from collections.abc import Iterable, Sequence
@@ -30,6 +31,7 @@ from aerodock.fileio import (
     InputError,
     atomic_open,
     dumps_json,
+    json_ready,
     read_input_text,
     refuse_symlink,
 )
@@ -42,6 +44,8 @@ OUTCOME_NAMES = ("trial", "docked", "missed", "slipped", "aborted", "abort_reaso
                  "err_3d_m")
 """A trial's outcome columns (:data:`aerodock.sweep.run.OUTCOME_COLUMNS`), what a cell file holds
 per trial; the cell's settings columns are rebuilt from the spec."""
+_BOOLS = ("docked", "missed", "slipped", "aborted", "clearance_violation")
+_FLOATS = ("min_clearance_m", "err_down_m", "err_3d_m")  # null in the file: NaN (a failed trial)
 
 
 def code_version() -> str:
@@ -127,13 +131,14 @@ class CellStore:
             except (OSError, InputError, ValueError, RecursionError):
                 continue
             if _valid(doc, key, trials):
-                return doc["outcomes"]
+                return [_outcome(o) for o in doc["outcomes"]]
         return None
 
     def save(self, key: str, settings: dict[str, Any], outcomes: list[dict[str, Any]]) -> Path:
         """Write one finished cell (atomically) into :attr:`folder`."""
         path = self.folder / f"{key}.json"
-        text = dumps_json({"key": key, "settings": settings, "outcomes": outcomes}, indent=None)
+        text = dumps_json(json_ready({"key": key, "settings": settings, "outcomes": outcomes}),
+                          indent=None)
         with atomic_open(path, "w") as fh:
             fh.write(text + "\n")
         return path
@@ -165,8 +170,29 @@ def _valid(doc: Any, key: str, trials: int) -> bool:
     if not isinstance(settings, dict) or cell_key(settings) != key:
         return False
     return (isinstance(outcomes, list) and len(outcomes) == trials
-            and all(isinstance(o, dict) and tuple(o) == OUTCOME_NAMES for o in outcomes)
-            and [o["trial"] for o in outcomes] == list(range(trials)))
+            and all(_valid_outcome(o, i) for i, o in enumerate(outcomes)))
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _valid_outcome(o: Any, trial: int) -> bool:
+    """One trial's outcome as :func:`aerodock.sweep.run.run_cell` writes it (typed columns)."""
+    return (isinstance(o, dict) and tuple(o) == OUTCOME_NAMES and o["trial"] == trial
+            and type(o["trial"]) is int and all(isinstance(o[k], bool) for k in _BOOLS)
+            and isinstance(o["abort_reason"], str)
+            and all(o[k] is None or _is_number(o[k]) for k in (*_FLOATS, "capture_time_s")))
+
+
+def _outcome(o: dict[str, Any]) -> dict[str, Any]:
+    """A stored outcome as a row holds it: floats, NaN where the file has null."""
+    out = dict(o)
+    for k in _FLOATS:
+        out[k] = math.nan if o[k] is None else float(o[k])
+    if o["capture_time_s"] is not None:
+        out["capture_time_s"] = float(o["capture_time_s"])
+    return out
 
 
 def partial_folder(out: str | Path) -> Path:
