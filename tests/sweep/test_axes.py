@@ -139,3 +139,16 @@ def test_sweep_command_over_a_config_key_writes_its_column_and_figures(tmp_path)
     assert "controller" in header and "downwash.params.turb_vertical" in header
     assert (out / "figures" / "sweep_success.png").read_bytes()[:4] == b"\x89PNG"
     assert "ours" in proc.stdout and "paper" in proc.stdout
+
+
+def test_the_example_studies_parse_and_fit_the_default_config():
+    from pathlib import Path
+
+    examples = sorted((Path(__file__).resolve().parents[2] / "examples").glob("sweep_*.toml"))
+    assert len(examples) >= 2
+    for path in examples:
+        spec = load_spec(path)
+        check_against_config(spec, load_config(spec.config))
+    spec = load_spec(examples[[p.name for p in examples].index("sweep_controller_wake.toml")])
+    assert len(spec.cells) == 9 and {c.controller for c in spec.cells} == {"paper", "tuned",
+                                                                            "ours"}
