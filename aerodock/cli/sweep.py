@@ -6,7 +6,7 @@ import shutil
 import time
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -92,15 +92,16 @@ def sweep_command(
         print_json(summary)
     else:
         _print_table(spec, summary)
-        typer.echo(f"wrote {', '.join(files.values())}, {out / 'summary.json'} and "
-                   f"{len(figures)} figures in {out / 'figures'} ({summary['wall_s']:.0f} s; "
+        drawn = f"{len(figures)} figures in {out / 'figures'}" if figures else "no figures"
+        typer.echo(f"wrote {', '.join(files.values())}, {out / 'summary.json'}, "
+                   f"{out / 'cells'} and {drawn} ({summary['wall_s']:.0f} s; "
                    f"{len(store.flown)} campaigns flown, {len(store.reused)} reused)")
     if figure_error is not None:
         fail(f"the figures failed ({figure_error}); the tables, cells/ and summary.json are "
              f"written in {out}", code=1)
 
 
-def _print_table(spec, summary: dict) -> None:
+def _print_table(spec: Any, summary: dict[str, Any]) -> None:
     """The per-cell table on stdout: settings, then docked with its Wilson 95 % interval."""
     from rich.console import Console
     from rich.markup import escape

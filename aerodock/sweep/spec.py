@@ -159,8 +159,6 @@ def _check_value(source: str, axis: str, value: Any) -> Any:
         if value not in PROFILES:
             raise _fail(source, f"axes.controller: {value!r} is not one of {'|'.join(PROFILES)}")
         return value
-    if axis not in AXES:
-        return value  # a config key: checked by the loader against the sweep's config
     if axis == "leader_dropout_s":
         if value == "none":
             return None
