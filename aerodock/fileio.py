@@ -5,6 +5,9 @@
 * :func:`write_dir_atomic` -- a directory of files replaced as a whole (a model directory): a
   kill at any moment leaves either the complete old directory or the complete new one; the
   temporary sibling a kill leaves is removed by the next such write in the same folder.
+  :func:`building_dir` does the same for an output folder of several files and sub-folders.
+  Both refuse an output folder given as a symbolic link (:func:`refuse_symlink`): the swap
+  would replace the link, not the folder it points to. A link in a parent folder is followed.
 * :func:`dumps_json` -- JSON that other tools can parse: ``NaN``/``Infinity`` are refused. Every
   ``--json`` prints through it, and :func:`write_json` writes every JSON file with it.
 * :func:`json_ready` -- the one policy for a non-finite number that means a figure is missing
@@ -20,6 +23,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import json
 import math
@@ -264,7 +268,10 @@ def remove_stale_dir_temps(parent: str | Path, *, now: float | None = None) -> l
     writer left behind; returns what was removed (or restored).
 
     Only directories named as the swap names them are considered, and only if they hold
-    nothing but regular files (what the swap writes; never a symlink or a sub-folder). One is
+    nothing but regular files (what the swap writes; never a symlink or a sub-folder). A
+    symbolic link named as the swap names its temporaries (with a process id), left when an
+    earlier version swapped a linked output folder out, is removed like a folder once its
+    process is gone (the link, never what it points to). One is
     left behind when the process in its name is gone and nobody holds its lock, or, for the
     earlier versions' names (no pid, no lock), when nothing in it has changed for
     :data:`LEGACY_DIR_TEMP_AGE_S`. A ``.old`` directory (the old contents set aside where the
@@ -281,6 +288,11 @@ def remove_stale_dir_temps(parent: str | Path, *, now: float | None = None) -> l
     for entry in entries:
         match = _DIR_TEMP.match(entry.name)
         legacy = None if match else _LEGACY_DIR_TEMP.match(entry.name)
+        if match and entry.is_symlink() and not _pid_alive(int(match["pid"])):
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+            continue
         if not (match or legacy) or not entry.is_dir(follow_symlinks=False):
             continue
         path = Path(entry.path)
@@ -339,10 +351,10 @@ def _swap_synced_dir(tmp: Path, path: Path) -> None:
     which :func:`remove_stale_dir_temps` restores if a kill comes between the two renames) and
     put back if the second rename fails. The parent folder is synced last.
     """
-    if not path.exists():
+    if not os.path.lexists(path):
         os.rename(tmp, path)
     elif _exchange(tmp, path):
-        shutil.rmtree(tmp, ignore_errors=True)  # now holds the old folder
+        _remove_entry(tmp)  # now holds the old folder (or a link swapped in since the check)
     else:
         aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.",
                                       suffix=".old"))
@@ -358,11 +370,38 @@ def _swap_synced_dir(tmp: Path, path: Path) -> None:
             except BaseException:
                 os.rename(aside, path)
                 raise
-            shutil.rmtree(aside, ignore_errors=True)
+            _remove_entry(aside)
         finally:
             if aside_lock is not None:
                 os.close(aside_lock)
     _fsync_dir(path.parent)
+
+
+def refuse_symlink(path: str | Path) -> Path:
+    """Refuse an output folder given as a symbolic link (a link in a parent folder is fine).
+
+    A folder written as a whole is swapped in by renaming, which replaces the link itself, not
+    the folder it points to; rather than do that silently (or write through the link into a
+    folder aerodock did not make), the link is refused.
+
+    Raises:
+        InputError: ``path`` is a symbolic link (one line, naming it).
+    """
+    path = Path(path)
+    if path.is_symlink():
+        raise InputError(path, "is a symbolic link; aerodock replaces an output folder as a "
+                               "whole and does not follow links: give the folder it points to "
+                               f"({os.path.realpath(path)}) or a new name")
+    return path
+
+
+def _remove_entry(path: Path) -> None:
+    """Remove a folder tree, or a symbolic link (never what it points to); errors ignored."""
+    if path.is_symlink():
+        with contextlib.suppress(OSError):
+            path.unlink()
+    else:
+        shutil.rmtree(path, ignore_errors=True)
 
 
 def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
@@ -380,9 +419,10 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
     so that a crash never makes the new name point at files that are not on disk yet.
 
     Raises:
+        InputError: ``path`` is a symbolic link (:func:`refuse_symlink`).
         OSError: the files cannot be written.
     """
-    path = Path(path)
+    path = refuse_symlink(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_dir_temps(path.parent)
     tmp, lock = _make_dir_temp(path.parent, path.name, "tmp")
@@ -394,6 +434,7 @@ def write_dir_atomic(path: str | Path, files: Mapping[str, bytes]) -> Path:
                 fh.flush()
                 os.fsync(fh.fileno())
         _fsync_dir(tmp)
+        refuse_symlink(path)  # it may have changed while we wrote
         _swap_synced_dir(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -727,14 +768,18 @@ def remove_stale_build_dirs(path: str | Path) -> list[Path]:
     """Remove the temporary folders of :func:`building_dir` for ``path`` left by killed runs.
 
     Each temporary folder names its process id (``.NAME.PID.XXXX.tmp``); one whose process is
-    gone is removed (a SIGKILL cannot clean up). Returns the removed folders.
+    gone is removed (a SIGKILL cannot clean up). A symbolic link of that name (what an earlier
+    version left when ``--out`` was a link: the swap moved the link there) is removed the same
+    way: the link, never what it points to. Returns the removed folders and links.
     """
     path = Path(path)
     removed = []
     for tmp in path.parent.glob(f".{glob_escape(path.name)}.*{_TMP_SUFFIX}"):
         pid_text = tmp.name[len(path.name) + 2:].split(".", 1)[0]
-        if tmp.is_dir() and pid_text.isdigit() and not _pid_alive(int(pid_text)):
-            shutil.rmtree(tmp, ignore_errors=True)
+        if not pid_text.isdigit() or _pid_alive(int(pid_text)):
+            continue
+        if tmp.is_symlink() or tmp.is_dir():
+            _remove_entry(tmp)
             removed.append(tmp)
     return removed
 
@@ -756,7 +801,8 @@ def check_output_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Path:
     """Refuse an output folder :func:`building_dir` would refuse, before the work begins.
 
     Raises:
-        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+        InputError: ``path`` is a symbolic link, exists and is not a folder, or holds entries
+            outside ``owned``.
     """
     path = Path(path)
     _check_owned(path, owned)
@@ -768,6 +814,7 @@ def _check_owned(path: Path, owned: tuple[str, ...]) -> None:
     or the current folder given as ``--out``)."""
     import fnmatch
 
+    refuse_symlink(path)
     if not path.exists():
         return
     if not path.is_dir():
@@ -815,7 +862,8 @@ def building_dir(path: str | Path, owned: tuple[str, ...] = ("*",)) -> Iterator[
             the current folder).
 
     Raises:
-        InputError: ``path`` exists and is not a folder, or holds entries outside ``owned``.
+        InputError: ``path`` is a symbolic link (:func:`refuse_symlink`), exists and is not a
+            folder, or holds entries outside ``owned``.
         OSError: the folder cannot be made or swapped in.
     """
     path = Path(path)

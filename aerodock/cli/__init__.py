@@ -26,6 +26,11 @@ def run(argv: list[str] | None = None) -> int:
 
 def main() -> None:
     """Console entry point (``aerodock``): see :func:`aerodock.cli.app.main`."""
-    from aerodock.cli.app import main as main_app
+    try:
+        from aerodock.cli.app import main as main_app
+    except KeyboardInterrupt:  # Ctrl-C while the commands load: the same one line as later
+        import sys
 
+        sys.stderr.write("interrupted\n")
+        raise SystemExit(130) from None
     main_app()

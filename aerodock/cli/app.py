@@ -170,6 +170,8 @@ def run(argv: list[str] | None = None) -> int:
     try:
         args = _expand_repeatable(args)
         rv = command().main(args=args, prog_name="aerodock", standalone_mode=False)
+        if rv == 130:  # Typer turns a KeyboardInterrupt in a command into a silent Exit(130)
+            typer.echo("interrupted", err=True)
         return rv if isinstance(rv, int) else 0
     except getattr(click, "NoArgsIsHelpError", ()) as err:
         typer.echo(err.ctx.get_help())
@@ -209,4 +211,6 @@ def _terminate(signum: int, frame: Any) -> None:
 def main() -> None:
     """Console entry point: run the app; turn errors into one-line messages."""
     signal.signal(signal.SIGTERM, _terminate)
-    sys.exit(run())
+    code = run()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # done: a late Ctrl-C does not break the exit
+    sys.exit(code)

@@ -32,7 +32,7 @@ from aerodock.cli.common import (
     print_json,
     progress_bar,
 )
-from aerodock.fileio import one_line
+from aerodock.fileio import one_line, refuse_symlink
 
 TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
 # The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
@@ -118,6 +118,7 @@ def train_command(
         fail(f"--minutes must be a positive finite number, got {minutes}")
     if max_epochs < 1:
         fail(f"--max-epochs must be at least 1, got {max_epochs}")
+    refuse_symlink(out)  # the model folder is swapped in whole: a link would be replaced
     if out.exists() and not out.is_dir():
         fail(f"{out}: exists and is not a directory")
     ds = _load_data(data)

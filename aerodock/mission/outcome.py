@@ -115,11 +115,18 @@ def _nan_stat(stat: Callable[[np.ndarray], Any], values: np.ndarray) -> float | 
 
 
 def wilson_interval(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """Wilson score interval for a binomial proportion ``k / n`` (95 % by default)."""
+    """Wilson score interval ``(low, high)`` for a binomial proportion ``k / n`` (95 % by default).
+
+    Always ``0 <= low <= k / n <= high <= 1``: the exact interval holds ``k / n``, and rounding
+    (``high`` = 0.9999999999999999 at ``k = n`` = 4, 10, 14, ...) is clamped, so an error bar
+    ``high - k / n`` is never negative. ``n = 0`` gives ``(0, 1)``.
+    """
     if n == 0:
         return (0.0, 1.0)
     p = k / n
     denom = 1 + z**2 / n
     centre = (p + z**2 / (2 * n)) / denom
     half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
-    return (float(max(0.0, centre - half)), float(min(1.0, centre + half)))
+    low = min(max(0.0, float(centre - half)), p)
+    high = max(min(1.0, float(centre + half)), p)
+    return (low, high)

@@ -4,6 +4,12 @@ Every cell is :func:`aerodock.mission.batch.run_campaign` with its own seed, so 
 not depend on where or in which order it runs: the local and the Ray backends give the same table
 (tested). The table is tidy: one row per trial, the cell's settings in columns beside the trial's
 outcome (:data:`OUTCOME_COLUMNS`).
+
+With a :class:`aerodock.sweep.store.CellStore`, every cell is saved as it finishes and a cell
+already in the store's folders is taken from there instead of flown (``sweep --resume``).
+An interrupt (Ctrl-C) or any other exception while local worker processes run stops them all
+before it propagates: the workers ignore ``SIGINT`` (a terminal's Ctrl-C reaches the whole
+process group; the driver alone reacts, so no worker prints a traceback) and are terminated.
 """
 
 from __future__ import annotations
@@ -11,15 +17,18 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
+import signal
+import threading
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.sweep.spec import Cell, SweepSpec, check_against_config
+from aerodock.sweep.spec import Cell, SweepSpec, cell_config, check_against_config
+from aerodock.sweep.store import OUTCOME_NAMES, CellStore, cell_key, cell_settings, model_digest
 
 OUTCOME_COLUMNS = (
     ("trial", "trial index within the campaign"),
@@ -36,18 +45,24 @@ OUTCOME_COLUMNS = (
 )
 
 Progress = Callable[[int, int], None]
+Rows = list[dict[str, Any]]
 
 
-def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> list[dict[str, Any]]:
-    """Fly one cell's campaign; its rows of the tidy table."""
+def cell_rows(cell: Cell, cell_cfg: Config, outcomes: list[dict[str, Any]]) -> Rows:
+    """A cell's rows of the tidy table: its settings (the cable length the config gives when the
+    cell sets none) beside each trial's outcome."""
+    base = cell.row()
+    if base["cable_length_m"] is None:
+        base["cable_length_m"] = cell_cfg.platform.cable_length_m
+    return [{**base, **outcome} for outcome in outcomes]
+
+
+def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> Rows:
+    """Fly one cell's campaign on ``cfg`` (the sweep's configuration; the cell's config keys,
+    controller and noise scale are applied here); its rows of the tidy table."""
     from aerodock.mission import AbortReason, MissionSpec, run_campaign
 
-    over: dict[str, Any] = {}
-    if cell.mocap_noise_scale != 1.0:
-        over["mocap"] = {"pos_noise_m": cfg.mocap.pos_noise_m * cell.mocap_noise_scale,
-                         "vel_noise_mps": cfg.mocap.vel_noise_mps * cell.mocap_noise_scale}
-    if over:
-        cfg = cfg.with_overrides(over, source="sweep cell")
+    cfg = cell_config(cfg, cell)
     predictor = None
     if cell.compensation == "model":
         from aerodock.learning.runtime import Predictor
@@ -57,13 +72,10 @@ def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> list[di
                        leader_speed_mps=cell.leader_speed_mps, compensation=cell.compensation,
                        seed=cell.seed, leader_dropout_s=cell.leader_dropout_s)
     res = run_campaign(cfg, spec, predictor)
-    base = cell.row()
-    if base["cable_length_m"] is None:
-        base["cable_length_m"] = cfg.platform.cable_length_m
-    rows = []
+    outcomes = []
     for i in range(trials):
         cap = float(res.capture_time_s[i])
-        rows.append({**base, "trial": i, "docked": bool(res.success[i]),
+        outcomes.append({"trial": i, "docked": bool(res.success[i]),
                      "missed": bool(res.missed[i]), "slipped": bool(res.slipped[i]),
                      "aborted": bool(res.aborted[i]),
                      "abort_reason": AbortReason(int(res.abort_reason[i])).name.lower(),
@@ -71,11 +83,11 @@ def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> list[di
                      "min_clearance_m": float(res.min_clearance_m[i]),
                      "capture_time_s": None if np.isnan(cap) else cap,
                      "err_down_m": float(res.err_down_m[i]), "err_3d_m": float(res.err_3d_m[i])})
-    return rows
+    return cell_rows(cell, cfg, outcomes)
 
 
 def _cell_job(cfg_data: dict[str, Any], cfg_source: str, cell: Cell, trials: int,
-              model: str | None) -> tuple[int, list[dict[str, Any]]]:
+              model: str | None) -> tuple[int, Rows]:
     """A picklable job: (cell index, rows)."""
     return cell.index, run_cell(Config(cfg_data, cfg_source), cell, trials, model)
 
@@ -98,9 +110,72 @@ def _single_threaded_children() -> Iterator[None]:
                 os.environ[k] = v
 
 
+def _ignore_sigint() -> None:
+    """A worker's initializer: Ctrl-C is the driver's to handle (it stops the workers)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """``SIGINT`` ignored inside (main thread only): processes started here inherit it through
+    ``exec``, so a Ctrl-C while a worker interpreter starts (before its initializer) does not
+    print a traceback from it. The driver's handler is restored on leaving."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _stop_pool(pool: ProcessPoolExecutor, futures: list[Future]) -> None:
+    """Stop every worker now (a running cell is abandoned) and wait for them to exit."""
+    for fut in futures:
+        fut.cancel()
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.join(5.0)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(5.0)
+
+
+def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], None]) -> None:
+    """The cells on ``workers`` local processes (or in this process for one worker)."""
+    if workers == 1:
+        for a in args:
+            finished(*_cell_job(*a))
+        return
+    # Fresh interpreters with one BLAS/OpenMP thread each: N processes on N cores (inherited
+    # thread pools oversubscribe the cores and spin in the kernel).
+    with _single_threaded_children(), _sigint_ignored():
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint,
+                                   mp_context=multiprocessing.get_context("spawn"))
+        futures: list[Future] = []
+        try:
+            futures = [pool.submit(_cell_job, *a) for a in args]  # starts the workers
+        except BaseException:
+            _stop_pool(pool, futures)
+            raise
+    try:
+        for fut in as_completed(futures):
+            finished(*fut.result())
+    except BaseException:
+        _stop_pool(pool, futures)
+        raise
+    pool.shutdown(wait=True)
+
+
 def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | None = None,
-              address: str | None = None, progress: Progress | None = None
-              ) -> list[dict[str, Any]]:
+              address: str | None = None, progress: Progress | None = None,
+              store: CellStore | None = None) -> Rows:
     """Every cell of ``spec``; the rows of the tidy table, ordered by cell then trial.
 
     Args:
@@ -110,7 +185,10 @@ def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | 
         jobs: parallel workers (local: processes, default the CPU count; ray: CPUs of a local
             Ray instance it starts, default all).
         address: an existing Ray cluster's address (``ray`` backend), e.g. ``"auto"``.
-        progress: called as ``progress(done, total)`` after every cell.
+        progress: called as ``progress(done, total)`` after every cell (and once first with
+            the cells taken from ``store``, if any).
+        store: where every cell is saved as it finishes, and where finished cells are looked
+            up (its ``reuse_from``); its ``reused`` and ``flown`` lists say which was which.
 
     Raises:
         SweepSpecError: a cell ``dock`` would refuse, or a campaign too large.
@@ -122,36 +200,56 @@ def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | 
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
     check_against_config(spec, cfg)  # every cell as dock would check it, before any runs
     model = None if spec.model is None else str(spec.model)
-    args = [(cfg.data, cfg.source, c, spec.trials, model) for c in spec.cells]
-    results: dict[int, list[dict[str, Any]]] = {}
-    total = len(args)
-    if backend == "local":
-        workers = min(jobs or os.cpu_count() or 1, total)
-        if workers == 1:
-            for a in args:
-                idx, rows = _cell_job(*a)
-                results[idx] = rows
-                if progress:
-                    progress(len(results), total)
-        else:
-            # Fresh interpreters with one BLAS/OpenMP thread each: N processes on N cores
-            # (inherited thread pools oversubscribe the cores and spin in the kernel).
-            with _single_threaded_children(), ProcessPoolExecutor(
-                    max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-                futures = [pool.submit(_cell_job, *a) for a in args]
-                for fut in as_completed(futures):
-                    idx, rows = fut.result()
-                    results[idx] = rows
-                    if progress:
-                        progress(len(results), total)
-    else:
-        results = _run_ray(args, jobs, address, progress)
+    results: dict[int, Rows] = {}
+    total = len(spec.cells)
+    saved: dict[int, tuple[str, dict[str, Any]]] = {}
+    if store is not None:
+        saved = _look_up(spec, cfg, model, store, results)
+        if results and progress:
+            progress(len(results), total)
+
+    def finished(idx: int, rows: Rows) -> None:
+        if store is not None:
+            key, settings = saved[idx]
+            store.save(key, settings, [{k: r[k] for k in OUTCOME_NAMES} for r in rows])
+            store.flown.append(idx)
+        results[idx] = rows
+        if progress:
+            progress(len(results), total)
+
+    args = [(cfg.data, cfg.source, c, spec.trials, model) for c in spec.cells
+            if c.index not in results]
+    if args and backend == "local":
+        _run_local(args, min(jobs or os.cpu_count() or 1, len(args)), finished)
+    elif args:
+        _run_ray(args, jobs, address, finished)
     return [row for idx in sorted(results) for row in results[idx]]
 
 
+def _look_up(spec: SweepSpec, cfg: Config, model: str | None, store: CellStore,
+             results: dict[int, Rows]) -> dict[int, tuple[str, dict[str, Any]]]:
+    """Every cell's key and settings; the cells ``store`` holds go into ``results``."""
+    digest = model_digest(model) if any(c.compensation == "model" for c in spec.cells) else None
+    configs: dict[str, Config] = {}
+    saved = {}
+    for cell in spec.cells:
+        point = repr((cell.settings, cell.controller, cell.mocap_noise_scale))
+        if point not in configs:
+            configs[point] = cell_config(cfg, cell)
+        settings = cell_settings(configs[point], cell, spec.trials, digest)
+        key = cell_key(settings)
+        saved[cell.index] = (key, settings)
+        store.keys[cell.index] = key
+        outcomes = store.load(key, spec.trials)
+        if outcomes is not None:
+            results[cell.index] = cell_rows(cell, configs[point], outcomes)
+            store.reused.append(cell.index)
+    return saved
+
+
 def _run_ray(args: list[tuple], jobs: int | None, address: str | None,
-             progress: Progress | None) -> dict[int, list[dict[str, Any]]]:
-    """The cells as Ray tasks: ``{cell index: rows}``.
+             finished: Callable[[int, Rows], None]) -> None:
+    """The cells as Ray tasks; ``finished(cell index, rows)`` as each one ends.
 
     A Ray instance started here (no ``address``, Ray not yet initialised) is watched by
     :class:`aerodock.sweep.raycleanup.RayReaper` (no Ray process outlives a killed driver), and
@@ -177,27 +275,20 @@ def _run_ray(args: list[tuple], jobs: int | None, address: str | None,
                 else:
                     ray.init(num_cpus=jobs, include_dashboard=False, log_to_driver=False)
                 reinstall_sigterm()  # ray.init put its C++ failure handler on SIGTERM
-            return _ray_cells(ray, args, progress)
+            _ray_cells(ray, args, finished)
         finally:
             if started_here:
                 ray.shutdown()
-    raise AssertionError("unreachable")  # pragma: no cover
 
 
-def _ray_cells(ray: Any, args: list[tuple], progress: Progress | None
-               ) -> dict[int, list[dict[str, Any]]]:
+def _ray_cells(ray: Any, args: list[tuple], finished: Callable[[int, Rows], None]) -> None:
     """Submit every cell and collect the rows (waits in short slices: signals get through)."""
     job = ray.remote(num_cpus=1)(_cell_job)
     pending = [job.remote(*a) for a in args]
-    results: dict[int, list[dict[str, Any]]] = {}
     while pending:
         done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
         for ref in done:
-            idx, rows = ray.get(ref)
-            results[idx] = rows
-            if progress:
-                progress(len(results), len(args))
-    return results
+            finished(*ray.get(ref))
 
 
 def columns(rows: list[dict[str, Any]]) -> list[str]:

@@ -1,6 +1,8 @@
 """kill -9 during ``ingest``, ``train``, ``export``, ``sweep`` and ``collect``: the old output stays
 intact or the new one is complete, never a mix; temporary files of a killed write are removed by
-the next write.
+the next write. Ctrl-C (SIGINT to the process group) during ``sweep``, serial and parallel, and
+``dock``: one ``interrupted`` line, exit 130, no traceback, no process left, outputs whole, and
+``sweep --resume`` finishes the interrupted study.
 
 Each command first runs to completion (its output is the "old" one, and its duration sets the
 range of kill moments); then it runs again and is killed with SIGKILL at random moments.
@@ -11,7 +13,10 @@ in, the old one is copied back; the last write, in-process, removes the killed r
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import json
+import os
 import random
 import shutil
 import signal
@@ -315,3 +320,118 @@ def test_kill_during_collect_leaves_one_collection(tmp_path):
             _restore(snapshot, out)
     _in_process(old_args)
     assert not _temps(tmp_path), "a killed collect's temporary folder outlived the next one"
+
+
+# ---- Ctrl-C: one 'interrupted' line, exit 130, no traceback, no process left, outputs whole ---
+
+def _group_running(pgid: int) -> list[int]:
+    """The processes of group ``pgid`` still running (a zombie waiting for its reaper is done)."""
+    running = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            raw = Path(f"/proc/{entry}/stat").read_text()
+        except OSError:
+            continue
+        fields = raw[raw.rindex(")") + 2:].split()  # state, ppid, pgrp, ...
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            running.append(int(entry))
+    return running
+
+
+def _cpu_s(pid: int) -> float:
+    """CPU time used so far by ``pid`` (user + system), s."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _ctrl_c(args: list, ready) -> tuple[int, str, str]:
+    """Run ``aerodock ARGS`` in its own process group, wait until ``ready(pid)``, then send
+    SIGINT to the whole group (what a terminal's Ctrl-C does: the workers get it too).
+
+    Returns (exit code, stdout, stderr) once every process of the group has ended.
+    """
+    from fuzz_helpers import count
+
+    count(f"ctrl-c-{args[0]}")
+    proc = subprocess.Popen([sys.executable, "-c", ENTRY, *map(str, args)], text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 300
+        while proc.poll() is None and not ready(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert proc.poll() is None, f"{args[0]} ended before the interrupt: {proc.stderr.read()}"
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=120)  # the pipes close when every holder is gone
+        deadline = time.monotonic() + 30
+        while _group_running(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _group_running(proc.pid), "a process of the command outlived it"
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    return proc.returncode, out, err
+
+
+def _interrupted(rc: int, out: str, err: str) -> None:
+    assert "Traceback" not in err and "Error" not in err, err
+    assert (rc, err) == (130, "interrupted\n"), (rc, err)
+    assert out == ""
+
+
+def _a_cell_finished(folder: Path):
+    return lambda pid: folder.is_dir() and any(folder.glob("*.json"))
+
+
+@pytest.mark.parametrize("jobs", [2, 1])
+def test_ctrl_c_in_a_sweep_is_one_line_and_resume_finishes_it(tmp_path, jobs):
+    """Ctrl-C once a cell has finished: workers and all (``--jobs 2``) stop without a
+    traceback, --out is untouched (here: never made), and ``--resume`` reuses the finished
+    cells and gives the table an uninterrupted run gives."""
+    (tmp_path / "short.toml").write_text(FAST_WORLD + short_mission_toml())
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SWEEP_SPEC.format(seed="0, 1, 2, 3").replace(', "oracle"', ""))
+    out = tmp_path / "study"
+    result = _ctrl_c(["sweep", spec, "--out", out, "--jobs", jobs],
+                     _a_cell_finished(tmp_path / ".study.cells"))
+    _interrupted(*result)
+    assert not out.exists() and not _temps(tmp_path)
+    kept = len(list((tmp_path / ".study.cells").glob("*.json")))
+    assert 1 <= kept < 4
+    _in_process(["sweep", spec, "--out", out, "--jobs", "1", "--resume"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["reused"], summary["flown"]) == (kept, 4 - kept)
+    _in_process(["sweep", spec, "--out", tmp_path / "whole", "--jobs", "1"])
+    assert (out / "results.csv").read_bytes() == (tmp_path / "whole/results.csv").read_bytes()
+
+
+def test_ctrl_c_leaves_the_old_study_whole(tmp_path):
+    (tmp_path / "short.toml").write_text(FAST_WORLD + short_mission_toml())
+    specs = {}
+    for seed in (0, 1):
+        specs[seed] = tmp_path / f"spec{seed}.toml"
+        specs[seed].write_text(SWEEP_SPEC.format(seed=seed))
+    out = tmp_path / "study"
+    _in_process(["sweep", specs[0], "--out", out, "--jobs", "1"])
+    old = _tree(out)
+    _interrupted(*_ctrl_c(["sweep", specs[1], "--out", out, "--jobs", "2"],
+                          _a_cell_finished(tmp_path / ".study.cells")))
+    assert _tree(out) == old and not _temps(tmp_path)
+
+
+def _numpy_loaded(pid: int) -> bool:
+    """The command's modules are loading (NumPy is mapped)."""
+    with contextlib.suppress(OSError):
+        return "numpy" in Path(f"/proc/{pid}/maps").read_text()
+    return False
+
+
+@pytest.mark.parametrize("moment", ["loading", "flying"])
+def test_ctrl_c_in_dock_is_one_line(tmp_path, moment):
+    """While the commands load, and in the middle of a campaign (2 s of CPU into it: loading
+    takes well under that, the campaign well over it)."""
+    ready = _numpy_loaded if moment == "loading" else (lambda pid: _cpu_s(pid) >= 2.0)
+    _interrupted(*_ctrl_c(["dock", "--trials", "2", "--json"], ready))

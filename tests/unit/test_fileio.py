@@ -157,7 +157,8 @@ def test_only_our_dead_unlocked_temp_dirs_are_removed(tmp_path):
     keep["a file"].write_bytes(b"atomic_open's")
     (keep["sub-folder"] / "inner").mkdir()
     link_target = _dir_with(tmp_path / "precious", {"a": b"mine"})
-    (tmp_path / f".m.{dead}.abcd_128.tmp").symlink_to(link_target)
+    link = tmp_path / f".m.{dead}.abcd_128.tmp"  # a linked folder an earlier swap left
+    link.symlink_to(link_target)
     legacy_new = _dir_with(tmp_path / ".m.abcd_129.tmp", {"a": b""})
     legacy_old = _dir_with(tmp_path / ".m.abcd_130.tmp", {"a": b""})
     past = time.time() - 2 * 3600  # old enough that age alone would not keep any of them
@@ -167,9 +168,10 @@ def test_only_our_dead_unlocked_temp_dirs_are_removed(tmp_path):
         removed = remove_stale_dir_temps(tmp_path)
     finally:
         os.close(fd)
-    assert sorted(removed) == sorted([stale, legacy_old])
+    assert sorted(removed) == sorted([stale, legacy_old, link])
     assert busy.exists() and locked.exists() and legacy_new.exists()
     assert all(p.exists() for p in keep.values())
+    assert not os.path.lexists(link)  # the link goes, never what it points to
     assert (link_target / "a").read_bytes() == b"mine"
     assert not stale.exists() and not legacy_old.exists()
 
