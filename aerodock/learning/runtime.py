@@ -361,6 +361,11 @@ class ZeroPredictor(Predictor):
 
     __call__ = predict
 
+    def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray,
+                       wake_scales: np.ndarray | None = None) -> tuple[np.ndarray, None]:
+        """Zeros (n, 3), and no torque."""
+        return self.predict(x, leader_R), None
+
     def predict_one(self, x: np.ndarray, leader_R: np.ndarray,
                     wake_scales: np.ndarray | None = None) -> np.ndarray:
         """Zeros (3,)."""
