@@ -189,15 +189,20 @@ def _predicted(g: _Graph, spec: ModelSpec, weights: list[tuple[np.ndarray, np.nd
 
 def _mlp(g: _Graph, z: str, spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
          ) -> str:
-    layers = [(np.asarray(w, np.float64), np.asarray(b, np.float64)) for w, b in weights]
-    w0, b0 = layers[0]
-    w0 = w0 / np.asarray(spec.in_std, np.float64)[None, :]
-    layers[0] = (w0, b0 - w0 @ np.asarray(spec.in_mean, np.float64))
-    wl, bl = layers[-1]
-    out_std = np.asarray(spec.out_std, np.float64)
-    layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, np.float64))
-    h = z
+    from aerodock.learning.runtime import folded_layers
+
+    layers = folded_layers(spec, weights)
+    record = get_kind(spec.kind)
+    e, n_features = record.ego_features, record.n_features
+    h, ego = z, ""
+    if e:  # deep sets: phi reads the neighbour's features, rho phi's output and the ego ones
+        i64 = np.int64
+        h, ego = (g.op("Slice", z, g.const([a], "s", i64), g.const([b], "e", i64),
+                       g.const([1], "ax", i64)) for a, b in ((0, n_features - e),
+                                                             (n_features - e, n_features)))
     for i, (w, b) in enumerate(layers):
+        if e and i == record.phi_layers:
+            h = g.op("Concat", h, ego, axis=1)
         h = g.op("Add", g.op("MatMul", h, g.const(w.T, "W")), g.const(b, "b"))
         if i < len(layers) - 1:
             h = g.op("Tanh", h) if spec.activation == "tanh" else g.mul(h, g.op("Sigmoid", h))

@@ -15,7 +15,9 @@ training time, ...), ``aerodock_version``, ``created_utc`` and, last, ``model_sh
 document's own checksum).
 
 ``weights.npz`` holds ``W0, b0, W1, b1, ...``: ``W{i}`` has shape ``(layer_sizes[i+1],
-layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``. The network
+layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``; in a
+deep-sets kind's network (``Kind.weight_shapes``), the first layer takes the neighbour's
+features only and the first ``rho`` layer the ego features besides ``phi``'s output. The network
 computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_std + out_mean``.
 
 ``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius and
@@ -127,9 +129,9 @@ class ModelSpec:
     feature_version: int = FEATURE_VERSION
 
     def weight_shapes(self) -> list[tuple[tuple[int, int], tuple[int]]]:
-        """Expected ``(W shape, b shape)`` per layer."""
-        s = self.layer_sizes
-        return [((s[i + 1], s[i]), (s[i + 1],)) for i in range(len(s) - 1)]
+        """Expected ``(W shape, b shape)`` per layer (the kind's network layout; a chain
+        ``W{i}: (layer_sizes[i+1], layer_sizes[i])`` but for a deep-sets kind)."""
+        return get_kind(self.kind).weight_shapes(self.layer_sizes)
 
 
 def _aerodock_version() -> str:
@@ -388,6 +390,7 @@ def load_model_dir(
     )
     try:
         check_normalisation(spec)
+        spec.weight_shapes()
     except ValueError as err:
         raise ModelFileError(f"{jpath}: {err}") from None
     return spec, _load_weights(path, spec, doc), doc

@@ -88,8 +88,9 @@ class DownwashModel(nn.Module):
         self.eps_pos_m = eps_pos_m
         self.eps_vel_mps = eps_vel_mps
         self.act = _activation(activation)
+        self.ego_features, self.phi_layers = record.ego_features, record.phi_layers
         linears = []
-        for a, b in zip(self.layer_sizes[:-1], self.layer_sizes[1:]):
+        for (b, a), _ in record.weight_shapes(self.layer_sizes):
             lin = nn.Linear(a, b)
             if spectral_norm:
                 lin = nn.utils.parametrizations.spectral_norm(lin)
@@ -111,10 +112,18 @@ class DownwashModel(nn.Module):
         )
 
     def components(self, z: torch.Tensor) -> torch.Tensor:
-        """Network outputs ``c`` (n, K) for raw features ``z`` (n, F)."""
+        """Network outputs ``c`` (n, K) for raw features ``z`` (n, F) (a deep-sets kind: the
+        ego features join ``phi``'s output before ``rho``'s first layer)."""
         h = (z - self.in_mean) / self.in_std
-        for lin in self.linears[:-1]:
+        e = self.ego_features
+        if e:
+            h, ego = h[:, :-e], h[:, -e:]
+        for i, lin in enumerate(self.linears[:-1]):
+            if e and i == self.phi_layers:
+                h = torch.cat([h, ego], -1)
             h = self.act(lin(h))
+        if e and len(self.linears) - 1 == self.phi_layers:
+            h = torch.cat([h, ego], -1)
         return self.linears[-1](h) * self.out_std + self.out_mean
 
     @property

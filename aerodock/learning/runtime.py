@@ -116,23 +116,15 @@ class Predictor:
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
         check_eps(spec.eps_pos_m, spec.eps_vel_mps)
-        layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64))
-                  for w, b in weights]
-        if len(layers) != len(spec.weight_shapes()):
+        if len(weights) != len(spec.weight_shapes()):
             raise ValueError("weights do not match the spec's layer sizes")
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            w0, b0 = layers[0]
-            w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
-            b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
-            layers[0] = (w0, b0)
-            wl, bl = layers[-1]
-            out_std = np.asarray(spec.out_std, dtype=np.float64)
-            layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        layers = folded_layers(spec, weights)
         with np.errstate(over="ignore", invalid="ignore"):
             finite = all(np.all(np.isfinite(w)) and np.all(np.isfinite(b)) for w, b in layers)
         if not finite:
             raise ValueError("weights and normalisation overflow to non-finite values")
         self._layers = [(np.ascontiguousarray(w), np.ascontiguousarray(b)) for w, b in layers]
+        self._ego, self._phi_layers = record.ego_features, record.phi_layers
         self._layers_t = [(np.ascontiguousarray(w.T), b) for w, b in self._layers]
         self._act = spec.activation
         self._z = np.zeros(record.n_features)
@@ -247,8 +239,10 @@ class Predictor:
                 eps_pos_m=self.spec.eps_pos_m, eps_vel_mps=self.spec.eps_vel_mps,
                 wake_scales=self._scales(wake_scales, x.shape[0]),
             )
-        h = z
+        h, ego = (z, None) if not self._ego else (z[:, :-self._ego], z[:, -self._ego:])
         for i, (wt, b) in enumerate(self._layers_t):
+            if ego is not None and i == self._phi_layers:  # deep sets: rho(phi(...), ego)
+                h = np.concatenate([h, ego], axis=1)
             h = h @ wt
             h += b
             if i < len(self._layers_t) - 1:
@@ -265,9 +259,11 @@ class Predictor:
     def _mlp_one(self, feats: tuple[float, ...] | list[float]) -> list[float]:
         z = self._z
         z[:] = feats
-        h = z
+        h = z if not self._ego else z[:-self._ego]
         last = len(self._layers) - 1
         for i, ((w, b), buf) in enumerate(zip(self._layers, self._bufs)):
+            if self._ego and i == self._phi_layers:  # deep sets: rho(phi(...), ego)
+                h = np.concatenate([h, z[-self._ego:]])
             np.dot(w, h, out=buf)
             buf += b
             if i < last:
@@ -313,6 +309,33 @@ class Predictor:
         torque = self.predict_torque(x, rot)  # no torque kind is leader-aware
         follower_rot = np.reshape(np.asarray(follower.R, dtype=float), (x.shape[0], 3, 3))
         return np.einsum("nji,nj->ni", follower_rot, torque)  # R^T tau
+
+
+def folded_layers(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``[(W, b), ...]`` (float64) with the input standardisation folded into the layers that
+    read the features (the first; a deep-sets kind's first ``rho`` layer for the ego features)
+    and the output scaling into the last: the network then maps raw features to raw outputs.
+    Values may overflow (the caller checks them)."""
+    layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64)) for w, b in weights]
+    in_std = np.asarray(spec.in_std, dtype=np.float64)
+    in_mean = np.asarray(spec.in_mean, dtype=np.float64)
+    record = get_kind(spec.kind)
+    e = record.ego_features
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        w0, b0 = layers[0]
+        w0 = w0 / in_std[None, :in_std.shape[0] - e]
+        b0 = b0 - w0 @ in_mean[:in_mean.shape[0] - e]
+        layers[0] = (w0, b0)
+        if e:
+            wp, bp = layers[record.phi_layers]
+            w_ego = wp[:, -e:] / in_std[None, -e:]
+            layers[record.phi_layers] = (np.concatenate([wp[:, :-e], w_ego], axis=1),
+                                         bp - w_ego @ in_mean[-e:])
+        wl, bl = layers[-1]
+        out_std = np.asarray(spec.out_std, dtype=np.float64)
+        layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+    return layers
 
 
 def _recorded_wake_scales(meta: dict[str, Any], kind: str) -> np.ndarray | None:

@@ -89,7 +89,10 @@ class Kind:
         scaled_frame: the frame's vectors carry a force scale (the last vector's squared length
             divides the training targets, see ``features.invariant_components``).
         equivariant: rotating the scene about the leader's axis rotates its prediction.
-        layout: the network: ``"mlp"`` (one stack ``[F, hidden..., K]``) or ``"none"``.
+        has_network: False for the zero model only.
+        ego_features: 0 for a plain network; for a deep-sets network (:attr:`layout`), how many
+            of the last features are the follower's own (they enter ``rho``, the rest ``phi``).
+        phi_layers: a deep-sets network's layers that belong to ``phi`` (the first ones).
     """
 
     name: str
@@ -104,13 +107,45 @@ class Kind:
     torque: bool = False
     scaled_frame: bool = False
     equivariant: bool = True
-    layout: str = "mlp"
+    has_network: bool = True
+    ego_features: int = 0
+    phi_layers: int = 1
 
     def __post_init__(self) -> None:
         if len(self.scale_floor) != len(self.feature_names):
             raise ValueError(f"kind {self.name!r}: one scale floor per feature")
-        if self.layout != "none" and self.features is None and not self.world_frame:
+        if self.has_network and self.features is None and not self.world_frame:
             raise ValueError(f"kind {self.name!r}: a network needs a feature map")
+        if not 0 <= self.ego_features < max(self.n_features, 1) or self.phi_layers < 1:
+            raise ValueError(f"kind {self.name!r}: ego_features or phi_layers out of range")
+
+    @property
+    def layout(self) -> str:
+        """The network: ``"mlp"``, one stack of layers ``[F, hidden..., K]``; ``"deepsets"``,
+        Neural-Swarm's ``rho(sum_j phi(z_j), z_ego)``: the first :attr:`phi_layers` layers are
+        ``phi`` (on the neighbour's features, an activation after each), their output (one
+        neighbour: the sum is itself) and the :attr:`ego_features` enter ``rho``, the rest;
+        ``"none"``, the zero model."""
+        if not self.has_network:
+            return "none"
+        return "deepsets" if self.ego_features else "mlp"
+
+    def weight_shapes(self, layer_sizes: Sequence[int]
+                      ) -> list[tuple[tuple[int, int], tuple[int]]]:
+        """``(W shape, b shape)`` per layer for layer sizes ``[F, hidden..., K]`` (torch's
+        ``Linear`` layout): a chain, except in a deep-sets network, whose first layer takes the
+        neighbour's ``F - ego`` features and whose first ``rho`` layer the ego features too.
+
+        Raises:
+            ValueError: a deep-sets network with no layer for ``rho``.
+        """
+        s, e = [int(v) for v in layer_sizes], self.ego_features
+        if e and len(s) - 1 <= self.phi_layers:
+            raise ValueError(f"kind {self.name!r} needs more than {self.phi_layers} hidden "
+                             "layers (phi's, then rho's)")
+        return [((s[i + 1], s[i] - (e if i == 0 else 0) + (e if e and i == self.phi_layers
+                                                           else 0)), (s[i + 1],))
+                for i in range(len(s) - 1)]
 
     @property
     def n_features(self) -> int:
@@ -122,10 +157,6 @@ class Kind:
         """The number of network outputs (K, or 2K for a torque kind)."""
         return len(self.output_names)
 
-    @property
-    def has_network(self) -> bool:
-        """False for the zero model only."""
-        return self.layout != "none"
 
 
 def scaled(v: Vec, s: Any) -> Vec:

@@ -4,4 +4,4 @@ from __future__ import annotations
 
 from aerodock.learning.kinds.base import Kind
 
-KIND = Kind(name="zero", summary="zero (predicts nothing)", layout="none")
+KIND = Kind(name="zero", summary="zero (predicts nothing)", has_network=False)
