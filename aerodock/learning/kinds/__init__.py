@@ -19,6 +19,7 @@ _MODULES = (
     "so2_wrench",
     "so2_leader",
     "so2_pair",
+    "deepsets",
     "mlp",
     "zero",
 )
