@@ -184,3 +184,16 @@ def test_an_unknown_kind_is_refused_by_the_config_and_the_model_file(tmp_path):
     (folder / "model.json").write_text(json.dumps(doc))
     with pytest.raises(ModelFileError, match="unknown model kind 'so2-bogus'"):
         load_model_dir(folder)
+
+
+def test_the_template_kind_runs_everywhere_once_registered(tmp_path, monkeypatch):
+    """``kinds/template.py`` is a working kind: registered (its one line), NumPy, torch and
+    ONNX agree on it and it is equivariant, with no other change anywhere."""
+    from aerodock.learning.kinds.template import KIND
+
+    assert KIND.name not in REGISTRY
+    monkeypatch.setitem(REGISTRY, KIND.name, KIND)
+    monkeypatch.setattr("aerodock.learning.kinds.KINDS", (*KINDS, KIND.name))
+    monkeypatch.setattr(__name__ + ".KINDS", (*KINDS, KIND.name))
+    test_numpy_torch_and_onnx_agree(KIND.name, tmp_path)
+    test_equivariant_kinds_rotate_their_prediction_with_the_scene(KIND.name, 0.9)

@@ -3,8 +3,8 @@
 Training, the NumPy runtime, the ONNX export, model files, the config and the command line all
 read a kind's facts here (``aerodock.learning.features`` keeps its older per-kind tables as views
 of this registry). To add a kind, write ``kinds/<name>.py`` with a ``KIND`` record and its feature
-map (see :mod:`aerodock.learning.kinds.base` and ``kinds/template.py``) and add its module's name
-below. Importing this package imports no array library.
+map (see :mod:`aerodock.learning.kinds.base` and :mod:`aerodock.learning.kinds.template`) and
+add its module's name below. Importing this package imports no array library.
 """
 
 from __future__ import annotations
