@@ -1,4 +1,5 @@
-"""SO(2)-invariant feature maps (the paper's Eq. ``featuremap``) and their extended variant.
+"""SO(2)-invariant feature maps (the paper's Eq. ``featuremap``): notation, regularisation, the
+wake scales, and the NumPy and torch entry points to every kind's feature map.
 
 Notation (the paper's): the model input is ``x = [dp, v_A, v_B]`` in R^9 with
 ``dp = p_B - p_A`` (follower minus leader, world NED, m), ``v_A`` and ``v_B`` the leader's and the
@@ -199,7 +200,7 @@ def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotor
                 follower_mass_kg: Any, follower_rotor_radius_m: Any, follower_n_rotors: Any,
                 *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
                 gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
-    """The wake scales (n, 4) of the leader-aware kinds (see the module docstring).
+    """The wake scales (n, 4) of the leader-aware kinds (:mod:`aerodock.learning.kinds.so2_leader`).
 
     Args:
         leader_thrust_n: (n,) or scalar, the leader's collective thrust, N (logged or
@@ -300,7 +301,8 @@ def so2_features(
 
 
 def so2_ext_features(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
-    """The extended invariant features (n, 10) of kind ``"so2-ext"`` (see the module docstring)."""
+    """The extended invariant features (n, 10) of kind ``"so2-ext"``
+    (:mod:`aerodock.learning.kinds.so2_ext`)."""
     return feature_map("so2-ext", x, leader_R)[0]
 
 
