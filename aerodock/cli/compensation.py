@@ -24,8 +24,9 @@ from aerodock.cli.common import (
     progress_bar,
 )
 from aerodock.fileio import one_line
+from aerodock.learning.kinds import REGISTRY
 
-KINDS = ("so2", "so2-ext", "so2-leader", "so2-pair", "mlp")
+KINDS = tuple(name for name, k in REGISTRY.items() if k.has_network and not k.torque)
 """Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
 
 

@@ -33,10 +33,11 @@ from aerodock.cli.common import (
     progress_bar,
 )
 from aerodock.fileio import one_line, refuse_symlink
+from aerodock.learning.kinds import KINDS, kinds_help, trained_kinds
 
-TRAINABLE = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
+TRAINABLE = KINDS
 # The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
-COLLECTABLE = tuple(kind for kind in TRAINABLE if kind != "zero")
+COLLECTABLE = trained_kinds()
 SPLITS = ("auto", "flight", "time-blocks")
 """``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
@@ -71,11 +72,7 @@ def train_command(
     data: DataOpt,
     out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
     model: Annotated[
-        str, typer.Option("--model", help="Model kind: so2 (paper), so2-ext, so2-wrench (force "
-                                          "and torque; needs logs with torques), so2-leader "
-                                          "(leader-aware; needs the vehicles' rotors in the "
-                                          "logs), so2-pair (so2-leader with the follower's "
-                                          "size), mlp (or zero).")
+        str, typer.Option("--model", help=f"Model kind: {kinds_help()}.")
     ] = "so2",
     minutes: Annotated[
         float | None,

@@ -17,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from aerodock.learning.kinds import trained_kinds
+
 
 @dataclass(frozen=True)
 class Rule:
@@ -294,7 +296,7 @@ class CurriculumSection:
     free_air_m: float = number(0.01, 100)
     leader_drift_max_mps: float = number(0, 100)
     drift_fraction: float = number(0, 1)
-    model: str = choice("mlp", "so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair")
+    model: str = choice(*trained_kinds())  # the registry's kinds with a network
     label_basis: str = choice("command", "thrust")
 
 

@@ -1,9 +1,9 @@
 """Learning the leader's downwash: labels, datasets, features, models, training and runtime.
 
-The modules split along one line: ``labels``, ``dataset``, ``datafiles``, ``splits``,
-``features``, ``modelfile``, ``training_vehicles``, ``compatibility``, ``runtime`` and
-``evaluate`` are NumPy-only (everything the *deployed* path needs is among them), so a controller
-can load a trained model without PyTorch; ``models``, ``train``, ``export`` and
+The modules split along one line: ``labels``, ``dataset``, ``datafiles``, ``splits``, ``features``,
+``kinds`` (the registry of model kinds), ``modelfile``, ``training_vehicles``, ``compatibility``,
+``runtime`` and ``evaluate`` are NumPy-only (everything the *deployed* path needs is among them),
+so a controller can load a trained model without PyTorch; ``models``, ``train``, ``export`` and
 ``sample_efficiency`` import PyTorch. This package's ``__init__`` imports nothing, on purpose:
 importing ``aerodock.learning.runtime`` must not pull in torch.
 

@@ -43,7 +43,8 @@ from typing import Any
 import numpy as np
 
 from aerodock.fileio import atomic_open
-from aerodock.learning.features import GRAVITY_MPS2, LEADER_KINDS, N_WAKE_SCALES, TORQUE_KINDS
+from aerodock.learning.kinds import get_kind
+from aerodock.learning.kinds.trace import AXIS_INPUTS, BODY_INPUTS, trace_prediction
 from aerodock.learning.modelfile import (
     CHECKSUM_KEY,
     MODEL_FORMAT,
@@ -145,81 +146,63 @@ class _Graph:
         return self.op("Concat", *[self.op("Unsqueeze", p, axis) for p in parts], axis=1)
 
 
-def _features(g: _Graph, kind: str, spec: ModelSpec) -> tuple[str, Any]:
-    """Feature tensor (n, F) and a function of the outputs giving the world force (n, 3)."""
-    if kind == "mlp":
-        return "x", lambda c: c
+_ONNX_OPS = {"add": "Add", "sub": "Sub", "mul": "Mul", "div": "Div", "neg": "Neg", "sqrt": "Sqrt"}
+
+
+def _predicted(g: _Graph, spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
+               ) -> tuple[str, str | None]:
+    """The force (n, 3) and a torque kind's torque (n, 3) (else None): the kind's traced
+    prediction (:func:`aerodock.learning.kinds.trace.trace_prediction`) written node by node,
+    the network in the middle."""
+    kind = get_kind(spec.kind)
+    if kind.world_frame:
+        return _mlp(g, "x", spec, weights), None
+    pred = trace_prediction(kind, spec.eps_pos_m**2, spec.eps_vel_mps**2)
     body = g.op("MatMul", g.op("Reshape", "x", g.const([-1, 3, 3], "shape", np.int64)),
                 "leader_R", hint="body")  # rows: R^T dp, R^T v_A, R^T v_B
-    px, py, pz = (g.col(body, 0, k) for k in range(3))
-    ax, ay, az = (g.col(body, 1, k) for k in range(3))
-    bx, by, bz = (g.col(body, 2, k) for k in range(3))
-    eps_p2 = g.const(spec.eps_pos_m**2, "eps_p2")
-    eps_v2 = g.const(spec.eps_vel_mps**2, "eps_v2")
-    rho2 = g.add(g.mul(px, px), g.mul(py, py))
-    rho_soft = g.sqrt(g.add(rho2, eps_p2))
-    urx, ury = g.div(px, rho_soft), g.div(py, rho_soft)
-    vb2 = g.add(g.mul(bx, bx), g.mul(by, by))
-    va2 = g.add(g.mul(ax, ax), g.mul(ay, ay))
-    vb_soft = g.sqrt(g.add(vb2, eps_v2))
-    cos_b = g.div(g.add(g.mul(urx, bx), g.mul(ury, by)), vb_soft)
-    if kind == "so2" or kind in LEADER_KINDS:
-        z = g.stack([cos_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2)])
-        accel_scale = None
-        if kind in LEADER_KINDS:
-            s3 = g.op("Unsqueeze", SCALES_INPUT_NAME, g.const([1], "axis", np.int64))
-            vh_a, size_a, vh_b = (g.col(s3, 0, k) for k in range(3))
-            parts = [cos_b, g.div(g.sqrt(rho2), size_a), g.div(g.sqrt(vb2), vh_a),
-                     g.div(pz, size_a), g.div(bz, vh_a), g.div(g.sqrt(va2), vh_a)]
-            if kind == "so2-pair":
-                parts.append(g.div(g.col(s3, 0, 3), size_a))
-            z = g.stack(parts)
-            ratio = g.div(vh_a, vh_b)
-            accel_scale = g.mul(g.mul(ratio, ratio), g.const(GRAVITY_MPS2, "g"))
-
-        def out_so2(c: str) -> str:
-            c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))  # (n, 1, 2)
-            cr, ca = g.col(c3, 0, 0), g.col(c3, 0, 1)
-            if accel_scale is not None:
-                cr, ca = g.mul(cr, accel_scale), g.mul(ca, accel_scale)
-            # f = R (cr e_r + ca e3) with e_r = (urx, ury, 0) in leader-body coordinates
-            return _rotate(g, [g.mul(cr, urx), g.mul(cr, ury), ca])
-
-        return z, out_so2
-    va_soft = g.sqrt(g.add(va2, eps_v2))
-    sin_b = g.div(g.sub(g.mul(urx, by), g.mul(ury, bx)), vb_soft)
-    cos_a = g.div(g.add(g.mul(urx, ax), g.mul(ury, ay)), va_soft)
-    sin_a = g.div(g.sub(g.mul(urx, ay), g.mul(ury, ax)), va_soft)
-    z = g.stack([cos_b, sin_b, g.sqrt(rho2), g.sqrt(vb2), pz, bz, g.sqrt(va2), cos_a, sin_a, az])
-
-    def out_ext(c: str, first: int = 0) -> str:
-        c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))
-        cr, ct, ca = (g.col(c3, 0, first + k) for k in range(3))
-        # f = R (cr e_r + ct e_t + ca e3) with e_r = (urx, ury, 0), e_t = (-ury, urx, 0)
-        return _rotate(g, [g.sub(g.mul(cr, urx), g.mul(ct, ury)),
-                           g.add(g.mul(cr, ury), g.mul(ct, urx)), ca])
-
-    return z, out_ext
-
-
-def _rotate(g: _Graph, body_parts: list[str]) -> str:
-    """``R @ v`` for leader-body components ``v`` given as three (n,) tensors: (n, 3)."""
-    v = g.op("Unsqueeze", g.stack(body_parts), g.const([2], "axis", np.int64))
-    return g.op("Reshape", g.op("MatMul", "leader_R", v),
-                g.const([-1, 3], "shape", np.int64))
+    scales = (g.op("Unsqueeze", SCALES_INPUT_NAME, g.const([1], "axis", np.int64))
+              if kind.n_wake_scales else "")
+    names: list[str] = []
+    c3 = ""
+    for node in pred.trace.nodes:
+        if node.op == "const":
+            names.append(g.const(node.value, "k"))
+        elif node.op != "input":
+            names.append(g.op(_ONNX_OPS[node.op], *[names[i] for i in node.args]))
+        elif node.name in BODY_INPUTS:
+            row, col = divmod(BODY_INPUTS.index(node.name), 3)
+            names.append(g.col(body, row, col))
+        elif node.name in AXIS_INPUTS:
+            names.append(g.col("leader_R", int(node.name[1]), int(node.name[2])))
+        elif node.name.startswith("s"):
+            names.append(g.col(scales, 0, int(node.name[1:])))
+        else:  # c{k}: the network's outputs (every feature is computed before them)
+            if not c3:
+                c = _mlp(g, g.stack([names[s.index] for s in pred.z]), spec, weights)
+                c3 = g.op("Unsqueeze", c, g.const([1], "axis", np.int64))
+            names.append(g.col(c3, 0, int(node.name[1:])))
+    force = g.stack([names[s.index] for s in pred.force])
+    if pred.torque is None:
+        return force, None
+    return force, g.stack([names[s.index] for s in pred.torque])
 
 
 def _mlp(g: _Graph, z: str, spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
          ) -> str:
-    layers = [(np.asarray(w, np.float64), np.asarray(b, np.float64)) for w, b in weights]
-    w0, b0 = layers[0]
-    w0 = w0 / np.asarray(spec.in_std, np.float64)[None, :]
-    layers[0] = (w0, b0 - w0 @ np.asarray(spec.in_mean, np.float64))
-    wl, bl = layers[-1]
-    out_std = np.asarray(spec.out_std, np.float64)
-    layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, np.float64))
-    h = z
+    from aerodock.learning.runtime import folded_layers
+
+    layers = folded_layers(spec, weights)
+    record = get_kind(spec.kind)
+    e, n_features = record.ego_features, record.n_features
+    h, ego = z, ""
+    if e:  # deep sets: phi reads the neighbour's features, rho phi's output and the ego ones
+        i64 = np.int64
+        h, ego = (g.op("Slice", z, g.const([a], "s", i64), g.const([b], "e", i64),
+                       g.const([1], "ax", i64)) for a, b in ((0, n_features - e),
+                                                             (n_features - e, n_features)))
     for i, (w, b) in enumerate(layers):
+        if e and i == record.phi_layers:
+            h = g.op("Concat", h, ego, axis=1)
         h = g.op("Add", g.op("MatMul", h, g.const(w.T, "W")), g.const(b, "b"))
         if i < len(layers) - 1:
             h = g.op("Tanh", h) if spec.activation == "tanh" else g.mul(h, g.op("Sigmoid", h))
@@ -240,26 +223,25 @@ def build_onnx(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
     if dtype not in DTYPES:
         raise ValueError(f"dtype {dtype!r}: use float32 or float64")
     g = _Graph(dtype)
-    if spec.kind == "zero":
+    kind = get_kind(spec.kind)
+    if not kind.has_network:
         n = g.op("Slice", g.op("Shape", "x"), g.const([0], "s", np.int64),
                  g.const([1], "e", np.int64))
         shape = g.op("Concat", n, g.const([3], "three", np.int64), axis=0)
         zero = helper.make_tensor("zero", g.elem, [1], [0.0])
         out = g.op("ConstantOfShape", shape, value=zero)
     else:
-        z, to_world = _features(g, spec.kind, spec)
-        c = _mlp(g, z, spec, weights)
-        out = to_world(c)
+        out, torque = _predicted(g, spec, weights)
     outputs = [OUTPUT_NAME]
     g.nodes.append(helper.make_node("Identity", [out], [OUTPUT_NAME]))
-    if spec.kind in TORQUE_KINDS:  # the torque's components: the network's last three
-        g.nodes.append(helper.make_node("Identity", [to_world(c, 3)], [TORQUE_OUTPUT_NAME]))
+    if kind.torque:  # the torque's components: the network's last K
+        g.nodes.append(helper.make_node("Identity", [torque], [TORQUE_OUTPUT_NAME]))
         outputs.append(TORQUE_OUTPUT_NAME)
     inputs = [helper.make_tensor_value_info("x", g.elem, ["n", 9]),
               helper.make_tensor_value_info("leader_R", g.elem, ["n", 3, 3])]
-    if spec.kind in LEADER_KINDS:
+    if kind.n_wake_scales:
         inputs.append(helper.make_tensor_value_info(SCALES_INPUT_NAME, g.elem,
-                                                    ["n", N_WAKE_SCALES[spec.kind]]))
+                                                    ["n", kind.n_wake_scales]))
     graph = helper.make_graph(
         g.nodes, f"aerodock_{spec.kind.replace('-', '_')}", inputs,
         [helper.make_tensor_value_info(name, g.elem, ["n", 3]) for name in outputs],
@@ -301,8 +283,8 @@ def _metadata(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
                            "follower, m/s^2, NED" + (
                                f"; {TORQUE_OUTPUT_NAME} (n, 3): predicted wake torque on the "
                                f"follower about its centre of mass, {TORQUE_UNITS}"
-                               if spec.kind in TORQUE_KINDS else ""),
-        **({"aerodock.torque_units": TORQUE_UNITS} if spec.kind in TORQUE_KINDS else {}),
+                               if get_kind(spec.kind).torque else ""),
+        **({"aerodock.torque_units": TORQUE_UNITS} if get_kind(spec.kind).torque else {}),
         "aerodock.vehicles": json.dumps(normalise_vehicles(doc.get("vehicles"))),
         "aerodock.label_bases": json.dumps(label_bases(doc)),
         "aerodock.feature_version": str(spec.feature_version),
@@ -374,7 +356,9 @@ def _predictor(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]],
     """The NumPy predictor the export is checked against."""
     from aerodock.learning.runtime import Predictor, ZeroPredictor
 
-    return ZeroPredictor(doc) if spec.kind == "zero" else Predictor(spec, weights, doc)
+    if not get_kind(spec.kind).has_network:
+        return ZeroPredictor(doc)
+    return Predictor(spec, weights, doc)
 
 
 def _check_file(path: Path, predictor: Any, dtype: str, n: int) -> dict[str, float] | None:
@@ -472,7 +456,7 @@ def _compare(path: str | Path, predictor: Any, *, n: int,
     if getattr(predictor, "needs_wake_scales", False):  # leaders of 0.25-4x a hover's v_h^2
         scales = np.stack([rng.uniform(2.0, 9.0, n), rng.uniform(0.03, 0.3, n),
                            rng.uniform(3.0, 8.0, n), rng.uniform(0.03, 0.3, n)],
-                          axis=1)[:, :N_WAKE_SCALES[predictor.kind]]
+                          axis=1)[:, :get_kind(predictor.kind).n_wake_scales]
         feeds[SCALES_INPUT_NAME] = scales.astype(dtype)
         scales = feeds[SCALES_INPUT_NAME].astype(float)
     if (SCALES_INPUT_NAME in [i.name for i in sess.get_inputs()]) != (scales is not None):

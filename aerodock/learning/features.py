@@ -1,4 +1,5 @@
-"""SO(2)-invariant feature maps (the paper's Eq. ``featuremap``) and their extended variant.
+"""SO(2)-invariant feature maps (the paper's Eq. ``featuremap``): notation, regularisation, the
+wake scales, and the NumPy and torch entry points to every kind's feature map.
 
 Notation (the paper's): the model input is ``x = [dp, v_A, v_B]`` in R^9 with
 ``dp = p_B - p_A`` (follower minus leader, world NED, m), ``v_A`` and ``v_B`` the leader's and the
@@ -38,64 +39,15 @@ make the equivariance exact everywhere, including on the leader's axis:
 ``phi`` itself (``phi_rad``) is ``atan2`` of the planar coordinates, defined as 0 on the axis; it
 is reported for analysis; the models use the equivalent soft unit vectors above.
 
-Extended features (kind ``"so2-ext"``, 10 features). The paper's unsigned cosine cannot tell on
-which side of ``proj dp`` the follower's velocity lies, so a model on ``h`` cannot express a
-tangential planar force (e.g. the wake skewing sideways when the follower moves across it). The
-extension replaces the cosine by the signed pair (cos, sin) of the angle from ``proj dp`` to
-``proj v_B`` and adds the leader's velocity relative to ``phi`` (the wake trails behind a moving
-leader)::
+Each kind's features and frame are described in its own module of
+:mod:`aerodock.learning.kinds` (``so2``, ``so2-ext``, ``so2-wrench``, ``so2-leader``,
+``so2-pair``, ``mlp``, ``zero``, ...), one record per kind; the tables of this module
+(:data:`KINDS`, :data:`N_FEATURES`, ...) are views of that registry.
 
-    ( cos_B, sin_B, |proj dp|, |proj v_B|, a3 . dp, a3 . v_B,
-      |proj v_A|, cos_A, sin_A, a3 . v_A )
-
-with the same regularisation (``sin_B = (proj dp x proj v_B)_3 / (...)``, and likewise for
-``v_A``). All of them are invariant under rotations about ``a3``.
-
-Wrench kind (``"so2-wrench"``): the same 10 features and frame ``(e_r, e_t, a3)``, and six outputs,
-the force's and the torque's components in that frame::
-
-    f   = s(rho) (f_r e_r' + f_t e_t') + f_a a3                (m/s², world NED)
-    tau = s(rho) (tau_r e_r' + tau_t e_t') + tau_a a3          (N m, world NED)
-
-(``e_r'``, ``e_t'`` the unit radial and tangential vectors). A torque is an axial vector, but the
-symmetry is a rotation about ``a3`` (no reflection), under which it turns like the force: rotating
-the scene about the leader's axis rotates both predictions. The wake's torque on a follower off
-the axis points along ``+e_t`` (it pushes the rotors nearer the axis down). Labels are measured in
-the follower's body frame and rotated to the world frame with its attitude before training.
-
-Leader-aware kind (``"so2-leader"``). The paper's ``h`` carries nothing of the leader's thrust or
-size, so a model on it trained on a small and a large leader learns their average. This kind
-takes, besides ``x`` and ``leader_R``, three **wake scales** per sample (n, 3), all invariant
-scalars (:data:`WAKE_SCALE_NAMES`, built by :func:`wake_scales` from the vehicles)::
-
-    v_hA = sqrt(T_A / (2 rho n_A pi R_A^2))     leader's hover induced velocity, m/s
-    L_A  = sqrt(n_A) R_A                        the radius of one disc of the leader's total
-                                                rotor area (the wake's width scale), m
-    v_hB = sqrt(m_B g / (2 rho n_B pi R_B^2))   follower's hover induced velocity, m/s
-
-and makes the so2 model dimensionless by momentum theory: positions in units of ``L_A``,
-velocities in units of ``v_hA``, the force in units of ``a_s = g (v_hA / v_hB)^2``::
-
-    z = ( cos_B, |proj dp| / L_A, |proj v_B| / v_hA, a3 . dp / L_A, a3 . v_B / v_hA,
-          |proj v_A| / v_hA )
-    f = a_s (c_r s(rho) e_r' + c_a a3)
-
-(``a_s``: a follower of mass ``m_B`` with rotor area ``A_B`` in a wake of speed ``w`` feels about
-``rho A_B w^2 / m_B = g (w / v_hB)^2 / 2``, and ``w`` scales with ``v_hA``.) Scales are
-invariant, so the equivariance of ``"so2"`` carries over unchanged; with one leader and one
-follower the features are a fixed rescaling of ``h``.
-
-Pair-aware kind (``"so2-pair"``): ``"so2-leader"`` with a seventh feature, the follower's size
-in units of the leader's, ``L_B / L_A`` (``L_B = sqrt(n_B) R_B``, the fourth wake scale). The
-force scale ``a_s`` assumes the follower's rotors take the wake whole; a follower as wide as the
-wake or wider does not (it averages the jet over its disks, and part of it falls beside them), and
-``L_B / L_A`` is the invariant that says how much. Still invariant: the equivariance holds.
-
-Kind ``"mlp"`` (the baseline) uses ``x`` itself, in the world frame, with an identity output map.
-
-The implementations below are written once, generically, and run on NumPy arrays (the runtime)
-or torch tensors (training, ONNX export), so the two agree by construction. This module does not
-import torch at module level.
+A kind's feature map is written once, over a small array interface
+(:mod:`aerodock.learning.kinds.base`), and runs on NumPy arrays (the runtime), torch tensors
+(training), Python floats (the runtime's one-sample path) and ONNX graph tensors (the export), so
+they agree by construction. This module does not import torch at module level.
 """
 
 from __future__ import annotations
@@ -105,90 +57,34 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.learning import kinds as _kinds
+from aerodock.learning.kinds import REGISTRY, get_kind
+from aerodock.learning.kinds.base import GRAVITY_MPS2, Kind, Scene
+
 FEATURE_VERSION = 1
 EPS_POS_M = 1e-3
 EPS_VEL_MPS = 1e-2
 
-KINDS = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp", "zero")
-LEADER_KINDS = ("so2-leader", "so2-pair")
+KINDS = _kinds.KINDS
+LEADER_KINDS = tuple(name for name, k in REGISTRY.items() if k.n_wake_scales)
 """Kinds that take the wake scales (:data:`WAKE_SCALE_NAMES`) as a third input."""
 WAKE_SCALE_NAMES = ("leader_vh_mps", "leader_size_m", "follower_vh_mps", "follower_size_m")
 """The wake scales' columns: the leader's hover induced velocity (m/s), its wake's width scale
 ``sqrt(n) R`` (m), the follower's hover induced velocity (m/s) and its size ``sqrt(n) R`` (m).
 :func:`wake_scales` builds all four; a kind reads the first :data:`N_WAKE_SCALES` of them."""
-N_WAKE_SCALES = {"so2-leader": 3, "so2-pair": 4}
+N_WAKE_SCALES = {name: k.n_wake_scales for name, k in REGISTRY.items() if k.n_wake_scales}
 """How many of the wake scales (the first ones) each leader-aware kind takes."""
 AIR_DENSITY_KGPM3 = 1.225
-GRAVITY_MPS2 = 9.81
-TORQUE_KINDS = ("so2-wrench",)
+TORQUE_KINDS = tuple(name for name, k in REGISTRY.items() if k.torque)
 """Kinds that also predict the wake's torque (their outputs: force components, then torque's)."""
-N_FEATURES = {"so2": 6, "so2-ext": 10, "so2-wrench": 10, "so2-leader": 6, "so2-pair": 7,
-              "mlp": 9, "zero": 0}
-N_OUTPUTS = {"so2": 2, "so2-ext": 3, "so2-wrench": 6, "so2-leader": 2, "so2-pair": 2, "mlp": 3,
-             "zero": 0}
-FEATURE_NAMES: dict[str, tuple[str, ...]] = {
-    "so2": (
-        "cos_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps", "rho_vA_mps",
-    ),
-    "so2-ext": (
-        "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
-        "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
-    ),
-    "so2-wrench": (
-        "cos_dp_vB", "sin_dp_vB", "rho_dp_m", "rho_vB_mps", "axial_dp_m", "axial_vB_mps",
-        "rho_vA_mps", "cos_dp_vA", "sin_dp_vA", "axial_vA_mps",
-    ),
-    "so2-leader": (
-        "cos_dp_vB", "rho_dp_per_size", "rho_vB_per_vh", "axial_dp_per_size", "axial_vB_per_vh",
-        "rho_vA_per_vh",
-    ),
-    "so2-pair": (
-        "cos_dp_vB", "rho_dp_per_size", "rho_vB_per_vh", "axial_dp_per_size", "axial_vB_per_vh",
-        "rho_vA_per_vh", "follower_size_per_size",
-    ),
-    "mlp": (
-        "dp_n_m", "dp_e_m", "dp_d_m", "vA_n_mps", "vA_e_mps", "vA_d_mps",
-        "vB_n_mps", "vB_e_mps", "vB_d_mps",
-    ),
-    "zero": (),
-}
-OUTPUT_NAMES: dict[str, tuple[str, ...]] = {
-    "so2": ("f_radial_mps2", "f_axial_mps2"),
-    "so2-ext": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2"),
-    "so2-wrench": ("f_radial_mps2", "f_tangential_mps2", "f_axial_mps2",
-                   "tau_radial_nm", "tau_tangential_nm", "tau_axial_nm"),
-    "so2-leader": ("f_radial_per_scale", "f_axial_per_scale"),
-    "so2-pair": ("f_radial_per_scale", "f_axial_per_scale"),
-    "mlp": ("f_n_mps2", "f_e_mps2", "f_d_mps2"),
-    "zero": (),
-}
-# Lower bounds on the standard deviations used to standardise each feature (in the feature's
-# units). A feature that barely varies in the training data (the leader always hovering: |v_A| of
-# a few mm/s) must not be blown up to hundreds of standard deviations when it does vary in use.
-_POS_FLOOR_M, _VEL_FLOOR_MPS, _ANGLE_FLOOR = 0.05, 0.05, 0.1
-SCALE_FLOOR: dict[str, tuple[float, ...]] = {
-    "so2": (_ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M, _VEL_FLOOR_MPS,
-            _VEL_FLOOR_MPS),
-    "so2-ext": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
-                _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
-    "so2-wrench": (_ANGLE_FLOOR, _ANGLE_FLOOR, _POS_FLOOR_M, _VEL_FLOOR_MPS, _POS_FLOOR_M,
-                   _VEL_FLOOR_MPS, _VEL_FLOOR_MPS, _ANGLE_FLOOR, _ANGLE_FLOOR, _VEL_FLOOR_MPS),
-    # dimensionless: 1 leader size (about 5 cm on a Crazyflie), 0.01 v_h (about 4 cm/s)
-    "so2-leader": (_ANGLE_FLOOR, 1.0, 0.01, 1.0, 0.01, 0.01),
-    # the size ratio: 0.1 (a follower a tenth of the leader's size apart)
-    "so2-pair": (_ANGLE_FLOOR, 1.0, 0.01, 1.0, 0.01, 0.01, 0.1),
-    "mlp": (_POS_FLOOR_M,) * 3 + (_VEL_FLOOR_MPS,) * 6,
-    "zero": (),
-}
-# Features standardised with one shared scale (indices into a kind's features). The MLP's inputs
-# are world vectors: the horizontal components of each (north, east) share one scale, so that
-# standardising keeps a rotation of the scene about the vertical a rotation (a pass flown
-# north-south looks, to the network, like the same pass flown east-west; with a scale per axis
-# the axis the training flights hardly moved along is magnified). Features not listed here have
-# their own scale.
-SCALE_GROUPS: dict[str, tuple[tuple[int, ...], ...]] = {
-    "mlp": ((0, 1), (3, 4), (6, 7)),
-}
+N_FEATURES = {name: k.n_features for name, k in REGISTRY.items()}
+N_OUTPUTS = {name: k.n_outputs for name, k in REGISTRY.items()}
+FEATURE_NAMES = {name: k.feature_names for name, k in REGISTRY.items()}
+OUTPUT_NAMES = {name: k.output_names for name, k in REGISTRY.items()}
+SCALE_FLOOR = {name: k.scale_floor for name, k in REGISTRY.items()}
+"""Lower bounds on the standard deviations used to standardise each feature (its units)."""
+SCALE_GROUPS = {name: k.scale_groups for name, k in REGISTRY.items() if k.scale_groups}
+"""Features standardised with one shared scale (indices into a kind's features)."""
 
 
 def check_kind(kind: str) -> str:
@@ -197,9 +93,7 @@ def check_kind(kind: str) -> str:
     Raises:
         ValueError: unknown kind.
     """
-    if kind not in KINDS:
-        raise ValueError(f"unknown model kind {kind!r} (expected one of {', '.join(KINDS)})")
-    return kind
+    return get_kind(kind).name
 
 
 def _body(w: Any, rot: Any) -> Any:
@@ -207,56 +101,31 @@ def _body(w: Any, rot: Any) -> Any:
     return (rot * w[..., :, None]).sum(-2)
 
 
-def _feature_map_generic(
-    kind: str, x: Any, rot: Any, stack: Callable[..., Any], eps_pos_m: float, eps_vel_mps: float,
+class _PowOps:
+    """The array interface of NumPy arrays and torch tensors (``** 0.5`` is their sqrt)."""
+
+    @staticmethod
+    def sqrt(a: Any) -> Any:
+        return a**0.5
+
+
+def _array_features(
+    kind: Kind, x: Any, rot: Any, stack: Callable[..., Any], eps_pos_m: float, eps_vel_mps: float,
     scales: Any = None,
 ) -> tuple[Any, Any]:
-    """Features ``z`` (n, F) and output map ``M`` (n, 3, K) for one array library.
+    """Features ``z`` (n, F) and output map ``M`` (n, 3, K) of a kind's feature map, for
+    NumPy arrays or torch tensors (``stack`` the library's).
 
     The world-frame prediction is ``f = M @ c`` where ``c`` (n, K) are the network's outputs
-    (for a wrench kind, ``M`` maps the force's K and the torque's K outputs alike).
-    Only arithmetic, ``** 0.5``, slicing, ``sum`` and ``stack`` are used so that NumPy, torch and
-    the ONNX exporter all see the same operations.
+    (for a torque kind, ``M`` maps the force's K and the torque's K outputs alike).
     """
-    dp_b = _body(x[..., 0:3], rot)
-    va_b = _body(x[..., 3:6], rot)
-    vb_b = _body(x[..., 6:9], rot)
-    px, py, pz = dp_b[..., 0], dp_b[..., 1], dp_b[..., 2]
-    ax, ay, az = va_b[..., 0], va_b[..., 1], va_b[..., 2]
-    bx, by, bz = vb_b[..., 0], vb_b[..., 1], vb_b[..., 2]
-    rho2 = px * px + py * py
-    rho = rho2**0.5
-    rho_soft = (rho2 + eps_pos_m * eps_pos_m) ** 0.5
-    ur_x, ur_y = px / rho_soft, py / rho_soft  # soft unit radial vector in (a1, a2) coordinates
-    vb2 = bx * bx + by * by
-    va2 = ax * ax + ay * ay
-    vb_soft = (vb2 + eps_vel_mps * eps_vel_mps) ** 0.5
-    cos_b = (ur_x * bx + ur_y * by) / vb_soft
-    a1, a2, a3 = rot[..., :, 0], rot[..., :, 1], rot[..., :, 2]
-    e_r = a1 * ur_x[..., None] + a2 * ur_y[..., None]  # world, |e_r| = s(rho)
-    if kind == "so2":
-        z = stack([cos_b, rho, vb2**0.5, pz, bz, va2**0.5], -1)
-        out_map = stack([e_r, a3], -1)
-    elif kind in LEADER_KINDS:
-        vh_a, size_a, vh_b = scales[..., 0], scales[..., 1], scales[..., 2]
-        ratio = vh_a / vh_b
-        accel_scale = (ratio * ratio * GRAVITY_MPS2)[..., None]
-        parts = [cos_b, rho / size_a, vb2**0.5 / vh_a, pz / size_a, bz / vh_a, va2**0.5 / vh_a]
-        if kind == "so2-pair":
-            parts.append(scales[..., 3] / size_a)
-        z = stack(parts, -1)
-        out_map = stack([e_r * accel_scale, a3 * accel_scale], -1)
-    elif kind in ("so2-ext", "so2-wrench"):
-        va_soft = (va2 + eps_vel_mps * eps_vel_mps) ** 0.5
-        sin_b = (ur_x * by - ur_y * bx) / vb_soft
-        cos_a = (ur_x * ax + ur_y * ay) / va_soft
-        sin_a = (ur_x * ay - ur_y * ax) / va_soft
-        z = stack([cos_b, sin_b, rho, vb2**0.5, pz, bz, va2**0.5, cos_a, sin_a, az], -1)
-        e_t = a2 * ur_x[..., None] - a1 * ur_y[..., None]
-        out_map = stack([e_r, e_t, a3], -1)
-    else:
-        raise ValueError(f"no feature map for model kind {kind!r}")
-    return z, out_map
+    body = [_body(x[..., i:i + 3], rot) for i in (0, 3, 6)]
+    comps = [b[..., k] for b in body for k in range(3)]
+    axes = [(rot[..., 0, k], rot[..., 1, k], rot[..., 2, k]) for k in range(3)]
+    cols = [] if scales is None else [scales[..., k] for k in range(kind.n_wake_scales)]
+    scene = Scene(comps, axes, cols, eps_pos_m * eps_pos_m, eps_vel_mps * eps_vel_mps)
+    z, frame = kind.features(scene, _PowOps)
+    return stack(z, -1), stack([stack(v, -1) for v in frame], -1)
 
 
 EPS_RANGE = (1e-9, 1.0)
@@ -302,7 +171,7 @@ def check_wake_scales(wake_scales: Any, n: int, kind: str) -> np.ndarray:
     Raises:
         ValueError: missing, of the wrong shape, or not finite and positive.
     """
-    k = N_WAKE_SCALES[kind]
+    k = get_kind(kind).n_wake_scales
     names = ", ".join(WAKE_SCALE_NAMES[:k])
     if wake_scales is None:
         raise ValueError(f"a {kind!r} model needs wake_scales (n, {k}): {names}")
@@ -331,7 +200,7 @@ def wake_scales(leader_thrust_n: Any, leader_rotor_radius_m: Any, leader_n_rotor
                 follower_mass_kg: Any, follower_rotor_radius_m: Any, follower_n_rotors: Any,
                 *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
                 gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
-    """The wake scales (n, 4) of the leader-aware kinds (see the module docstring).
+    """The wake scales (n, 4) of the leader-aware kinds (:mod:`aerodock.learning.kinds.so2_leader`).
 
     Args:
         leader_thrust_n: (n,) or scalar, the leader's collective thrust, N (logged or
@@ -371,8 +240,7 @@ def feature_map(
     """NumPy features and output map of a model kind.
 
     Args:
-        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"so2-leader"``, ``"so2-pair"`` or
-            ``"mlp"``.
+        kind: a kind of :mod:`aerodock.learning.kinds` with features (not ``"zero"``).
         x: (n, 9) ``[dp, v_A, v_B]``, world NED.
         leader_R: (n, 3, 3) leader attitude, body to world.
         eps_pos_m: radial regularisation (see the module docstring).
@@ -385,11 +253,14 @@ def feature_map(
         to the world-frame force, ``f = M @ c``. For ``"mlp"``, ``z = x`` and ``M = I``.
     """
     x, leader_R = check_inputs(x, leader_R)
-    if kind == "mlp":
+    k = get_kind(kind)
+    if k.world_frame:
         return x.copy(), np.broadcast_to(np.eye(3), (x.shape[0], 3, 3))
+    if k.features is None:
+        raise ValueError(f"no feature map for model kind {kind!r}")
     check_eps(eps_pos_m, eps_vel_mps)
-    scales = check_wake_scales(wake_scales, x.shape[0], kind) if kind in LEADER_KINDS else None
-    return _feature_map_generic(kind, x, leader_R, np.stack, eps_pos_m, eps_vel_mps, scales)
+    scales = check_wake_scales(wake_scales, x.shape[0], kind) if k.n_wake_scales else None
+    return _array_features(k, x, leader_R, np.stack, eps_pos_m, eps_vel_mps, scales)
 
 
 def feature_map_torch(
@@ -404,13 +275,15 @@ def feature_map_torch(
     """Torch version of :func:`feature_map` (same operations; tensors in, tensors out)."""
     import torch
 
-    if kind == "mlp":
+    k = get_kind(kind)
+    if k.world_frame:
         eye = torch.eye(3, dtype=x.dtype, device=x.device)
         return x, eye.expand(x.shape[0], 3, 3)
-    if kind in LEADER_KINDS and wake_scales is None:
-        raise ValueError(f"model kind {kind!r} needs wake_scales (n, {N_WAKE_SCALES[kind]})")
-    return _feature_map_generic(kind, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps,
-                                wake_scales)
+    if k.features is None:
+        raise ValueError(f"no feature map for model kind {kind!r}")
+    if k.n_wake_scales and wake_scales is None:
+        raise ValueError(f"model kind {kind!r} needs wake_scales (n, {k.n_wake_scales})")
+    return _array_features(k, x, leader_R, torch.stack, eps_pos_m, eps_vel_mps, wake_scales)
 
 
 def so2_features(
@@ -428,7 +301,8 @@ def so2_features(
 
 
 def so2_ext_features(x: np.ndarray, leader_R: np.ndarray) -> np.ndarray:
-    """The extended invariant features (n, 10) of kind ``"so2-ext"`` (see the module docstring)."""
+    """The extended invariant features (n, 10) of kind ``"so2-ext"``
+    (:mod:`aerodock.learning.kinds.so2_ext`)."""
     return feature_map("so2-ext", x, leader_R)[0]
 
 
@@ -459,9 +333,10 @@ def invariant_components(
     """
     _, out_map = feature_map(kind, x, leader_R, wake_scales=wake_scales)
     c = np.einsum("nik,ni->nk", out_map, np.asarray(y, dtype=float))
-    if kind in LEADER_KINDS:
+    k = get_kind(kind)
+    if k.scaled_frame:
         c = c / np.sum(out_map[:, :, -1] ** 2, axis=1)[:, None]  # the a3 column: |a_s a3|^2
-    if kind not in TORQUE_KINDS:
+    if not k.torque:
         return c
     if torque is None:
         raise ValueError(f"model kind {kind!r} needs torque labels")

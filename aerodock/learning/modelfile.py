@@ -4,17 +4,20 @@ Safe by construction: weights are read with ``np.load(allow_pickle=False)`` and 
 ``json``; nothing is ever unpickled, so a model file from an untrusted source cannot run code.
 NumPy-only (the runtime uses it without PyTorch).
 
-``model.json`` holds: ``format`` (``"aerodock-model"``), ``version``, ``kind`` (``so2``,
-``so2-ext``, ``so2-wrench``, ``mlp``, ``zero``), ``feature_version``, ``units`` (``"m/s^2 NED"``,
-the force's; a ``so2-wrench`` model also has ``torque_units``, ``"N m NED"``), the feature
-regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``, ``activation``,
-``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features, ``out_mean``/
-``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names), ``training`` (data
-summary with the flights' ``label_bases``, seed, epochs, validation loss, training time, ...),
-``aerodock_version``, ``created_utc`` and, last, ``model_sha256`` (the document's own checksum).
+``model.json`` holds: ``format`` (``"aerodock-model"``), ``version``, ``kind`` (a kind of
+:mod:`aerodock.learning.kinds`: ``so2``, ``so2-ext``, ``so2-wrench``, ...), ``feature_version``,
+``units`` (``"m/s^2 NED"``, the force's; a ``so2-wrench`` model also has ``torque_units``,
+``"N m NED"``), the feature regularisation constants, ``layer_sizes`` ``[F, hidden..., K]``,
+``activation``, ``spectral_norm``, ``normalisation`` (``in_mean``/``in_std`` of the F features,
+``out_mean``/``out_std`` of the K outputs), ``weights`` (file name, SHA-256, array names),
+``training`` (data summary with the flights' ``label_bases``, seed, epochs, validation loss,
+training time, ...), ``aerodock_version``, ``created_utc`` and, last, ``model_sha256`` (the
+document's own checksum).
 
 ``weights.npz`` holds ``W0, b0, W1, b1, ...``: ``W{i}`` has shape ``(layer_sizes[i+1],
-layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``. The network
+layer_sizes[i])`` (torch's ``Linear`` layout) and ``b{i}`` ``(layer_sizes[i+1],)``; in a
+deep-sets kind's network (``Kind.weight_shapes``), the first layer takes the neighbour's
+features only and the first ``rho`` layer the ego features besides ``phi``'s output. The network
 computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_std + out_mean``.
 
 ``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius and
@@ -62,17 +65,8 @@ from aerodock.fileio import (
     read_input_text,
     write_dir_atomic,
 )
-from aerodock.learning.features import (
-    EPS_POS_M,
-    EPS_VEL_MPS,
-    FEATURE_NAMES,
-    FEATURE_VERSION,
-    KINDS,
-    N_FEATURES,
-    N_OUTPUTS,
-    OUTPUT_NAMES,
-    TORQUE_KINDS,
-)
+from aerodock.learning.features import EPS_POS_M, EPS_VEL_MPS, FEATURE_VERSION
+from aerodock.learning.kinds import REGISTRY, get_kind
 from aerodock.learning.training_vehicles import normalise_vehicles
 
 MODEL_FORMAT = "aerodock-model"
@@ -108,7 +102,7 @@ class ModelSpec:
     """Everything needed to rebuild a model's computation (besides the weights).
 
     Attributes:
-        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"mlp"`` or ``"zero"``.
+        kind: a kind of :mod:`aerodock.learning.kinds`.
         layer_sizes: ``(F, hidden..., K)``; empty for ``"zero"``.
         activation: hidden-layer activation, ``"tanh"`` or ``"silu"``.
         in_mean: (F,) feature means.
@@ -135,9 +129,9 @@ class ModelSpec:
     feature_version: int = FEATURE_VERSION
 
     def weight_shapes(self) -> list[tuple[tuple[int, int], tuple[int]]]:
-        """Expected ``(W shape, b shape)`` per layer."""
-        s = self.layer_sizes
-        return [((s[i + 1], s[i]), (s[i + 1],)) for i in range(len(s) - 1)]
+        """Expected ``(W shape, b shape)`` per layer (the kind's network layout; a chain
+        ``W{i}: (layer_sizes[i+1], layer_sizes[i])`` but for a deep-sets kind)."""
+        return get_kind(self.kind).weight_shapes(self.layer_sizes)
 
 
 def _aerodock_version() -> str:
@@ -178,7 +172,7 @@ def check_normalisation(spec: ModelSpec) -> None:
     Raises:
         ValueError: one line naming the first value out of its range.
     """
-    if spec.kind == "zero":
+    if not get_kind(spec.kind).has_network:
         return
     for key, limit, unit in (("in_mean", MAX_INPUT_SCALE, "m or m/s"),
                              ("in_std", MAX_INPUT_SCALE, "m or m/s"),
@@ -236,6 +230,7 @@ def save_model_dir(
     ):
         raise ValueError(f"weights do not match layer sizes {list(spec.layer_sizes)}")
     check_normalisation(spec)
+    record = get_kind(spec.kind)
     if vehicles is None:
         data = (training or {}).get("data")
         vehicles = data.get("vehicles") if isinstance(data, Mapping) else None
@@ -249,15 +244,15 @@ def save_model_dir(
                  "leader_R (n, 3, 3) leader attitude, body to world",
         "output": "f_ext (n, 3): predicted downwash acceleration on the follower, m/s^2, NED"
                   + ("; tau_ext (n, 3): predicted wake torque on the follower about its centre "
-                     "of mass, N m, world NED" if spec.kind in TORQUE_KINDS else ""),
-        **({"torque_units": TORQUE_UNITS} if spec.kind in TORQUE_KINDS else {}),
+                     "of mass, N m, world NED" if record.torque else ""),
+        **({"torque_units": TORQUE_UNITS} if record.torque else {}),
         "vehicles": normalise_vehicles(vehicles),
         "features": {
-            "names": list(FEATURE_NAMES[spec.kind]),
+            "names": list(record.feature_names),
             "eps_pos_m": spec.eps_pos_m,
             "eps_vel_mps": spec.eps_vel_mps,
         },
-        "outputs": list(OUTPUT_NAMES[spec.kind]),
+        "outputs": list(record.output_names),
         "layer_sizes": [int(s) for s in spec.layer_sizes],
         "activation": spec.activation,
         "spectral_norm": bool(spec.spectral_norm),
@@ -343,8 +338,9 @@ def load_model_dir(
         )
     _check_document(doc, version, jpath)
     kind = doc.get("kind")
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in REGISTRY:
         raise ModelFileError(f"{jpath}: unknown model kind {kind!r}")
+    record = REGISTRY[kind]
     if doc.get("feature_version") != FEATURE_VERSION:
         raise ModelFileError(
             f"{jpath}: feature version {doc.get('feature_version')!r} does not match this "
@@ -352,22 +348,22 @@ def load_model_dir(
         )
     if doc.get("units") != UNITS:
         raise ModelFileError(f"{jpath}: units {doc.get('units')!r}, expected {UNITS!r}")
-    if kind in TORQUE_KINDS and doc.get("torque_units") != TORQUE_UNITS:
+    if record.torque and doc.get("torque_units") != TORQUE_UNITS:
         raise ModelFileError(f"{jpath}: torque_units {doc.get('torque_units')!r}, expected "
                              f"{TORQUE_UNITS!r}")
-    if kind == "zero":
+    if not record.has_network:
         if doc.get("layer_sizes") or doc.get("weights") is not None:
             raise ModelFileError(f"{jpath}: kind 'zero' with layer sizes or weights "
                                  "(edited kind?)")
-        return ModelSpec(kind="zero"), [], doc
+        return ModelSpec(kind=kind), [], doc
     sizes = doc.get("layer_sizes")
     if (not isinstance(sizes, list) or len(sizes) < 2
             or not all(isinstance(s, int) and s > 0 for s in sizes)):
         raise ModelFileError(f"{jpath}: layer_sizes must be a list of positive integers")
-    if sizes[0] != N_FEATURES[kind] or sizes[-1] != N_OUTPUTS[kind]:
+    if sizes[0] != record.n_features or sizes[-1] != record.n_outputs:
         raise ModelFileError(
             f"{jpath}: layer_sizes {sizes} do not fit kind {kind!r} "
-            f"({N_FEATURES[kind]} features, {N_OUTPUTS[kind]} outputs)"
+            f"({record.n_features} features, {record.n_outputs} outputs)"
         )
     activation = doc.get("activation")
     if activation not in ACTIVATIONS:
@@ -394,6 +390,7 @@ def load_model_dir(
     )
     try:
         check_normalisation(spec)
+        spec.weight_shapes()
     except ValueError as err:
         raise ModelFileError(f"{jpath}: {err}") from None
     return spec, _load_weights(path, spec, doc), doc

@@ -7,27 +7,13 @@ the predicted downwash acceleration on the follower (n, 3), m/s², world NED. A 
     c = MLP((z - in_mean) / in_std) * out_std + out_mean   # K invariant components
     f = M @ c                                           # back to the world frame
 
-* :class:`SO2Model` (kind ``"so2"``, the paper): ``z = h(x)`` (6 features), ``c = (f_radial,
-  f_axial)``, ``f = f_radial e_r + f_axial a3``, ``e_r`` the direction of ``proj dp`` (angle
-  ``phi`` in the rotor plane). With the paper's unsigned cosine a tangential component has no
-  well-defined sign, so the paper model has none.
-* :class:`SO2ExtModel` (``"so2-ext"``): 10 signed invariant features, ``c = (f_radial,
-  f_tangential, f_axial)``, ``f = f_radial e_r + f_tangential e_t + f_axial a3``.
-* :class:`SO2WrenchModel` (``"so2-wrench"``): the features of ``"so2-ext"`` and six outputs,
-  ``c = (f_radial, f_tangential, f_axial, tau_radial, tau_tangential, tau_axial)``: the force as
-  ``"so2-ext"``'s, and the wake's torque on the follower (N m) through the same frame,
-  ``tau = tau_radial e_r + tau_tangential e_t + tau_axial a3`` (world NED). ``forward`` is the
-  force, as for every kind; :meth:`DownwashModel.wrench` gives both. Trained on standardised
-  outputs (:func:`standardised_wrench_loss`), so force and torque weigh alike.
-* :class:`SO2LeaderModel` (``"so2-leader"``): ``"so2"`` made leader-aware: a third input, the
-  wake scales (n, 3: the leader's hover induced velocity and rotor size, the follower's hover
-  induced velocity), makes its features and outputs dimensionless by momentum theory.
-* :class:`SO2PairModel` (``"so2-pair"``): ``"so2-leader"`` with the follower's size in units of
-  the leader's as a seventh feature (a fourth wake scale, the follower's ``sqrt(n) R``).
-* :class:`MLPModel` (``"mlp"``): the plain baseline, ``z = x`` and ``c = f`` in the world frame
-  (standardised with one scale for the north and east components of each vector, see
-  :meth:`DownwashModel.set_normalisation`).
-* :class:`ZeroModel` (``"zero"``): always 0.
+The kinds (``"so2"``, the paper's; ``"so2-ext"``; ``"so2-wrench"``, force and torque;
+``"so2-leader"`` and ``"so2-pair"``, leader-aware; ``"mlp"``, the plain baseline; ``"zero"``)
+are the records of :mod:`aerodock.learning.kinds`: one :class:`DownwashModel` class serves every
+kind with a network (its features, frame, scale floors and torque flag are the kind's), and
+:class:`ZeroModel` the zero model. A torque kind's ``forward`` is the force, as for every kind;
+:meth:`DownwashModel.wrench` gives both, and it is trained on standardised outputs
+(:func:`standardised_wrench_loss`), so force and torque weigh alike.
 
 Network: fully connected, two hidden layers of 64 by default, **tanh** activations. tanh is smooth
 (so is the learnt force, which the LQR feed-forward differentiates through the closed loop) and
@@ -47,17 +33,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from aerodock.learning.features import (
-    EPS_POS_M,
-    EPS_VEL_MPS,
-    N_FEATURES,
-    N_OUTPUTS,
-    SCALE_FLOOR,
-    SCALE_GROUPS,
-    TORQUE_KINDS,
-    check_kind,
-    feature_map_torch,
-)
+from aerodock.learning.features import EPS_POS_M, EPS_VEL_MPS, feature_map_torch
+from aerodock.learning.kinds import get_kind
 from aerodock.learning.modelfile import ModelSpec, load_model_dir
 
 DEFAULT_HIDDEN = (64, 64)
@@ -73,14 +50,14 @@ def _activation(name: str) -> nn.Module:
 
 
 class DownwashModel(nn.Module):
-    """Base class: features, standardised MLP, output map (see the module docstring)."""
-
-    kind = ""
+    """A model of any kind with a network: features, standardised MLP, output map (see the
+    module docstring)."""
 
     def __init__(
         self,
         hidden: Sequence[int] = DEFAULT_HIDDEN,
         *,
+        kind: str = "so2",
         activation: str = DEFAULT_ACTIVATION,
         spectral_norm: bool = False,
         eps_pos_m: float = EPS_POS_M,
@@ -90,21 +67,30 @@ class DownwashModel(nn.Module):
 
         Args:
             hidden: hidden layer widths.
+            kind: a registered kind with a network (:mod:`aerodock.learning.kinds`).
             activation: ``"tanh"`` (default) or ``"silu"``.
             spectral_norm: spectrally normalise every linear layer while training.
             eps_pos_m: feature regularisation (see :mod:`aerodock.learning.features`).
             eps_vel_mps: feature regularisation.
         """
         super().__init__()
-        n_in, n_out = N_FEATURES[self.kind], N_OUTPUTS[self.kind]
+        record = get_kind(kind)
+        if not record.has_network:
+            raise ValueError(f"model kind {kind!r} has no network")
+        self.kind = kind
+        self.scale_floor = record.scale_floor
+        self.scale_groups = record.scale_groups
+        self.torque = record.torque
+        n_in, n_out = record.n_features, record.n_outputs
         self.layer_sizes = (n_in, *[int(h) for h in hidden], n_out)
         self.activation = activation
         self.spectral_norm = spectral_norm
         self.eps_pos_m = eps_pos_m
         self.eps_vel_mps = eps_vel_mps
         self.act = _activation(activation)
+        self.ego_features, self.phi_layers = record.ego_features, record.phi_layers
         linears = []
-        for a, b in zip(self.layer_sizes[:-1], self.layer_sizes[1:]):
+        for (b, a), _ in record.weight_shapes(self.layer_sizes):
             lin = nn.Linear(a, b)
             if spectral_norm:
                 lin = nn.utils.parametrizations.spectral_norm(lin)
@@ -126,16 +112,33 @@ class DownwashModel(nn.Module):
         )
 
     def components(self, z: torch.Tensor) -> torch.Tensor:
-        """Network outputs ``c`` (n, K) for raw features ``z`` (n, F)."""
+        """Network outputs ``c`` (n, K) for raw features ``z`` (n, F) (a deep-sets kind: the
+        ego features join ``phi``'s output before ``rho``'s first layer)."""
         h = (z - self.in_mean) / self.in_std
-        for lin in self.linears[:-1]:
+        e = self.ego_features
+        if e:
+            h, ego = h[:, :-e], h[:, -e:]
+        for i, lin in enumerate(self.linears[:-1]):
+            if e and i == self.phi_layers:
+                h = torch.cat([h, ego], -1)
             h = self.act(lin(h))
+        if e and len(self.linears) - 1 == self.phi_layers:
+            h = torch.cat([h, ego], -1)
         return self.linears[-1](h) * self.out_std + self.out_mean
 
     @property
     def has_torque(self) -> bool:
         """True for a kind that also predicts the wake's torque."""
-        return self.kind in TORQUE_KINDS
+        return self.torque
+
+    def output_scales(self) -> tuple[float, float]:
+        """(force, torque) label scales of a torque kind: the RMS of the standardisation's
+        output scales of each (m/s², N m), by which :func:`standardised_wrench_loss` divides
+        the errors."""
+        std = self.out_std.detach().double()
+        k = std.shape[0] // 2
+        return (float(torch.sqrt(torch.mean(std[:k] ** 2))),
+                float(torch.sqrt(torch.mean(std[k:] ** 2))))
 
     def head(self, z: torch.Tensor, out_map: torch.Tensor) -> torch.Tensor:
         """World-frame force (n, 3) from precomputed features and output map."""
@@ -167,17 +170,17 @@ class DownwashModel(nn.Module):
     def set_normalisation(self, z: np.ndarray, c: np.ndarray) -> None:
         """Standardisation statistics from training features ``z`` (n, F) and targets ``c`` (n, K).
 
-        Feature scales are floored (``features.SCALE_FLOOR``) so that a feature that hardly
+        Feature scales are floored (the kind's ``scale_floor``) so that a feature that hardly
         varies in training is not magnified when it does vary in use. The features of a group
-        of ``features.SCALE_GROUPS`` (the horizontal components of the MLP's world vectors)
+        of the kind's ``scale_groups`` (the horizontal components of the MLP's world vectors)
         share one scale, the RMS of their standard deviations.
         """
         z = np.asarray(z, dtype=float)
         c = np.asarray(c, dtype=float)
         std = z.std(axis=0)
-        for group in SCALE_GROUPS.get(self.kind, ()):
+        for group in self.scale_groups:
             std[list(group)] = np.sqrt(np.mean(std[list(group)] ** 2))
-        in_std = np.maximum(std, np.asarray(SCALE_FLOOR[self.kind]))
+        in_std = np.maximum(std, np.asarray(self.scale_floor))
         out_std = np.maximum(c.std(axis=0), 1e-3)
         for name, val in (("in_mean", z.mean(axis=0)), ("in_std", in_std),
                           ("out_mean", c.mean(axis=0)), ("out_std", out_std)):
@@ -207,32 +210,6 @@ class DownwashModel(nn.Module):
                  lin.bias.detach().cpu().double().numpy().copy()) for lin in self.linears]
 
 
-class SO2Model(DownwashModel):
-    """The paper's model: MLP on ``h(x)`` predicting ``(f_radial, f_axial)``."""
-
-    kind = "so2"
-
-
-class SO2ExtModel(DownwashModel):
-    """Extended SO(2) model: signed features, predicts ``(f_radial, f_tangential, f_axial)``."""
-
-    kind = "so2-ext"
-
-
-class SO2WrenchModel(DownwashModel):
-    """Wrench SO(2) model: ``"so2-ext"``'s features, predicts the force's and the torque's
-    ``(radial, tangential, axial)`` components."""
-
-    kind = "so2-wrench"
-
-    def output_scales(self) -> tuple[float, float]:
-        """(force, torque) label scales: the RMS of the standardisation's output scales of each
-        (m/s², N m), by which :func:`standardised_wrench_loss` divides the errors."""
-        std = self.out_std.detach().double()
-        return (float(torch.sqrt(torch.mean(std[:3] ** 2))),
-                float(torch.sqrt(torch.mean(std[3:] ** 2))))
-
-
 def standardised_wrench_loss(force: torch.Tensor, force_label: torch.Tensor,
                              torque: torch.Tensor, torque_label: torch.Tensor,
                              scales: tuple[float, float]) -> torch.Tensor:
@@ -241,29 +218,6 @@ def standardised_wrench_loss(force: torch.Tensor, force_label: torch.Tensor,
     force_scale, torque_scale = scales
     return 0.5 * (torch.mean((force - force_label) ** 2) / force_scale**2
                   + torch.mean((torque - torque_label) ** 2) / torque_scale**2)
-
-
-class SO2LeaderModel(DownwashModel):
-    """Leader-aware SO(2) model: ``"so2"``'s features made dimensionless with the leader's wake
-    scales (hover induced velocity, rotor size) and the force in units of
-    ``g (v_hA / v_hB)^2`` (see :mod:`aerodock.learning.features`); predicts ``(f_radial,
-    f_axial)`` in those units."""
-
-    kind = "so2-leader"
-
-
-class SO2PairModel(DownwashModel):
-    """Pair-aware SO(2) model: ``"so2-leader"`` with the follower's size in units of the
-    leader's, ``L_B / L_A``, as a seventh invariant feature (see
-    :mod:`aerodock.learning.features`)."""
-
-    kind = "so2-pair"
-
-
-class MLPModel(DownwashModel):
-    """Baseline: plain MLP on ``x`` (world frame) predicting the world-frame force."""
-
-    kind = "mlp"
 
 
 class ZeroModel(nn.Module):
@@ -287,13 +241,6 @@ class ZeroModel(nn.Module):
         return []
 
 
-MODEL_CLASSES: dict[str, type[nn.Module]] = {
-    "so2": SO2Model, "so2-ext": SO2ExtModel, "so2-wrench": SO2WrenchModel,
-    "so2-leader": SO2LeaderModel, "so2-pair": SO2PairModel, "mlp": MLPModel,
-    "zero": ZeroModel,
-}
-
-
 def build_model(
     kind: str,
     *,
@@ -302,18 +249,17 @@ def build_model(
     spectral_norm: bool = False,
 ) -> nn.Module:
     """An untrained model of ``kind`` (initialised from torch's global RNG)."""
-    check_kind(kind)
-    if kind == "zero":
+    if not get_kind(kind).has_network:
         return ZeroModel()
-    return MODEL_CLASSES[kind](hidden, activation=activation, spectral_norm=spectral_norm)
+    return DownwashModel(hidden, kind=kind, activation=activation, spectral_norm=spectral_norm)
 
 
 def model_from_spec(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]) -> nn.Module:
     """A torch model (float32, eval mode, no spectral-norm parametrisation) with given weights."""
-    if spec.kind == "zero":
+    if not get_kind(spec.kind).has_network:
         return ZeroModel().eval()
-    model = MODEL_CLASSES[spec.kind](
-        spec.layer_sizes[1:-1], activation=spec.activation, spectral_norm=False,
+    model = DownwashModel(
+        spec.layer_sizes[1:-1], kind=spec.kind, activation=spec.activation, spectral_norm=False,
         eps_pos_m=spec.eps_pos_m, eps_vel_mps=spec.eps_vel_mps,
     )
     model.spectral_norm = spec.spectral_norm

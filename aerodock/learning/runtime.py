@@ -43,7 +43,6 @@ Other kinds ignore ``wake_scales``: they run exactly as before.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -52,16 +51,14 @@ import numpy as np
 from aerodock.downwash.base import BodyState
 from aerodock.learning.features import (
     GRAVITY_MPS2,
-    LEADER_KINDS,
-    N_FEATURES,
-    N_WAKE_SCALES,
-    TORQUE_KINDS,
     check_eps,
     check_inputs,
     check_wake_scales,
     feature_map,
     wake_scales,
 )
+from aerodock.learning.kinds import get_kind
+from aerodock.learning.kinds.trace import compile_scalar
 from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
 
 
@@ -94,7 +91,7 @@ class Predictor:
     ``predict_one`` reuses preallocated buffers: one Predictor per thread (loading is cheap).
 
     Attributes:
-        kind: ``"so2"``, ``"so2-ext"``, ``"so2-wrench"``, ``"mlp"`` or ``"zero"``.
+        kind: the model's kind (:mod:`aerodock.learning.kinds`).
         spec: the model's :class:`~aerodock.learning.modelfile.ModelSpec`.
         meta: the model's ``model.json`` document (training summary etc.).
         has_torque: the model also predicts the wake's torque (``"so2-wrench"``).
@@ -109,38 +106,33 @@ class Predictor:
         """Build from a spec and ``[(W, b), ...]`` (torch ``Linear`` layout)."""
         self.spec = spec
         self.kind = spec.kind
-        self.has_torque = spec.kind in TORQUE_KINDS
-        self.needs_wake_scales = spec.kind in LEADER_KINDS
+        record = get_kind(spec.kind)
+        self.has_torque = record.torque
+        self.needs_wake_scales = bool(record.n_wake_scales)
         self.meta = dict(meta or {})
         self.default_wake_scales = _recorded_wake_scales(self.meta, spec.kind)
         self.rotor_geometry = _recorded_rotor_geometry(self.meta)
-        if spec.kind == "zero":
+        if not get_kind(spec.kind).has_network:
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
         check_eps(spec.eps_pos_m, spec.eps_vel_mps)
-        layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64))
-                  for w, b in weights]
-        if len(layers) != len(spec.weight_shapes()):
+        if len(weights) != len(spec.weight_shapes()):
             raise ValueError("weights do not match the spec's layer sizes")
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            w0, b0 = layers[0]
-            w0 = w0 / np.asarray(spec.in_std, dtype=np.float64)[None, :]
-            b0 = b0 - w0 @ np.asarray(spec.in_mean, dtype=np.float64)
-            layers[0] = (w0, b0)
-            wl, bl = layers[-1]
-            out_std = np.asarray(spec.out_std, dtype=np.float64)
-            layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+        layers = folded_layers(spec, weights)
         with np.errstate(over="ignore", invalid="ignore"):
             finite = all(np.all(np.isfinite(w)) and np.all(np.isfinite(b)) for w, b in layers)
         if not finite:
             raise ValueError("weights and normalisation overflow to non-finite values")
         self._layers = [(np.ascontiguousarray(w), np.ascontiguousarray(b)) for w, b in layers]
+        self._ego, self._phi_layers = record.ego_features, record.phi_layers
         self._layers_t = [(np.ascontiguousarray(w.T), b) for w, b in self._layers]
         self._act = spec.activation
-        self._z = np.zeros(N_FEATURES[spec.kind])
+        self._z = np.zeros(record.n_features)
+        self._world_frame = record.world_frame
+        if not self._world_frame and not self.needs_wake_scales:
+            self._predict_scalar = compile_scalar(record, spec.eps_pos_m**2,
+                                                  spec.eps_vel_mps**2)
         self._bufs = [np.zeros(w.shape[0]) for w, _ in self._layers]
-        self._eps_p2 = spec.eps_pos_m**2
-        self._eps_v2 = spec.eps_vel_mps**2
 
     @classmethod
     def load(cls, path: str | Path) -> Predictor:
@@ -155,7 +147,7 @@ class Predictor:
             where = where / MODEL_JSON
         try:
             spec, weights, doc = load_model_dir(path)
-            if spec.kind == "zero":
+            if not get_kind(spec.kind).has_network:
                 return ZeroPredictor(meta=doc)
             return cls(spec, weights, doc)
         except ModelFileError:
@@ -239,7 +231,7 @@ class Predictor:
                        ) -> tuple[np.ndarray, np.ndarray | None]:
         """(force (n, 3) m/s², torque (n, 3) N m or None without one), world NED."""
         x, leader_R = check_inputs(x, leader_R)
-        if self.kind == "mlp":
+        if self._world_frame:
             z, out_map = x, None
         else:
             z, out_map = feature_map(
@@ -247,8 +239,10 @@ class Predictor:
                 eps_pos_m=self.spec.eps_pos_m, eps_vel_mps=self.spec.eps_vel_mps,
                 wake_scales=self._scales(wake_scales, x.shape[0]),
             )
-        h = z
+        h, ego = (z, None) if not self._ego else (z[:, :-self._ego], z[:, -self._ego:])
         for i, (wt, b) in enumerate(self._layers_t):
+            if ego is not None and i == self._phi_layers:  # deep sets: rho(phi(...), ego)
+                h = np.concatenate([h, ego], axis=1)
             h = h @ wt
             h += b
             if i < len(self._layers_t) - 1:
@@ -265,9 +259,11 @@ class Predictor:
     def _mlp_one(self, feats: tuple[float, ...] | list[float]) -> list[float]:
         z = self._z
         z[:] = feats
-        h = z
+        h = z if not self._ego else z[:-self._ego]
         last = len(self._layers) - 1
         for i, ((w, b), buf) in enumerate(zip(self._layers, self._bufs)):
+            if self._ego and i == self._phi_layers:  # deep sets: rho(phi(...), ego)
+                h = np.concatenate([h, z[-self._ego:]])
             np.dot(w, h, out=buf)
             buf += b
             if i < last:
@@ -286,48 +282,11 @@ class Predictor:
             return self.predict(np.reshape(x, (1, 9)), np.reshape(leader_R, (1, 3, 3)),
                                 None if wake_scales is None else np.reshape(wake_scales, (1, -1))
                                 )[0]
-        dx, dy, dz, ax, ay, az, bx, by, bz = np.asarray(x, dtype=float).reshape(9).tolist()
-        if self.kind == "mlp":
-            return np.array(self._mlp_one((dx, dy, dz, ax, ay, az, bx, by, bz)))
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = np.asarray(
-            leader_R, dtype=float
-        ).reshape(3, 3).tolist()
-        # leader-body coordinates (R^T w): planar (a1, a2) and axial (a3) components
-        px = r00 * dx + r10 * dy + r20 * dz
-        py = r01 * dx + r11 * dy + r21 * dz
-        pz = r02 * dx + r12 * dy + r22 * dz
-        vbx = r00 * bx + r10 * by + r20 * bz
-        vby = r01 * bx + r11 * by + r21 * bz
-        vbz = r02 * bx + r12 * by + r22 * bz
-        vax = r00 * ax + r10 * ay + r20 * az
-        vay = r01 * ax + r11 * ay + r21 * az
-        rho2 = px * px + py * py
-        rho_soft = math.sqrt(rho2 + self._eps_p2)
-        urx, ury = px / rho_soft, py / rho_soft
-        vb2 = vbx * vbx + vby * vby
-        vb_soft = math.sqrt(vb2 + self._eps_v2)
-        cos_b = (urx * vbx + ury * vby) / vb_soft
-        va2 = vax * vax + vay * vay
-        erx, ery, erz = r00 * urx + r01 * ury, r10 * urx + r11 * ury, r20 * urx + r21 * ury
-        if self.kind == "so2":
-            cr, ca = self._mlp_one(
-                (cos_b, math.sqrt(rho2), math.sqrt(vb2), pz, vbz, math.sqrt(va2))
-            )
-            return np.array([cr * erx + ca * r02, cr * ery + ca * r12, cr * erz + ca * r22])
-        vaz = r02 * ax + r12 * ay + r22 * az
-        va_soft = math.sqrt(va2 + self._eps_v2)
-        cr, ct, ca = self._mlp_one((
-            cos_b, (urx * vby - ury * vbx) / vb_soft, math.sqrt(rho2), math.sqrt(vb2), pz, vbz,
-            math.sqrt(va2), (urx * vax + ury * vay) / va_soft, (urx * vay - ury * vax) / va_soft,
-            vaz,
-        ))[:3]
-        # tangential unit vector e_t = a2 urx - a1 ury
-        etx, ety, etz = r01 * urx - r00 * ury, r11 * urx - r10 * ury, r21 * urx - r20 * ury
-        return np.array([
-            cr * erx + ct * etx + ca * r02,
-            cr * ery + ct * ety + ca * r12,
-            cr * erz + ct * etz + ca * r22,
-        ])
+        xs = np.asarray(x, dtype=float).reshape(9).tolist()
+        if self._world_frame:
+            return np.array(self._mlp_one(xs))
+        rs = np.asarray(leader_R, dtype=float).reshape(3, 3).tolist()
+        return np.array(self._predict_scalar(xs, rs, self._mlp_one))
 
     # -- controller interface ------------------------------------------------------------------
     def predict_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
@@ -352,6 +311,33 @@ class Predictor:
         return np.einsum("nji,nj->ni", follower_rot, torque)  # R^T tau
 
 
+def folded_layers(spec: ModelSpec, weights: list[tuple[np.ndarray, np.ndarray]]
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``[(W, b), ...]`` (float64) with the input standardisation folded into the layers that
+    read the features (the first; a deep-sets kind's first ``rho`` layer for the ego features)
+    and the output scaling into the last: the network then maps raw features to raw outputs.
+    Values may overflow (the caller checks them)."""
+    layers = [(np.array(w, dtype=np.float64), np.array(b, dtype=np.float64)) for w, b in weights]
+    in_std = np.asarray(spec.in_std, dtype=np.float64)
+    in_mean = np.asarray(spec.in_mean, dtype=np.float64)
+    record = get_kind(spec.kind)
+    e = record.ego_features
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        w0, b0 = layers[0]
+        w0 = w0 / in_std[None, :in_std.shape[0] - e]
+        b0 = b0 - w0 @ in_mean[:in_mean.shape[0] - e]
+        layers[0] = (w0, b0)
+        if e:
+            wp, bp = layers[record.phi_layers]
+            w_ego = wp[:, -e:] / in_std[None, -e:]
+            layers[record.phi_layers] = (np.concatenate([wp[:, :-e], w_ego], axis=1),
+                                         bp - w_ego @ in_mean[-e:])
+        wl, bl = layers[-1]
+        out_std = np.asarray(spec.out_std, dtype=np.float64)
+        layers[-1] = (out_std[:, None] * wl, out_std * bl + np.asarray(spec.out_mean, float))
+    return layers
+
+
 def _recorded_wake_scales(meta: dict[str, Any], kind: str) -> np.ndarray | None:
     """``training.wake_scales.default`` of a leader-aware model's document (k,), or None."""
     training = meta.get("training")
@@ -361,7 +347,7 @@ def _recorded_wake_scales(meta: dict[str, Any], kind: str) -> np.ndarray | None:
         arr = np.asarray(default, dtype=float)
     except (TypeError, ValueError):
         return None
-    k = N_WAKE_SCALES.get(kind)
+    k = get_kind(kind).n_wake_scales
     return arr if k and arr.shape == (k,) and np.all(np.isfinite(arr) & (arr > 0)) else None
 
 
@@ -397,6 +383,11 @@ class ZeroPredictor(Predictor):
         return np.zeros((x.shape[0], 3))
 
     __call__ = predict
+
+    def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray,
+                       wake_scales: np.ndarray | None = None) -> tuple[np.ndarray, None]:
+        """Zeros (n, 3), and no torque."""
+        return self.predict(x, leader_R), None
 
     def predict_one(self, x: np.ndarray, leader_R: np.ndarray,
                     wake_scales: np.ndarray | None = None) -> np.ndarray:

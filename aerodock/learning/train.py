@@ -50,15 +50,12 @@ from torch import nn
 
 from aerodock.learning.dataset import Dataset
 from aerodock.learning.features import (
-    LEADER_KINDS,
-    N_WAKE_SCALES,
-    TORQUE_KINDS,
     WAKE_SCALE_NAMES,
-    check_kind,
     check_wake_scales,
     feature_map,
     invariant_components,
 )
+from aerodock.learning.kinds import get_kind
 from aerodock.learning.modelfile import save_model_dir
 from aerodock.learning.models import (
     DEFAULT_ACTIVATION,
@@ -98,8 +95,8 @@ class TrainedModel:
     def predictor(self) -> Predictor:
         """The NumPy runtime for this model (no file round trip)."""
         self.model.eval()
-        if self.kind == "zero":
-            return ZeroPredictor(meta={"kind": "zero", "training": self.info})
+        if not get_kind(self.kind).has_network:
+            return ZeroPredictor(meta={"kind": self.kind, "training": self.info})
         return Predictor(self.model.spec(), self.model.weights(),
                          {"kind": self.kind, "training": self.info})
 
@@ -138,7 +135,8 @@ def check_trainable(ds: Dataset, min_samples: int = 20, kind: str | None = None)
     if ds.n < min_samples:
         raise ValueError(f"too few samples to train on ({ds.n} < {min_samples})")
     arrays = [("inputs x", ds.x), ("labels y", ds.y), ("leader_R", ds.leader_R)]
-    if kind in TORQUE_KINDS:
+    record = None if kind is None else get_kind(kind)
+    if record is not None and record.torque:
         arrays.append(("torque labels", ds.torque_labels()))
     for name, arr in arrays:
         arr = np.asarray(arr, dtype=float)
@@ -147,7 +145,7 @@ def check_trainable(ds: Dataset, min_samples: int = 20, kind: str | None = None)
         if arr.size and np.max(np.abs(arr)) > MAX_ABS_INPUT:
             raise ValueError(f"degenerate data: {name} reach {np.max(np.abs(arr)):.3g}, beyond "
                              f"{MAX_ABS_INPUT:g} (not SI units?)")
-    if kind in LEADER_KINDS:
+    if record is not None and record.n_wake_scales:
         ds.wake_scales()  # raises DataError (a ValueError) naming a flight without vehicles
     rot = np.asarray(ds.leader_R, dtype=float)
     gram = np.einsum("nji,njk->nik", rot, rot)
@@ -160,7 +158,7 @@ def training_wake_scales(ds: Dataset, kind: str = "so2-leader") -> dict[str, Any
     reads): the median of each (:data:`~aerodock.learning.features.WAKE_SCALE_NAMES`, m/s and
     m), the default the runtime uses when it is given no leader (``default``), and each one's
     range (``min``, ``max``)."""
-    k = N_WAKE_SCALES[kind]
+    k = get_kind(kind).n_wake_scales
     scales = ds.wake_scales()[:, :k]
     return {
         "names": list(WAKE_SCALE_NAMES[:k]),
@@ -235,10 +233,11 @@ def _features_tensors(
     kind: str, ds: Dataset, idx: np.ndarray
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None]:
     """Features, output map, force labels and (wrench kinds) torque labels of samples ``idx``."""
-    scales = ds.wake_scales()[idx] if kind in LEADER_KINDS else None
+    record = get_kind(kind)
+    scales = ds.wake_scales()[idx] if record.n_wake_scales else None
     z, out_map = feature_map(kind, ds.x[idx], ds.leader_R[idx], wake_scales=scales)
     torque = (torch.as_tensor(ds.torque_labels()[idx], dtype=torch.float32)
-              if kind in TORQUE_KINDS else None)
+              if record.torque else None)
     return (torch.as_tensor(z, dtype=torch.float32),
             torch.as_tensor(np.ascontiguousarray(out_map), dtype=torch.float32),
             torch.as_tensor(ds.y[idx], dtype=torch.float32), torque)
@@ -337,7 +336,7 @@ def train_model(
         ValueError: unknown kind, bad options, too few samples, degenerate data
             (:func:`check_trainable`), or a training that diverged to non-finite weights.
     """
-    check_kind(kind)
+    record = get_kind(kind)
     if not 0.0 <= val_fraction < 1.0:
         raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
     if max_epochs < 1 or patience < 1 or batch_size < 1:
@@ -345,7 +344,7 @@ def train_model(
     if split not in SPLITS:
         raise ValueError(f"unknown split {split!r} (expected one of {', '.join(SPLITS)})")
     check_trainable(train, kind=kind)
-    wrench = kind in TORQUE_KINDS
+    wrench = record.torque
     info: dict[str, Any] = {
         "kind": kind, "seed": seed, "data": train.summary(), "spectral_norm": spectral_norm,
         "hyperparameters": {
@@ -357,10 +356,10 @@ def train_model(
                      "scale squared" if wrench else "MSE (m^2/s^4, world NED)"),
         },
     }
-    if kind in LEADER_KINDS:
+    if record.n_wake_scales:
         info["wake_scales"] = training_wake_scales(train, kind)
-    if kind == "zero":
-        return TrainedModel("zero", build_model("zero"), {**info, "train_time_s": 0.0}, {})
+    if not record.has_network:
+        return TrainedModel(kind, build_model(kind), {**info, "train_time_s": 0.0}, {})
     t_start = time.perf_counter()
     rng = np.random.default_rng(seed)
     if val_fraction > 0:
@@ -380,7 +379,7 @@ def train_model(
             z_tr.double().numpy(),
             invariant_components(kind, train.x[tr_idx], train.leader_R[tr_idx], train.y[tr_idx],
                                  None if tau_tr is None else tau_tr.double().numpy(),
-                                 train.wake_scales()[tr_idx] if kind in LEADER_KINDS else None),
+                                 train.wake_scales()[tr_idx] if record.n_wake_scales else None),
         )
         loss_fn = _loss_fn(model)
         has_val = len(va_idx) > 0

@@ -1,0 +1,81 @@
+"""Every existing kind predicts bit for bit what it did before the kinds became a registry.
+
+``data/kind_pins`` holds a small model folder per kind and the predictions of each path, written
+by ``data/make_kind_pins.py`` with the code before the registry (commit ``ea3179b``): the
+batched and the one-sample NumPy runtime, the NumPy and torch feature maps, and the torch module.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from aerodock.learning.features import feature_map
+from aerodock.learning.runtime import Predictor
+
+PINS = Path(__file__).parent / "data" / "kind_pins"
+PINNED_KINDS = ("so2", "so2-ext", "so2-wrench", "so2-leader", "so2-pair", "mlp")
+LEADER_AWARE = ("so2-leader", "so2-pair")
+
+
+@pytest.fixture(scope="module")
+def scenes() -> dict[str, np.ndarray]:
+    with np.load(PINS / "scenes.npz") as data:
+        return {k: data[k] for k in data.files}
+
+
+def _pins(kind: str) -> dict[str, np.ndarray]:
+    with np.load(PINS / f"{kind}_pins.npz") as data:
+        return {k: data[k] for k in data.files}
+
+
+@pytest.mark.parametrize("kind", PINNED_KINDS)
+def test_numpy_runtime_predicts_bit_for_bit(kind, scenes):
+    x, rot = scenes["x"], scenes["rot"]
+    ws = scenes["scales"] if kind in LEADER_AWARE else None
+    pins = _pins(kind)
+    pred = Predictor.load(PINS / kind)
+    force, torque = pred.predict_wrench(x, rot, ws)
+    assert np.array_equal(force, pins["force"])
+    if "torque" in pins:
+        assert np.array_equal(torque, pins["torque"])
+    else:
+        assert torque is None
+    one = np.stack([pred.predict_one(x[j], rot[j], None if ws is None else ws[j])
+                    for j in range(x.shape[0])])
+    assert np.array_equal(one, pins["one"])
+
+
+@pytest.mark.parametrize("kind", PINNED_KINDS)
+def test_feature_maps_bit_for_bit(kind, scenes):
+    torch = pytest.importorskip("torch")
+    from aerodock.learning.features import feature_map_torch
+
+    x, rot = scenes["x"], scenes["rot"]
+    ws = scenes["scales"] if kind in LEADER_AWARE else None
+    pins = _pins(kind)
+    z, m = feature_map(kind, x, rot, wake_scales=ws)
+    assert np.array_equal(z, pins["z"]) and np.array_equal(m, pins["m"])
+    zt, mt = feature_map_torch(kind, torch.as_tensor(x), torch.as_tensor(rot),
+                               wake_scales=None if ws is None else torch.as_tensor(ws))
+    assert np.array_equal(zt.numpy(), pins["torch_z"])
+    assert np.array_equal(mt.numpy(), pins["torch_m"])
+
+
+@pytest.mark.parametrize("kind", PINNED_KINDS)
+def test_torch_module_bit_for_bit(kind, scenes):
+    torch = pytest.importorskip("torch")
+    from aerodock.learning.models import load_torch_model
+
+    x, rot = scenes["x"], scenes["rot"]
+    ws = scenes["scales"] if kind in LEADER_AWARE else None
+    pins = _pins(kind)
+    model = load_torch_model(PINS / kind).double()
+    with torch.no_grad():
+        force, torque = model.wrench(torch.as_tensor(x), torch.as_tensor(rot),
+                                     None if ws is None else torch.as_tensor(ws))
+    assert np.array_equal(force.numpy(), pins["torch_force"])
+    if "torch_torque" in pins:
+        assert np.array_equal(torque.numpy(), pins["torch_torque"])
