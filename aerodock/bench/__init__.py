@@ -15,6 +15,12 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``simulator_point_mass``: the same with point-mass vehicles (``model = "point-mass"``), for
   comparison. Each simulator figure also gives ``per_cpu_s``: vehicle-steps per second of the
   process's CPU time (median), which a busy shared machine does not dilute.
+- ``simulator_python_field``: the rigid-body world with a plug-in field written in Python (the
+  template's uniform column) instead of the compiled jet, at batches of 1 and 256: what a
+  Python term between the compiled ones costs.
+- ``kernels``: a fresh process's import and first two control periods with the compiled kernels
+  cached (``cached_s``) and, without ``--quick``, with an empty cache (``cold_s``: every kernel
+  compiled, about a minute).
 - ``vehicle_step``: the vehicles' own step alone (``Fleet.step`` on 2n vehicles: for rigid
   bodies the autopilot, rotor wrench and attitude step), per model and batch of 1, 256 and 1024.
 - ``docking``: wall time of one docking trial and of a 100-trial campaign
@@ -72,7 +78,14 @@ from aerodock.bench.peer import (
     peer_rotorpy_batched,
 )
 from aerodock.bench.report import TARGETS, machine_info, table_rows, targets
-from aerodock.bench.simulator import SIM_BATCHES, SimLoop, bench_simulator, bench_vehicle_step
+from aerodock.bench.simulator import (
+    SIM_BATCHES,
+    SimLoop,
+    bench_kernels,
+    bench_python_field,
+    bench_simulator,
+    bench_vehicle_step,
+)
 from aerodock.bench.timing import Progress, failure_reason, figure, measure, quiet, unavailable
 
 __all__ = [
@@ -110,6 +123,9 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
         figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
                                                        model="point-mass")
         figs["vehicle_step"] = bench_vehicle_step(cfg, quick=quick, progress=progress)
+        figs["simulator_python_field"] = bench_python_field(cfg, quick=quick,
+                                                            progress=progress)
+        figs["kernels"] = bench_kernels(cold=not quick, progress=progress)
     if wanted("docking"):
         figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
     if wanted("predictor"):

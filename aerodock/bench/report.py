@@ -120,10 +120,14 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
         rows.append((name, _fmt(fig["value"], unit), spread, unit, note))
 
     figs = doc["figures"]
-    for key, model in (("simulator", "rigid-body"), ("simulator_point_mass", "point-mass")):
+    for key, model in (("simulator", "rigid-body"), ("simulator_point_mass", "point-mass"),
+                       ("simulator_python_field", "rigid-body, Python plug-in field")):
         for n, row in figs.get(key, {}).items():
             add(f"simulator {model}, batch {n}, with controllers", row.get("with_controllers"))
             add(f"simulator {model}, batch {n}, physics only", row.get("physics_only"))
+    kernels = figs.get("kernels", {})
+    add("kernels: fresh process, import + first steps (cached)", kernels.get("cached_s"))
+    add("kernels: fresh process, import + first steps (compiling all)", kernels.get("cold_s"))
     for model, row in figs.get("vehicle_step", {}).items():
         for n, fig in row.items():
             add(f"vehicle step {model}, batch {n} (Fleet.step alone)", fig)

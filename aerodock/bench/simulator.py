@@ -143,3 +143,59 @@ def bench_vehicle_step(cfg: Any, batches: tuple[int, ...] = (1, 256, 1024), quic
             row[str(n)] = fig
         out[model] = row
     return out
+
+
+PYTHON_FIELD = {"downwash": {"field": "aerodock.downwash.template:UniformColumnField",
+                             "params": {"accel_mps2": 3.0, "radius_m": 0.15}}}
+"""A plug-in field written in Python (the template's uniform column), for
+:func:`bench_python_field`."""
+
+
+def bench_python_field(cfg: Any, batches: tuple[int, ...] = (1, 256), quick: bool = False,
+                       progress: Progress = quiet) -> dict[str, Any]:
+    """:func:`bench_simulator` with a plug-in field written in Python instead of the compiled
+    jet: the world's other terms stay compiled, the field's own NumPy calls run between them
+    (rigid-body vehicles)."""
+    progress("simulator with a Python plug-in field")
+    return bench_simulator(cfg.with_overrides(PYTHON_FIELD, source="bench"), batches, quick,
+                           progress, model="rigid-body")
+
+
+_FIRST_STEPS = """
+import time
+t0 = time.perf_counter()
+from aerodock.bench.simulator import SimLoop
+from aerodock.config import load_config
+loop = SimLoop(load_config(None), 1)
+loop.run(2)
+print(time.perf_counter() - t0)
+"""
+
+
+def bench_kernels(cold: bool = True, progress: Progress = quiet) -> dict[str, Any]:
+    """What the compiled kernels cost before the first step: a fresh process importing aerodock
+    and flying two control periods of the default world, with the kernels already cached
+    (``cached_s``), and (``cold``) with an empty cache, every kernel compiled (``cold_s``;
+    about a minute: ``make`` pays it once, at install)."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    def run(env: dict[str, str]) -> float:
+        done = subprocess.run([sys.executable, "-c", _FIRST_STEPS], env=env, check=True,
+                              capture_output=True, text=True)
+        return float(done.stdout.strip().splitlines()[-1])
+
+    progress("kernels: a fresh process's first steps (cached)")
+    out: dict[str, Any] = {"cached_s": figure([run(dict(os.environ)) for _ in range(3)], "s",
+                                              "import + first 2 control periods, kernels "
+                                              "cached")}
+    if cold:
+        progress("kernels: a fresh process's first steps (compiling, about a minute)")
+        with tempfile.TemporaryDirectory() as tmp:
+            env = dict(os.environ, AERODOCK_CACHE_DIR=tmp)
+            env.pop("NUMBA_CACHE_DIR", None)
+            out["cold_s"] = figure([run(env)], "s", "the same with an empty cache: every "
+                                   "kernel the default world flies compiled")
+    return out
