@@ -95,7 +95,7 @@ class RigidBodyParams:
         inertia = np.array(v.inertia_kgm2, dtype=float)
         mixer_inv = np.linalg.inv(mixer).T.copy()
         # Constants, read-only: the autopilot's gain columns and the downwash field's geometry
-        # are cached by these arrays (gain_columns, RoundJetField.wrench).
+        # are cached by these arrays (autopilot_constants, RoundJetField.wrench).
         freeze(gains.attitude_p, gains.rate_p, gains.rate_i, gains.rate_max_radps, inertia,
                offsets, spin, torque_map, drag_sums, mixer_inv)
         return cls(
