@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import Annotated
 
 import typer
@@ -21,6 +22,9 @@ from aerodock.cli.common import (
 )
 from aerodock.fileio import json_ready
 
+BenchPart = StrEnum("BenchPart", {part: part for part in PARTS})
+"""``--only``'s choices: the parts of :func:`aerodock.bench.run_all`."""
+
 
 def bench_command(
     quick: Annotated[bool, typer.Option(
@@ -29,8 +33,8 @@ def bench_command(
     config: ConfigOpt = None,
     sets: SetOpt = None,
     trust: TrustOpt = None,
-    only: Annotated[str | None, typer.Option(
-        "--only", help=f"Measure one part alone: {', '.join(PARTS)}.")] = None,
+    only: Annotated[BenchPart | None, typer.Option(
+        "--only", help="Measure one part alone.")] = None,
 ) -> None:
     """Measure the speed of every hot path: simulator, docking, learnt model, training,
     `reproduce --quick`, memory, and RotorPy on the same scenario (if installed)."""
@@ -47,7 +51,8 @@ def bench_command(
             else:
                 err.print(f"bench: {msg}", highlight=False)
 
-        doc = run_all(cfg, quick=quick, progress=progress, config_path=child_config, only=only)
+        doc = run_all(cfg, quick=quick, progress=progress, config_path=child_config,
+                      only=None if only is None else str(only))
     if as_json:
         print_json(json_ready(doc))  # a figure that could not be computed is null
         return

@@ -4,6 +4,7 @@ over real flights, and the disturbance each leaves (:mod:`aerodock.experiments.c
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -28,6 +29,8 @@ from aerodock.learning.kinds import REGISTRY
 
 KINDS = tuple(name for name, k in REGISTRY.items() if k.has_network and not k.torque)
 """Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
+TrainedKind = StrEnum("TrainedKind", {kind: kind for kind in KINDS})
+"""``--kind``'s choices."""
 
 
 def default_data_root(data_dir: Path | None = None) -> Path:
@@ -54,8 +57,8 @@ def evaluate_compensation_command(
     model: Annotated[Path | None, typer.Option(
         "--model", help="A trained model DIR to fly (default: train one on swap_ss 00-04 and "
                         "swap_sl 00-07).")] = None,
-    kind: Annotated[str, typer.Option(
-        "--kind", help=f"Model kind to train without --model: {', '.join(KINDS)}.")] = "so2",
+    kind: Annotated[TrainedKind, typer.Option(
+        "--kind", help="Model kind to train without --model.")] = "so2",
     quick: Annotated[bool, typer.Option(
         "--quick", help="Train for at most 30 epochs (without --model).")] = False,
     warmup: Annotated[float, typer.Option(
@@ -107,7 +110,7 @@ def evaluate_compensation_command(
         update = bar_callback(bar)
         try:
             result = compensation_study(
-                root, cfg=cfg, model_dir=model, kind=kind, seed=seed, quick=quick,
+                root, cfg=cfg, model_dir=model, kind=str(kind), seed=seed, quick=quick,
                 warmup_s=warmup, lateral_radius_m=lateral_radius, figure=figure, say=say,
                 train_progress=lambda e, n, *_: update("training epochs", e, n))
         except ImportError:

@@ -3,6 +3,7 @@ and the default jet fitted to real flights."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -26,6 +27,13 @@ if TYPE_CHECKING:
     from aerodock.config import Config
     from aerodock.flightlog import FlightLog
     from aerodock.learning.wake_fit import FlightSamples, WakeFit
+
+
+class NoiseMode(StrEnum):
+    """``field fit --noise``: the label noise the turbulence is read above."""
+
+    POOLED = "pooled"
+    SPEED = "speed"
 
 
 def field_probe(
@@ -171,7 +179,7 @@ def field_fit(
     bootstrap: Annotated[int, typer.Option(
         help="Refits on flights resampled with replacement, for the uncertainty (0: none).")]
         = 20,
-    noise: Annotated[str, typer.Option(
+    noise: Annotated[NoiseMode, typer.Option(
         help="The label noise the turbulence is read above: 'pooled' (each follower "
              "vehicle's free-air variance over all its free-air samples) or 'speed' (its "
              "free-air variance at the follower's speed at each sample; the noise grows with "
@@ -214,8 +222,6 @@ def field_fit(
 
     if not 0 <= bootstrap <= 1000:
         fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
-    if noise not in ("pooled", "speed"):
-        fail(f"--noise must be 'pooled' or 'speed', got {noise!r}")
     if folds == 1 or not 0 <= folds <= 100:
         fail(f"--folds must be 0 (none) or between 2 and 100, got {folds}")
     cfg = load_cli_config(config, sets, trust)

@@ -13,6 +13,7 @@ machine-readable. PyTorch is imported only by the commands that need it (``train
 from __future__ import annotations
 
 import math
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -38,7 +39,11 @@ from aerodock.learning.kinds import KINDS, kinds_help, trained_kinds
 TRAINABLE = KINDS
 # The kinds a curriculum trains and flies at each stage (the zero model would fly nothing).
 COLLECTABLE = trained_kinds()
+ModelKind = StrEnum("ModelKind", {kind: kind for kind in TRAINABLE})
+CollectKind = StrEnum("CollectKind", {kind: kind for kind in COLLECTABLE})
 SPLITS = ("auto", "flight", "time-blocks")
+Split = StrEnum("Split", {split: split for split in SPLITS})
+GraphDtype = StrEnum("GraphDtype", {"float32": "float32", "float64": "float64"})
 """``--split`` values (``aerodock.learning.train.SPLITS``; not imported: that needs PyTorch)."""
 
 DataOpt = Annotated[
@@ -72,7 +77,7 @@ def train_command(
     data: DataOpt,
     out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
     model: Annotated[
-        str, typer.Option("--model", help=f"Model kind: {kinds_help()}.")
+        ModelKind, typer.Option("--model", help=f"Model kind: {kinds_help()}.")
     ] = "so2",
     minutes: Annotated[
         float | None,
@@ -84,7 +89,7 @@ def train_command(
     ] = False,
     max_epochs: Annotated[int, typer.Option("--max-epochs", help="Epoch limit.")] = 200,
     split: Annotated[
-        str, typer.Option("--split", help="Validation split: auto (by flight with 20 flights or "
+        Split, typer.Option("--split", help="Validation split: auto (by flight with 20 flights or "
                                           "more, else 5 s time blocks of every flight), flight "
                                           "or time-blocks.")
     ] = "auto",
@@ -102,6 +107,7 @@ def train_command(
     """
     import numpy as np
 
+    model = str(model)
     if model not in TRAINABLE:
         fail(f"unknown model kind {model!r} (expected one of {', '.join(TRAINABLE)})")
     if split not in SPLITS:
@@ -148,7 +154,7 @@ def train_command(
 
         try:
             trained = train_model(model, ds, seed=seed, spectral_norm=spectral_norm,
-                                  max_epochs=max_epochs, split=split, progress=progress)
+                                  max_epochs=max_epochs, split=str(split), progress=progress)
         except ValueError as err:
             fail(one_line(err, first_line=True))
     try:
@@ -285,7 +291,8 @@ def evaluate_command(
 def export_command(
     model: Annotated[Path, typer.Option("--model", help="Trained model directory.")],
     out: Annotated[Path, typer.Option("--out", help="ONNX file to write.")],
-    dtype: Annotated[str, typer.Option("--dtype", help="float32 or float64 graph.")] = "float32",
+    dtype: Annotated[GraphDtype, typer.Option("--dtype", help="The graph's float type.")
+                     ] = "float32",
     as_json: JsonStdoutOpt = False,
 ) -> None:
     """Export a trained model to ONNX (inputs x (n,9), leader_R (n,3,3); output f_ext_mps2 (n,3),
@@ -314,7 +321,7 @@ def export_command(
     except ImportError:
         fail("ONNX export needs onnx: pip install 'aerodock[export]'")
     try:  # checked against the NumPy predictor before it takes the name --out
-        path, diffs = export_checked(model, out, dtype=dtype)
+        path, diffs = export_checked(model, out, dtype=str(dtype))
     except ModelFileError as err:
         fail(one_line(err, first_line=True))
     except ExportCheckError as err:
@@ -339,7 +346,9 @@ def export_command(
 
 def collect(
     out: Annotated[Path, typer.Option(help="Folder for the FlightLogs and stage models.")],
-    model: Annotated[str | None, typer.Option(help="Model kind trained at each stage.")] = None,
+    model: Annotated[CollectKind | None, typer.Option(
+        help="Model kind trained at each stage (default: the config's curriculum.model).")
+    ] = None,
     config: ConfigOpt = None,
     sets: SetOpt = None,
     trust: TrustOpt = None,
@@ -351,6 +360,7 @@ def collect(
     from aerodock.learning.curriculum import run_curriculum
 
     cfg = load_cli_config(config, sets, trust)
+    model = None if model is None else str(model)
     if model is not None and model not in COLLECTABLE:
         fail(f"--model must be {', '.join(COLLECTABLE[:-1])} or {COLLECTABLE[-1]}, got {model!r}")
 
