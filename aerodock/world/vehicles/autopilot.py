@@ -99,6 +99,6 @@ def mix(thrust_n: np.ndarray, torque_nm: np.ndarray, mixer_inv: np.ndarray,
         raise ValueError(f"the mixer maps [T, tau] to four rotors: mixer_inv must be (4, 4), "
                          f"got {mixer_inv.shape}")
     out = np.empty((torque.shape[0], 4))
-    rigid_kernel.mix_batch(thrust, torque, rigid_kernel.as_tuple(mixer_inv),
+    rigid_kernel.mix_batch(thrust, torque, rigid_kernel.flat(mixer_inv),
                            float(rotor_thrust_max_n), out)
     return out

@@ -213,16 +213,16 @@ _NO_ROWS = np.zeros((1, 4))  # the kernels' placeholder for an absent (n, k) inp
 freeze(_NO_ROWS)
 
 
-def kernel_constants(params: RigidBodyParams) -> tuple[tuple[float, ...], ...]:
+def kernel_constants(params: RigidBodyParams) -> tuple[np.ndarray, ...]:
     """The vehicle's constant matrices as the kernels take them (tuples, row-major): the
     autopilot's loop constants, the mixer, the torque map and the rotor drag's sums (kept on
     ``params``)."""
     hit = params.__dict__.get("_kernel_constants")
     if hit is None:
-        hit = (rigid_kernel.as_tuple(autopilot_constants(params.gains, params.inertia_kgm2)),
-               rigid_kernel.as_tuple(params.mixer_inv),
-               rigid_kernel.as_tuple(params.rotor_torque_map),
-               rigid_kernel.as_tuple(params.rotor_drag_sums))
+        hit = (rigid_kernel.flat(autopilot_constants(params.gains, params.inertia_kgm2)),
+               rigid_kernel.flat(params.mixer_inv),
+               rigid_kernel.flat(params.rotor_torque_map),
+               rigid_kernel.flat(params.rotor_drag_sums))
         params.__dict__["_kernel_constants"] = hit
     return hit
 

@@ -17,7 +17,7 @@ when the two are equal), so a NaN propagates as it did.
 The helpers take and return numbers and tuples of numbers, never arrays: a compiled call with
 array arguments pays for their reference counts (tens of nanoseconds a call, more than the
 arithmetic here), so the loops over the batch index the arrays themselves. Constant matrices
-travel as tuples, row-major (:func:`as_tuple`).
+travel as flat arrays (:func:`flat`), read into tuples once a call.
 """
 
 from __future__ import annotations
@@ -29,9 +29,41 @@ import numpy as np
 from aerodock.jit import fma, njit
 
 
-def as_tuple(values: np.ndarray) -> tuple[float, ...]:
-    """A constant array as the kernels take it: its numbers, row-major, as a tuple."""
-    return tuple(float(x) for x in np.asarray(values, dtype=float).ravel())
+def flat(values: np.ndarray) -> np.ndarray:
+    """A constant array as the kernels take it: its numbers, row-major, in a flat read-only
+    array (the kernel reads it into a tuple once a call: :func:`tuple12` and its kin; a tuple
+    argument would cost the call's dispatch a type check per number)."""
+    out = np.array(values, dtype=float).ravel()
+    out.flags.writeable = False
+    return out
+
+
+@njit
+def tuple12(a: np.ndarray) -> tuple:
+    """A flat 12-array's numbers as a tuple (read once per kernel call)."""
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11])
+
+
+@njit
+def tuple16(a: np.ndarray) -> tuple:
+    """A flat 16-array's numbers as a tuple."""
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12],
+            a[13], a[14], a[15])
+
+
+@njit
+def tuple18(a: np.ndarray) -> tuple:
+    """A flat 18-array's numbers as a tuple."""
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12],
+            a[13], a[14], a[15], a[16], a[17])
+
+
+@njit
+def tuple28(a: np.ndarray) -> tuple:
+    """A flat 28-array's numbers as a tuple."""
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12],
+            a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23], a[24],
+            a[25], a[26], a[27])
 
 
 @njit
@@ -266,10 +298,11 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
                   autopilot_on: bool, omega_cmd: np.ndarray, att: np.ndarray, use_att: bool,
                   r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
                   torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
-                  noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts: tuple,
-                  mixer_inv: tuple, rotor_thrust_max: float, thrust_coeff: float,
+                  noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts_a: np.ndarray,
+                  mixer_a: np.ndarray, rotor_thrust_max: float, thrust_coeff: float,
                   ext_force: np.ndarray, ext_torque: np.ndarray, has_ext_torque: bool,
-                  torque_map: tuple, drag_sums: tuple, kd: float, kz: float, c_drag: float,
+                  torque_map_a: np.ndarray, drag_sums_a: np.ndarray, kd: float, kz: float,
+                  c_drag: float,
                   gravity: float, dt: float, p_new: np.ndarray, v_new: np.ndarray,
                   rot_new: np.ndarray, w_new: np.ndarray, omega_new: np.ndarray,
                   thrust_new: np.ndarray, accel: np.ndarray, integral_new: np.ndarray,
@@ -289,6 +322,8 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
     exponential); the motors by their exact first-order step (``alpha``: ``1 - exp(-dt/tau)``,
     (n,) or one number in a (1,) array).
     """
+    consts, mixer_inv = tuple18(consts_a), tuple16(mixer_a)
+    torque_map, drag_sums = tuple12(torque_map_a), tuple28(drag_sums_a)
     per_vehicle_alpha = alpha.shape[0] > 1
     half = 0.5 * dt
     for i in range(p.shape[0]):
@@ -381,11 +416,12 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
 def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
                     thrust_cmd: np.ndarray, torque_ff: np.ndarray, has_ff: bool,
                     gyro: np.ndarray, gyro_noise: np.ndarray, noisy: bool,
-                    integral: np.ndarray, consts: tuple, mixer_inv: tuple,
+                    integral: np.ndarray, consts_a: np.ndarray, mixer_a: np.ndarray,
                     rotor_thrust_max: float, thrust_coeff: float, dt: float,
                     cmd: np.ndarray, integral_new: np.ndarray) -> None:
     """:func:`autopilot` for ``n`` vehicles: rotor speed commands ``cmd`` (n, 4) and new
     integrals (n, 3). The gyro reads ``gyro`` (plus ``gyro_noise`` when ``noisy``)."""
+    consts, mixer_inv = tuple18(consts_a), tuple16(mixer_a)
     for i in range(att.shape[0]):
         g0, g1, g2 = gyro[i, 0], gyro[i, 1], gyro[i, 2]
         if noisy:
@@ -403,9 +439,10 @@ def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
 
 
 @njit
-def mix_batch(thrust: np.ndarray, torque: np.ndarray, mixer_inv: tuple,
+def mix_batch(thrust: np.ndarray, torque: np.ndarray, mixer_a: np.ndarray,
               rotor_thrust_max: float, out: np.ndarray) -> None:
     """:func:`mix` for ``n`` vehicles: collective (n,), torques (n, 3) -> (n, 4)."""
+    mixer_inv = tuple16(mixer_a)
     for i in range(thrust.shape[0]):
         f = mix(thrust[i], torque[i, 0], torque[i, 1], torque[i, 2], mixer_inv,
                 rotor_thrust_max)
@@ -414,9 +451,11 @@ def mix_batch(thrust: np.ndarray, torque: np.ndarray, mixer_inv: tuple,
 
 @njit
 def wrench_batch(omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
-                 v_body: np.ndarray, w: np.ndarray, torque_map: tuple, drag_sums: tuple,
-                 kd: float, kz: float, force: np.ndarray, torque: np.ndarray) -> None:
+                 v_body: np.ndarray, w: np.ndarray, torque_map_a: np.ndarray,
+                 drag_sums_a: np.ndarray, kd: float, kz: float, force: np.ndarray,
+                 torque: np.ndarray) -> None:
     """:func:`rotor_wrench` for ``n`` vehicles (body-frame velocities ``v_body``)."""
+    torque_map, drag_sums = tuple12(torque_map_a), tuple28(drag_sums_a)
     for i in range(omega.shape[0]):
         out = rotor_wrench(omega[i, 0], omega[i, 1], omega[i, 2], omega[i, 3],
                            thrust_coeffs[i], torque_gain[i], v_body[i, 0], v_body[i, 1],
