@@ -214,7 +214,7 @@ freeze(_NO_ROWS)
 
 
 def kernel_constants(params: RigidBodyParams) -> tuple[np.ndarray, ...]:
-    """The vehicle's constant matrices as the kernels take them (tuples, row-major): the
+    """The vehicle's constant matrices as the kernels take them (flat, row-major): the
     autopilot's loop constants, the mixer, the torque map and the rotor drag's sums (kept on
     ``params``)."""
     hit = params.__dict__.get("_kernel_constants")
