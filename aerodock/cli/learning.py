@@ -164,11 +164,28 @@ def train_command(
         path = trained.save(out)
     except (OSError, ValueError) as err:
         fail(f"{out}: cannot write model ({one_line(err, first_line=True)})")
+    result = _train_result(trained, path, model, seed, ds, available)
+    if curve is not None and model != "zero":
+        from aerodock.learning.curves import plot_learning_curve
+
+        try:
+            result["learning_curve"] = str(plot_learning_curve(trained.info, curve))
+        except OSError as err:
+            fail(f"{curve}: cannot write the learning curve ({one_line(err, first_line=True)})")
+    if as_json:
+        print_json(result)
+        return
+    _echo_trained(result, model, ds, path)
+
+
+def _train_result(trained: Any, path: Path, model: str, seed: int, ds: Any,
+                  available: float) -> dict[str, Any]:
+    """``train --json``'s object, from the training record (``TrainedModel.record``)."""
     rec = trained.record
     assert rec is not None  # train_model always records its training
     done = rec.outcome  # None: a kind with nothing to train
     fit = None if done is None else done.fit
-    result = {
+    return {
         "model_dir": str(path),
         "kind": model,
         "seed": seed,
@@ -188,16 +205,10 @@ def train_command(
         "learning_curve": None,
         "warnings": ds.meta.get("warnings", []),
     }
-    if curve is not None and model != "zero":
-        from aerodock.learning.curves import plot_learning_curve
 
-        try:
-            result["learning_curve"] = str(plot_learning_curve(trained.info, curve))
-        except OSError as err:
-            fail(f"{curve}: cannot write the learning curve ({one_line(err, first_line=True)})")
-    if as_json:
-        print_json(result)
-        return
+
+def _echo_trained(result: dict[str, Any], model: str, ds: Any, path: Path) -> None:
+    """``train``'s text output: the warnings, the training's figures, what was written."""
     for note in result["warnings"]:
         typer.echo(f"warning: {note}", err=True)
     typer.echo(
