@@ -65,7 +65,7 @@ def reproduce(
         results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
                                 bar=bar_callback(bar), smoke=smoke)
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
-               f"{results['timings_s']['total_s']:.0f} s)")
+               f"{results.total_s:.0f} s)")
 
 
 def targets_command(
@@ -83,7 +83,10 @@ def targets_command(
 ) -> None:
     """Docking targets beyond the paper (d_p 0.36 and 0.27 m; leader at 0.25 and 0.5 m/s) for
     the paper's controller and ours, with the learnt model, on the configured field."""
+    from dataclasses import replace
+
     from aerodock.control.profiles import controller_config
+    from aerodock.experiments.records import TargetsProvenance
     from aerodock.experiments.report_controllers import targets_markdown
     from aerodock.experiments.targets import targets
     from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
@@ -122,10 +125,11 @@ def targets_command(
         res = targets({"paper's controller + model": (controller_config(cfg, "paper"), predictor),
                        "ours + model": (controller_config(cfg, "ours"), predictor)},
                       trials, predictor, seed, say)
-        res.update({"model": str(model), "config": cfg.source, "field": cfg.downwash.field})
-        write_json(work / "targets.json", json_ready(res))
+        res = replace(res, provenance=TargetsProvenance(str(model), cfg.source,
+                                                        cfg.downwash.field))
+        write_json(work / "targets.json", json_ready(res.to_json()))
     if as_json:
-        print_json(res)
+        print_json(res.to_json())
         return
-    typer.echo("\n".join(targets_markdown({"targets": res})))
+    typer.echo("\n".join(targets_markdown(res)))
     typer.echo(f"wrote {out / 'targets.json'}")

@@ -73,6 +73,15 @@ def _fmt(v: float | None, digits: int = 3) -> str:
     return f"{v:.{digits}f}"
 
 
+_TORQUE_FIGURES = ("train_rmse_torque_nm", "val_rmse_torque_nm", "val_torque_vs_true_rmse_nm",
+                   "val_true_torque_rms_nm")
+
+
+def _torque_figures(fit: Any) -> dict[str, float]:
+    """A wrench model's torque figures that were computed (a ``FitRecord``'s), by name."""
+    return {key: getattr(fit, key) for key in _TORQUE_FIGURES if getattr(fit, key) is not None}
+
+
 def train_command(
     data: DataOpt,
     out: Annotated[Path, typer.Option("--out", help="Model directory to write.")],
@@ -161,8 +170,28 @@ def train_command(
         path = trained.save(out)
     except (OSError, ValueError) as err:
         fail(f"{out}: cannot write model ({one_line(err, first_line=True)})")
-    info = trained.info
-    result = {
+    result = _train_result(trained, path, model, seed, ds, available)
+    if curve is not None and model != "zero":
+        from aerodock.learning.curves import plot_learning_curve
+
+        try:
+            result["learning_curve"] = str(plot_learning_curve(trained.info, curve))
+        except OSError as err:
+            fail(f"{curve}: cannot write the learning curve ({one_line(err, first_line=True)})")
+    if as_json:
+        print_json(result)
+        return
+    _echo_trained(result, model, ds, path)
+
+
+def _train_result(trained: Any, path: Path, model: str, seed: int, ds: Any,
+                  available: float) -> dict[str, Any]:
+    """``train --json``'s object, from the training record (``TrainedModel.record``)."""
+    rec = trained.record
+    assert rec is not None  # train_model always records its training
+    done = rec.outcome  # None: a kind with nothing to train
+    fit = None if done is None else done.fit
+    return {
         "model_dir": str(path),
         "kind": model,
         "seed": seed,
@@ -170,30 +199,22 @@ def train_command(
         "n_flights": ds.n_flights,
         "minutes": round(ds.minutes, 4),
         "minutes_available": round(available, 4),
-        "split": info.get("split"),
-        "epochs": info.get("epochs"),
-        "best_epoch": info.get("best_epoch"),
-        "stopped": info.get("stopped"),
-        "train_rmse_mps2": info.get("train_rmse_mps2"),
-        "val_rmse_mps2": info.get("val_rmse_mps2"),
-        **{key: info[key] for key in ("train_rmse_torque_nm", "val_rmse_torque_nm",
-                                      "val_torque_vs_true_rmse_nm", "val_true_torque_rms_nm")
-           if key in info},
-        "train_time_s": info.get("train_time_s"),
-        "history": info.get("history"),
+        "split": None if done is None else done.split,
+        "epochs": None if done is None else done.epochs,
+        "best_epoch": None if done is None else done.best_epoch,
+        "stopped": None if done is None else done.stopped,
+        "train_rmse_mps2": None if fit is None else fit.train_rmse_mps2,
+        "val_rmse_mps2": None if fit is None else fit.val_rmse_mps2,
+        **({} if fit is None else _torque_figures(fit)),
+        "train_time_s": rec.train_time_s,
+        "history": rec.history,
         "learning_curve": None,
         "warnings": ds.meta.get("warnings", []),
     }
-    if curve is not None and model != "zero":
-        from aerodock.learning.curves import plot_learning_curve
 
-        try:
-            result["learning_curve"] = str(plot_learning_curve(info, curve))
-        except OSError as err:
-            fail(f"{curve}: cannot write the learning curve ({one_line(err, first_line=True)})")
-    if as_json:
-        print_json(result)
-        return
+
+def _echo_trained(result: dict[str, Any], model: str, ds: Any, path: Path) -> None:
+    """``train``'s text output: the warnings, the training's figures, what was written."""
     for note in result["warnings"]:
         typer.echo(f"warning: {note}", err=True)
     typer.echo(

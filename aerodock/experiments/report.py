@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.experiments.records import ReproduceResults
 from aerodock.experiments.report_controllers import controllers_markdown, targets_markdown
 from aerodock.plots import _plt, _save, plot_altitudes, plot_trajectories
 
@@ -197,7 +198,7 @@ def fig_docking_animation(tr: dict[str, Any], fig_dir: Path, cfg: Config) -> Pat
 
 
 # -- report ----------------------------------------------------------------------------------
-def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
+def write_report(results: ReproduceResults, traces: dict[str, Any], out_dir: Path,
                  cfg: Config) -> list[str]:
     """Write the figures and ``report.md``; returns the figure paths (relative to out_dir)."""
     fig_dir = out_dir / "figures"
@@ -226,7 +227,7 @@ def write_report(results: dict[str, Any], traces: dict[str, Any], out_dir: Path,
                                    "Altitude of both vehicles: a successful and a missed attempt"))
     figs.append(fig_moving(traces["moving"], fig_dir, cfg.planner.horizon_moving_s,
                            cfg.planner.hold_s))
-    bandwidth = fig_observer_bandwidth(results.get("controller_costs"), fig_dir)
+    bandwidth = fig_observer_bandwidth(results.controller_costs, fig_dir)
     if bandwidth is not None:
         figs.append(bandwidth)
     for extra in ("sample_efficiency.png", "real_sample_efficiency.png",
@@ -302,46 +303,69 @@ def _paper_counts_markdown(pc: dict[str, Any] | None) -> list[str]:
     return lines + [""]
 
 
-def _markdown(r: dict[str, Any], figs: list[str]) -> str:
-    meta = r["aerodock_reproduce"]
-    lines = ["# aerodock reproduce: report", "",
-             f"Run: {'smoke' if meta.get('smoke') else 'quick' if meta['quick'] else 'full'}, "
-             f"seed {meta['seed']}, "
-             f"config `{meta.get('config_source', meta['config'])}`, {meta['machine']}; "
-             f"total {r['timings_s']['total_s']:.0f} s. Every number below is computed by "
+def _markdown(r: ReproduceResults, figs: list[str]) -> str:
+    """``report.md``: every section, from the results, then the figures."""
+    lines: list[str] = []
+    for section in (_header_markdown, _learning_markdown, _cable_markdown, _hover_markdown,
+                    _moving_markdown, controllers_markdown,
+                    lambda r: targets_markdown(r.targets), _real_data_markdown,
+                    _compensation_section_markdown):
+        lines += section(r)
+    lines += figures_markdown(figs)
+    return "\n".join(lines)
+
+
+def _header_markdown(r: ReproduceResults) -> list[str]:
+    """The report's title and how the run was made."""
+    meta = r.aerodock_reproduce
+    lines: list[str] = ["# aerodock reproduce: report", "",
+             f"Run: {'smoke' if meta.smoke else 'quick' if meta.quick else 'full'}, "
+             f"seed {meta.seed}, "
+             f"config `{meta.config_source}`, {meta.machine}; "
+             f"total {r.total_s:.0f} s. Every number below is computed by "
              "`aerodock reproduce` and stored in `results.json`; the paper's numbers are quoted "
              "beside ours. The reproduction flies the paper's controller as its flight stack "
              "publishes it (Freyja's weights, bias estimator and state filter, 50 Hz, no "
              "reference feed-forward); our tuned controller is a separate section. \"Without "
              "model\" is the LQG baseline (bias observer); \"with model\" "
              "adds the learnt SO(2)-equivariant model's feed-forward.", ""]
-    # Learning
-    lrn = r["learning"]
-    ho = lrn["heldout"]
+    return lines
+
+
+def _learning_markdown(r: ReproduceResults) -> list[str]:
+    """The curriculum's model on held-out flights, and the sample efficiency."""
+    lines: list[str] = []
+    lrn = r.learning
+    ho = lrn.heldout
     lines += ["## Learning (curriculum, held-out simulated flights)", "",
-              f"Curriculum: {lrn['curriculum']['flights']} flights, "
-              f"{lrn['curriculum']['minutes']:.1f} min of flight in "
-              f"{len(lrn['curriculum']['stages'])} stages "
-              f"({lrn['curriculum']['stages'][0]['depth_band_m'][1]:.1f} m down to "
-              f"{lrn['curriculum']['stages'][-1]['depth_band_m'][0]:.1f} m below the leader).", "",
+              f"Curriculum: {lrn.curriculum['flights']} flights, "
+              f"{lrn.curriculum['minutes']:.1f} min of flight in "
+              f"{len(lrn.curriculum['stages'])} stages "
+              f"({lrn.curriculum['stages'][0]['depth_band_m'][1]:.1f} m down to "
+              f"{lrn.curriculum['stages'][-1]['depth_band_m'][0]:.1f} m below the leader).", "",
               "| region | model RMSE [m/s²] | zero model | error floor (true mean field) | "
               "ratio to floor |", "|---|---|---|---|---|"]
     for region in ("all", "interaction"):
         d = ho[region]
         floor = d.get("error_floor")
-        ratio = lrn["rmse_ratio_to_floor"][region]
+        ratio = lrn.rmse_ratio_to_floor[region]
         lines.append(f"| {region} | {_fmt(d['model']['rmse_mps2']['overall'])} | "
                      f"{_fmt(d['zero']['rmse_mps2']['overall'])} | "
                      f"{_fmt(floor['rmse_mps2']['overall']) if floor else 'unavailable'} | "
                      f"{_fmt(ratio, 2) if ratio is not None else 'unavailable'} |")
     lines += ["", "The error floor is the RMSE of the simulator's own mean field against the same "
               "labels (turbulence and sensor noise no model can predict).",
-              f"Mean field used for the floor: {lrn.get('error_floor_source', 'the field')}.", ""]
-    se = r.get("sample_efficiency")
+              f"Mean field used for the floor: {lrn.error_floor_source}.", ""]
+    se = r.sample_efficiency
     if se:
         lines += _se_table(se, "Sample efficiency, simulated")
-    # Cable study
-    cs = r["cable_study"]
+    return lines
+
+
+def _cable_markdown(r: ReproduceResults) -> list[str]:
+    """The cable-length study beside the paper's table."""
+    lines: list[str] = []
+    cs = r.docking.cable_study
     lines += ["## Cable-length study (leader on a rigid stand)", "",
               f"{cs['repetitions']} repetitions per offset and mode, same start location. "
               "Integrals over the final 0.5 s of the approach (m·s for errors, m/s for the "
@@ -369,13 +393,18 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
                      "our wake the force decays with depth, so at long cables the slow observer "
                      "copes; the table reports it as measured.")
     lines.append("")
-    # Hover
-    h = r["hover_docking"]
+    return lines
+
+
+def _hover_markdown(r: ReproduceResults) -> list[str]:
+    """Hover docking beside the paper's figures, and the paper's counts."""
+    lines: list[str] = []
+    h = r.docking.hover_docking
     lines += ["## Docking with the leader hovering (d_p = 0.36 m, eps_g = 0.1 m)", "",
               "| | docked | terminal err down (median) | terminal err 3D (median) | slips | "
               "aborts |", "|---|---|---|---|---|---|"]
     for key in ("without_model", "with_model", "oracle"):
-        d = h[key]
+        d = h.mode(key)
         lines.append(f"| {key.replace('_', ' ')} | {d['docked']}/{d['trials']} = "
                      f"{_pct(d['success_rate'], d['success_wilson95'])} | "
                      f"{_fmt(d['terminal_err_down_median_m'])} m | "
@@ -384,29 +413,39 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
     lines += ["", f"Paper: {PAPER_HOVER['docked']}/{PAPER_HOVER['trials']} docks with the model, "
               f"terminal tracking error < {PAPER_HOVER['terminal_error_m']} m, a "
               f"{PAPER_HOVER['reduction_x']}x reduction. Here: error reduction "
-              f"{_fmt(h['terminal_error_reduction_x'], 1)}x (median vertical error over the "
+              f"{_fmt(h.terminal_error_reduction_x, 1)}x (median vertical error over the "
               "final 0.5 s of the approach). The oracle flies the simulator's mean field: "
-              f"{h.get('oracle_mean_source', 'the field')}.", ""]
-    lines += _paper_counts_markdown(r.get("paper_counts"))
-    # Moving
-    mv = r["moving_leader"]
+              f"{h.oracle_mean_source}.", ""]
+    lines += _paper_counts_markdown(r.paper_counts)
+    return lines
+
+
+def _moving_markdown(r: ReproduceResults) -> list[str]:
+    """The leader in motion beside the paper's figures."""
+    lines: list[str] = []
+    mv = r.docking.moving_leader
     lines += ["## Leader in motion (0.25 m/s, meet at 6 s, hold 5 s)", "",
               "| | docked | mean altitude error 4-6 s | mean altitude error during hold |",
               "|---|---|---|---|"]
     for key in ("without_model", "with_model"):
-        d = mv[key]
+        mode = mv.mode(key)
+        d = mode.summary
         lines.append(f"| {key.replace('_', ' ')} | {d['docked']}/{d['trials']} = "
                      f"{_pct(d['success_rate'], d['success_wilson95'])} | "
-                     f"{_fmt(d['altitude_error_approach']['mean_abs_err_down_m'])} m | "
-                     f"{_fmt(d['altitude_error_hold']['mean_abs_err_down_m'])} m |")
+                     f"{_fmt(mode.altitude_error_approach.mean_abs_err_down_m)} m | "
+                     f"{_fmt(mode.altitude_error_hold.mean_abs_err_down_m)} m |")
     lines += ["", f"Paper: {PAPER_MOVING['success']} docking success; mean error over "
               f"{PAPER_MOVING['err_without_m']} m without the model, under "
               f"{PAPER_MOVING['err_with_m']} m with it. Altitude errors come from the same "
               "flights with the gripper disarmed, so that every trial holds formation for the "
               "full 5 s as in the paper's figure.", ""]
-    lines += controllers_markdown(r)
-    lines += targets_markdown(r)
-    rd = r.get("real_data")
+    return lines
+
+
+def _real_data_markdown(r: ReproduceResults) -> list[str]:
+    """The real-data study, or why it did not run."""
+    lines: list[str] = []
+    rd = r.real_data
     if rd:
         lines += ["## Real data (Neural-Swarm swap flights, leave flights out)", "",
                   f"Train on {', '.join(rd['train_flights'])}; evaluate on "
@@ -428,16 +467,20 @@ def _markdown(r: dict[str, Any], figs: list[str]) -> str:
                   "Not run: no Neural-Swarm flights in the data location (`--no-real-data`, or "
                   "neither `--data-dir` nor `AERODOCK_DATA_DIR` names a folder holding "
                   "`neural-swarm/swap_ss`; docs/real-logs.md says where to get them).", ""]
-    if "compensation" in r:
-        from aerodock.experiments.compensation_study import compensation_markdown
+    return lines
 
-        lines += ["## The compensations scored on real flights", "",
-                  "Each compensation replayed causally over held-out real swap flights at its "
-                  "own rate, one control period late: the disturbance it leaves (m/s²) and the "
-                  "share of the uncompensated RMS it removes.", ""]
-        lines += compensation_markdown(r["compensation"])
-    lines += figures_markdown(figs)
-    return "\n".join(lines)
+
+def _compensation_section_markdown(r: ReproduceResults) -> list[str]:
+    """The compensations scored on real flights."""
+    lines: list[str] = []
+    from aerodock.experiments.compensation_study import compensation_markdown
+
+    lines += ["## The compensations scored on real flights", "",
+              "Each compensation replayed causally over held-out real swap flights at its "
+              "own rate, one control period late: the disturbance it leaves (m/s²) and the "
+              "share of the uncompensated RMS it removes.", ""]
+    lines += compensation_markdown(r.compensation)
+    return lines
 
 
 FIGURE_CAPTIONS = {

@@ -7,12 +7,29 @@ what the observer time constant and the terminal gains cost on the rigid-body wo
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aerodock.experiments.records import (
+        DockingRecord,
+        ReproduceResults,
+        ScenarioOutcome,
+        TargetsResult,
+    )
 
 
 def _rate(d: dict[str, Any]) -> str:
-    lo, hi = d["success_wilson95"]
-    return f"{d['docked']}/{d['trials']} ({lo:.0%}-{hi:.0%})"
+    """Docked trials with the Wilson interval, from a campaign summary."""
+    return _rate_of(d["docked"], d["trials"], d["success_wilson95"])
+
+
+def _rate_of(docked: int, trials: int, wilson95: list[float]) -> str:
+    lo, hi = wilson95
+    return f"{docked}/{trials} ({lo:.0%}-{hi:.0%})"
+
+
+def _scenario_rate(rec: ScenarioOutcome) -> str:
+    return _rate_of(rec.docked, rec.trials, rec.success_wilson95)
 
 
 def _offsets_docked(cable: dict[str, Any], key: str) -> str:
@@ -22,30 +39,27 @@ def _offsets_docked(cable: dict[str, Any], key: str) -> str:
     return f"{docked}/{len(recs)} offsets ({per})"
 
 
-def controllers_markdown(r: dict[str, Any]) -> list[str]:
+def controllers_markdown(r: ReproduceResults) -> list[str]:
     """Markdown lines: paper vs the paper's controller here vs our tuned controller, and the
-    lever-cost sweeps (empty when the run has no ``controllers`` record)."""
-    ctl = r.get("controllers")
-    if not ctl:
-        return []
-    cols = [("paper's controller", r)]
+    lever-cost sweeps."""
+    ctl = r.controllers
+    cols: list[tuple[str, DockingRecord]] = [("paper's controller", r.docking)]
     lines = [
         "## The paper's controller and ours, side by side", "",
         "Every table above flies **the paper's controller** "
-        f"({ctl['paper']['source']}: Q = diag{tuple(ctl['paper']['q_diag'])}) with the model of "
+        f"({ctl.paper.source}: Q = diag{tuple(ctl.paper.q_diag)}) with the model of "
         "the paper's curriculum (down to 0.5 m).",
     ]
-    if "tuned" in ctl:  # (not flown by a smoke run)
-        tuned = ctl["tuned"]
-        cols.append(("tuned controller", tuned))
+    if ctl.tuned is not None:  # (not flown by a smoke run)
+        tuned = ctl.tuned
+        cols.append(("tuned controller", tuned.docking))
         lines[-1] += (" The **tuned** columns fly the configuration's controller "
-                      f"({tuned['source']}: terminal Q = diag{tuple(tuned['terminal_q_diag'])}, "
-                      f"observer {tuned['observer_bias_tau_s']:g} s) with the same model, on the "
+                      f"({tuned.source}: terminal Q = diag{tuple(tuned.terminal_q_diag)}, "
+                      f"observer {tuned.observer_bias_tau_s:g} s) with the same model, on the "
                       "same world and seeds.")
-    if "ours" in ctl:
-        cols.append(("ours", ctl["ours"]))
-        lines[-1] += (f" **Ours** is {ctl['ours']['source']} (low-pass "
-                      f"{ctl['ours']['accel_observer_tau_s']:g} s).")
+    cols.append(("ours", ctl.ours.docking))
+    lines[-1] += (f" **Ours** is {ctl.ours.source} (low-pass "
+                  f"{ctl.ours.accel_observer_tau_s:g} s).")
     lines[-1] += " Docked trials with a Wilson 95 % interval."
     lines += ["", "| experiment | paper | " + " | ".join(
         f"{name}, without model | with model" for name, _ in cols) + " |",
@@ -56,19 +70,20 @@ def controllers_markdown(r: dict[str, Any]) -> list[str]:
             f"{cell(c, 'without_model')} | {cell(c, 'with_model')}" for _, c in cols) + " |")
 
     row("hover docking, d_p 0.36 m", "8/10 with model",
-        lambda c, k: _rate(c["hover_docking"][k]))
+        lambda c, k: _rate(c.hover_docking.mode(k)))
     row("terminal vertical error, median", "< 0.06 m with model",
-        lambda c, k: f"{c['hover_docking'][k]['terminal_err_down_median_m']:.3f} m")
+        lambda c, k: f"{c.hover_docking.mode(k)['terminal_err_down_median_m']:.3f} m")
     row("terminal tilt RMS, median", "-",
-        lambda c, k: f"{c['hover_docking'][k]['terminal_tilt_rms_deg_median']:.1f} deg")
-    row("rotor strikes (hover)", "-", lambda c, k: str(c["hover_docking"][k]["rotor_strikes"]))
+        lambda c, k: f"{c.hover_docking.mode(k)['terminal_tilt_rms_deg_median']:.1f} deg")
+    row("rotor strikes (hover)", "-", lambda c, k: str(c.hover_docking.mode(k)["rotor_strikes"]))
     row("leader's sink when the post-dock window ends (hover, median)", "the leader dips",
-        lambda c, k: _metres(c["hover_docking"][k].get("post_dock_sink_median_m")))
-    row("leader moving 0.25 m/s", "very limited", lambda c, k: _rate(c["moving_leader"][k]))
+        lambda c, k: _metres(c.hover_docking.mode(k).get("post_dock_sink_median_m")))
+    row("leader moving 0.25 m/s", "very limited",
+        lambda c, k: _rate(c.moving_leader.mode(k).summary))
     row("cable study (leader on a stand)", "6/6 with vs 0/6 without",
-        lambda c, k: _offsets_docked(c["cable_study"], k))
+        lambda c, k: _offsets_docked(c.cable_study, k))
     lines.append("")
-    costs = r.get("controller_costs")
+    costs = r.controller_costs
     if costs:
         head = ("| {lever} | compensation | docked | terminal err down (median) | "
                 "tilt RMS (median) | saturated (mean) | slips | aborts | rotor strikes |")
@@ -137,43 +152,40 @@ def observer_bandwidth_markdown(costs: dict[str, Any]) -> list[str]:
     return lines + [""]
 
 
-def targets_markdown(r: dict[str, Any]) -> list[str]:
+def targets_markdown(t: TargetsResult | None) -> list[str]:
     """Markdown lines: the targets beyond the paper, for each (controller, model) row."""
-    t = r.get("targets")
-    if not t:
+    if t is None:
         return []
-    scen = t["scenarios"]
+    scen = t.scenarios
     lines = ["## Beyond the paper: targets", "",
-             f"{t['trials']} trials per cell, the same seeds in every row; docked with a Wilson "
+             f"{t.trials} trials per cell, the same seeds in every row; docked with a Wilson "
              "95 % interval (target in the header; **bold**: met). Terminal vertical error: "
-             f"median, hover at d_p 0.36 m (target <= {t['err_down_target_m']} m).", "",
+             f"median, hover at d_p 0.36 m (target <= {t.err_down_target_m} m).", "",
              "| controller + model | " + " | ".join(
-                 f"{s['name'].replace('_', ' d_p ' if 'hover' in s['name'] else ' ')}"
-                 f"{' m' if 'hover' in s['name'] else ' m/s'} (>= {s['target_success']:.0%})"
+                 f"{s.name.replace('_', ' d_p ' if 'hover' in s.name else ' ')}"
+                 f"{' m' if 'hover' in s.name else ' m/s'} (>= {s.target_success:.0%})"
                  for s in scen) + " | terminal err down | tilt RMS | rotor strikes |",
              "|---|" + "---|" * (len(scen) + 3)]
-    for name, row in t["rows"].items():
+    for name, row in t.rows.items():
         cells = []
         for s in scen:
-            rec = row["scenarios"][s["name"]]
-            cell = _rate(rec)
-            cells.append(f"**{cell}**" if rec["met"] else cell)
-        hover = row["scenarios"]["hover_0.36"]
-        err = f"{hover['terminal_err_down_median_m']:.4f} m"
-        strikes = sum(row["scenarios"][s["name"]]["rotor_strikes"] for s in scen)
+            rec = row.scenarios[s.name]
+            cell = _scenario_rate(rec)
+            cells.append(f"**{cell}**" if rec.met else cell)
+        hover = row.scenarios["hover_0.36"]
+        err = f"{hover.terminal_err_down_median_m:.4f} m"
+        strikes = sum(row.scenarios[s.name].rotor_strikes for s in scen)
         lines.append(f"| {name} | " + " | ".join(cells)
-                     + f" | {'**' + err + '**' if row['err_down_met'] else err} | "
-                     f"{hover['terminal_tilt_rms_deg_median']:.1f} deg | {strikes} |")
+                     + f" | {'**' + err + '**' if row.err_down_met else err} | "
+                     f"{hover.terminal_tilt_rms_deg_median:.1f} deg | {strikes} |")
     lines += ["", f"Learnt mean vertical force on the leader's axis against the field's "
-              f"(target: within {t['mean_rel_target']:.0%} at 0.36 m):", "",
+              f"(target: within {t.mean_rel_target:.0%} at 0.36 m):", "",
               "| model | where | depth | field | learnt | error |", "|---|---|---|---|---|---|"]
-    for label, key in (("deep curriculum", "learnt_mean"),
-                       ("paper's curriculum", "learnt_mean_paper_model"),
-                       ("learnt wrench (thrust basis)", "learnt_mean_wrench_model")):
-        for m in t.get(key, []):
-            rel = m["relative_error"]
-            lines.append(f"| {label} | {m['where']} | {m['depth_m']:.3f} m | "
-                         f"{m['field_mean_down_mps2']:.2f} m/s² | {m['learnt_down_mps2']:.2f} "
+    for label, checks in t.learnt_means():
+        for m in checks:
+            rel = m.relative_error
+            lines.append(f"| {label} | {m.where} | {m.depth_m:.3f} m | "
+                         f"{m.field_mean_down_mps2:.2f} m/s² | {m.learnt_down_mps2:.2f} "
                          f"m/s² | {'-' if rel is None else f'{rel:+.1%}'} |")
     lines.append("")
     return lines

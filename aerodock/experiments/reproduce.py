@@ -20,19 +20,16 @@ import os
 import platform
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from aerodock.config import Config
-from aerodock.control.compensation import Compensation
 from aerodock.control.observer_response import bias_step_response
 from aerodock.control.profiles import controller_config
 from aerodock.downwash import build_field
-from aerodock.downwash.mean import has_mean, mean_acceleration_fn, mean_source
-from aerodock.experiments.cable_study import CABLE_OFFSETS_M, cable_study
+from aerodock.downwash.mean import has_mean
+from aerodock.experiments.cable_study import CABLE_OFFSETS_M
 from aerodock.experiments.controller_costs import (
     GATE_HEIGHTS_M,
     OBSERVER_TAUS_S,
@@ -40,11 +37,24 @@ from aerodock.experiments.controller_costs import (
     CostSize,
     controller_costs,
 )
+from aerodock.experiments.docking_runs import docking_experiments
 from aerodock.experiments.paper_counts import paper_outcome_probabilities
 from aerodock.experiments.provenance import provenance
+from aerodock.experiments.records import (
+    UNITS,
+    ControllersRecord,
+    DockingRecord,
+    LearningRecord,
+    OursController,
+    PaperController,
+    Record,
+    ReproduceResults,
+    RunHeader,
+    TargetsResult,
+    TunedController,
+)
 from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
-from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
 if TYPE_CHECKING:
     from aerodock.flightlog import FlightLog
@@ -126,99 +136,6 @@ OUTPUTS = ("results.json", "report.md", "figures", "data", "data-wrench")
 """What ``reproduce --out`` holds: the folder is replaced as a whole by the next reproduction."""
 
 
-def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> dict[str, Any]:
-    """Mean |vertical error| (follower vs its reference) in [t0, t1) over approaching trials."""
-    t = trace["t_s"]
-    sel = (t >= t0) & (t < t1)
-    err = np.abs(trace["follower_p"][sel, :, 2] - trace["ref_p"][sel, :, 2])
-    ok = trace["phase"][sel] <= Phase.TERMINAL
-    per_trial = np.array([np.mean(err[ok[:, i], i]) if ok[:, i].any() else np.nan
-                          for i in range(err.shape[1])])
-    good = per_trial[np.isfinite(per_trial)]
-    return {"window_s": [t0, t1], "mean_abs_err_down_m": float(np.mean(good)) if good.size
-            else None, "sd_m": float(np.std(good)) if good.size else None,
-            "trials": int(good.size)}
-
-
-def _campaign_record(res: CampaignResult) -> dict[str, Any]:
-    s = res.summary()
-    s["arrival_s"] = res.arrival_s
-    return s
-
-
-def _traces_subset(res: CampaignResult, keep: int) -> dict[str, np.ndarray]:
-    return {k: (v[:, :keep] if v.ndim >= 2 else v) for k, v in res.trace.items()}
-
-
-def _docking_experiments(cfg: Config, size: RunSize, predictor: Any, seed: int,
-                         say: Callable[[str], None], label: str
-                         ) -> tuple[dict[str, Any], dict[str, Any], dict[str, float]]:
-    """The cable-length study, hover docking and the moving leader with one controller.
-
-    Returns (results by experiment, traces for the figures, timings).
-    """
-    results: dict[str, Any] = {}
-    traces: dict[str, Any] = {}
-    timings: dict[str, float] = {}
-    # 2. Cable-length study -----------------------------------------------------------------
-    t0 = time.perf_counter()
-    say(f"2/5 cable-length study (leader on a rigid stand), {label}")
-    results["cable_study"], traces["cable"] = cable_study(
-        cfg, size.cable_offsets_m, size.cable_reps, predictor, seed, record="trace")
-    timings["cable_study_s"] = time.perf_counter() - t0
-
-    # 3. Hover docking ----------------------------------------------------------------------
-    t0 = time.perf_counter()
-    say(f"3/5 docking with the leader hovering ({size.hover_trials} trials per mode), {label}")
-    hover: dict[str, Any] = {"offset_m": 0.36, "aperture_m": cfg.gripper.aperture_m,
-                             "trials": size.hover_trials}
-    hover_res: dict[str, CampaignResult] = {}
-    for key, comp in (("without_model", Compensation.OBSERVER),
-                      ("with_model", Compensation.MODEL), ("oracle", Compensation.ORACLE)):
-        res = run_campaign(cfg, MissionSpec(trials=size.hover_trials, offset_m=0.36,
-                                            compensation=comp, seed=seed + 1), predictor,
-                           record="trace")
-        hover[key] = _campaign_record(res)
-        hover_res[key] = res
-    w, m = hover["without_model"], hover["with_model"]
-    err_w, err_m = w["terminal_err_down_median_m"], m["terminal_err_down_median_m"]
-    hover["terminal_error_reduction_x"] = (None if err_w is None or err_m is None
-                                           else err_w / max(err_m, 1e-9))
-    hover["oracle_mean_source"] = mean_source(mean_acceleration_fn(build_field(cfg)))
-    results["hover_docking"] = hover
-    traces["hover"] = {k: _trace_keep(v) for k, v in hover_res.items()}
-    timings["hover_s"] = time.perf_counter() - t0
-
-    # 4. Leader in motion --------------------------------------------------------------------
-    t0 = time.perf_counter()
-    say(f"4/5 leader in motion at 0.25 m/s ({size.moving_trials} trials per mode), {label}")
-    moving: dict[str, Any] = {"leader_speed_mps": 0.25, "meet_s": cfg.planner.horizon_moving_s,
-                              "hold_s": cfg.planner.hold_s, "trials": size.moving_trials}
-    moving_traces = {}
-    meet, hold = cfg.planner.horizon_moving_s, cfg.planner.hold_s
-    n = size.moving_trials
-    armed = (True,) * n + (False,) * n
-    for key, comp in (("without_model", Compensation.OBSERVER),
-                      ("with_model", Compensation.MODEL)):
-        # Docking, and formation tracking as in the paper's figure: the same flights with the
-        # gripper disarmed, flown in one batch (trial ids 0..n-1 twice; outcomes are per trial).
-        both = run_campaign(cfg, MissionSpec(trials=2 * n, offset_m=0.36, leader_speed_mps=0.25,
-                                             compensation=comp, seed=seed + 2,
-                                             passive_trigger=armed, active_trigger=armed),
-                            predictor, record="trace", trials=np.r_[0:n, 0:n])
-        dock_res, track = both.take(np.arange(n)), both.take(np.arange(n, 2 * n))
-        rec = _campaign_record(dock_res)
-        rec["altitude_error_approach"] = _window_mean(track.trace, meet - 2.0, meet)
-        rec["altitude_error_hold"] = _window_mean(track.trace, meet, meet + hold)
-        moving[key] = rec
-        moving_traces[key] = track.trace
-    results["moving_leader"] = moving
-    traces["moving"] = moving_traces
-    timings["moving_s"] = time.perf_counter() - t0
-
-    return results, traces, timings
-
-
 @dataclass
 class LearningData:
     """What step 1 of the reproduction learns from: see :func:`learning_data`."""
@@ -280,7 +197,7 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
                   say: Callable[[str], None] = print,
                   shared_data: Path | None = None,
                   bar: Callable[[str, int, int], None] | None = None,
-                  smoke: bool = False) -> dict[str, Any]:
+                  smoke: bool = False) -> ReproduceResults:
     """Run every experiment and write ``results.json``, ``report.md`` and ``figures/``.
 
     ``quick`` is a smaller run (a few minutes); ``smoke`` the smallest that crosses every step
@@ -290,198 +207,269 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     runs (a progress bar); ``say`` reports each step. The folder is written as a whole
     (:func:`aerodock.fileio.building_dir`): it is built beside ``out_dir`` and swapped in at the
     end, so a kill leaves the old reproduction or the new one, never a mix; ``out_dir`` may hold
-    only what a reproduction writes (:data:`OUTPUTS`)."""
+    only what a reproduction writes (:data:`OUTPUTS`).
+
+    Returns:
+        The results (``results.json`` is their :meth:`~ReproduceResults.to_json`), their paths
+        naming ``out_dir``.
+    """
     out_dir = Path(out_dir)
     check_output_dir(out_dir, OUTPUTS)
     with building_dir(out_dir, OUTPUTS) as work:
         return _reproduce_into(cfg, work, out_dir, quick, seed, say, shared_data, bar, smoke)
 
 
+@dataclass
+class _Run:
+    """One reproduction: its settings, the folder being built and what its steps share."""
+
+    cfg: Config  # the run size's overrides applied
+    size: RunSize
+    seed: int
+    say: Callable[[str], None]
+    bar: Callable[[str, int, int], None] | None
+    out_dir: Path  # the folder being built
+    named: Path  # the folder it becomes
+    timings: dict[str, float] = field(default_factory=dict)
+    traces: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def fig_dir(self) -> Path:
+        return self.out_dir / "figures"
+
+    def train_kwargs(self) -> dict[str, Any] | None:
+        """What each curriculum stage's training is given: the progress bar, the epoch cap."""
+        epochs: dict[str, Any] = {}
+        if self.bar is not None:
+            bar = self.bar
+            epochs["progress"] = lambda e, n, *_: bar("training epochs", e, n)
+        if self.size.train_max_epochs is not None:
+            epochs["max_epochs"] = self.size.train_max_epochs
+        return epochs or None
+
+    def timed(self, key: str, t0: float) -> None:
+        """Record the wall-clock time since ``t0`` (``time.perf_counter``) as ``key``."""
+        self.timings[key] = time.perf_counter() - t0
+
+
 def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: int,
                     say: Callable[[str], None], shared_data: Path | None,
                     bar: Callable[[str, int, int], None] | None, smoke: bool = False
-                    ) -> dict[str, Any]:
+                    ) -> ReproduceResults:
     """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
     naming the folder ``named`` it becomes."""
     from aerodock.experiments.report import write_report
-    from aerodock.learning.curriculum import run_curriculum
-    from aerodock.learning.dataset import build_dataset
-    from aerodock.learning.evaluate import evaluate
-    from aerodock.learning.runtime import Predictor
-    from aerodock.learning.sample_efficiency import sample_efficiency
 
     quick = quick or smoke
     size = SMOKE if smoke else QUICK if quick else FULL
-    given = provenance(cfg)  # the config as resolved from --config and --set, the code's version
+    header = _run_header(cfg, size, quick, smoke, seed)
     if size.overrides:
         cfg = cfg.with_overrides(size.overrides, source="reproduce's run size")
-    out_dir = Path(out_dir)
-    fig_dir = out_dir / "figures"
-    fig_dir.mkdir(parents=True, exist_ok=True)
+    run = _Run(cfg, size, seed, say, bar, Path(out_dir), named)
+    run.fig_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    timings: dict[str, float] = {}
-    traces: dict[str, Any] = {}
-    results: dict[str, Any] = {
-        "aerodock_reproduce": {"quick": quick, "smoke": smoke, "seed": seed,
-                               **given, "size_overrides": size.overrides,
-                               "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
-                                          f"Python {platform.python_version()}"},
-        "units": {"errors": "m", "integrals_over_0.5s": "m*s (errors), m/s (force)",
-                  "accelerations": "m/s^2, NED (down positive)", "rates": "fraction"},
-    }
+    learned, learning = _learning_step(run)
+    se = _sample_efficiency_step(run, learned)
+    docking, controllers = _controllers_step(run, learned)
+    paper_counts = paper_outcome_probabilities(
+        docking.hover_docking.with_model, docking.hover_docking.without_model,
+        docking.cable_study)
+    targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
+    costs = _costs_step(run, learned)
+    real_data, compensation = _real_data_step(run, shared_data, quick, smoke)
+    run.timings["total_s"] = time.perf_counter() - started
+    results = ReproduceResults(
+        aerodock_reproduce=header, units=UNITS,
+        learning=replace(learning, wrench_curriculum=wrench_curriculum),
+        sample_efficiency=se, docking=docking, paper_counts=paper_counts,
+        controllers=controllers, targets=targets_result, controller_costs=costs,
+        real_data=real_data, compensation=compensation, timings_s=run.timings)
+    say("writing results.json, report.md and figures/")
+    figures = write_report(results, run.traces, run.out_dir, cfg)
+    # Paths name the folder the run becomes, not the one it is built in; a figure that could not
+    # be computed (NaN) is written as null.
+    results = _renamed(replace(results, figures=figures), run.out_dir, named)
+    write_json(run.out_dir / "results.json", json_ready(results.to_json()))
+    return results
 
-    # 1. Curriculum + training ---------------------------------------------------------------
+
+def _run_header(cfg: Config, size: RunSize, quick: bool, smoke: bool, seed: int) -> RunHeader:
+    """How the run was asked for: ``cfg`` as resolved from --config and --set (before the run
+    size's overrides), the code's version and the machine."""
+    return RunHeader(quick=quick, smoke=smoke, seed=seed, provenance=provenance(cfg),
+                     size_overrides=size.overrides,
+                     machine=f"{platform.machine()}, {os.cpu_count()} cores, "
+                             f"Python {platform.python_version()}")
+
+
+def _learning_step(run: _Run) -> tuple[LearningData, LearningRecord]:
+    """Step 1: the curriculum and its models, judged on held-out flights."""
+    from aerodock.learning.evaluate import evaluate
+
     t0 = time.perf_counter()
-    say("1/5 curriculum data collection and training")
-    data_dir = out_dir / "data"
-    epochs: dict[str, Any] = {}
-    if bar is not None:
-        epochs["progress"] = lambda e, n, *_: bar("training epochs", e, n)
-    if size.train_max_epochs is not None:
-        epochs["max_epochs"] = size.train_max_epochs
-    learning = learning_data(cfg, size, data_dir, seed, say=say, train_kwargs=epochs or None,
-                             name_as=named / "data")
-    curriculum, test_ds, train_logs = learning.curriculum, learning.test_ds, learning.train_logs
-    deep_predictor, predictor = learning.deep_predictor, learning.predictor
-    heldout_eval = evaluate(deep_predictor, test_ds)
-    results["learning"] = {
-        "curriculum": curriculum,
-        "heldout": heldout_eval,
-        "heldout_paper_model": evaluate(predictor, test_ds),
-        **_floor_ratio(heldout_eval, cfg),
-    }
-    timings["curriculum_s"] = time.perf_counter() - t0
+    run.say("1/5 curriculum data collection and training")
+    learned = learning_data(run.cfg, run.size, run.out_dir / "data", run.seed, say=run.say,
+                            train_kwargs=run.train_kwargs(), name_as=run.named / "data")
+    heldout_eval = evaluate(learned.deep_predictor, learned.test_ds)
+    record = LearningRecord(curriculum=learned.curriculum, heldout=heldout_eval,
+                            heldout_paper_model=evaluate(learned.predictor, learned.test_ds),
+                            **_floor_ratio(heldout_eval, run.cfg))
+    run.timed("curriculum_s", t0)
+    return learned, record
+
+
+def _sample_efficiency_step(run: _Run, learned: LearningData) -> dict[str, Any]:
+    """Held-out RMSE against minutes of training data for the SO(2), extended SO(2) and MLP
+    models."""
+    from aerodock.learning.dataset import build_dataset
+    from aerodock.learning.sample_efficiency import sample_efficiency
+
     t0 = time.perf_counter()
-    say("    sample efficiency (so2, so2-ext, mlp)")
+    run.say("    sample efficiency (so2, so2-ext, mlp)")
+    size = run.size
     se = sample_efficiency(
-        build_dataset(train_logs), test_ds, kinds=("so2", "so2-ext", "mlp"),
-        minutes=size.se_minutes, seeds=size.se_seeds, out_dir=fig_dir,
+        build_dataset(learned.train_logs), learned.test_ds, kinds=("so2", "so2-ext", "mlp"),
+        minutes=size.se_minutes, seeds=size.se_seeds, out_dir=run.fig_dir,
         train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
-        progress=bar,
+        progress=run.bar,
     )
-    results["sample_efficiency"] = se
-    timings["sample_efficiency_s"] = time.perf_counter() - t0
+    run.timed("sample_efficiency_s", t0)
+    return se
 
-    # 2-4. Docking experiments: the paper's controller (the reproduction), then ours --------
+
+def _controllers_step(run: _Run, learned: LearningData
+                      ) -> tuple[DockingRecord, ControllersRecord]:
+    """Steps 2-4 flown by the paper's controller (the reproduction, its traces the figures'),
+    then by the tuned controller (not in a smoke run) and by ours."""
+    cfg, size, seed, say = run.cfg, run.size, run.seed, run.say
     paper_cfg = controller_config(cfg, "paper")
-    docking, traces_paper, times = _docking_experiments(paper_cfg, size, predictor, seed, say,
-                                                        "paper's controller")
-    results.update(docking)
-    results["paper_counts"] = paper_outcome_probabilities(
-        docking["hover_docking"]["with_model"], docking["hover_docking"]["without_model"],
-        docking["cable_study"])
-    traces.update(traces_paper)
-    timings.update(times)
-    results["controllers"] = {
-        "paper": {"source": "as its flight stack publishes it: Freyja's LQR weights in every "
-                            "phase, Freyja's bias estimator and state filter, 50 Hz, no reference "
-                            "feed-forward",
-                  "q_diag": list(paper_cfg.control.q_diag),
-                  "terminal_q_diag": list(paper_cfg.control.terminal_q_diag),
-                  "bias_estimator": paper_cfg.control.bias_estimator,
-                  "command_rate_hz": paper_cfg.control.command_rate_hz,
-                  "reference_ff_factor": paper_cfg.control.reference_ff_factor,
-                  "observer_rise_63_s": bias_step_response(paper_cfg).rise_63_s},
-    }
+    docking, traces, times = docking_experiments(paper_cfg, size, learned.predictor, seed, say,
+                                                  "paper's controller")
+    run.traces.update(traces)
+    run.timings.update(times)
+    paper = PaperController(
+        source="as its flight stack publishes it: Freyja's LQR weights in every phase, "
+               "Freyja's bias estimator and state filter, 50 Hz, no reference feed-forward",
+        q_diag=list(paper_cfg.control.q_diag),
+        terminal_q_diag=list(paper_cfg.control.terminal_q_diag),
+        bias_estimator=paper_cfg.control.bias_estimator,
+        command_rate_hz=paper_cfg.control.command_rate_hz,
+        reference_ff_factor=paper_cfg.control.reference_ff_factor,
+        observer_rise_63_s=bias_step_response(paper_cfg).rise_63_s)
+    tuned = None
     if size.tuned_row:
-        tuned, _, times = _docking_experiments(controller_config(cfg, "tuned"), size, predictor,
-                                               seed, say, "tuned controller")
-        results["controllers"]["tuned"] = {
-            "source": "the configuration's weights (terminal gain schedule)",
-            "q_diag": list(cfg.control.q_diag),
-            "terminal_q_diag": list(cfg.control.terminal_q_diag),
-            "observer_bias_tau_s": cfg.control.observer_bias_tau_s, **tuned}
-        timings.update({f"tuned_{k}": v for k, v in times.items()})
+        tuned_docking, _, times = docking_experiments(controller_config(cfg, "tuned"), size,
+                                                       learned.predictor, seed, say,
+                                                       "tuned controller")
+        tuned = TunedController(
+            source="the configuration's weights (terminal gain schedule)",
+            q_diag=list(cfg.control.q_diag), terminal_q_diag=list(cfg.control.terminal_q_diag),
+            observer_bias_tau_s=cfg.control.observer_bias_tau_s, docking=tuned_docking)
+        run.timings.update({f"tuned_{k}": v for k, v in times.items()})
     ours_cfg = controller_config(cfg, "ours")
-    ours, _, times = _docking_experiments(ours_cfg, size, deep_predictor, seed, say,
-                                          "our controller (accelerometer observer, deep model)")
-    results["controllers"]["ours"] = {
-        "source": "tuned + the accelerometer observer (INDI-like), with the deep curriculum's "
-                  "model", "accel_observer_tau_s": ours_cfg.control.accel_observer_tau_s,
-        "terminal_q_diag": list(ours_cfg.control.terminal_q_diag), **ours}
-    timings.update({f"ours_{k}": v for k, v in times.items()})
+    ours_docking, _, times = docking_experiments(
+        ours_cfg, size, learned.deep_predictor, seed, say,
+        "our controller (accelerometer observer, deep model)")
+    ours = OursController(
+        source="tuned + the accelerometer observer (INDI-like), with the deep curriculum's "
+               "model", accel_observer_tau_s=ours_cfg.control.accel_observer_tau_s,
+        terminal_q_diag=list(ours_cfg.control.terminal_q_diag), docking=ours_docking)
+    run.timings.update({f"ours_{k}": v for k, v in times.items()})
+    return docking, ControllersRecord(paper=paper, tuned=tuned, ours=ours)
+
+
+def _targets_step(run: _Run, learned: LearningData, ours: OursController
+                  ) -> tuple[TargetsResult, dict[str, Any] | None]:
+    """The targets beyond the paper for each (controller, model) row, and (in a full run) the
+    learnt wrench's curriculum (returned beside the targets: ``None`` when not flown)."""
+    from aerodock.learning.curriculum import run_curriculum
+    from aerodock.learning.runtime import Predictor
+
+    cfg, say, deep = run.cfg, run.say, learned.deep_predictor
     t0 = time.perf_counter()
     say("    targets beyond the paper: d_p 0.36 and 0.27 m, leader at 0.25 and 0.5 m/s")
+    paper_cfg, ours_cfg = controller_config(cfg, "paper"), controller_config(cfg, "ours")
     ours_tff_cfg = ours_cfg.with_overrides({"control": {"torque_feedforward": True}})
     rows = {
-        "paper's controller + paper's model": (paper_cfg, predictor),
-        "paper's controller + deep model": (paper_cfg, deep_predictor),
-        "tuned + deep model": (cfg, deep_predictor),
-        "ours + deep model": (ours_cfg, deep_predictor),
-        "ours + torque feed-forward + deep model": (ours_tff_cfg, deep_predictor),
+        "paper's controller + paper's model": (paper_cfg, learned.predictor),
+        "paper's controller + deep model": (paper_cfg, deep),
+        "tuned + deep model": (cfg, deep),
+        "ours + deep model": (ours_cfg, deep),
+        "ours + torque feed-forward + deep model": (ours_tff_cfg, deep),
     }
-    wrench_predictor = None
-    if size.target_all_rows:
+    wrench_predictor = wrench_curriculum = None
+    if run.size.target_all_rows:
         # The learnt wrench: so2-wrench on thrust-basis labels (the force on the body alone),
         # its learnt torque fed to the autopilot; a curriculum of its own, flown the same way.
         say("    learnt wrench: the deep curriculum again, so2-wrench on thrust-basis labels")
         wrench_cfg = cfg.with_overrides({"curriculum": {"label_basis": "thrust"}})
-        wrench_curriculum = run_curriculum(wrench_cfg, out_dir / "data-wrench", seed=seed,
+        wrench_curriculum = run_curriculum(wrench_cfg, run.out_dir / "data-wrench", seed=run.seed,
                                            model_kind="so2-wrench",
                                            progress=lambda m: say("    " + m),
-                                           train_kwargs=epochs or None,
-                                           name_as=named / "data-wrench")
-        results["learning"]["wrench_curriculum"] = wrench_curriculum
-        wrench_predictor = Predictor.load(out_dir / "data-wrench" / "models" / "final")
+                                           train_kwargs=run.train_kwargs(),
+                                           name_as=run.named / "data-wrench")
+        wrench_predictor = Predictor.load(run.out_dir / "data-wrench" / "models" / "final")
         rows[WRENCH_ROW] = (ours_tff_cfg, wrench_predictor)
     else:
         rows = {k: v for k, v in rows.items() if k in ("paper's controller + paper's model",
                                                        "ours + deep model")}
-    results["targets"] = targets(rows, size.target_trials, deep_predictor, seed + 5, say)
-    results["targets"]["learnt_mean_paper_model"] = learnt_mean_check(cfg, predictor)
-    if wrench_predictor is not None:
-        results["targets"]["learnt_mean_wrench_model"] = learnt_mean_check(cfg,
-                                                                            wrench_predictor)
-    timings["targets_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    say("    what each unstated lever costs: observer bandwidth, terminal gains, gripper window")
-    results["controller_costs"] = controller_costs(
-        cfg, size.costs, predictor, seed + 3,
-        ours_predictor=deep_predictor if size.target_all_rows else None)
-    timings["controller_costs_s"] = time.perf_counter() - t0
+    result = targets(rows, run.size.target_trials, deep, run.seed + 5, say)
+    result = replace(
+        result, learnt_mean_paper_model=learnt_mean_check(cfg, learned.predictor),
+        learnt_mean_wrench_model=(None if wrench_predictor is None
+                                  else learnt_mean_check(cfg, wrench_predictor)))
+    run.timed("targets_s", t0)
+    return result, wrench_curriculum
 
-    # 5. Real data ----------------------------------------------------------------------------
+
+def _costs_step(run: _Run, learned: LearningData) -> dict[str, Any]:
+    """What each lever the paper leaves unstated costs."""
     t0 = time.perf_counter()
+    run.say("    what each unstated lever costs: observer bandwidth, terminal gains, gripper "
+            "window")
+    costs = controller_costs(
+        run.cfg, run.size.costs, learned.predictor, run.seed + 3,
+        ours_predictor=learned.deep_predictor if run.size.target_all_rows else None)
+    run.timed("controller_costs_s", t0)
+    return costs
+
+
+def _real_data_step(run: _Run, shared_data: Path | None, quick: bool, smoke: bool
+                    ) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    """Step 5: the real-data study and the compensations scored on real flights, each ``None``
+    when the data location lacks its flights."""
+    t0 = time.perf_counter()
+    say, seed = run.say, run.seed
     real_dir = None if shared_data is None else shared_data / "neural-swarm" / "swap_ss"
+    real = compensation = None
     if real_dir is not None and real_dir.is_dir():
         say("5/5 real-data study (Neural-Swarm, leave flights out)")
+        from aerodock.experiments.compensation_study import FOLDERS, compensation_section
         from aerodock.experiments.real_data import real_data_study
 
         other = shared_data / "neural-swarm" / "swap_sl_2020-06-19"
-        results["real_data"] = real_data_study(real_dir, fig_dir, quick=quick, seed=seed,
-                                               other_pair=other if other.is_dir() else None,
-                                               smoke=smoke)
-        from aerodock.experiments.compensation_study import FOLDERS, compensation_section
-
+        real = real_data_study(real_dir, run.fig_dir, quick=quick, seed=seed,
+                               other_pair=other if other.is_dir() else None, smoke=smoke)
         if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
             say("    the compensations scored on real flights (held-out swap flights)")
-            results["compensation"] = compensation_section(shared_data, fig_dir, quick=quick,
-                                                           seed=seed, cfg=cfg)
+            compensation = compensation_section(shared_data, run.fig_dir, quick=quick,
+                                                seed=seed, cfg=run.cfg)
         else:
             say("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)")
-            results["compensation"] = None
     else:
         why = ("no data location: --no-real-data, or neither --data-dir nor AERODOCK_DATA_DIR"
                if shared_data is None else f"{real_dir} not found")
         say(f"5/5 real-data study skipped ({why})")
-        results["real_data"] = results["compensation"] = None
-    timings["real_data_s"] = time.perf_counter() - t0
-
-    results["timings_s"] = timings
-    results["timings_s"]["total_s"] = time.perf_counter() - started
-    say("writing results.json, report.md and figures/")
-    figures = write_report(results, traces, out_dir, cfg)
-    results["figures"] = figures
-    # Paths name the folder the run becomes, not the one it is built in; a figure that could not
-    # be computed (NaN) is written as null.
-    results = _renamed(results, out_dir, named)
-    write_json(out_dir / "results.json", json_ready(results))
-    return results
+    run.timed("real_data_s", t0)
+    return real, compensation
 
 
 def _renamed(node: Any, built: Path, named: Path) -> Any:
     """``node`` with every string path inside ``built`` (the folder being built) naming the same
-    file inside ``named`` (the folder it becomes)."""
+    file inside ``named`` (the folder it becomes), in records, dicts and lists at any depth."""
+    if isinstance(node, Record):
+        return replace(node, **{f.name: _renamed(getattr(node, f.name), built, named)
+                                for f in fields(node)})
     if isinstance(node, dict):
         return {k: _renamed(v, built, named) for k, v in node.items()}
     if isinstance(node, list):
@@ -520,10 +508,3 @@ def _floor_ratio(heldout_eval: dict[str, Any], cfg: Config) -> dict[str, Any]:
                 "was estimated by averaging acceleration() over turbulence samples "
                 "(aerodock.downwash.mean)")
     return {"rmse_ratio_to_floor": ratio, "error_floor_source": note}
-
-
-def _trace_keep(res: CampaignResult) -> dict[str, Any]:
-    tr = dict(res.trace)
-    tr["success"] = res.success
-    tr["arrival_s"] = res.arrival_s
-    return tr

@@ -24,6 +24,13 @@ from aerodock.control.compensation import AccelPredictor, Compensation
 from aerodock.downwash import build_field
 from aerodock.downwash.mean import mean_acceleration_fn
 from aerodock.downwash.probe import probe_bodies
+from aerodock.experiments.records import (
+    LearntMean,
+    ScenarioOutcome,
+    ScenarioSpec,
+    TargetRow,
+    TargetsResult,
+)
 from aerodock.mission import MissionSpec, run_campaign
 from aerodock.planning.docking import DockGeometry
 
@@ -36,28 +43,35 @@ SCENARIOS = (
 )
 ERR_DOWN_TARGET_M = 0.015  # median terminal vertical error, hover at 0.36 m
 MEAN_REL_TARGET = 0.10  # learnt mean within 10 % of the field's at 0.36 m
+# the campaign summary's figures a scenario's outcome keeps (ScenarioOutcome's first fields)
 _KEYS = ("trials", "docked", "success_rate", "success_wilson95", "terminal_err_down_median_m",
          "terminal_err_3d_median_m", "terminal_tilt_rms_deg_median", "slip_throughs", "missed",
          "aborts", "rotor_strikes", "clearance_violations")
 
 
+def scenario_outcome(summary: dict[str, Any], offset_m: float, speed_mps: float,
+                     target: float) -> ScenarioOutcome:
+    """A scenario's outcome from its campaign's summary
+    (:meth:`~aerodock.mission.CampaignResult.summary`)."""
+    return ScenarioOutcome(**{key: summary[key] for key in _KEYS}, offset_m=offset_m,
+                           leader_speed_mps=speed_mps, target_success=target,
+                           met=summary["success_rate"] >= target)
+
+
 def scenario_campaigns(cfg: Config, trials: int, predictor: AccelPredictor | None, seed: int,
-                       compensation: Compensation = Compensation.MODEL) -> dict[str, Any]:
+                       compensation: Compensation = Compensation.MODEL
+                       ) -> dict[str, ScenarioOutcome]:
     """Every scenario flown by ``cfg``'s controller; one record per scenario."""
-    out: dict[str, Any] = {}
+    out: dict[str, ScenarioOutcome] = {}
     for k, (name, offset, speed, target) in enumerate(SCENARIOS):
         res = run_campaign(cfg, MissionSpec(trials=trials, offset_m=offset,
                                             leader_speed_mps=speed, compensation=compensation,
                                             seed=seed + 10 * k), predictor)
-        s = res.summary()
-        rec = {key: s[key] for key in _KEYS}
-        rec.update({"offset_m": offset, "leader_speed_mps": speed, "target_success": target,
-                    "met": s["success_rate"] >= target})
-        out[name] = rec
+        out[name] = scenario_outcome(res.summary(), offset, speed, target)
     return out
 
 
-def learnt_mean_check(cfg: Config, predictor: AccelPredictor) -> list[dict[str, Any]]:
+def learnt_mean_check(cfg: Config, predictor: AccelPredictor) -> list[LearntMean]:
     """The learnt model's vertical force against the field's mean, on the leader's axis, at
     0.36 m and at the follower's docking depth for d_p = 0.36 m (hovering leader)."""
     field = build_field(cfg)
@@ -71,14 +85,14 @@ def learnt_mean_check(cfg: Config, predictor: AccelPredictor) -> list[dict[str, 
         true = float(np.asarray(mean_fn(leader, follower))[0, 2])
         learnt = float(np.asarray(predictor.predict_bodies(leader, follower))[0, 2])
         rel = (learnt - true) / true if abs(true) > 1e-9 else None
-        rows.append({"where": label, "depth_m": depth, "field_mean_down_mps2": true,
-                     "learnt_down_mps2": learnt, "relative_error": rel,
-                     "met": rel is not None and abs(rel) <= MEAN_REL_TARGET})
+        rows.append(LearntMean(where=label, depth_m=depth, field_mean_down_mps2=true,
+                               learnt_down_mps2=learnt, relative_error=rel,
+                               met=rel is not None and abs(rel) <= MEAN_REL_TARGET))
     return rows
 
 
 def targets(rows: dict[str, tuple[Config, AccelPredictor]], trials: int,
-            model_check: AccelPredictor, seed: int, say: Any = None) -> dict[str, Any]:
+            model_check: AccelPredictor, seed: int, say: Any = None) -> TargetsResult:
     """The scenarios for each (controller, model) row, and the learnt-mean check.
 
     Args:
@@ -89,16 +103,15 @@ def targets(rows: dict[str, tuple[Config, AccelPredictor]], trials: int,
         seed: base seed (the same for every row).
         say: optional progress callback.
     """
-    out: dict[str, Any] = {"trials": trials, "scenarios": [
-        {"name": n, "offset_m": o, "leader_speed_mps": s, "target_success": t}
-        for n, o, s, t in SCENARIOS], "err_down_target_m": ERR_DOWN_TARGET_M,
-        "mean_rel_target": MEAN_REL_TARGET, "rows": {}}
+    flown: dict[str, TargetRow] = {}
     for name, (cfg, predictor) in rows.items():
         if say is not None:
             say(f"    targets: {name}, {trials} trials per scenario")
         recs = scenario_campaigns(cfg, trials, predictor, seed)
-        err = recs["hover_0.36"]["terminal_err_down_median_m"]
-        out["rows"][name] = {"scenarios": recs, "err_down_met": err <= ERR_DOWN_TARGET_M}
+        err = recs["hover_0.36"].terminal_err_down_median_m
+        flown[name] = TargetRow(scenarios=recs, err_down_met=err <= ERR_DOWN_TARGET_M)
     first_cfg = next(iter(rows.values()))[0]
-    out["learnt_mean"] = learnt_mean_check(first_cfg, model_check)
-    return out
+    return TargetsResult(
+        trials=trials, scenarios=[ScenarioSpec(*s) for s in SCENARIOS],
+        err_down_target_m=ERR_DOWN_TARGET_M, mean_rel_target=MEAN_REL_TARGET, rows=flown,
+        learnt_mean=learnt_mean_check(first_cfg, model_check))

@@ -19,8 +19,9 @@ early stopping into a test of extrapolation. On the shared swap_ss logs (10 flig
 split held out, for every seed, the only flight whose passes run north-south; a model in world
 coordinates (``mlp``) had never seen such a pass, its validation loss rose from the second epoch
 and early stopping kept an almost untrained network (best epoch 1-3 of 21). ``info["split"]``
-records the split used. Features are computed once; the loop then only runs the small MLP, so a
-30 000-sample data set (5 minutes at 100 Hz) trains in well under a minute on two CPU cores.
+(``TrainedModel.record.outcome.split``) records the split used. Features are computed once;
+the loop then only runs the small MLP, so a 30 000-sample data set (5 minutes at 100 Hz)
+trains in well under a minute on two CPU cores.
 
 The per-epoch losses are kept (``TrainedModel.history``) and recorded, rounded, in
 ``info["history"]`` (so in ``model.json`` -> ``training.history``): the learning curves.
@@ -39,7 +40,8 @@ from __future__ import annotations
 import copy
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -63,6 +65,12 @@ from aerodock.learning.models import (
     build_model,
     standardised_wrench_loss,
 )
+from aerodock.learning.records import (
+    FitRecord,
+    Hyperparameters,
+    TrainingOutcome,
+    TrainingRecord,
+)
 from aerodock.learning.runtime import Predictor, ZeroPredictor
 from aerodock.learning.splits import flight_split_ids, time_block_split_mask
 
@@ -77,15 +85,19 @@ class TrainedModel:
     Attributes:
         kind: model kind.
         model: the torch module (eval mode).
-        info: JSON-ready training summary (also written to ``model.json``).
+        info: JSON-ready training summary, written to ``model.json`` (``record.to_json()``
+            for a model :func:`train_model` trained).
         history: per-epoch ``train_loss`` and ``val_loss`` (MSE, m²/s⁴; for a wrench model the
             standardised loss, dimensionless).
+        record: the typed training record (``None`` for a model not made by
+            :func:`train_model`).
     """
 
     kind: str
     model: nn.Module
     info: dict[str, Any] = field(default_factory=dict)
     history: dict[str, list[float]] = field(default_factory=dict)
+    record: TrainingRecord | None = None
 
     def save(self, path: str | Path) -> Path:
         """Write a model directory (``weights.npz`` + ``model.json``)."""
@@ -336,127 +348,184 @@ def train_model(
         ValueError: unknown kind, bad options, too few samples, degenerate data
             (:func:`check_trainable`), or a training that diverged to non-finite weights.
     """
-    record = get_kind(kind)
-    if not 0.0 <= val_fraction < 1.0:
-        raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
-    if max_epochs < 1 or patience < 1 or batch_size < 1:
-        raise ValueError("max_epochs, patience and batch_size must be positive")
-    if split not in SPLITS:
-        raise ValueError(f"unknown split {split!r} (expected one of {', '.join(SPLITS)})")
+    kind_record = get_kind(kind)
+    _check_options(val_fraction, max_epochs, patience, batch_size, split)
     check_trainable(train, kind=kind)
-    wrench = record.torque
-    info: dict[str, Any] = {
+    wrench = kind_record.torque
+    given = {
         "kind": kind, "seed": seed, "data": train.summary(), "spectral_norm": spectral_norm,
-        "hyperparameters": {
-            "hidden": list(hidden), "activation": activation, "lr": lr,
-            "batch_size": batch_size, "weight_decay": weight_decay, "max_epochs": max_epochs,
-            "patience": patience, "val_fraction": val_fraction, "split_rule": split,
-            "optimizer": "Adam",
-            "loss": ("standardised MSE: mean of force and torque MSE, each over its label "
-                     "scale squared" if wrench else "MSE (m^2/s^4, world NED)"),
-        },
+        "hyperparameters": Hyperparameters(
+            hidden=list(hidden), activation=activation, lr=lr, batch_size=batch_size,
+            weight_decay=weight_decay, max_epochs=max_epochs, patience=patience,
+            val_fraction=val_fraction, split_rule=split, optimizer="Adam",
+            loss=("standardised MSE: mean of force and torque MSE, each over its label "
+                  "scale squared" if wrench else "MSE (m^2/s^4, world NED)")),
+        "wake_scales": (training_wake_scales(train, kind) if kind_record.n_wake_scales
+                        else None),
     }
-    if record.n_wake_scales:
-        info["wake_scales"] = training_wake_scales(train, kind)
-    if not record.has_network:
-        return TrainedModel(kind, build_model(kind), {**info, "train_time_s": 0.0}, {})
+    if not kind_record.has_network:
+        untrained = TrainingRecord(**given, outcome=None, train_time_s=0.0)
+        return TrainedModel(kind, build_model(kind), untrained.to_json(), {}, record=untrained)
     t_start = time.perf_counter()
     rng = np.random.default_rng(seed)
     if val_fraction > 0:
         tr_idx, va_idx, split_used = validation_split(train, val_fraction, rng, split)
     else:
         tr_idx, va_idx, split_used = np.arange(train.n), np.zeros(0, dtype=np.int64), "none"
-    old_threads = torch.get_num_threads()
-    if num_threads:
-        torch.set_num_threads(num_threads)
-    try:
+    with _torch_threads(num_threads):
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(seed)
             model = build_model(kind, hidden=hidden, activation=activation,
                                 spectral_norm=spectral_norm)
-        z_tr, m_tr, y_tr, tau_tr = tr_tensors = _features_tensors(kind, train, tr_idx)
-        model.set_normalisation(
-            z_tr.double().numpy(),
-            invariant_components(kind, train.x[tr_idx], train.leader_R[tr_idx], train.y[tr_idx],
-                                 None if tau_tr is None else tau_tr.double().numpy(),
-                                 train.wake_scales()[tr_idx] if record.n_wake_scales else None),
-        )
+        tr_tensors = _features_tensors(kind, train, tr_idx)
+        _normalise(model, kind, train, tr_idx, tr_tensors)
+        va_tensors = _features_tensors(kind, train, va_idx) if len(va_idx) else None
         loss_fn = _loss_fn(model)
-        has_val = len(va_idx) > 0
-        if has_val:
-            z_va, m_va, y_va, tau_va = va_tensors = _features_tensors(kind, train, va_idx)
-        opt = torch.optim.Adam(model.parameters(), lr=lr, weight_decay=weight_decay)
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
-            opt, factor=0.5, patience=max(3, patience // 3)
-        )
-        history: dict[str, list[float]] = {"train_loss": [], "val_loss": []}
-        best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(model.state_dict())
-        stopped = "max_epochs"
-        n_tr = len(tr_idx)
-        for epoch in range(1, max_epochs + 1):
-            model.train()
-            perm = torch.from_numpy(rng.permutation(n_tr))
-            total = 0.0
-            for start in range(0, n_tr, batch_size):
-                b = perm[start:start + batch_size]
-                loss = loss_fn(z_tr[b], m_tr[b], y_tr[b], None if tau_tr is None else tau_tr[b])
-                opt.zero_grad(set_to_none=True)
-                loss.backward()
-                opt.step()
-                total += float(loss.detach()) * len(b)
-            train_loss = total / n_tr
-            model.eval()
-            val_loss = None
-            if has_val:
-                with torch.no_grad():
-                    val_loss = float(loss_fn(z_va, m_va, y_va, tau_va))
-                sched.step(val_loss)
-            history["train_loss"].append(train_loss)
-            if val_loss is not None:
-                history["val_loss"].append(val_loss)
-            monitor = val_loss if val_loss is not None else train_loss
-            if monitor < best_loss * (1.0 - 1e-4):
-                best_loss, best_epoch = monitor, epoch
-                best_state = copy.deepcopy(model.state_dict())
-            if progress is not None:
-                progress(epoch, max_epochs, train_loss, val_loss)
-            if has_val and epoch - best_epoch >= patience:
-                stopped = "early stopping"
-                break
-            if max_time_s is not None and time.perf_counter() - t_start > max_time_s:
-                stopped = "time limit"
-                break
-        if has_val or stopped != "max_epochs":
-            model.load_state_dict(best_state)
-        else:
-            best_epoch = len(history["train_loss"])
-        model.eval()
-        with torch.no_grad():
-            train_mse = float(loss_fn(z_tr, m_tr, y_tr, tau_tr))
-            val_mse = float(loss_fn(z_va, m_va, y_va, tau_va)) if has_val else None
-        fit = _fit_record(model, train, tr_idx, "train", tr_tensors)
-        if has_val:
-            fit.update(_fit_record(model, train, va_idx, "val", va_tensors))
-        else:
-            fit["val_rmse_mps2"] = None
+        loop = _epoch_loop(model, loss_fn, tr_tensors, va_tensors, rng, _LoopSettings(
+            max_epochs=max_epochs, patience=patience, lr=lr, batch_size=batch_size,
+            weight_decay=weight_decay, max_time_s=max_time_s, t_start=t_start,
+            progress=progress))
+        outcome = _outcome(model, loss_fn, train, (tr_idx, tr_tensors), (va_idx, va_tensors),
+                           split_used, loop)
+    _check_trained(model, outcome.train_loss)
+    trained = TrainingRecord(**given, outcome=outcome,
+                             train_time_s=round(time.perf_counter() - t_start, 3),
+                             torch_version=torch.__version__,
+                             history=learning_curve_record(loop.history, wrench))
+    return TrainedModel(kind, model, trained.to_json(), loop.history, record=trained)
+
+
+def _check_options(val_fraction: float, max_epochs: int, patience: int, batch_size: int,
+                   split: str) -> None:
+    """Refuse training options out of range (ValueError, one line)."""
+    if not 0.0 <= val_fraction < 1.0:
+        raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
+    if max_epochs < 1 or patience < 1 or batch_size < 1:
+        raise ValueError("max_epochs, patience and batch_size must be positive")
+    if split not in SPLITS:
+        raise ValueError(f"unknown split {split!r} (expected one of {', '.join(SPLITS)})")
+
+
+@torch.no_grad()
+def _outcome(model: nn.Module, loss_fn: LossFn, train: Dataset, tr: tuple, va: tuple,
+             split_used: str, loop: _LoopResult) -> TrainingOutcome:
+    """The trained model's losses and fit on its training part ``tr`` and validation part
+    ``va`` (each ``(indices, tensors)``; no validation: no indices, tensors ``None``)."""
+    (tr_idx, tr_tensors), (va_idx, va_tensors) = tr, va
+    train_mse = float(loss_fn(*tr_tensors))
+    val_mse = None if va_tensors is None else float(loss_fn(*va_tensors))
+    fit = _fit_record(model, train, tr_idx, "train", tr_tensors)
+    if va_tensors is not None:
+        fit.update(_fit_record(model, train, va_idx, "val", va_tensors))
+    else:
+        fit["val_rmse_mps2"] = None
+    return TrainingOutcome(
+        split=split_used, n_train=int(len(tr_idx)), n_val=int(len(va_idx)),
+        val_flights=(sorted({train.flight_names[k] for k in np.unique(train.flight_id[va_idx])})
+                     if split_used == "flight" else []),
+        epochs=len(loop.history["train_loss"]), best_epoch=int(loop.best_epoch),
+        stopped=loop.stopped, train_loss=train_mse, val_loss=val_mse,
+        fit=FitRecord.from_parts(fit))
+
+
+@contextmanager
+def _torch_threads(num_threads: int | None) -> Iterator[None]:
+    """Torch's intra-op threads set to ``num_threads`` (None: left alone), restored after."""
+    old_threads = torch.get_num_threads()
+    if num_threads:
+        torch.set_num_threads(num_threads)
+    try:
+        yield
     finally:
         if num_threads:
             torch.set_num_threads(old_threads)
-    _check_trained(model, train_mse)
-    info.update({
-        "split": split_used,
-        "n_train": int(n_tr),
-        "n_val": int(len(va_idx)),
-        "val_flights": sorted({train.flight_names[k] for k in np.unique(train.flight_id[va_idx])})
-        if split_used == "flight" else [],
-        "epochs": len(history["train_loss"]),
-        "best_epoch": int(best_epoch),
-        "stopped": stopped,
-        "train_loss": train_mse,
-        "val_loss": val_mse,
-        **fit,
-        "train_time_s": round(time.perf_counter() - t_start, 3),
-        "torch_version": torch.__version__,
-        "history": learning_curve_record(history, wrench),
-    })
-    return TrainedModel(kind, model, info, history)
+
+
+def _normalise(model: nn.Module, kind: str, train: Dataset, idx: np.ndarray,
+               tensors: tuple) -> None:
+    """Set the model's input and output normalisation from the training samples ``idx``."""
+    z_tr, _, _, tau_tr = tensors
+    wake = train.wake_scales()[idx] if get_kind(kind).n_wake_scales else None
+    model.set_normalisation(
+        z_tr.double().numpy(),
+        invariant_components(kind, train.x[idx], train.leader_R[idx], train.y[idx],
+                             None if tau_tr is None else tau_tr.double().numpy(), wake),
+    )
+
+
+@dataclass(frozen=True)
+class _LoopSettings:
+    """The epoch loop's settings (see :func:`train_model`'s arguments)."""
+
+    max_epochs: int
+    patience: int
+    lr: float
+    batch_size: int
+    weight_decay: float
+    max_time_s: float | None
+    t_start: float  # time.perf_counter() when training started (for max_time_s)
+    progress: ProgressFn | None
+
+
+@dataclass
+class _LoopResult:
+    """What the epoch loop did: per-epoch losses, the epoch kept and why it stopped."""
+
+    history: dict[str, list[float]]
+    best_epoch: int
+    stopped: str
+
+
+def _epoch_loop(model: nn.Module, loss_fn: LossFn, tr: tuple, va: tuple | None,
+                rng: np.random.Generator, s: _LoopSettings) -> _LoopResult:
+    """Adam over shuffled mini-batches of ``tr``, the learning rate halved on a validation
+    plateau, early stopping on ``va``; the model is left in eval mode with its best weights
+    (the last epoch's when it trained for ``max_epochs`` without validation)."""
+    z_tr, m_tr, y_tr, tau_tr = tr
+    opt = torch.optim.Adam(model.parameters(), lr=s.lr, weight_decay=s.weight_decay)
+    sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
+        opt, factor=0.5, patience=max(3, s.patience // 3)
+    )
+    history: dict[str, list[float]] = {"train_loss": [], "val_loss": []}
+    best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(model.state_dict())
+    stopped = "max_epochs"
+    n_tr = len(y_tr)
+    for epoch in range(1, s.max_epochs + 1):
+        model.train()
+        perm = torch.from_numpy(rng.permutation(n_tr))
+        total = 0.0
+        for start in range(0, n_tr, s.batch_size):
+            b = perm[start:start + s.batch_size]
+            loss = loss_fn(z_tr[b], m_tr[b], y_tr[b], None if tau_tr is None else tau_tr[b])
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+            total += float(loss.detach()) * len(b)
+        train_loss = total / n_tr
+        model.eval()
+        val_loss = None
+        if va is not None:
+            with torch.no_grad():
+                val_loss = float(loss_fn(*va))
+            sched.step(val_loss)
+        history["train_loss"].append(train_loss)
+        if val_loss is not None:
+            history["val_loss"].append(val_loss)
+        monitor = val_loss if val_loss is not None else train_loss
+        if monitor < best_loss * (1.0 - 1e-4):
+            best_loss, best_epoch = monitor, epoch
+            best_state = copy.deepcopy(model.state_dict())
+        if s.progress is not None:
+            s.progress(epoch, s.max_epochs, train_loss, val_loss)
+        if va is not None and epoch - best_epoch >= s.patience:
+            stopped = "early stopping"
+            break
+        if s.max_time_s is not None and time.perf_counter() - s.t_start > s.max_time_s:
+            stopped = "time limit"
+            break
+    if va is not None or stopped != "max_epochs":
+        model.load_state_dict(best_state)
+    else:
+        best_epoch = len(history["train_loss"])
+    model.eval()
+    return _LoopResult(history, best_epoch, stopped)

@@ -253,16 +253,16 @@ def test_targets_measure_every_scenario_and_the_learnt_mean(short_cfg):
     cfg = short_cfg
     oracle = OraclePredictor(build_field(cfg))
     res = targets({"ours + oracle": (controller_config(cfg, "ours"), oracle)}, 2, oracle, 3)
-    row = res["rows"]["ours + oracle"]["scenarios"]
+    row = res.rows["ours + oracle"].scenarios
     assert list(row) == [s[0] for s in SCENARIOS]
     for name, offset, speed, target in SCENARIOS:
-        assert (row[name]["offset_m"], row[name]["leader_speed_mps"]) == (offset, speed)
-        assert row[name]["trials"] == 2
-        assert row[name]["met"] == (row[name]["success_rate"] >= target)
-    at_036 = res["learnt_mean"][0]
-    assert at_036["depth_m"] == 0.36
-    assert abs(at_036["relative_error"]) < 1e-9  # the oracle is the field's own mean
-    assert at_036["met"]
+        assert (row[name].offset_m, row[name].leader_speed_mps) == (offset, speed)
+        assert row[name].trials == 2
+        assert row[name].met == (row[name].success_rate >= target)
+    at_036 = res.learnt_mean[0]
+    assert at_036.depth_m == 0.36
+    assert abs(at_036.relative_error) < 1e-9  # the oracle is the field's own mean
+    assert at_036.met
 
 
 def test_a_moving_leader_starts_the_mission_cruising_with_the_bar_hanging_still(cfg):
