@@ -21,6 +21,7 @@ from aerodock.cli.common import (
     print_json,
     progress_bar,
 )
+from aerodock.fileio import one_line
 
 TARGETS_OUTPUTS = ("data", "targets.json")
 """What ``targets --out`` holds: the folder is replaced as a whole by the next run."""
@@ -44,7 +45,7 @@ def reproduce(
                            "else ../shared/data in this repository; docs/real-logs.md).")] = None,
 ) -> None:
     """The paper's experiments end to end: results.json, report.md and figures/."""
-    from aerodock.experiments.reproduce import run_reproduce
+    from aerodock.experiments.reproduce import ReportError, run_reproduce
     from aerodock.mission.limits import check_campaign_size
 
     cfg = load_cli_config(config, sets, trust)
@@ -61,9 +62,12 @@ def reproduce(
     def say(msg: str) -> None:
         err_console.print(msg)
 
-    with progress_bar() as bar:
-        results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say, shared_data=data,
-                                bar=bar_callback(bar), smoke=smoke)
+    try:
+        with progress_bar() as bar:
+            results = run_reproduce(cfg, out, quick=quick, seed=seed, say=say,
+                                    shared_data=data, bar=bar_callback(bar), smoke=smoke)
+    except ReportError as err:
+        fail(one_line(str(err)), code=1)
     typer.echo(f"report: {out / 'report.md'}  (results.json, figures/ beside it; "
                f"{results.total_s:.0f} s)")
 

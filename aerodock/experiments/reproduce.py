@@ -54,7 +54,7 @@ from aerodock.experiments.records import (
     TunedController,
 )
 from aerodock.experiments.targets import learnt_mean_check, targets
-from aerodock.fileio import building_dir, check_output_dir, json_ready, write_json
+from aerodock.fileio import building_dir, check_output_dir, json_ready, one_line, write_json
 
 if TYPE_CHECKING:
     from aerodock.flightlog import FlightLog
@@ -216,7 +216,17 @@ def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0
     out_dir = Path(out_dir)
     check_output_dir(out_dir, OUTPUTS)
     with building_dir(out_dir, OUTPUTS) as work:
-        return _reproduce_into(cfg, work, out_dir, quick, seed, say, shared_data, bar, smoke)
+        results, report_error = _reproduce_into(cfg, work, out_dir, quick, seed, say,
+                                                shared_data, bar, smoke)
+    if report_error is not None:  # after the folder is in place: nothing flown is lost
+        raise ReportError(f"{out_dir}: the experiments ran and results.json holds their "
+                          f"numbers, but the report or a figure failed: {report_error}")
+    return results
+
+
+class ReportError(RuntimeError):
+    """The experiments ran and ``results.json`` is written, but ``report.md`` or a figure
+    could not be made (what is written stays written)."""
 
 
 @dataclass
@@ -255,9 +265,9 @@ class _Run:
 def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: int,
                     say: Callable[[str], None], shared_data: Path | None,
                     bar: Callable[[str, int, int], None] | None, smoke: bool = False
-                    ) -> ReproduceResults:
+                    ) -> tuple[ReproduceResults, str | None]:
     """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
-    naming the folder ``named`` it becomes."""
+    naming the folder ``named`` it becomes; and why the report failed (None: it did not)."""
     from aerodock.experiments.report import write_report
 
     quick = quick or smoke
@@ -285,12 +295,17 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         controllers=controllers, targets=targets_result, controller_costs=costs,
         real_data=real_data, compensation=compensation, timings_s=run.timings)
     say("writing results.json, report.md and figures/")
-    figures = write_report(results, run.traces, run.out_dir, cfg)
+    report_error = None
+    try:
+        figures = write_report(results, run.traces, run.out_dir, cfg)
+    except Exception as err:  # noqa: BLE001 - a figure or the report failed after the run:
+        # the numbers are still written, and the failure is said in one line at the end
+        figures, report_error = None, one_line(f"{type(err).__name__}: {err}")
     # Paths name the folder the run becomes, not the one it is built in; a figure that could not
     # be computed (NaN) is written as null.
     results = _renamed(replace(results, figures=figures), run.out_dir, named)
     write_json(run.out_dir / "results.json", json_ready(results.to_json()))
-    return results
+    return results, report_error
 
 
 def _run_header(cfg: Config, size: RunSize, quick: bool, smoke: bool, seed: int) -> RunHeader:
