@@ -25,7 +25,7 @@ from aerodock.cli.common import (
 if TYPE_CHECKING:
     from aerodock.config import Config
     from aerodock.flightlog import FlightLog
-    from aerodock.learning.wake_fit import FlightSamples, WakeFit
+    from aerodock.identify.wake_fit import FlightSamples, WakeFit
 
 
 def field_probe(
@@ -210,7 +210,7 @@ def field_fit(
         write_json,
     )
     from aerodock.flightlog import FlightLogError, load_flightlogs
-    from aerodock.learning import wake_fit as wf
+    from aerodock.identify import wake_fit as wf
 
     if not 0 <= bootstrap <= 1000:
         fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
@@ -231,7 +231,7 @@ def field_fit(
     try:
         flights = wf.prepare_flights(logs)
         if noise == "speed":
-            from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
+            from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
 
             flights = with_speed_noise(flights, noise_by_speed(logs))
             pooled = sorted({str(f.vehicles.get("follower")) for f in flights
@@ -255,7 +255,7 @@ def field_fit(
                           seed=seed, progress=say)
         cross = None
         if folds:
-            from aerodock.learning.wake_folds import cross_validate, flight_turbulence
+            from aerodock.identify.wake_folds import cross_validate, flight_turbulence
 
             def say_fold(done: int, total: int) -> None:
                 if not as_json:
@@ -336,9 +336,9 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
     squared: an assumption, for a term, J dw/dt, that averages out in the profile)."""
     from dataclasses import asdict
 
-    from aerodock.learning import wake_fit as wf
-    from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
-    from aerodock.learning.wake_torque import has_motor_torque, torque_profile
+    from aerodock.identify import wake_fit as wf
+    from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
+    from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
     out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None}
     try:

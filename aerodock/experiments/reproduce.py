@@ -304,11 +304,11 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     """:func:`run_reproduce` writing into the folder ``out_dir`` (being built), its results
     naming the folder ``named`` it becomes."""
     from aerodock.experiments.report import write_report
+    from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.curriculum import run_curriculum
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import Predictor
-    from aerodock.learning.sample_efficiency import sample_efficiency
 
     quick = quick or smoke
     size = SMOKE if smoke else QUICK if quick else FULL

@@ -1,4 +1,4 @@
-"""The labels' noise by the follower's speed (aerodock/learning/label_noise.py): a synthetic
+"""The labels' noise by the follower's speed (aerodock/identify/label_noise.py): a synthetic
 flight whose label noise grows with speed and whose wake has no turbulence, and the real
 flights."""
 
@@ -11,8 +11,8 @@ from aerodock.config import load_config
 from aerodock.downwash.base import BodyState
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, rotmat_to_quat
-from aerodock.learning import wake_fit as wf
-from aerodock.learning.label_noise import (
+from aerodock.identify import wake_fit as wf
+from aerodock.identify.label_noise import (
     noise_by_speed,
     speed_matched_turbulence,
     with_speed_noise,

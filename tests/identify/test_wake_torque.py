@@ -1,4 +1,4 @@
-"""The wake's torque read from logged motor torques (aerodock/learning/wake_torque.py): synthetic
+"""The wake's torque read from logged motor torques (aerodock/identify/wake_torque.py): synthetic
 flights whose motors answer a known multiple of the jet's torque, and the real flights."""
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from aerodock.config import load_config
 from aerodock.downwash.base import BodyState
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
-from aerodock.learning import wake_fit as wf
-from aerodock.learning import wake_torque as wt
+from aerodock.identify import wake_fit as wf
+from aerodock.identify import wake_torque as wt
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 INERTIA = {vid: (1.7e-5, 1.7e-5, 3.0e-5) for vid in ("cf1", "cf2", "cf9")}

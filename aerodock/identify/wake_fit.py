@@ -19,7 +19,7 @@ flight's residual is de-biased by its free-air median (flights without free-air 
 their follower vehicle's other flights'); the free-air variance (and autocovariance) of each
 follower vehicle's residual, about that bias, is subtracted from the wake's before it is read
 as turbulence (or, given per sample, the noise at the follower's own speed:
-:func:`aerodock.learning.label_noise.with_speed_noise`, ``field fit --noise speed``). The
+:func:`aerodock.identify.label_noise.with_speed_noise`, ``field fit --noise speed``). The
 leader's logged thrust is scaled so that its flight median is its weight (the thrust estimate of
 a real log carries the same few-percent bias).
 
@@ -90,7 +90,7 @@ class FlightSamples:
         free_var_mps4: (3,) the follower vehicle's free-air label variance per axis.
         free_autocov: (LAGS,) its free-air vertical autocovariance, lags 0..LAGS-1 samples.
         noise_var_mps4: (m, 3) the label noise variance of each sample, where it is known per
-            sample (:func:`aerodock.learning.label_noise.with_speed_noise`: the free-air
+            sample (:func:`aerodock.identify.label_noise.with_speed_noise`: the free-air
             variance at the follower's speed); None: ``free_var_mps4`` for every sample.
     """
 

@@ -1,4 +1,4 @@
-"""Cross-validation of the wake fit over flights (aerodock/learning/wake_folds.py, `field fit
+"""Cross-validation of the wake fit over flights (aerodock/identify/wake_folds.py, `field fit
 --folds`):
 
 - the folds: every flight held out once, each pair's flights dealt round-robin;
@@ -19,8 +19,8 @@ from cli_process import aerodock
 from wake_synth import synthetic_flights, synthetic_pair
 
 from aerodock.flightlog import save_flightlogs
-from aerodock.learning import wake_fit as wf
-from aerodock.learning.wake_folds import assign_folds, cross_validate, flight_turbulence
+from aerodock.identify import wake_fit as wf
+from aerodock.identify.wake_folds import assign_folds, cross_validate, flight_turbulence
 
 
 @pytest.fixture(scope="module")

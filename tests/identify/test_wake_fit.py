@@ -1,4 +1,4 @@
-"""`aerodock field fit`: the jet identified from flight logs (aerodock/learning/wake_fit.py).
+"""`aerodock field fit`: the jet identified from flight logs (aerodock/identify/wake_fit.py).
 
 - synthetic flights made by the simulator's wake with known parameters: the fit recovers them;
 - the shared real Crazyflie flights: the fit reproduces examples/crazyflie_wake_fitted.toml and
@@ -18,7 +18,7 @@ from cli_process import aerodock as run_cli
 from wake_synth import synthetic_flights
 
 from aerodock.flightlog import save_flightlogs
-from aerodock.learning import wake_fit as wf
+from aerodock.identify import wake_fit as wf
 
 FITTED = Path(__file__).resolve().parents[2] / "examples" / "crazyflie_wake_fitted.toml"
 SPEED_FITTED = FITTED.with_name("wake_fitted_speed_noise.toml")
@@ -129,7 +129,7 @@ def test_real_fit_above_the_noise_at_speed(shared_data):
     the same fit, the lateral intensity a third lower (0.035 against 0.052: the pooled noise
     read part of the follower's own noise as gusts), the vertical 4 % lower."""
     from aerodock.experiments.swap_flights import read_swap_flights
-    from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
+    from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
 
     logs = read_swap_flights(shared_data("neural-swarm"))
     flights = with_speed_noise(wf.prepare_flights(logs), noise_by_speed(logs))
