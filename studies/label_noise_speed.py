@@ -16,8 +16,8 @@ import tomllib
 from pathlib import Path
 
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.identify.flights import prepare_flights, select_flights
 from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
-from aerodock.identify.wake_fit import prepare_flights, select_flights
 from aerodock.ingest.data_dir import find_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
-from aerodock.identify.wake_fit import prepare_flights
+from aerodock.identify.flights import prepare_flights
 from aerodock.identify.wake_torque import free_air_map_check, motor_command_range, torque_profile
 from aerodock.ingest.data_dir import find_data_dir
 

@@ -20,15 +20,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from aerodock.flightlog import FlightLog
-from aerodock.identify.wake_fit import (
-    CORE_RADII,
-    REGION_RADII,
-    FlightSamples,
-    WakeFitError,
-    centred,
-    model_mean,
-    model_turbulence,
-)
+from aerodock.identify.flights import REGION_RADII, FlightSamples, WakeFitError
+from aerodock.identify.wake_fit import CORE_RADII, centred, model_mean, model_turbulence
 from aerodock.learning.labels import free_air_mask, raw_labels
 
 SPEED_EDGES_MPS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, np.inf)

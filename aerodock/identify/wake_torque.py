@@ -31,7 +31,8 @@ import numpy as np
 from aerodock.downwash.jet import quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
-from aerodock.identify.wake_fit import FlightSamples, WakeFitError, build_jet, geometry_with
+from aerodock.identify.flights import FlightSamples, WakeFitError
+from aerodock.identify.wake_fit import build_jet, geometry_with
 from aerodock.learning.labels import free_air_mask, raw_labels
 
 MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
