@@ -6,7 +6,7 @@ For each data set file (from ``aerodock ingest``) and each follower (the flight 
 ``_`` part, e.g. ``cf101``): the vertical label's RMS in the interaction region (the zero
 model's RMSE) and out of the wake (below the leader, at least ``--out-radius`` off its axis), the
 mean there, and the ceiling ``1 - rms_out / rms_wake`` on any wake model's reduction
-(aerodock/learning/label_floor.py says the assumptions).
+(aerodock/experiments/label_floor.py says the assumptions).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from __future__ import annotations
 import argparse
 import json
 
+from aerodock.experiments.label_floor import OUT_OF_WAKE_RADIUS_M, label_floor
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
-from aerodock.learning.label_floor import OUT_OF_WAKE_RADIUS_M, label_floor
 
 
 def main() -> int:

@@ -1,5 +1,5 @@
 """The wake's turbulence read above the labels' noise at the follower's own speed, on the real
-Crazyflie flights (aerodock/learning/label_noise.py), beside the fit's pooled reading.
+Crazyflie flights (aerodock/identify/label_noise.py), beside the fit's pooled reading.
 
     .venv/bin/python studies/label_noise_speed.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
 
@@ -16,9 +16,9 @@ import tomllib
 from pathlib import Path
 
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.identify.flights import prepare_flights, select_flights
+from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
 from aerodock.ingest.data_dir import find_data_dir
-from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
-from aerodock.learning.wake_fit import prepare_flights, select_flights
 
 ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.

@@ -7,7 +7,7 @@
 ``sim``: step 1 of ``aerodock reproduce`` (the curriculum's flights and models, held-out
 excitation flights, the sample-efficiency pool: :func:`aerodock.experiments.reproduce.
 learning_data`) at the reproduction's ``--size`` (``quick`` or ``full``), then
-:func:`aerodock.learning.sample_efficiency.sample_efficiency` as the reproduction calls it;
+:func:`aerodock.experiments.sample_efficiency.sample_efficiency` as the reproduction calls it;
 ``--minutes`` / ``--seeds`` replace the size's (an intermediate size, named in the output).
 ``real``: the sample-efficiency part of the real-data study (Neural-Swarm swap_ss, train on
 flights 00-04, judge on 05-06, metric ``interaction``, :func:`aerodock.experiments.real_data.
@@ -31,10 +31,10 @@ from typing import Any
 from aerodock.config import load_config
 from aerodock.experiments import real_data
 from aerodock.experiments.reproduce import FULL, QUICK, learning_data
+from aerodock.experiments.sample_efficiency import sample_efficiency
 from aerodock.fileio import json_ready, write_json
 from aerodock.ingest.data_dir import find_data_dir
 from aerodock.learning.dataset import build_dataset
-from aerodock.learning.sample_efficiency import sample_efficiency
 
 ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.

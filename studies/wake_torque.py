@@ -1,5 +1,5 @@
 """The wake's torque on the follower: the real Crazyflie flights' (from their logged motor torques
-and body rates) against the fitted jet's at the same states (aerodock/learning/wake_torque.py).
+and body rates) against the fitted jet's at the same states (aerodock/identify/wake_torque.py).
 
     .venv/bin/python studies/wake_torque.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
 
@@ -19,9 +19,9 @@ from pathlib import Path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.identify.flights import prepare_flights
+from aerodock.identify.wake_torque import free_air_map_check, motor_command_range, torque_profile
 from aerodock.ingest.data_dir import find_data_dir
-from aerodock.learning.wake_fit import prepare_flights
-from aerodock.learning.wake_torque import free_air_map_check, motor_command_range, torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.

@@ -26,7 +26,8 @@ from aerodock.cli.common import (
 if TYPE_CHECKING:
     from aerodock.config import Config
     from aerodock.flightlog import FlightLog
-    from aerodock.learning.wake_fit import FlightSamples, WakeFit
+    from aerodock.identify.flights import FlightSamples
+    from aerodock.identify.wake_fit import WakeFit
 
 
 class NoiseMode(StrEnum):
@@ -218,7 +219,9 @@ def field_fit(
         write_json,
     )
     from aerodock.flightlog import FlightLogError, load_flightlogs
-    from aerodock.learning import wake_fit as wf
+    from aerodock.identify import flights as fl
+    from aerodock.identify import wake_fit as wf
+    from aerodock.identify import wake_score as ws
 
     if not 0 <= bootstrap <= 1000:
         fail(f"--bootstrap must be between 0 and 1000, got {bootstrap}")
@@ -235,9 +238,9 @@ def field_fit(
         except (FlightLogError, OSError) as err:
             fail(one_line(err))
     try:
-        flights = wf.prepare_flights(logs)
+        flights = fl.prepare_flights(logs)
         if noise == "speed":
-            from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
+            from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
 
             flights = with_speed_noise(flights, noise_by_speed(logs))
             pooled = sorted({str(f.vehicles.get("follower")) for f in flights
@@ -246,7 +249,7 @@ def field_fit(
                 err_console.print(f"warning: too little free air to table the noise by speed "
                                   f"for {', '.join(pooled)}: their flights keep the pooled "
                                   f"noise")
-        fitted, held = wf.select_flights(flights, holdout or [])
+        fitted, held = fl.select_flights(flights, holdout or [])
         if holdout and not held:
             fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "
                  f"(flights: {', '.join(sorted({f.flight for f in flights}))})")
@@ -261,7 +264,7 @@ def field_fit(
                           seed=seed, progress=say)
         cross = None
         if folds:
-            from aerodock.learning.wake_folds import cross_validate, flight_turbulence
+            from aerodock.identify.wake_folds import cross_validate, flight_turbulence
 
             def say_fold(done: int, total: int) -> None:
                 if not as_json:
@@ -272,12 +275,12 @@ def field_fit(
             cross["per_flight"] = flight_turbulence(fit.params, flights, fit.rotor_radii_m)
     except wf.WakeFitError as err:
         fail(one_line(err))
-    scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
-    fit_scores = wf.score_wake(fit.params, fitted, fit.rotor_radii_m)
+    scores = ws.score_wake(fit.params, held, fit.rotor_radii_m)
+    fit_scores = ws.score_wake(fit.params, fitted, fit.rotor_radii_m)
     checks = _fit_checks(cfg, fit, logs, flights, fitted, held)
-    rows = wf.wake_at_separations(fit.params, cfg)
+    rows = ws.wake_at_separations(fit.params, cfg)
     if fit.bootstrap_draws:
-        tables = [wf.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
+        tables = [ws.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
         for i, row in enumerate(rows):
             row["bootstrap"] = {k: [float(np.percentile([t[i][k] for t in tables], q))
                                     for q in (2.5, 97.5)]
@@ -342,9 +345,9 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
     squared: an assumption, for a term, J dw/dt, that averages out in the profile)."""
     from dataclasses import asdict
 
-    from aerodock.learning import wake_fit as wf
-    from aerodock.learning.label_noise import noise_by_speed, speed_matched_turbulence
-    from aerodock.learning.wake_torque import has_motor_torque, torque_profile
+    from aerodock.identify import wake_fit as wf
+    from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
+    from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
     out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None}
     try:

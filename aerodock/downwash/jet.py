@@ -2,7 +2,7 @@
 felt on each rotor disk of the follower and on its body.
 
 Physics (DESIGN.md, "Downwash field"; the parameters are fitted to real flights by
-``aerodock field fit``, :mod:`aerodock.learning.wake_fit`, and are dimensionless, so one set
+``aerodock field fit``, :mod:`aerodock.identify.wake_fit`, and are dimensionless, so one set
 serves every pair of vehicles: the world's rotor sizes and the leader's thrust give the scales):
 
 - **A jet that conserves momentum.** Below the leader the wake's axial velocity is a Gaussian of

@@ -2,7 +2,7 @@
 
 On the shared Neural-Swarm flights (``swap_ss``: two small Crazyflies; ``swap_sl_2020-06-19``:
 a small and a large one), a model is trained on flights swap_ss 00-04 and swap_sl 00-07 (or a
-given one is used) and every compensation of :mod:`aerodock.learning.compensation_replay` is
+given one is used) and every compensation of :mod:`aerodock.experiments.compensation_replay` is
 replayed causally over the held-out flights, swap_ss 05-06 and swap_sl 08-11, each vehicle of a
 flight taking the follower's role in turn. The result: the RMS of what each leaves, vertical and
 planar, per pairing (small under small, small under large, large under small, and all), in the
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config, load_config
-from aerodock.learning.compensation_replay import (
+from aerodock.experiments.compensation_replay import (
     COMPENSATIONS,
     DEFAULT_MAX_GAP_S,
     DEFAULT_WARMUP_S,

@@ -105,9 +105,9 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     (:func:`transfer_to_other_pair`, ``transfer``). ``quick`` and ``smoke`` shorten the
     sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)
     and nothing else."""
+    from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
-    from aerodock.learning.sample_efficiency import sample_efficiency
     from aerodock.learning.train import train_model
 
     train_logs, test_logs, train_ds, test_ds = real_split(folder)
@@ -133,7 +133,7 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     out["sample_efficiency"] = sample_efficiency(
         train_ds, test_ds, kinds=("so2", "so2-ext", "mlp"),
         minutes=SE_MINUTES[size], seeds=SE_SEEDS[size], metric="interaction")
-    from aerodock.learning.sample_efficiency import plot_sample_efficiency
+    from aerodock.experiments.sample_efficiency import plot_sample_efficiency
 
     plot_sample_efficiency(out["sample_efficiency"], fig_dir / "real_sample_efficiency.png")
     _plot_heldout(test_logs, test_ds, predictors, fig_dir / "real_heldout_vertical.png")

@@ -336,8 +336,8 @@ def _learning_step(run: _Run) -> tuple[LearningData, LearningRecord]:
 def _sample_efficiency_step(run: _Run, learned: LearningData) -> dict[str, Any]:
     """Held-out RMSE against minutes of training data for the SO(2), extended SO(2) and MLP
     models."""
+    from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.dataset import build_dataset
-    from aerodock.learning.sample_efficiency import sample_efficiency
 
     t0 = time.perf_counter()
     run.say("    sample efficiency (so2, so2-ext, mlp)")

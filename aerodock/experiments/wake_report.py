@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.learning.wake_fit import FITTED_PARAMS, TARGETS, WakeFit
+from aerodock.identify.wake_fit import FITTED_PARAMS, WakeFit
+from aerodock.identify.wake_score import TARGETS
 
 FIELD_PATH = "aerodock.downwash.jet:RoundJetField"
 # DESIGN.md's hand table for the 0.7 kg vehicles (the previous default jet was calibrated to it).
@@ -260,7 +261,7 @@ def _checks_markdown(checks: dict[str, Any]) -> list[str]:
     else:
         lines += ["The targets' turbulence subtracts the follower's free-air label noise pooled "
                   "over its free-air samples; the noise grows with its speed "
-                  "(aerodock/learning/label_noise.py). Real sd less the pooled noise / less the "
+                  "(aerodock/identify/label_noise.py). Real sd less the pooled noise / less the "
                   "noise at each sample's speed [95th percentile over the pair's flights] / "
                   "the jet's, m/s², within one leader equivalent radius of the axis; 0 means the "
                   "spread is all the labels' noise.", "",
@@ -283,7 +284,7 @@ def _checks_markdown(checks: dict[str, Any]) -> list[str]:
         return lines
     lines += ["The inward torque (pushing the disks nearer the leader's axis down), 0.15-0.45 m "
               "below the leader, by offset from its axis: the logs' (Euler's equation on the "
-              "motors' torque and the body rates, aerodock/learning/wake_torque.py) and the "
+              "motors' torque and the body rates, aerodock/identify/wake_torque.py) and the "
               "fitted jet's at the same states, and the lever (the torque over the real "
               "downward force; a loss of thrust on the disks alone keeps it within half the "
               "diagonal).", "",
@@ -306,7 +307,7 @@ def _cross_validation_markdown(cross: dict[str, Any] | None) -> list[str]:
     lines = ["", f"## Cross-validation over flights ({n} folds)", "",
              "Every flight (the held-out ones too) held out once: each pair's flights in name "
              "order dealt round-robin into the folds (the deal carried on from pair to pair), "
-             "each fold scored by a fit on all the others (aerodock/learning/wake_folds.py; the "
+             "each fold scored by a fit on all the others (aerodock/identify/wake_folds.py; the "
              "labels' noise is each follower vehicle's, read from every flight's free air). "
              "Per pair and target: the relative error (the mean's: its worst bin, signed) "
              "of each fold, and folds within the target; beside it the flights' own reference, "

@@ -4,8 +4,9 @@ Layout:
 
 - :mod:`aerodock.node.core`: everything that does not need ROS: turning the fields of the
   supported state messages into NED states (attitudes that are no rotation refused), the
-  staleness rule, one prediction step, the output frame and the bounded account of refused
-  messages. Pure functions, unit-tested without ``rclpy``.
+  staleness rule, one prediction step and the output frame. Pure functions, unit-tested
+  without ``rclpy``.
+- :mod:`aerodock.node.refusals`: the bounded account of refused messages (also ROS-free).
 - :mod:`aerodock.node.ros`: the ``rclpy`` node (subscriptions, timer, publishers). Needs the
   ``aerodock[ros]`` extra.
 - :mod:`aerodock.node.replay`: a flight replayed as state messages, what the node publishes

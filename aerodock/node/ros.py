@@ -21,13 +21,13 @@ at ``rate_hz`` (``timer``; :class:`aerodock.node.core.PublishMode`):
   ``stale_reason`` (why, ``""`` when fresh), ``leader_stamp``, ``follower_stamp`` (the states'
   own stamps, s), ``tick`` (the output's sequence number), ``output_frame`` (``ned``, ``enu``
   or ``undecided``) and ``output_frame_rule`` (why), and the refused messages
-  (:class:`aerodock.node.core.RefusalLog`: ``refused_total``, ``refused_recent``, a
+  (:class:`aerodock.node.refusals.RefusalLog`: ``refused_total``, ``refused_recent``, a
   ``refused <role>: <kind>`` count per kind, bounded). The level is OK, or STALE when the output
   is zero for unusable inputs (the status message is then the reason) or not published.
 
 Each vehicle's messages pass an :class:`aerodock.node.core.InputMonitor` (stamps that are zero,
 go backwards or freeze; a message repeated by a relay); a message refused (by the monitor, the
-plausibility rules or its converter) is counted in a :class:`aerodock.node.core.RefusalLog`. The
+plausibility rules or its converter) is counted in a :class:`aerodock.node.refusals.RefusalLog`. The
 output frame and its ``frame_id`` are decided once, when the follower's state type is known
 (:func:`aerodock.node.core.output_frame_choice`): at start with ``--state-type`` or
 ``--output-frame``, else when the type is found on the graph; no f_ext goes out before, so the
@@ -59,7 +59,6 @@ from aerodock.node.core import (
     UNDECIDED,
     InputMonitor,
     PublishMode,
-    RefusalLog,
     StepResult,
     VehicleState,
     current_state,
@@ -70,6 +69,7 @@ from aerodock.node.core import (
     prediction_step,
     px4_odometry_state,
 )
+from aerodock.node.refusals import RefusalLog
 
 STATUS_NAME = "aerodock f_ext"
 STATE_QUEUE_DEPTH = 1

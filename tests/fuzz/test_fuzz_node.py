@@ -207,15 +207,12 @@ def test_a_long_run_of_garbage_keeps_the_bookkeeping_bounded():
     """Every message of a long garbage stream goes the node's way (converter, monitor,
     plausibility; as the ROS callback does) into a :class:`RefusalLog`, with reasons of every
     kind and random numbers; the log never holds more than its bounds."""
-    from aerodock.node.core import (
+    from aerodock.node.core import current_state, implausible, odometry_state, px4_odometry_state
+    from aerodock.node.refusals import (
         MAX_REASON_CHARS,
         MAX_REFUSAL_KINDS,
         RECENT_REFUSALS,
         RefusalLog,
-        current_state,
-        implausible,
-        odometry_state,
-        px4_odometry_state,
     )
 
     rng = np.random.default_rng(7)

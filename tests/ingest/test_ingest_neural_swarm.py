@@ -164,7 +164,7 @@ def test_tilted_consistent_physics_gives_zero_residual(tmp_path: Path) -> None:
 
 def test_motor_torque_and_commands_are_kept(tmp_path: Path) -> None:
     """The logs' motor torque (body FLU) reaches the follower's FlightLog in FRD, its motor
-    commands unchanged: what aerodock.learning.wake_torque reads."""
+    commands unchanged: what aerodock.identify.wake_torque reads."""
     n = 300
     torque = np.tile([1e-3, 2e-3, -3e-4], (n, 1))
     pwm = np.tile([0.61, 0.62, 0.63, 0.64], (n, 1))

@@ -33,14 +33,3 @@ def trained_so2(synth_ds):
     from aerodock.learning.train import train_model
 
     return train_model("so2", synth_ds, seed=0, max_epochs=40, patience=10)
-
-
-@pytest.fixture(scope="session")
-def truth() -> dict[str, float]:
-    """The default world's wake (the fit to the real flights) as the known parameters of the
-    synthetic wake flights (``wake_synth``)."""
-    from aerodock.config import load_config
-    from aerodock.learning.wake_fit import FITTED_PARAMS
-
-    params = load_config().downwash.params
-    return {k: float(params[k]) for k in FITTED_PARAMS}

@@ -1,4 +1,4 @@
-"""The compensations replayed over flight logs (aerodock.learning.compensation_replay) and
+"""The compensations replayed over flight logs (aerodock.experiments.compensation_replay) and
 ``aerodock evaluate-compensation``: causality, each observer's step response, the real flights."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import pytest
 
 from aerodock.cli.app import run
 from aerodock.config import load_config
+from aerodock.experiments import compensation_replay as cr
 from aerodock.experiments.compensation_study import compensation_markdown
 from aerodock.flightlog import FlightLog
-from aerodock.learning import compensation_replay as cr
 from aerodock.learning.dataset import build_dataset
 
 DT_S = 0.01

@@ -1,13 +1,14 @@
-"""The label's noise floor (aerodock.learning.label_floor) on synthetic samples of known parts."""
+"""The label's noise floor (aerodock.experiments.label_floor) on synthetic samples of known
+parts."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from aerodock.experiments.label_floor import label_floor
 from aerodock.learning.dataset import Dataset
 from aerodock.learning.evaluate import evaluate
-from aerodock.learning.label_floor import label_floor
 
 
 def _wake_z(dp: np.ndarray) -> np.ndarray:

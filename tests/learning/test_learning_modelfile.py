@@ -280,7 +280,7 @@ def test_a_leftover_temp_dir_is_removed_by_the_next_save(tmp_path):
     _save("so2", tmp_path / "a")
     code = ("import os, signal, sys\n"
             f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
-            "import aerodock.fileio as f\n"
+            "import aerodock.fileio.writes as f\n"
             "from test_learning_runtime import _random_trained\n"
             "real = f._fsync_dir\n"
             "def die(path):\n"

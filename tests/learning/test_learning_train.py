@@ -11,12 +11,12 @@ from learning_synth import make_logs
 from typer.testing import CliRunner
 
 from aerodock.cli.learning import evaluate_command, export_command, train_command
+from aerodock.experiments.sample_efficiency import sample_efficiency
 from aerodock.flightlog import save_flightlogs
 from aerodock.learning.datafiles import save_dataset
 from aerodock.learning.dataset import build_dataset
 from aerodock.learning.evaluate import evaluate, regression_metrics
 from aerodock.learning.runtime import Predictor
-from aerodock.learning.sample_efficiency import sample_efficiency
 from aerodock.learning.train import (
     MIN_FLIGHTS_FOR_FLIGHT_SPLIT,
     train_model,

@@ -16,16 +16,13 @@ from aerodock.node.core import (
     FOLLOWER_EVENT,
     MAX_ANGLE_RAD,
     MAX_POSITION_M,
-    MAX_REFUSAL_KINDS,
     MAX_SPEED_MPS,
     ODOMETRY,
     PX4_ODOMETRY,
     QUAT_NORM_TOLERANCE,
-    RECENT_REFUSALS,
     TICK_EVENT,
     InputMonitor,
     PublishMode,
-    RefusalLog,
     VehicleState,
     current_state,
     euler_attitude,
@@ -39,10 +36,10 @@ from aerodock.node.core import (
     prediction_step,
     px4_odometry_state,
     quaternion_attitude,
-    refusal_kind,
     stale_reasons,
     to_output_frame,
 )
+from aerodock.node.refusals import MAX_REFUSAL_KINDS, RECENT_REFUSALS, RefusalLog, refusal_kind
 
 
 def _state(t: float = 0.0, p=(0.0, 0.0, -2.0), v=(0.1, 0.0, 0.0), rot=None) -> VehicleState:

@@ -288,7 +288,7 @@ def test_no_f_ext_before_the_follower_type_is_known(ros, tmp_path):
 
 
 def test_garbage_is_refused_with_its_reason_and_counted_within_bounds(ros, tmp_path):
-    from aerodock.node.core import MAX_REFUSAL_KINDS, RECENT_REFUSALS
+    from aerodock.node.refusals import MAX_REFUSAL_KINDS, RECENT_REFUSALS
 
     harness = Harness(tmp_path, PublishMode.ON_FOLLOWER, rate_hz=5.0)
     ros.append(harness)

@@ -122,7 +122,7 @@ def test_a_killed_swap_leaves_a_temp_dir_that_the_next_write_removes(tmp_path):
     temporary sibling left behind goes with the next write in the same folder."""
     write_dir_atomic(tmp_path / "m", {"a": b"old"})
     code = ("import os, signal\n"
-            "import aerodock.fileio as f\n"
+            "import aerodock.fileio.writes as f\n"
             "real = f._fsync_dir\n"
             "def die(path):\n"
             "    if path.name.endswith('.tmp'): os.kill(os.getpid(), signal.SIGKILL)\n"

@@ -1,4 +1,4 @@
-"""Cross-validation of the wake fit over flights (aerodock/learning/wake_folds.py, `field fit
+"""Cross-validation of the wake fit over flights (aerodock/identify/wake_folds.py, `field fit
 --folds`):
 
 - the folds: every flight held out once, each pair's flights dealt round-robin;
@@ -19,13 +19,14 @@ from cli_process import aerodock
 from wake_synth import synthetic_flights, synthetic_pair
 
 from aerodock.flightlog import save_flightlogs
-from aerodock.learning import wake_fit as wf
-from aerodock.learning.wake_folds import assign_folds, cross_validate, flight_turbulence
+from aerodock.identify import flights as fl
+from aerodock.identify import wake_fit as wf
+from aerodock.identify.wake_folds import assign_folds, cross_validate, flight_turbulence
 
 
 @pytest.fixture(scope="module")
 def flights(truth):
-    return wf.prepare_flights(synthetic_flights(truth, flights_per_pair=4, seed=3))
+    return fl.prepare_flights(synthetic_flights(truth, flights_per_pair=4, seed=3))
 
 
 def test_every_flight_is_held_out_once_round_robin_per_pair(flights):
@@ -67,7 +68,7 @@ def test_flights_that_differ_show_in_the_per_flight_turbulence(truth):
     low, high = ({**truth, "turb_vertical": s * truth["turb_vertical"]} for s in (0.5, 1.5))
     logs = (synthetic_pair("ss", [0, 2], low, seeds=[10, 12], depths_m=(0.2, 0.3, 0.4))
             + synthetic_pair("ss", [1, 3], high, seeds=[11, 13], depths_m=(0.2, 0.3, 0.4)))
-    flights = wf.prepare_flights(logs)
+    flights = fl.prepare_flights(logs)
     per = flight_turbulence(truth, flights)["32 g under 32 g"]
     real = {r["flight"][-2:]: r["vertical_real_mps2"] for r in per}
     assert min(real["01"], real["03"]) > 2.0 * max(real["00"], real["02"]), real
@@ -82,7 +83,7 @@ def test_the_shared_flights_cross_validated(shared_data):
     turbulence sd of one flight differs from another's by more than the target, in every pair."""
     from aerodock.experiments.swap_flights import read_swap_flights
 
-    flights = wf.prepare_flights(read_swap_flights(shared_data("neural-swarm")))
+    flights = fl.prepare_flights(read_swap_flights(shared_data("neural-swarm")))
     cv = cross_validate(flights, 3, estimate_rotor_for=["cf101"])
     summary = cv["summary"]
     assert set(summary) == {"32 g under 32 g", "32 g under 67 g", "67 g under 32 g"}

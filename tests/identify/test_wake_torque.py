@@ -1,4 +1,4 @@
-"""The wake's torque read from logged motor torques (aerodock/learning/wake_torque.py): synthetic
+"""The wake's torque read from logged motor torques (aerodock/identify/wake_torque.py): synthetic
 flights whose motors answer a known multiple of the jet's torque, and the real flights."""
 
 from __future__ import annotations
@@ -14,8 +14,9 @@ from aerodock.config import load_config
 from aerodock.downwash.base import BodyState
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
-from aerodock.learning import wake_fit as wf
-from aerodock.learning import wake_torque as wt
+from aerodock.identify import flights as fl
+from aerodock.identify import wake_fit as wf
+from aerodock.identify import wake_torque as wt
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 INERTIA = {vid: (1.7e-5, 1.7e-5, 3.0e-5) for vid in ("cf1", "cf2", "cf9")}
@@ -32,7 +33,7 @@ def _answering(log: FlightLog, params: dict, gain: float, trim: np.ndarray,
     """``log`` with motors that hold the follower level against ``gain`` times the jet's mean
     disk torque (their torque: the trim minus it, plus noise) and no rotation."""
     n = log.n_samples
-    geometry = wf.log_geometry(log)
+    geometry = fl.log_geometry(log)
     jet = wf.build_jet(params, geometry)
     m_l, m_f = geometry["leader_mass_kg"], geometry["follower_mass_kg"]
     leader = BodyState(log.leader_pos_m, log.leader_vel_mps, quat_to_rotmat(log.leader_quat),
@@ -54,7 +55,7 @@ def test_profile_recovers_a_known_torque(params, gain):
     rng = np.random.default_rng(0)
     logs = [_answering(log, params, gain, np.array([3e-4, -2e-4, 1e-4]), rng)
             for log in synthetic_flights(params, flights_per_pair=2, seed=3)]
-    profile = wt.torque_profile(params, wf.prepare_flights(logs), logs, INERTIA,
+    profile = wt.torque_profile(params, fl.prepare_flights(logs), logs, INERTIA,
                                 separation_m=(0.1, 0.65))
     assert set(profile) == {"32 g under 32 g", "67 g under 32 g", "32 g under 67 g"}
     checked = both = 0
@@ -106,7 +107,7 @@ def test_free_air_map_check_sees_a_map_that_overstates_the_top(params):
 def test_logs_without_motor_torque_are_refused(params):
     logs = synthetic_flights(params, flights_per_pair=1, seed=3)
     with pytest.raises(wf.WakeFitError, match="no flight carries the motor torque"):
-        wt.torque_profile(params, wf.prepare_flights(logs), logs, INERTIA)
+        wt.torque_profile(params, fl.prepare_flights(logs), logs, INERTIA)
     with pytest.raises(wf.WakeFitError, match="follower_motor_torque_nm"):
         wt.real_wake_torque_nm(logs[0], INERTIA["cf1"])
 
@@ -121,7 +122,7 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
     cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
     inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
                "cf101": cfg.leader.inertia_kgm2}
-    profile = wt.torque_profile(dict(cfg.downwash.params), wf.prepare_flights(logs), logs,
+    profile = wt.torque_profile(dict(cfg.downwash.params), fl.prepare_flights(logs), logs,
                                 inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
     commands = wt.motor_command_range(logs)
     assert set(commands) == {"cf50", "cf51", "cf101"}

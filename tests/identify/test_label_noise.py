@@ -1,4 +1,4 @@
-"""The labels' noise by the follower's speed (aerodock/learning/label_noise.py): a synthetic
+"""The labels' noise by the follower's speed (aerodock/identify/label_noise.py): a synthetic
 flight whose label noise grows with speed and whose wake has no turbulence, and the real
 flights."""
 
@@ -11,8 +11,9 @@ from aerodock.config import load_config
 from aerodock.downwash.base import BodyState
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, rotmat_to_quat
-from aerodock.learning import wake_fit as wf
-from aerodock.learning.label_noise import (
+from aerodock.identify import flights as fl
+from aerodock.identify import wake_fit as wf
+from aerodock.identify.label_noise import (
     noise_by_speed,
     speed_matched_turbulence,
     with_speed_noise,
@@ -72,7 +73,7 @@ def test_speed_matched_noise_reads_no_turbulence_where_there_is_none():
     slow, fast = table.at(np.array([0.05, 0.6]))
     assert fast[0] > 4 * slow[0]  # the noise grows with speed, per axis
     np.testing.assert_allclose(np.sqrt(fast), 0.05 + 0.3 * 0.6, rtol=0.15)
-    rows = speed_matched_turbulence(params, wf.prepare_flights(logs), noise, bootstrap=50)
+    rows = speed_matched_turbulence(params, fl.prepare_flights(logs), noise, bootstrap=50)
     (row,) = rows.values()
     assert row["lateral_pooled"] > 0.1 and row["vertical_pooled"] > 0.1  # spurious
     assert row["lateral_speed"] < 0.08 and row["vertical_speed"] < 0.08
@@ -88,7 +89,7 @@ def test_the_fit_above_the_noise_at_speed_finds_no_turbulence_where_there_is_non
     params.update(turb_vertical=0.0, turb_lateral=0.0)
     logs = [_flight(params, seed) for seed in range(4)]
     noise = noise_by_speed(logs)
-    flights = wf.prepare_flights(logs)
+    flights = fl.prepare_flights(logs)
     matched = with_speed_noise(flights, noise)
     for f, g in zip(flights, matched, strict=True):
         assert f.noise_var_mps4 is None
@@ -122,7 +123,7 @@ def test_real_lateral_turbulence_under_the_small_leader_is_within_the_noise(shar
     for table in noise.values():
         slow, fast = table.at(np.array([0.05, 0.45]))
         assert 0.5 * (fast[0] + fast[1]) > 1.3 * 0.5 * (slow[0] + slow[1])
-    _, held = wf.select_flights(wf.prepare_flights(logs), ["swap_ss_0[56]"])
+    _, held = fl.select_flights(fl.prepare_flights(logs), ["swap_ss_0[56]"])
     (row,) = speed_matched_turbulence(params, held, noise, rotor_radii_m={"cf101": 0.0239},
                                       bootstrap=50).values()
     assert row["lateral_speed"] < row["lateral_pooled"]

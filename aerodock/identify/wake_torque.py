@@ -1,6 +1,6 @@
 """The wake's torque on the follower, read from real flights, beside the jet's.
 
-A fit of the wake (:mod:`aerodock.learning.wake_fit`) sees the follower's acceleration only.
+A fit of the wake (:mod:`aerodock.identify.wake_fit`) sees the follower's acceleration only.
 Flights whose logs carry the torque the motors make (``follower_motor_torque_nm``, N·m, body
 FRD: the Neural-Swarm logs' own mixer of their per-motor thrusts) and the body rates
 (``follower_body_rates_radps``) also give the wake's torque, from Euler's equation:
@@ -31,8 +31,9 @@ import numpy as np
 from aerodock.downwash.jet import quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
+from aerodock.identify.flights import FlightSamples, WakeFitError
+from aerodock.identify.wake_fit import build_jet, geometry_with
 from aerodock.learning.labels import free_air_mask, raw_labels
-from aerodock.learning.wake_fit import FlightSamples, WakeFitError, build_jet, geometry_with
 
 MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
 BODY_RATES_KEY = "follower_body_rates_radps"

@@ -1,4 +1,4 @@
-"""`aerodock field fit`: the jet identified from flight logs (aerodock/learning/wake_fit.py).
+"""`aerodock field fit`: the jet identified from flight logs (aerodock/identify/wake_fit.py).
 
 - synthetic flights made by the simulator's wake with known parameters: the fit recovers them;
 - the shared real Crazyflie flights: the fit reproduces examples/crazyflie_wake_fitted.toml and
@@ -18,7 +18,9 @@ from cli_process import aerodock as run_cli
 from wake_synth import synthetic_flights
 
 from aerodock.flightlog import save_flightlogs
-from aerodock.learning import wake_fit as wf
+from aerodock.identify import flights as fl
+from aerodock.identify import wake_fit as wf
+from aerodock.identify import wake_score as ws
 
 FITTED = Path(__file__).resolve().parents[2] / "examples" / "crazyflie_wake_fitted.toml"
 SPEED_FITTED = FITTED.with_name("wake_fitted_speed_noise.toml")
@@ -33,7 +35,7 @@ def synthetic(truth):
 def test_fit_recovers_the_simulators_wake(truth, synthetic):
     """Known parameters in, the same parameters out: the mean's within a few percent, the
     turbulence's within its estimate's spread; the labels' bias and white noise are removed."""
-    flights = wf.prepare_flights(synthetic)
+    flights = fl.prepare_flights(synthetic)
     fit = wf.fit_wake(flights)
     got = fit.params
     print({k: (round(truth[k], 4), round(got[k], 4)) for k in wf.FITTED_PARAMS})
@@ -45,7 +47,7 @@ def test_fit_recovers_the_simulators_wake(truth, synthetic):
     # the disks' shared share is what the two follower sizes tell apart: loosely identified
     assert 0.25 * truth["turb_length_ratio"] < got["turb_length_ratio"] \
         < 4 * truth["turb_length_ratio"]
-    scores = wf.score_wake(got, flights)
+    scores = ws.score_wake(got, flights)
     for pair, entry in scores["pairs"].items():
         assert entry["mean_vertical"]["met"], pair
         assert entry["half_width"]["met"], pair
@@ -62,14 +64,14 @@ def test_fit_estimates_a_rotor_radius_the_logs_get_wrong(truth, synthetic):
             if meta[f"{role}_id"] == "cf9":
                 meta[f"{role}_rotor_radius_m"] = 0.0325
         wrong.append(type(log)(**{**log.__dict__, "meta": meta}))
-    flights = wf.prepare_flights(wrong)
+    flights = fl.prepare_flights(wrong)
     params, radii, _ = wf.fit_mean(flights, estimate_rotor_for=["cf9"])
     assert radii["cf9"] == pytest.approx(0.024, rel=0.1)
     assert params["ingest_exponent"] == pytest.approx(truth["ingest_exponent"], rel=0.1)
 
 
 def test_bootstrap_brackets_the_estimate(synthetic):
-    flights = wf.prepare_flights(synthetic)
+    flights = fl.prepare_flights(synthetic)
     fit = wf.fit_wake(flights, bootstrap=3, seed=2)
     assert fit.bootstrap_runs == 3
     for key in ("width0_ratio", "ingest_coeff", "turb_vertical"):
@@ -83,7 +85,7 @@ def test_prepare_refuses_logs_without_geometry(synthetic):
     meta = {k: v for k, v in log.meta.items() if k != "follower_diagonal_m"}
     bare = type(log)(**{**log.__dict__, "meta": meta})
     with pytest.raises(wf.WakeFitError, match="follower_diagonal_m"):
-        wf.prepare_flights([bare])
+        fl.prepare_flights([bare])
 
 
 def test_real_fit_on_the_shared_flights(shared_data):
@@ -103,13 +105,13 @@ def test_real_fit_on_the_shared_flights(shared_data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         logs = read_logs("neural-swarm", folders, vehicle="cf50=small,cf51=small,cf101=large")
-    fitted, held = wf.select_flights(wf.prepare_flights(logs), HOLDOUT)
+    fitted, held = fl.select_flights(fl.prepare_flights(logs), HOLDOUT)
     assert len({f.flight for f in held}) == 6
     fit = wf.fit_wake(fitted, estimate_rotor_for=["cf101"])
     shipped = tomllib.loads(FITTED.read_text())["downwash"]["params"]
     for key in wf.FITTED_PARAMS:
         assert fit.params[key] == pytest.approx(shipped[key], rel=2e-3, abs=2e-4), key
-    scores = wf.score_wake(fit.params, held, fit.rotor_radii_m)
+    scores = ws.score_wake(fit.params, held, fit.rotor_radii_m)
     pairs = scores["pairs"]
     assert set(pairs) == {"32 g under 32 g", "32 g under 67 g", "67 g under 32 g"}
     for pair, entry in pairs.items():
@@ -129,11 +131,11 @@ def test_real_fit_above_the_noise_at_speed(shared_data):
     the same fit, the lateral intensity a third lower (0.035 against 0.052: the pooled noise
     read part of the follower's own noise as gusts), the vertical 4 % lower."""
     from aerodock.experiments.swap_flights import read_swap_flights
-    from aerodock.learning.label_noise import noise_by_speed, with_speed_noise
+    from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
 
     logs = read_swap_flights(shared_data("neural-swarm"))
-    flights = with_speed_noise(wf.prepare_flights(logs), noise_by_speed(logs))
-    fitted, _ = wf.select_flights(flights, HOLDOUT)
+    flights = with_speed_noise(fl.prepare_flights(logs), noise_by_speed(logs))
+    fitted, _ = fl.select_flights(flights, HOLDOUT)
     fit = wf.fit_wake(fitted, estimate_rotor_for=["cf101"])
     shipped = tomllib.loads(SPEED_FITTED.read_text())["downwash"]["params"]
     pooled = tomllib.loads(FITTED.read_text())["downwash"]["params"]

@@ -6,7 +6,7 @@ real flights differ from each other: a pair's turbulence sd near the axis moves 
 more from flight to flight, so one split's pass or miss of a 20 % target is one draw of that
 spread. Here every flight is held out once (:func:`cross_validate`): each vehicle pair's flights,
 in name order, are dealt round-robin into ``folds`` folds, and each fold is scored
-(:func:`aerodock.learning.wake_fit.score_wake`) by a fit on all the other flights (every pair's).
+(:func:`aerodock.identify.wake_score.score_wake`) by a fit on all the other flights (every pair's).
 Per pair and target: the relative error of every fold that has data, and how many meet the
 target. :func:`flight_turbulence` reads the real turbulence sd of each flight alone, the spread a
 single fitted intensity must cover.
@@ -19,13 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.learning.wake_fit import (
-    TARGETS,
-    FlightSamples,
-    WakeFitError,
-    fit_wake,
-    score_wake,
-)
+from aerodock.identify.flights import FlightSamples, WakeFitError
+from aerodock.identify.wake_fit import fit_wake
+from aerodock.identify.wake_score import TARGETS, score_wake
 
 TARGET_KEYS = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
 

@@ -1,6 +1,6 @@
 """The labels' own noise against the follower's speed, and the wake's turbulence read above it.
 
-The wake fit (:mod:`aerodock.learning.wake_fit`) reads the turbulence as the spread of a
+The wake fit (:mod:`aerodock.identify.wake_fit`) reads the turbulence as the spread of a
 flight's residual near the leader's axis less the follower vehicle's free-air label variance,
 pooled over all its free-air samples. On the real swap flights that noise grows with the
 follower's speed (its own manoeuvres: at rest 0.12-0.13 m/s² sideways, at 0.5-0.7 m/s 0.17-0.27),
@@ -20,16 +20,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from aerodock.flightlog import FlightLog
+from aerodock.identify.flights import REGION_RADII, FlightSamples, WakeFitError
+from aerodock.identify.wake_fit import CORE_RADII, centred, model_mean, model_turbulence
 from aerodock.learning.labels import free_air_mask, raw_labels
-from aerodock.learning.wake_fit import (
-    CORE_RADII,
-    REGION_RADII,
-    FlightSamples,
-    WakeFitError,
-    centred,
-    model_mean,
-    model_turbulence,
-)
 
 SPEED_EDGES_MPS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, np.inf)
 MIN_NOISE_SAMPLES = 30

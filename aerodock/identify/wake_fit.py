@@ -19,32 +19,31 @@ flight's residual is de-biased by its free-air median (flights without free-air 
 their follower vehicle's other flights'); the free-air variance (and autocovariance) of each
 follower vehicle's residual, about that bias, is subtracted from the wake's before it is read
 as turbulence (or, given per sample, the noise at the follower's own speed:
-:func:`aerodock.learning.label_noise.with_speed_noise`, ``field fit --noise speed``). The
+:func:`aerodock.identify.label_noise.with_speed_noise`, ``field fit --noise speed``). The
 leader's logged thrust is scaled so that its flight median is its weight (the thrust estimate of
 a real log carries the same few-percent bias).
 
-Scores (:func:`score_wake`) are what the issue's targets name, per vehicle pair, on any flights
-(held out from the fit): the mean vertical acceleration directly below the leader per bin of
-separation, the lateral half-magnitude radius, the vertical and lateral turbulence sd, and the
-autocorrelation at 50 and 80 ms. The uncertainty is a bootstrap over flights.
+The flights are read into samples by :mod:`aerodock.identify.flights`; a fit is scored
+against flights by :mod:`aerodock.identify.wake_score`.
 """
 
 from __future__ import annotations
 
-import fnmatch
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from aerodock.downwash.base import BodyState
 from aerodock.downwash.jet import CONTRACTED_WIDTH0_RATIO, RoundJetField
-from aerodock.flightlog import FlightLog
-from aerodock.geometry import quat_to_rotmat
-from aerodock.learning.labels import estimate_biases, free_air_mask, raw_labels, valid_mask
+from aerodock.identify.flights import (
+    GRAVITY_MPS2,
+    LAGS,
+    FlightSamples,
+    WakeFitError,
+    autocovariance,
+)
 
-GRAVITY_MPS2 = 9.81
 MEAN_PARAMS = ("width0_ratio", "spread_rate", "ingest_coeff", "ingest_exponent", "planar_ratio")
 TURBULENCE_PARAMS = ("turb_vertical", "turb_lateral", "turb_length_ratio", "turb_time_ratio")
 FITTED_PARAMS = MEAN_PARAMS + TURBULENCE_PARAMS
@@ -58,73 +57,8 @@ BOUNDS = {"width0_ratio": (0.1, 5.0), "spread_rate": (0.0, 1.0), "ingest_coeff":
           "turb_vertical": (0.0, 3.0), "turb_lateral": (0.0, 3.0),
           "turb_length_ratio": (0.05, 20.0), "turb_time_ratio": (0.05, 100.0)}
 ROTOR_BOUNDS_M = (0.005, 0.2)
-GEOMETRY_KEYS = ("leader_rotor_radius_m", "leader_n_rotors", "follower_rotor_radius_m",
-                 "follower_n_rotors", "follower_diagonal_m", "leader_mass_kg", "follower_mass_kg")
-REGION_RADII = 6.0  # the interaction region: horizontally within 6 leader equivalent radii
 CORE_RADII = 1.0  # "directly below": within one leader equivalent radius of its axis
-SEPARATION_BIN_M = 0.05
 MIN_BIN_SAMPLES = 30
-LAGS = 9  # autocorrelation lags 0..8 (0-80 ms at 100 Hz)
-TARGETS = {"mean_vertical": 0.15, "half_width": 0.20, "vertical_sd": 0.20, "lateral_sd": 0.20}
-"""The issue's targets: largest relative error of each figure on held-out flights."""
-
-
-class WakeFitError(ValueError):
-    """The logs cannot be fitted (missing geometry, no samples in the wake); one line."""
-
-
-@dataclass(frozen=True)
-class FlightSamples:
-    """One flight log's samples in the interaction region, as the fit uses them.
-
-    Attributes:
-        name: the log's name; ``flight``: the flight it belongs to (both vehicles' logs of one
-            flight share it); ``pair``: the vehicle pair, e.g. ``"32 g under 67 g"``.
-        geometry: the field's vehicle keywords (:data:`GEOMETRY_KEYS`).
-        vehicles: ``{"leader": id, "follower": id}`` (the logs' vehicle ids, or None).
-        leader, follower: the logged states of the region's samples (leader thrust scaled to
-            its weight, follower thrust its weight).
-        label_mps2: (m, 3) de-biased residual ``a_obs - cmd``, NED.
-        index: (m,) the samples' indices in the log (consecutive samples: consecutive indices).
-        dt_s: the log's median sample interval.
-        free_var_mps4: (3,) the follower vehicle's free-air label variance per axis.
-        free_autocov: (LAGS,) its free-air vertical autocovariance, lags 0..LAGS-1 samples.
-        noise_var_mps4: (m, 3) the label noise variance of each sample, where it is known per
-            sample (:func:`aerodock.learning.label_noise.with_speed_noise`: the free-air
-            variance at the follower's speed); None: ``free_var_mps4`` for every sample.
-    """
-
-    name: str
-    flight: str
-    pair: str
-    geometry: dict[str, float]
-    vehicles: dict[str, str | None]
-    leader: BodyState
-    follower: BodyState
-    label_mps2: np.ndarray
-    index: np.ndarray
-    dt_s: float
-    free_var_mps4: np.ndarray
-    free_autocov: np.ndarray
-    noise_var_mps4: np.ndarray | None = None
-
-    @property
-    def sample_noise_var_mps4(self) -> np.ndarray:
-        """(m, 3) the label noise variance the turbulence is read above, per sample."""
-        if self.noise_var_mps4 is not None:
-            return self.noise_var_mps4
-        return np.broadcast_to(self.free_var_mps4, self.label_mps2.shape)
-
-    @property
-    def offset_m(self) -> np.ndarray:
-        """(m, 3) follower minus leader position, NED."""
-        return self.follower.p - self.leader.p
-
-    @property
-    def equivalent_radius_m(self) -> float:
-        """The leader's equivalent disk radius ``R sqrt(n)``."""
-        return float(self.geometry["leader_rotor_radius_m"]
-                     * np.sqrt(self.geometry["leader_n_rotors"]))
 
 
 @dataclass
@@ -146,159 +80,6 @@ class WakeFit:
         """The ``[downwash.params]`` values the fit identified."""
         return {k: float(self.params[k]) for k in FITTED_PARAMS}
 
-
-# -- data ------------------------------------------------------------------------------------
-def flight_key(log: FlightLog) -> str:
-    """The flight a log belongs to: its name less the follower's id (both logs of a two-vehicle
-    Neural-Swarm flight share it), else the name."""
-    name = str(log.meta.get("name", ""))
-    follower = log.meta.get("follower_id")
-    if follower and name.endswith(f"_{follower}"):
-        return name[: -len(follower) - 1]
-    return name
-
-
-def log_geometry(log: FlightLog, rotor_radii_m: dict[str, float] | None = None) -> dict:
-    """The field's vehicle keywords from a log's meta (``rotor_radii_m`` overrides a vehicle's
-    rotor radius by its id).
-
-    Raises:
-        WakeFitError: a key the meta lacks (named).
-    """
-    meta = log.meta
-    out: dict[str, float] = {}
-    for key in GEOMETRY_KEYS:
-        value = meta.get(key)
-        if not isinstance(value, int | float) or not np.isfinite(value) or value <= 0:
-            raise WakeFitError(f"{log.name}: the log's meta has no {key} (the wake fit needs "
-                               "both vehicles' masses, rotors and the follower's diagonal)")
-        out[key] = float(value)
-    for role in ("leader", "follower"):
-        vid = meta.get(f"{role}_id")
-        if rotor_radii_m and vid in rotor_radii_m:
-            out[f"{role}_rotor_radius_m"] = float(rotor_radii_m[vid])
-    return out
-
-
-def pair_name(geometry: dict[str, float]) -> str:
-    """``"32 g under 67 g"``: the follower's and the leader's mass."""
-    return (f"{1000 * geometry['follower_mass_kg']:.0f} g under "
-            f"{1000 * geometry['leader_mass_kg']:.0f} g")
-
-
-def prepare_flights(logs: Sequence[FlightLog], *, region_radii: float = REGION_RADII,
-                    ) -> list[FlightSamples]:
-    """The fit's samples of each log: de-biased labels in the interaction region and the
-    follower vehicle's free-air noise (module docstring).
-
-    Free air (the bias, the noise) and the interaction region are set by the leader's size:
-    horizontally within ``region_radii`` leader equivalent radii below the leader is the region,
-    farther (or above it) is free air.
-
-    Raises:
-        WakeFitError: a log without the geometry, or no sample in any region.
-    """
-    logs = list(logs)
-    groups: dict[str, list[int]] = {}
-    for i, log in enumerate(logs):
-        key = f"{log.meta.get('follower_id') or ''}|{log.meta.get('follower_mass_kg')}"
-        groups.setdefault(key, []).append(i)
-    out: list[FlightSamples | None] = [None] * len(logs)
-    for members in groups.values():
-        group = [logs[i] for i in members]
-        radii = [_equivalent_radius(log) * region_radii for log in group]
-        raws = [raw_labels(log) for log in group]
-        biases = [estimate_biases([log], free_air_radius_m=r, raw=[raw])[0][0]
-                  for log, r, raw in zip(group, radii, raws, strict=True)]
-        own = [b for b in biases if b.source == "own"]
-        fallback = (np.median([b.bias for b in own], axis=0) if own else np.zeros(3))
-        free_parts, auto_parts = [], []
-        debiased = []
-        for log, r, raw, b in zip(group, radii, raws, biases, strict=True):
-            y = raw - (b.bias if b.source == "own" else fallback)
-            debiased.append(y)
-            mask = free_air_mask(log, r)
-            if mask.sum() > LAGS:
-                free_parts.append(y[mask])
-                auto_parts.append((y[:, 2], mask))
-        if free_parts:
-            free = np.concatenate(free_parts)
-            free_var = free.var(axis=0)
-            free_auto = _autocovariance(auto_parts)
-        else:
-            free_var, free_auto = np.zeros(3), np.zeros(LAGS)
-        for i, log, r, y in zip(members, group, radii, debiased, strict=True):
-            out[i] = _region_samples(log, y, r, free_var, free_auto)
-    flights = [s for s in out if s is not None]
-    if not flights:
-        raise WakeFitError("no log has samples below its leader within the interaction region")
-    return flights
-
-
-def _equivalent_radius(log: FlightLog) -> float:
-    geometry = log_geometry(log)
-    return geometry["leader_rotor_radius_m"] * np.sqrt(geometry["leader_n_rotors"])
-
-
-def _region_samples(log: FlightLog, label: np.ndarray, radius_m: float, free_var: np.ndarray,
-                    free_auto: np.ndarray) -> FlightSamples | None:
-    geometry = log_geometry(log)
-    dp = log.follower_pos_m - log.leader_pos_m
-    horizontal = np.hypot(dp[:, 0], dp[:, 1])
-    keep = (dp[:, 2] > 0.0) & (horizontal < radius_m) & valid_mask(log)
-    if keep.sum() < 2:
-        return None
-    index = np.nonzero(keep)[0]
-    g = GRAVITY_MPS2
-    m_lead, m_fol = geometry["leader_mass_kg"], geometry["follower_mass_kg"]
-    logged = log.extra.get("leader_thrust_n")
-    if logged is not None and np.median(logged) > 0:
-        thrust = m_lead * g * np.asarray(logged, dtype=float) / float(np.median(logged))
-    else:
-        thrust = np.full(log.n_samples, m_lead * g)
-    n = index.size
-    leader = BodyState(log.leader_pos_m[index], log.leader_vel_mps[index],
-                       quat_to_rotmat(log.leader_quat[index]), thrust[index],
-                       np.full(n, m_lead))
-    follower = BodyState(log.follower_pos_m[index], log.follower_vel_mps[index],
-                         quat_to_rotmat(log.follower_quat[index]), np.full(n, m_fol * g),
-                         np.full(n, m_fol))
-    dt = float(np.median(np.diff(log.t_s))) if log.n_samples > 1 else 0.01
-    return FlightSamples(
-        name=log.name, flight=flight_key(log), pair=pair_name(geometry), geometry=geometry,
-        vehicles={"leader": log.meta.get("leader_id"), "follower": log.meta.get("follower_id")},
-        leader=leader, follower=follower, label_mps2=label[index], index=index, dt_s=dt,
-        free_var_mps4=np.asarray(free_var, dtype=float),
-        free_autocov=np.asarray(free_auto, dtype=float))
-
-
-def _autocovariance(parts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """Autocovariance (lags 0..LAGS-1 samples) of zero-mean series (de-biased labels, or
-    residuals about the jet's mean) over the runs of consecutive samples where ``mask`` holds,
-    pooled over the runs (a run shorter than a lag adds nothing to it)."""
-    num, count = np.zeros(LAGS), np.zeros(LAGS)
-    for series, mask in parts:
-        for start, stop in _runs(mask):
-            x = series[start:stop]
-            for lag in range(min(LAGS, x.size)):
-                num[lag] += np.dot(x[: x.size - lag], x[lag:])
-                count[lag] += x.size - lag
-    return np.where(count > 0, num / np.maximum(count, 1), 0.0)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """``[start, stop)`` of each run of True in ``mask``."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return list(zip(np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0], strict=True))
-
-
-def select_flights(flights: Sequence[FlightSamples], patterns: Sequence[str],
-                   ) -> tuple[list[FlightSamples], list[FlightSamples]]:
-    """``(others, matching)``: the flights whose flight key matches none / one of the
-    shell-style ``patterns`` (e.g. ``"swap_ss_0[56]"``)."""
-    match = [f for f in flights if any(fnmatch.fnmatchcase(f.flight, p) for p in patterns)]
-    names = {f.name for f in match}
-    return [f for f in flights if f.name not in names], match
 
 
 # -- the model at the samples ---------------------------------------------------------------
@@ -524,7 +305,7 @@ def autocorrelations(params: dict[str, float], flights: Sequence[FlightSamples],
         entry["dt"].append(f.dt_s)
     out = {}
     for pair, entry in sorted(by_pair.items()):
-        cov = _autocovariance(entry["parts"])
+        cov = autocovariance(entry["parts"])
         cov = cov - np.mean(entry["free"], axis=0)
         if not cov[0] > 0:
             continue
@@ -642,151 +423,3 @@ def _bootstrap(flights: list[FlightSamples], fit: WakeFit, estimate_rotor_for: S
         if progress:
             progress(run + 1, runs)
     return draws
-
-
-def wake_at_separations(params: dict[str, float], cfg: Any,
-                        separations_m: Sequence[float] = (0.36, 0.64, 1.35)) -> list[dict]:
-    """The jet with ``params`` in the world of ``cfg`` (its vehicles, its air), directly below
-    a hovering leader at each separation: mean downward acceleration on a level follower,
-    half-magnitude radius of it, the sd of the whole follower's turbulence along the axis and
-    across it, and the correlation time."""
-    from aerodock.downwash import build_field
-    from aerodock.downwash.probe import half_magnitude_radius_m, probe_bodies
-
-    cfg = cfg.with_overrides({"downwash": {"field": "aerodock.downwash.jet:RoundJetField",
-                                           "params": {k: float(v) for k, v in params.items()
-                                                      if k in FITTED_PARAMS}}},
-                             source=cfg.source)
-    jet = build_field(cfg)
-    mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
-    rows = []
-    for sep in separations_m:
-        leader, follower = probe_bodies(sep, 0.0, 0.0, mass, g)
-        mean = float(jet.mean_acceleration(leader, follower)[0, 2])
-        turb = jet.turbulence(leader, follower)
-        rows.append({"separation_m": float(sep), "mean_mps2": mean,
-                     "half_width_m": half_magnitude_radius_m(jet.mean_acceleration, sep, mass, g),
-                     "vertical_sd_mps2": float(np.sqrt(turb["axial_var_mps4"][0])),
-                     "lateral_sd_mps2": float(np.sqrt(turb["lateral_var_mps4"][0])),
-                     "corr_time_s": float(turb["corr_time_s"][0])})
-    return rows
-
-
-# -- scores ----------------------------------------------------------------------------------
-def score_wake(params: dict[str, float], flights: Sequence[FlightSamples],
-               rotor_radii_m: dict[str, float] | None = None) -> dict[str, Any]:
-    """Per vehicle pair, the issue's targets on ``flights`` (module docstring): each figure real
-    and fitted, its relative error and whether it is within the target (:data:`TARGETS`)."""
-    pairs: dict[str, list[FlightSamples]] = {}
-    for f in flights:
-        pairs.setdefault(f.pair, []).append(f)
-    out: dict[str, Any] = {}
-    for pair, group in sorted(pairs.items()):
-        means = [model_mean(params, f, rotor_radii_m) for f in group]
-        turbs = [model_turbulence(params, f, rotor_radii_m) for f in group]
-        label = np.concatenate([f.label_mps2 for f in group])
-        model = np.concatenate(means)
-        dp = np.concatenate([f.offset_m for f in group])
-        req = np.concatenate([np.full(f.label_mps2.shape[0], f.equivalent_radius_m)
-                              for f in group])
-        h = np.hypot(dp[:, 0], dp[:, 1])
-        core = h < CORE_RADII * req
-        entry: dict[str, Any] = {"flights": sorted({f.flight for f in group}),
-                                 "samples": int(label.shape[0]), "core_samples": int(core.sum())}
-        # Mean vertical acceleration directly below, per separation bin.
-        bins = []
-        edges = np.arange(0.0, dp[:, 2].max() + SEPARATION_BIN_M, SEPARATION_BIN_M)
-        for lo in edges:
-            sel = core & (dp[:, 2] >= lo) & (dp[:, 2] < lo + SEPARATION_BIN_M)
-            if sel.sum() < MIN_BIN_SAMPLES:
-                continue
-            real, fitted = float(label[sel, 2].mean()), float(model[sel, 2].mean())
-            bins.append({"separation_m": [round(float(lo), 3),
-                                          round(float(lo + SEPARATION_BIN_M), 3)],
-                         "samples": int(sel.sum()), "real_mps2": real, "fitted_mps2": fitted,
-                         "real_sd_mps2": float(label[sel, 2].std()),
-                         "rel_error": (fitted - real) / abs(real) if real else float("nan")})
-        entry["separation_bins"] = bins
-        worst = max((abs(b["rel_error"]) for b in bins), default=float("nan"))
-        entry["mean_vertical"] = {"worst_rel_error": worst,
-                                  "met": bool(bins) and worst <= TARGETS["mean_vertical"]}
-        # Lateral half-magnitude radius of the vertical acceleration, all depths of the pair.
-        profile = lateral_profile(h, label[:, 2], model[:, 2], float(np.median(req)))
-        entry["lateral_profile"] = profile
-        real_hw, fit_hw = profile["real_half_width_m"], profile["fitted_half_width_m"]
-        rel = (fit_hw - real_hw) / real_hw if real_hw and np.isfinite(real_hw) else float("nan")
-        entry["half_width"] = {"real_m": real_hw, "fitted_m": fit_hw, "rel_error": rel,
-                               "met": bool(np.isfinite(rel) and abs(rel) <= TARGETS["half_width"])}
-        # Turbulence sd near the axis: each flight's residual about the mean (and its own
-        # offset), less the free-air noise.
-        err = label - model
-        about = np.concatenate([
-            centred(f.label_mps2 - m, np.hypot(f.offset_m[:, 0], f.offset_m[:, 1])
-                    < CORE_RADII * f.equivalent_radius_m) for f, m in zip(group, means,
-                                                                         strict=True)])
-        free = np.concatenate([f.sample_noise_var_mps4 for f in group])
-        axial = np.concatenate([t["axial_var_mps4"] for t in turbs])
-        lateral = np.concatenate([t["lateral_var_mps4"] for t in turbs])
-        for name, real_var, model_var, key in (
-                ("vertical_sd", about[core, 2].var() - free[core, 2].mean(),
-                 axial[core].mean() if core.any() else np.nan, "vertical_sd"),
-                ("lateral_sd", 0.5 * (about[core, 0].var() + about[core, 1].var())
-                 - 0.5 * (free[core, 0] + free[core, 1]).mean(),
-                 lateral[core].mean() if core.any() else np.nan, "lateral_sd")):
-            real_sd = float(np.sqrt(real_var)) if core.sum() >= MIN_BIN_SAMPLES \
-                and real_var > 0 else float("nan")
-            fit_sd = float(np.sqrt(model_var)) if np.isfinite(model_var) else float("nan")
-            rel = (fit_sd - real_sd) / real_sd if np.isfinite(real_sd) else float("nan")
-            entry[name] = {"real_mps2": real_sd, "fitted_mps2": fit_sd, "rel_error": rel,
-                           "met": bool(np.isfinite(rel) and abs(rel) <= TARGETS[key])}
-        entry["rmse_mps2"] = float(np.sqrt(np.mean(np.sum(err ** 2, axis=1))))
-        entry["zero_model_rmse_mps2"] = float(np.sqrt(np.mean(np.sum(label ** 2, axis=1))))
-        out[pair] = entry
-    ac = autocorrelations(params, flights, rotor_radii_m)
-    for pair, entry in out.items():
-        if pair in ac:
-            lags = np.asarray(ac[pair]["lag_s"])
-            entry["autocorrelation"] = {
-                f"{1000 * lag:.0f}ms": {"real": float(np.interp(lag, lags, ac[pair]["real"])),
-                                        "fitted": float(np.interp(lag, lags,
-                                                                  ac[pair]["model"]))}
-                for lag in (0.05, 0.08)}
-            entry["autocorrelation_curve"] = ac[pair]
-    out_all = {"pairs": out, "targets": TARGETS}
-    out_all["all_met"] = all(e[k]["met"] for e in out.values()
-                             for k in ("mean_vertical", "half_width", "vertical_sd",
-                                       "lateral_sd"))
-    return out_all
-
-
-def lateral_profile(offset_m: np.ndarray, real_mps2: np.ndarray, fitted_mps2: np.ndarray,
-                    equivalent_radius_m: float) -> dict[str, Any]:
-    """Binned real and fitted vertical acceleration against lateral offset (bins of a quarter
-    of the leader's equivalent radius, to four), and each profile's half-magnitude radius: where
-    it first falls to half its value in the innermost bin (linear between bins)."""
-    width = 0.25 * equivalent_radius_m
-    edges = np.arange(0.0, 4.0 * equivalent_radius_m + 1e-12, width)
-    centres, real, fitted, spread, counts = [], [], [], [], []
-    for lo in edges[:-1]:
-        sel = (offset_m >= lo) & (offset_m < lo + width)
-        if sel.sum() < MIN_BIN_SAMPLES:
-            continue
-        centres.append(float(lo + 0.5 * width))
-        real.append(float(real_mps2[sel].mean()))
-        fitted.append(float(fitted_mps2[sel].mean()))
-        spread.append(float(real_mps2[sel].std()))
-        counts.append(int(sel.sum()))
-    return {"offset_m": centres, "real_mps2": real, "fitted_mps2": fitted,
-            "real_sd_mps2": spread, "samples": counts,
-            "real_half_width_m": _half_width(centres, real),
-            "fitted_half_width_m": _half_width(centres, fitted)}
-
-
-def _half_width(x: list[float], y: list[float]) -> float:
-    if len(x) < 2 or not y[0] > 0:
-        return float("nan")
-    half = 0.5 * y[0]
-    for i in range(1, len(x)):
-        if y[i] <= half:
-            return float(x[i - 1] + (x[i] - x[i - 1]) * (y[i - 1] - half) / (y[i - 1] - y[i]))
-    return float("nan")
