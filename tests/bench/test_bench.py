@@ -170,14 +170,18 @@ def test_bench_only_one_part_and_bad_part(cfg, monkeypatch):
     monkeypatch.setattr(bench, "bench_simulator",
                         lambda cfg, quick, progress, model: {"1": {"model": model}})
     monkeypatch.setattr(bench, "bench_vehicle_step", lambda cfg, quick, progress: {})
+    monkeypatch.setattr(bench, "bench_python_field", lambda cfg, quick, progress: {})
+    monkeypatch.setattr(bench, "bench_kernels", lambda cold, progress: {"cold": cold})
     doc = bench.run_all(cfg, quick=True, only="simulator")
-    assert set(doc["figures"]) == {"simulator", "simulator_point_mass", "vehicle_step"}
+    assert set(doc["figures"]) == {"simulator", "simulator_point_mass", "vehicle_step",
+                                   "simulator_python_field", "kernels"}
+    assert doc["figures"]["kernels"] == {"cold": False}  # --quick compiles nothing
     assert doc["figures"]["simulator_point_mass"]["1"]["model"] == "point-mass"
     app = typer.Typer()
     app.command("bench")(bench_command)
     app.command("other")(lambda: None)
     result = CliRunner().invoke(app, ["bench", "--only", "nonsense"])
-    assert result.exit_code == 2 and "error: unknown --only" in result.output
+    assert result.exit_code == 2 and "Invalid value for '--only'" in result.output
 
 
 def test_vehicle_step_figures(cfg):

@@ -204,7 +204,7 @@ def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
     (["DATA", "--holdout", "nothing_like_it"], "--holdout nothing_like_it matches no flight"),
     (["DATA", "--holdout", "synth_*"], "--holdout leaves no flight to fit"),
     (["DATA", "--bootstrap", "-1"], "--bootstrap must be between 0 and 1000"),
-    (["DATA", "--noise", "fast"], "--noise must be 'pooled' or 'speed', got 'fast'"),
+    (["DATA", "--noise", "fast"], "'fast' is not one of 'pooled', 'speed'"),
     (["DATA", "--estimate-rotor", "cf77"], "--estimate-rotor cf77: no log has a vehicle"),
     (["NOTLOG"], "NOTLOG"),
 ])

@@ -165,7 +165,7 @@ def test_cli_train_evaluate_export(tmp_path, cli, synth_logs, held_out):
     assert out["split"] == "flight" and len(out["history"]["val_loss"]) == out["epochs"]
     assert (tmp_path / "curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out["learning_curve"] == str(tmp_path / "curve.png")
-    for bad, msg in ((["--split", "random"], "--split must be"),
+    for bad, msg in ((["--split", "random"], "'random' is not one of"),
                      (["--curve", str(tmp_path / "mlp" / "c.png")], "not inside the model")):
         res = runner.invoke(app, ["train", "--model", "mlp", "--data", str(tmp_path / "logs"),
                                   "--out", str(tmp_path / "mlp"), "--max-epochs", "1", *bad])
