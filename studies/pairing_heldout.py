@@ -5,7 +5,7 @@ judged on the held-out swap_sl 08-11 (each follower apart) and swap_ss 05-06.
         sl_test.npz KIND [KIND ...]
 
 The data files are ``aerodock ingest`` of swap_ss 00-04, swap_sl 00-07, swap_ss 05-06 and
-swap_sl 08-11 (docs/results.md gives the commands). Prints, per kind and seed 0, 1, 2, the
+swap_sl 08-11 (docs/results/so2-pair.md gives the commands). Prints, per kind and seed 0, 1, 2, the
 reduction of the interaction region's vertical RMSE against the zero model (``evaluate``'s
 ``interaction.model.rmse_mps2.z`` against ``interaction.zero.rmse_mps2.z``, the leader-aware
 kinds given the data's wake scales), then mean (sd, min-max): the same figures as

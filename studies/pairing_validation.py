@@ -5,9 +5,9 @@ follower apart; the held-out swap_sl 08-11 are not read.
     .venv/bin/python studies/pairing_validation.py ss_train.npz sl_train.npz [CANDIDATE ...]
 
 ``ss_train.npz`` and ``sl_train.npz`` are ``aerodock ingest`` of swap_ss 00-04 and swap_sl 00-07
-(docs/results.md gives the commands). Prints, per candidate and seed 0, 1, 2, the reduction of
-the interaction region's vertical RMSE against the zero model on swap_sl 05-07 per follower
-(``cf51`` small, ``cf101`` large), then mean (sd, min-max). Candidates: see ``CANDIDATES``.
+(docs/results/label-floor.md gives the commands). Prints, per candidate and seed 0, 1, 2, the
+reduction of the interaction region's vertical RMSE against the zero model on swap_sl 05-07 per
+follower (``cf51`` small, ``cf101`` large), then mean (sd, min-max). Candidates: see ``CANDIDATES``.
 """
 
 from __future__ import annotations
