@@ -7,7 +7,9 @@ The scripts that read the real flights take them from the data location
 them; those that read data files get them from ``aerodock ingest`` of a few of those flights. The
 mission studies that need a model fly ``tests/learning/data/kind_pins/so2`` (a small ``so2``
 model of random weights: the smoke run checks that the study runs, not a docking rate). The
-studies that fly a curriculum or time two simulators are ``slow``.
+studies that fly a curriculum or time two simulators are ``slow``. ``sample_efficiency.py`` runs
+its real-flight part only: its simulated part is ``reproduce``'s first step, which
+``tests/e2e/test_reproduce.py`` crosses at the same smoke size.
 """
 
 from __future__ import annotations
@@ -66,8 +68,7 @@ def _peer_within_tolerance(out: str, tmp: Path) -> None:
 
 
 def _sample_efficiency_json(out: str, tmp: Path) -> None:
-    part = "real" if "real" in out.splitlines()[-1] else "sim"
-    record = json.loads((tmp / "se" / f"sample_efficiency_{part}.json").read_text())
+    record = json.loads((tmp / "se" / "sample_efficiency_real.json").read_text())
     se = record["sample_efficiency"]
     assert se["minutes"] == [0.5] and set(se["models"]) == {"so2", "so2-ext", "mlp"}
 
@@ -142,13 +143,6 @@ STUDY_CASES = (
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
           frozenset({"data"})),
 )
-# The one study that is slow in one part only: its simulated part flies reproduce's curriculum.
-SIM_SAMPLE_EFFICIENCY = Study(
-    "sample_efficiency.py", ("--part", "sim", "--out", "{tmp}/se"),
-    tuple(rf"^{k}\s+0\.5\s+{NUMBER} \({NUMBER}\)\s+{NUMBER} \({NUMBER}\)$"
-          for k in ("so2", "so2-ext", "mlp")), slow=True, check=_sample_efficiency_json)
-
-
 def _have_rotorpy() -> bool:
     try:
         import rotorpy  # noqa: F401
@@ -212,11 +206,6 @@ def test_study_runs_at_its_smoke_size(study: Study, tmp_path: Path) -> None:
 def test_study_on_ingested_flights_runs_at_its_smoke_size(study: Study, tmp_path: Path,
                                                           data_files: Path) -> None:
     _run(study, tmp_path, data_files)
-
-
-@pytest.mark.slow
-def test_sample_efficiency_on_simulated_flights_runs_at_its_smoke_size(tmp_path: Path) -> None:
-    _run(SIM_SAMPLE_EFFICIENCY, tmp_path, None)
 
 
 def test_every_study_is_run_by_a_test() -> None:
