@@ -2,8 +2,10 @@
 (and onto the world that knows only what a real vehicle knows): docks with and without a model.
 
     .venv/bin/python studies/baseline_ladder.py --model DIR [--trials 40] [--seed 3] [--json]
+        [--smoke]
 
 Each row adds one difference to the row above; every row flies the same trials (same seed).
+``--smoke`` flies the last row only, two trials each, the mission's waits cut.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
@@ -56,14 +60,19 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=3)
     parser.add_argument("--config", type=Path, default=None)
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     base = load_config(args.config)
+    if args.smoke:
+        base, args.trials = smoke_config(base), SMOKE_TRIALS
     predictor = Predictor.load(args.model)
     overrides, rows = OLD_PAPER, []
-    for name, step in STEPS:
+    for i, (name, step) in enumerate(STEPS):
         if step == "spreads":  # the configuration's own spreads (the defaults: a real fleet's)
             step = {"vehicle": {k: getattr(base.vehicle, k) for k in SPREADS}}
         overrides = _merge(overrides, step)
+        if args.smoke and i < len(STEPS) - 1:
+            continue  # the steps still add up
         cfg = base.with_overrides(overrides)
         row = {"step": name}
         for label, comp in (("with_model", Compensation.MODEL),

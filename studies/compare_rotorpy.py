@@ -28,13 +28,16 @@ learning and plotting dependencies out)::
     .venv/bin/pip install --no-deps rotorpy               # sequential Multirotor
     .venv/bin/pip install --no-deps torchdiffeq roma      # + its batched simulator (uses torch)
 
-Run: ``.venv/bin/python studies/compare_rotorpy.py [--quick] [--batch 256] [--json]``.
+Run: ``.venv/bin/python studies/compare_rotorpy.py [--quick] [--batch 256] [--json] [--smoke]``;
+``--smoke`` is ``--quick`` with a batch of 2 (a timing study: it still takes half a minute).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.bench import compare_rotorpy, machine_info
 from aerodock.config import load_config
@@ -47,7 +50,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="half the scenario, fewer runs")
     parser.add_argument("--batch", type=int, default=256, help="batch size of the batched runs")
     parser.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    add_smoke_option(parser)
     args = parser.parse_args(argv)
+    if args.smoke:
+        args.quick, args.batch = True, 2
     if args.batch < 1:
         parser.error(f"--batch must be >= 1, got {args.batch}")
 

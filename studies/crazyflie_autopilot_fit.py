@@ -2,7 +2,7 @@
 response, for a given motor time constant.
 
     .venv/bin/python studies/crazyflie_autopilot_fit.py [--config examples/crazyflie.toml]
-        [--motor-tau 0.03] [--json]
+        [--motor-tau 0.03] [--json] [--smoke]
 
 drone-models (utiasDSL, ``so_rpy_rotor/params.toml``, ``[cf2x_L250]``) identifies the stock
 Crazyflie's attitude response to a commanded angle as ``th'' = -257.2 th - 20.2 th' + 207.1
@@ -10,7 +10,8 @@ th_cmd`` (16 rad/s, damping 0.63). This finds the roll/pitch angle and rate gain
 (rate integral gain at the default's ratio to the rate gain) whose response to a 5 deg roll step
 comes nearest to that model's, normalised to its steady state: the RMS difference over 0.6 s,
 minimised by Nelder-Mead from the best point of a small grid. One vehicle, exactly nominal, the
-ideal IMU chain, commands held over the control period as the world does.
+ideal IMU chain, commands held over the control period as the world does. ``--smoke``: one motor
+time constant, one grid point, two Nelder-Mead iterations.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from _smoke import add_smoke_option  # studies/, on sys.path
 from scipy.optimize import minimize
 
 from aerodock.config import Config, load_config
@@ -34,6 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 IDENTIFIED = (-257.2, -20.2)  # th'' = a th + b th' + ... (drone-models, cf2x_L250, roll)
 STEP_RAD = np.radians(5.0)
 SECONDS = 0.6
+GRID = [(a, r) for a in (6.0, 9.0, 12.7, 18.0) for r in (10.0, 15.0, 20.2, 30.0, 45.0)]
+"""The (attitude, rate) gains tried before Nelder-Mead starts from the best."""
 
 
 def step_response(cfg: Config) -> tuple[np.ndarray, np.ndarray]:
@@ -69,7 +73,8 @@ def identified_response(t: np.ndarray, dt: float = 1e-4) -> np.ndarray:
     return np.asarray(out)
 
 
-def fit(cfg: Config, motor_tau_s: float) -> dict:
+def fit(cfg: Config, motor_tau_s: float, grid: list[tuple[float, float]] = GRID,
+        maxiter: int = 80) -> dict:
     """The fitted roll/pitch gains and their RMS difference from the identified response."""
     ratio = cfg.autopilot.rate_i[0] / cfg.autopilot.rate_p[0]
     yaw = (cfg.autopilot.attitude_p[2], cfg.autopilot.rate_p[2], cfg.autopilot.rate_i[2])
@@ -87,11 +92,9 @@ def fit(cfg: Config, motor_tau_s: float) -> dict:
             return 10.0
         return float(np.sqrt(np.mean((roll - identified_response(t)) ** 2)))
 
-    grid = [(cost(np.array([a, r])), a, r) for a in (6.0, 9.0, 12.7, 18.0)
-            for r in (10.0, 15.0, 20.2, 30.0, 45.0)]
-    best = min(grid)
+    best = min((cost(np.array([a, r])), a, r) for a, r in grid)
     res = minimize(cost, np.array(best[1:]), method="Nelder-Mead",
-                   options={"xatol": 0.05, "fatol": 1e-4, "maxiter": 80})
+                   options={"xatol": 0.05, "fatol": 1e-4, "maxiter": maxiter})
     return {"motor_tau_s": motor_tau_s, "attitude_p": float(res.x[0]),
             "rate_p": float(res.x[1]), "rate_i": float(res.x[1] * ratio),
             "rms_difference": float(res.fun)}
@@ -103,9 +106,12 @@ def main() -> int:
     parser.add_argument("--motor-tau", type=float, action="append",
                         help="motor time constant(s), s (default: 0.03 and 0.072)")
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     cfg = load_config(args.config)
-    rows = [fit(cfg, tau) for tau in (args.motor_tau or [0.03, 0.072])]
+    taus = args.motor_tau or [0.03, 0.072]
+    rows = ([fit(cfg, taus[0], GRID[:1], maxiter=2)] if args.smoke
+            else [fit(cfg, tau) for tau in taus])
     if args.json:
         print(json.dumps(rows, indent=2))
         return 0

@@ -3,14 +3,16 @@ model, as `aerodock dock` flies them (the same campaigns, one table).
 
     .venv/bin/python studies/crazyflie_docking.py --models C [--collect]
         [--config examples/crazyflie.toml] [--force-at-centre] [--offset 0.12] [--trials 40]
-        [--seed 0] [--json]
+        [--seed 0] [--json] [--smoke]
 
 The models are a curriculum's (``aerodock collect --config <the same world> --out C``, or this
 script's ``--collect``, which flies it into C first, in the world the campaigns fly):
 C/models/paper (the paper's curriculum) for the paper's controller, C/models/final (the deep
 curriculum) for ours, as in the README's headline table. ``--force-at-centre`` flies the world
 with the jet's force at the follower's centre of mass (``aerodock.downwash.at_centre``: no wake
-torque), the other side of a bracket round the jet's torque (docs/crazyflie.md).
+torque), the other side of a bracket round the jet's torque (docs/crazyflie.md). ``--smoke``
+flies ours with the model only, two trials, the mission's waits cut (and ``--collect`` the
+smallest curriculum, ``reproduce --smoke``'s).
 """
 
 from __future__ import annotations
@@ -19,6 +21,14 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from _smoke import (  # studies/, on sys.path
+    SMOKE_CURRICULUM,
+    SMOKE_EPOCHS,
+    SMOKE_TRIALS,
+    add_smoke_option,
+    smoke_config,
+)
 
 from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
@@ -43,8 +53,12 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--force-at-centre", action="store_true")
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     base = load_config(args.config)
+    if args.smoke:
+        base = smoke_config(base).with_overrides({"curriculum": SMOKE_CURRICULUM})
+        args.trials = SMOKE_TRIALS
     if args.force_at_centre:
         base = base.with_overrides(  # a new field takes only the params given with it
             {"downwash": {"field": "aerodock.downwash.at_centre:RoundJetAtCentre",
@@ -55,12 +69,15 @@ def main() -> int:
         from aerodock.learning.curriculum import run_curriculum
 
         curriculum = run_curriculum(base, args.models, seed=args.seed, progress=None if args.json
-                                    else lambda m: print(m, flush=True))
+                                    else lambda m: print(m, flush=True),
+                                    train_kwargs={"max_epochs": SMOKE_EPOCHS} if args.smoke
+                                    else None)
     rows = []
-    for controller, model in (("paper", args.models / "models" / "paper"),
-                              ("ours", args.models / "models" / "final")):
+    runs = (("paper", args.models / "models" / "paper"), ("ours", args.models / "models" / "final"))
+    for controller, model in runs[1:] if args.smoke else runs:
         predictor = Predictor.load(model)
-        for comp in (Compensation.OBSERVER, Compensation.MODEL):
+        comps = (Compensation.OBSERVER, Compensation.MODEL)
+        for comp in comps[1:] if args.smoke else comps:
             spec = MissionSpec(trials=args.trials, offset_m=args.offset, compensation=comp,
                                seed=args.seed)
             cfg = check_mission(controller_config(base, controller), spec)

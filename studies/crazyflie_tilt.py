@@ -3,6 +3,7 @@ world, with the jet's force on the rotor disks (its wake torque) and at the cent
 
     .venv/bin/python studies/crazyflie_tilt.py [--config examples/crazyflie.toml]
         [--depth 0.3] [--trials 16] [--data $AERODOCK_DATA_DIR/neural-swarm/swap_ss] [--json]
+        [--smoke]    # two followers, a settled start of 1 s
 
 Real: the tilt (angle of the body z axis from the vertical) of every sample of the swap_ss
 flights with the follower 0.25-0.35 m below the other vehicle and within 3 cm of its axis, and
@@ -19,6 +20,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import Config, load_config
 from aerodock.control.controller import PositionController, Reference
@@ -88,8 +90,11 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=16)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     cfg = load_config(args.config)
+    if args.smoke:
+        cfg, args.trials = smoke_config(cfg), SMOKE_TRIALS
     centre = cfg.with_overrides(  # a new field takes only the params given with it
         {"downwash": {"field": AT_CENTRE, "params": dict(cfg.data["downwash"]["params"])}},
         source="force at centre")

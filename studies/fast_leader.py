@@ -4,6 +4,7 @@ oracle (the simulator's true mean field, wake skew included), and how far the le
 mean vertical force is from the field's where the follower docks.
 
     .venv/bin/python studies/fast_leader.py --model DIR [--trials 100] [--seed 0] [--json]
+        [--smoke]    # the first case with the model only, two trials, the mission's waits cut
 
 The learnt model's features include both vehicles' velocities, so a skewed wake is something it
 can represent; whether it does at speeds it never saw in the curriculum (which flies the leader
@@ -16,6 +17,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
@@ -36,12 +39,16 @@ def main() -> int:
     parser.add_argument("--trials", type=int, default=100)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     cfg = controller_config(load_config(), args.controller)
+    cases = CASES[:1] if args.smoke else CASES
+    if args.smoke:
+        cfg, args.trials = smoke_config(cfg), SMOKE_TRIALS
     predictor = Predictor.load(args.model)
     rows = []
-    for speed, turn in CASES:
-        for comp in COMPENSATIONS:
+    for speed, turn in cases:
+        for comp in (Compensation.MODEL,) if args.smoke else COMPENSATIONS:
             res = run_campaign(cfg, MissionSpec(
                 trials=args.trials, offset_m=0.36, leader_speed_mps=speed,
                 leader_turn_rate_radps=turn, compensation=comp, seed=args.seed),

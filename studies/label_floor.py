@@ -1,6 +1,7 @@
 """The label's noise floor per follower: how much of it no wake model can explain (data only).
 
     .venv/bin/python studies/label_floor.py sl_train.npz sl_test.npz [--out-radius 0.3] [--json]
+        [--smoke]    # accepted for the suite: the study reads data only and takes seconds
 
 For each data set file (from ``aerodock ingest``) and each follower (the flight name's last
 ``_`` part, e.g. ``cf101``): the vertical label's RMS in the interaction region (the zero
@@ -14,6 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 
+from _smoke import add_smoke_option  # studies/, on sys.path
+
 from aerodock.experiments.label_floor import OUT_OF_WAKE_RADIUS_M, label_floor
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
@@ -25,6 +28,7 @@ def main() -> int:
     parser.add_argument("--out-radius", type=float, default=OUT_OF_WAKE_RADIUS_M,
                         help="horizontal distance out of the wake, m")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_smoke_option(parser)
     args = parser.parse_args()
     rows = []
     for path in args.data:

@@ -2,6 +2,7 @@
 Crazyflie flights (aerodock/identify/label_noise.py), beside the fit's pooled reading.
 
     .venv/bin/python studies/label_noise_speed.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
+        [--smoke]    # accepted for the suite: the study reads data only and takes seconds
 
 The jet is examples/crazyflie_wake_fitted.toml's, the flights the fit's: swap_ss 00-04 and
 swap_sl 00-07 fitted on, swap_ss 05-06 and swap_sl 08-11 held out (docs/world.md).
@@ -14,6 +15,8 @@ import json
 import sys
 import tomllib
 from pathlib import Path
+
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.identify.flights import prepare_flights, select_flights
@@ -33,6 +36,7 @@ def main() -> int:
     parser.add_argument("--data", type=Path,
                         default=DATA_DIR / "neural-swarm")
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     try:
         logs = read_swap_flights(args.data)

@@ -2,13 +2,14 @@
 10 % check (``results.json`` -> ``targets.learnt_mean``) a bias of the pipeline or one seed's?
 
     .venv/bin/python studies/learnt_mean_seeds.py [--seeds 0 1 2] [--config FILE]
-        [--out DIR] [--json]
+        [--out DIR] [--json] [--smoke]
 
 For each seed, the curriculum ``aerodock collect`` flies (the configuration's, as ``reproduce``
 flies it), then ``learnt_mean_check`` for the deep curriculum's model (``models/final``) and the
 paper's (``models/paper``) at 0.36 m, and the mean of the labels minus the simulator's mean field
 over the curriculum's samples within 3 cm of the axis 0.3-0.4 m below the leader (what the
-models learn from where the check looks). About a minute per seed.
+models learn from where the check looks). About a minute per seed. ``--smoke``: the first seed
+only, ``reproduce --smoke``'s curriculum trained for a few epochs, the mission's waits cut.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from _smoke import SMOKE_CURRICULUM, SMOKE_EPOCHS, add_smoke_option, smoke_config
 
 from aerodock.config import load_config
 from aerodock.experiments.targets import learnt_mean_check
@@ -55,14 +57,20 @@ def main() -> int:
     parser.add_argument("--config", type=Path, help="TOML overriding aerodock's defaults")
     parser.add_argument("--out", type=Path, help="keep each seed's curriculum in DIR/seed-N")
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     cfg = load_config(args.config) if args.config else load_config()
+    train_kwargs = None
+    if args.smoke:
+        cfg = smoke_config(cfg).with_overrides({"curriculum": SMOKE_CURRICULUM})
+        args.seeds, train_kwargs = args.seeds[:1], {"max_epochs": SMOKE_EPOCHS}
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         base = args.out if args.out is not None else Path(tmp)
         for seed in args.seeds:
             folder = base / f"seed-{seed}"
-            run_curriculum(cfg, folder, seed=seed, progress=lambda m: None)
+            run_curriculum(cfg, folder, seed=seed, progress=lambda m: None,
+                           train_kwargs=train_kwargs)
             deep = learnt_mean_check(cfg, Predictor.load(folder / "models" / "final"))[0]
             paper_dir = folder / "models" / "paper"
             paper = (learnt_mean_check(cfg, Predictor.load(paper_dir))[0]

@@ -2,10 +2,10 @@
 judged on the held-out swap_sl 08-11 (each follower apart) and swap_ss 05-06.
 
     .venv/bin/python studies/pairing_heldout.py ss_train.npz sl_train.npz ss_test.npz \\
-        sl_test.npz KIND [KIND ...]
+        sl_test.npz KIND [KIND ...] [--smoke]    # the first kind, two seeds, a few epochs
 
 The data files are ``aerodock ingest`` of swap_ss 00-04, swap_sl 00-07, swap_ss 05-06 and
-swap_sl 08-11 (docs/results.md gives the commands). Prints, per kind and seed 0, 1, 2, the
+swap_sl 08-11 (docs/results/so2-pair.md gives the commands). Prints, per kind and seed 0, 1, 2, the
 reduction of the interaction region's vertical RMSE against the zero model (``evaluate``'s
 ``interaction.model.rmse_mps2.z`` against ``interaction.zero.rmse_mps2.z``, the leader-aware
 kinds given the data's wake scales), then mean (sd, min-max): the same figures as
@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import argparse
 
-from pairing_validation import score_seeds  # studies/ is the script's folder, on sys.path
+from _smoke import SMOKE_EPOCHS, add_smoke_option
+from pairing_validation import SEEDS, score_seeds  # studies/ is the script's folder, on sys.path
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
@@ -28,6 +29,7 @@ def main() -> int:
     for name in ("ss_train", "sl_train", "ss_test", "sl_test"):
         parser.add_argument(name)
     parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
+    add_smoke_option(parser)
     args = parser.parse_args()
     bad = [k for k in args.kinds if k not in KINDS]
     if bad:
@@ -40,8 +42,12 @@ def main() -> int:
     judged = {"ss 05-06": load_data_paths([args.ss_test]),
               "small under large": sl_test.subset(follower == "cf51"),
               "large under small": sl_test.subset(follower == "cf101")}
-    for kind in args.kinds:
-        score_seeds("HELDOUT", kind, kind, fit, judged)
+    for kind in args.kinds[:1] if args.smoke else args.kinds:
+        if args.smoke:
+            score_seeds("HELDOUT", kind, kind, fit, judged, {"max_epochs": SMOKE_EPOCHS},
+                        seeds=SEEDS[:2])
+        else:
+            score_seeds("HELDOUT", kind, kind, fit, judged)
     return 0
 
 

@@ -3,11 +3,12 @@ large-under-small target): train on swap_ss 00-04 + swap_sl 00-04, judge on swap
 follower apart; the held-out swap_sl 08-11 are not read.
 
     .venv/bin/python studies/pairing_validation.py ss_train.npz sl_train.npz [CANDIDATE ...]
+        [--smoke]    # the first candidate, two seeds, a few epochs
 
 ``ss_train.npz`` and ``sl_train.npz`` are ``aerodock ingest`` of swap_ss 00-04 and swap_sl 00-07
-(docs/results.md gives the commands). Prints, per candidate and seed 0, 1, 2, the reduction of
-the interaction region's vertical RMSE against the zero model on swap_sl 05-07 per follower
-(``cf51`` small, ``cf101`` large), then mean (sd, min-max). Candidates: see ``CANDIDATES``.
+(docs/results/label-floor.md gives the commands). Prints, per candidate and seed 0, 1, 2, the
+reduction of the interaction region's vertical RMSE against the zero model on swap_sl 05-07 per
+follower (``cf51`` small, ``cf101`` large), then mean (sd, min-max). Candidates: see ``CANDIDATES``.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from _smoke import SMOKE_EPOCHS, add_smoke_option
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
@@ -39,12 +41,13 @@ FIT_LAST, VALIDATION = 4, (5, 6, 7)
 
 
 def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, Dataset],
-                options: dict | None = None) -> dict[str, list[float]]:
-    """Train ``kind`` on ``fit`` for each of :data:`SEEDS` and print, per data set of
+                options: dict | None = None, seeds: tuple[int, ...] = SEEDS
+                ) -> dict[str, list[float]]:
+    """Train ``kind`` on ``fit`` for each of ``seeds`` (:data:`SEEDS`) and print, per data set of
     ``judged``, the interaction region's vertical RMSE reduction against the zero model (%), per
     seed and then as ``TAG NAME WHO: mean % (sd, min-max)``; returns the reductions."""
     scores: dict[str, list[float]] = {who: [] for who in judged}
-    for seed in SEEDS:
+    for seed in seeds:
         predictor = train_model(kind, fit, seed=seed, **(options or {})).predictor()
         for who, ds in judged.items():
             ev = evaluate(predictor, ds)["interaction"]
@@ -63,6 +66,7 @@ def main() -> int:
     parser.add_argument("ss_train", help="swap_ss 00-04 (aerodock ingest)")
     parser.add_argument("sl_train", help="swap_sl 00-07 (aerodock ingest --vehicle ...)")
     parser.add_argument("candidates", nargs="*", help=f"some of {', '.join(CANDIDATES)}")
+    add_smoke_option(parser)
     args = parser.parse_args()
     unknown = [c for c in args.candidates if c not in CANDIDATES]
     if unknown:
@@ -75,10 +79,15 @@ def main() -> int:
     sl_fit = sl.subset(number <= FIT_LAST)
     validation = {who: sl.subset(np.isin(number, VALIDATION) & (follower == who))
                   for who in ("cf51", "cf101")}
-    for name in args.candidates or list(CANDIDATES):
+    names = args.candidates or list(CANDIDATES)
+    for name in names[:1] if args.smoke else names:
         kind, with_ss, options = CANDIDATES[name]
         fit = concat_datasets([ss, sl_fit]) if with_ss else sl_fit
-        score_seeds("VAL", name, kind, fit, validation, options)
+        if args.smoke:
+            score_seeds("VAL", name, kind, fit, validation,
+                        {**options, "max_epochs": SMOKE_EPOCHS}, seeds=SEEDS[:2])
+        else:
+            score_seeds("VAL", name, kind, fit, validation, options)
     return 0
 
 

@@ -9,7 +9,7 @@ attitude and their difference over time (the aero-on run) to a PNG.
 Needs RotorPy: ``.venv/bin/pip install --no-deps rotorpy``.
 
 Run: ``.venv/bin/python studies/peer_rotorpy.py [--figure docs/figures/peer_rotorpy.png] [--json]
-[--rtol 1e-9]``.
+[--rtol 1e-9] [--smoke]``; ``--smoke`` flies 0.2 s with drag on only (its error is no figure).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.fileio import atomic_open, dumps_json
@@ -90,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rtol", type=float, default=None,
                         help="RotorPy's solve_ivp relative tolerance (default: its own, 1e-3); "
                              "atol is 1e-3 of it")
+    add_smoke_option(parser)
     args = parser.parse_args(argv)
     try:
         import rotorpy  # noqa: F401
@@ -102,8 +104,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--rtol must be in (0, 1), got {args.rtol}")
     kwargs = (None if args.rtol is None
               else {"method": "RK45", "rtol": args.rtol, "atol": 1e-3 * args.rtol})
-    runs = {aero: compare_with_rotorpy(cfg, aero=aero, integrator_kwargs=kwargs)
-            for aero in (True, False)}
+    size = {"duration_s": 0.2} if args.smoke else {}
+    runs = {aero: compare_with_rotorpy(cfg, aero=aero, integrator_kwargs=kwargs, **size)
+            for aero in ((True,) if args.smoke else (True, False))}
     if args.json:
         print(dumps_json({("aero_on" if k else "aero_off"): c.summary()
                           for k, c in runs.items()}))

@@ -3,6 +3,7 @@ pairs sink.
 
     .venv/bin/python studies/post_dock.py --controller ours --compensation observer --seed 1
     .venv/bin/python studies/post_dock.py --controller ours --compensation model --model DIR
+    .venv/bin/python studies/post_dock.py --smoke    # two trials, the mission's waits cut
 
 A campaign flies until its last trial is done; a trial that finished earlier (phase DONE: docked
 and hung on the cables for ``mission.post_dock_s``, or backed off) goes on being simulated.
@@ -17,6 +18,8 @@ and how far the leader has sunk below its altitude when a docked trial ends. The
 from __future__ import annotations
 
 import argparse
+
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.control.profiles import controller_config
@@ -34,8 +37,11 @@ def main() -> None:
     ap.add_argument("--leader-speed", type=float, default=0.0, help="m/s")
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--seed", type=int, default=1)
+    add_smoke_option(ap)
     args = ap.parse_args()
     cfg = controller_config(load_config(), args.controller)
+    if args.smoke:
+        cfg, args.trials = smoke_config(cfg), SMOKE_TRIALS
     predictor = Predictor.load(args.model) if args.model else None
     n = args.trials
     batch = MissionBatch(cfg, MissionSpec(trials=n, offset_m=0.36,

@@ -3,6 +3,7 @@
     .venv/bin/python studies/sample_efficiency.py --part sim --size full --out runs/se-sim
     .venv/bin/python studies/sample_efficiency.py --part real --out runs/se-real \
         [--real-folder $AERODOCK_DATA_DIR/neural-swarm/swap_ss]
+    .venv/bin/python studies/sample_efficiency.py --part real|sim --smoke --out DIR   # seconds
 
 ``sim``: step 1 of ``aerodock reproduce`` (the curriculum's flights and models, held-out
 excitation flights, the sample-efficiency pool: :func:`aerodock.experiments.reproduce.
@@ -11,7 +12,9 @@ learning_data`) at the reproduction's ``--size`` (``quick`` or ``full``), then
 ``--minutes`` / ``--seeds`` replace the size's (an intermediate size, named in the output).
 ``real``: the sample-efficiency part of the real-data study (Neural-Swarm swap_ss, train on
 flights 00-04, judge on 05-06, metric ``interaction``, :func:`aerodock.experiments.real_data.
-real_split`) at its full minutes and seeds unless replaced.
+real_split`) at its full minutes and seeds unless replaced. ``--smoke``: the smallest run that
+crosses every step (``reproduce --smoke``'s size for ``sim``; half a minute of data, one seed
+and a few epochs a training for both).
 
 Prints, per kind and minutes, the mean (sd over seeds) held-out RMSE, m/s², over all samples and
 over the interaction region, and the zero model's; writes ``OUT/sample_efficiency_PART.json``
@@ -28,9 +31,11 @@ import time
 from pathlib import Path
 from typing import Any
 
+from _smoke import SMOKE_EPOCHS, add_smoke_option  # studies/, on sys.path
+
 from aerodock.config import load_config
 from aerodock.experiments import real_data
-from aerodock.experiments.reproduce import FULL, QUICK, learning_data
+from aerodock.experiments.reproduce import FULL, QUICK, SMOKE, learning_data
 from aerodock.experiments.sample_efficiency import sample_efficiency
 from aerodock.fileio import json_ready, write_json
 from aerodock.ingest.data_dir import find_data_dir
@@ -88,7 +93,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--real-folder", type=Path,
                         default=DATA_DIR / "neural-swarm" / "swap_ss")
     parser.add_argument("--out", type=Path, required=True, help="output folder")
+    add_smoke_option(parser)
     args = parser.parse_args(argv)
+    train_kwargs = {"max_epochs": SMOKE_EPOCHS} if args.smoke else None
+    if args.smoke:
+        args.size = "smoke"
+        args.minutes, args.seeds = args.minutes or [0.5], args.seeds or [0]
     if args.minutes is not None and min(args.minutes) <= 0:
         parser.error("--minutes must be > 0")
     if args.part == "real" and not args.real_folder.is_dir():
@@ -98,12 +108,12 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     record: dict[str, Any] = {"part": args.part, "commit": _commit(), "kinds": list(KINDS)}
     if args.part == "sim":
-        size = FULL if args.size == "full" else QUICK
+        size = {"full": FULL, "quick": QUICK, "smoke": SMOKE}[args.size]
         if args.minutes is not None or args.seeds is not None:
             size = dataclasses.replace(
                 size, se_minutes=tuple(args.minutes or size.se_minutes),
                 se_seeds=tuple(size.se_seeds if args.seeds is None else args.seeds))
-        record["size"] = {"base": args.size, "intermediate": size not in (FULL, QUICK),
+        record["size"] = {"base": args.size, "intermediate": size not in (FULL, QUICK, SMOKE),
                           "se_minutes": size.se_minutes, "se_seeds": size.se_seeds,
                           "se_pool_flights": size.se_pool_flights,
                           "test_flights_per_stage": size.test_flights_per_stage,
@@ -115,7 +125,8 @@ def main(argv: list[str] | None = None) -> int:
         se = sample_efficiency(
             build_dataset(learning.train_logs), learning.test_ds, kinds=KINDS,
             minutes=size.se_minutes, seeds=size.se_seeds, out_dir=fig_dir,
-            train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
+            train_kwargs={**({"max_time_s": size.se_max_time_s} if size.se_max_time_s else {}),
+                          **(train_kwargs or {})} or None,
             progress=_progress)
     else:
         minutes = tuple(args.minutes or real_data.SE_MINUTES["full"])
@@ -125,7 +136,8 @@ def main(argv: list[str] | None = None) -> int:
                       test_flights=[lg.name for lg in test_logs])
         t0 = time.perf_counter()
         se = sample_efficiency(train_ds, test_ds, kinds=KINDS, minutes=minutes, seeds=seeds,
-                               out_dir=fig_dir, metric="interaction", progress=_progress)
+                               out_dir=fig_dir, metric="interaction", train_kwargs=train_kwargs,
+                               progress=_progress)
     record["sample_efficiency_s"] = time.perf_counter() - t0
     record["total_s"] = time.perf_counter() - started
     record["sample_efficiency"] = se

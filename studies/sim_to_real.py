@@ -4,10 +4,11 @@ flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judg
 
     .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
         [--pair small_under_small|small_under_large] [--data $AERODOCK_DATA_DIR/neural-swarm]
-        [--out sim_to_real.json] [--json]
+        [--out sim_to_real.json] [--json] [--smoke]
 
 The worlds are examples/crazyflie.toml (small under small) and
-examples/crazyflie_small_under_large.toml (small under large).
+examples/crazyflie_small_under_large.toml (small under large). ``--smoke``: small under small
+only (unless ``--pair`` names one), one flight in two depth bands, 8 epochs.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.experiments.sim_to_real import PAIRS, sim_to_real_study
@@ -40,13 +43,16 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, help="write the results as JSON here")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_smoke_option(parser)
     args = parser.parse_args()
+    if args.smoke and not args.pair:
+        args.pair = ["small_under_small"]
     if not args.data.is_dir():
         print(f"error: {args.data}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
         return 2
     worlds = {key: load_config(WORLDS[key]) for key in (args.pair or sorted(PAIRS))}
     result = sim_to_real_study(worlds, args.data, kind=args.model, quick=args.quick,
-                               seed=args.seed,
+                               seed=args.seed, smoke=args.smoke,
                                progress=None if args.json else lambda m: print(m, flush=True))
     if args.out is not None:
         write_json(args.out, result, final_newline=True)

@@ -3,6 +3,7 @@ torque feed-forward off and on: the measurement behind README's "learnt wrench" 
 
     aerodock collect --out out/wrench --config examples/learnt_wrench.toml
     .venv/bin/python studies/torque_pairing.py out/wrench/models/final --offset 0.36 --trials 100
+    .venv/bin/python studies/torque_pairing.py DIR --smoke   # feed-forward on, two trials, short
 
 For each setting: docked trials and the terminal tilt (the campaign summary), then medians over
 the approaching trials in the final second before the planned arrival: the follower's distance
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.control.compensation import Compensation, OraclePredictor
@@ -36,11 +38,14 @@ def main() -> None:
     ap.add_argument("--offset", type=float, default=0.36, help="cable length d_p, m")
     ap.add_argument("--trials", type=int, default=100)
     ap.add_argument("--seed", type=int, default=0)
+    add_smoke_option(ap)
     args = ap.parse_args()
     predictor = Predictor.load(args.model)
     base = controller_config(load_config(), "ours")
+    if args.smoke:
+        base, args.trials = smoke_config(base), SMOKE_TRIALS
     g = base.sim.gravity_mps2
-    for torque_ff in (False, True):
+    for torque_ff in (True,) if args.smoke else (False, True):
         cfg = base.with_overrides({"control": {"torque_feedforward": torque_ff}})
         batch = MissionBatch(cfg, MissionSpec(trials=args.trials, offset_m=args.offset,
                                               compensation=Compensation.MODEL, seed=args.seed),

@@ -4,7 +4,7 @@ logged motor torques give, docs/crazyflie.md, "The wake's torque in the logs"), 
 unchanged, in hover at d_p 0.36 m.
 
     .venv/bin/python studies/torque_sensitivity.py [--gains 1 5 8] [--trials 100] [--seed 0]
-        [--model DIR] [--json]
+        [--model DIR] [--json] [--smoke]
 
 Cells: the paper's controller (as published) with the oracle (the simulator's true mean force:
 a perfect model), ours (tuned + accelerometer observer) without a model, and ours with the
@@ -12,7 +12,8 @@ oracle; with ``--model``, ours with that learnt model too. Every cell flies the 
 the gains differ by the torque alone. The attitude loops are the world's as configured: the
 real Crazyflie holds a torque at least fifteen times more stiffly than the Crazyflie world's
 (same page), and no log says how the paper's vehicles hold one, so a gain above 1 here is the
-logged torque without the loop that meets it in a real vehicle.
+logged torque without the loop that meets it in a real vehicle. ``--smoke`` flies the first gain
+and the first cell only, two trials, the mission's waits cut.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.control.compensation import Compensation
@@ -40,16 +43,20 @@ def main() -> int:
     parser.add_argument("--offset", type=float, default=0.36, help="cable length d_p, m")
     parser.add_argument("--model", type=Path, help="a trained model directory (ours + model)")
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
     if any(g < 0 for g in args.gains):
         print("error: --gains must be >= 0", file=sys.stderr)
         return 2
     base = load_config()
+    if args.smoke:
+        base, args.trials, args.gains = smoke_config(base), SMOKE_TRIALS, args.gains[:1]
     predictor = Predictor.load(args.model) if args.model is not None else None
     cells = [("paper", Compensation.ORACLE), ("ours", Compensation.OBSERVER),
              ("ours", Compensation.ORACLE)]
     if predictor is not None:
         cells.append(("ours", Compensation.MODEL))
+    cells = cells[:1] if args.smoke else cells
     rows = []
     for gain in args.gains:
         params = {**base.downwash.params, "disk_torque_gain": gain}

@@ -5,6 +5,7 @@ physics rate, through the public ``field probe`` functions only, so an older aer
 alike).
 
     .venv/bin/python studies/wake_paper_scale.py [--samples 40000] [--json]
+        [--smoke]    # 2,000 samples a separation
     # the previous release's hand-calibrated jet, for the comparison in docs/world.md:
     git archive 609b0bc aerodock | tar -x -C /tmp/before
     PYTHONPATH=/tmp/before .venv/bin/python studies/wake_paper_scale.py
@@ -16,6 +17,7 @@ import argparse
 import json
 
 import numpy as np
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.downwash import build_field
@@ -54,8 +56,9 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=40000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
     args = parser.parse_args()
-    rows = measure(args.samples, args.seed)
+    rows = measure(2000 if args.smoke else args.samples, args.seed)
     if args.json:
         print(json.dumps(rows, indent=2))
         return

@@ -2,6 +2,7 @@
 and body rates) against the fitted jet's at the same states (aerodock/identify/wake_torque.py).
 
     .venv/bin/python studies/wake_torque.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
+        [--smoke]    # accepted for the suite: the study reads data only and takes seconds
 
 The jet is examples/crazyflie_small_under_large.toml's (the fitted wake, cf101's fitted rotors);
 the inertias are that file's: the small Crazyflie's [vehicle] and the large cf101's [leader]
@@ -16,6 +17,8 @@ import json
 import sys
 from dataclasses import asdict
 from pathlib import Path
+
+from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
@@ -34,6 +37,7 @@ def main() -> int:
     parser.add_argument("--data", type=Path,
                         default=DATA_DIR / "neural-swarm")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_smoke_option(parser)
     args = parser.parse_args()
     try:
         logs = read_swap_flights(args.data)

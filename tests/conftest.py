@@ -36,6 +36,7 @@ DATA_DIR = find_data_dir(cwd=Path(__file__).resolve().parents[1]).path or SHARED
 _FIRST = (
     "tests/protocol/test_protocol_commands.py",  # three runs started as the module begins
     "tests/e2e/test_reproduce.py",
+    "tests/studies/test_studies.py",  # about twenty study scripts, one after the other
 )
 
 

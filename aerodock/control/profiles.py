@@ -8,7 +8,8 @@
   filter for position and velocity (:mod:`aerodock.control.freyja_state_filter`); its bias
   estimator (:mod:`aerodock.control.freyja_estimator`, propagated at 20 Hz). Used for every
   figure that stands beside the paper's. The paper itself states none of the last four; each
-  one's effect is measured (``docs/results.md``).
+  one's effect is measured (``docs/results/hand-calibrated-wake.md``,
+  ``docs/results/hand-calibrated-levers.md``).
 - ``tuned``: the configuration as given (by default: stiffer terminal weights scheduled in the
   last ``mission.terminal_s`` before arrival). A separate, named row wherever it is reported.
 - ``ours``: ``tuned`` plus fast disturbance rejection from the accelerometer

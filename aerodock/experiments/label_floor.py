@@ -15,7 +15,7 @@ on the axis measured (z, the vertical, by default: the axis of the documented fi
 offset in the non-wake part (a wrong bias) counts in ``ms_out`` like noise: a model of the wake
 alone does not predict it. ``out_mean`` reports that offset apart.
 
-Used by ``studies/label_floor.py`` on the real Neural-Swarm flights (docs/results.md).
+Used by ``studies/label_floor.py`` on the real Neural-Swarm flights (docs/results/label-floor.md).
 """
 
 from __future__ import annotations

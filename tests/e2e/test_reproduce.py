@@ -120,7 +120,7 @@ def test_reproduce_writes_results_report_and_figures(tmp_path):
             assert pairing["interaction_samples"] > 1000
             assert pairing["models"]["zero"]["vertical_reduction"] == 0.0
             # the paper's model, trained on the small pair, still removes part of a wake of
-            # another size (docs/results.md, seeds 0-2: 61.8-68.2 % and 48.1-54.0 %)
+            # another size (docs/results/label-floor.md, seeds 0-2: 61.8-68.2 % and 48.1-54.0 %)
             assert pairing["models"]["so2"]["vertical_reduction"] > 0.2
         assert "Transfer to a pair of other sizes" in report
     else:  # no flights in the data location: the report says so, and where to get them

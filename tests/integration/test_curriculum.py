@@ -83,7 +83,8 @@ def test_run_curriculum_writes_logs_and_deploys_models(collected):
 
 def test_the_fast_leader_curriculum_flies_the_targets_leader_speeds(short_cfg):
     """examples/curriculum_fast_leader.toml: the leader drifts at up to 0.6 m/s, covering the
-    docking targets' 0.5 m/s; the default drifts at up to 0.3 m/s (docs/results.md)."""
+    docking targets' 0.5 m/s; the default drifts at up to 0.3 m/s
+    (docs/results/fitted-wake-targets.md)."""
     from pathlib import Path
 
     from aerodock.config import load_config
