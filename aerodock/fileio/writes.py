@@ -43,13 +43,19 @@ def _umask() -> int:
 
 
 def check_writable_target(path: str | Path) -> Path:
-    """Refuse an output path that exists and is not a regular file (a FIFO, a device, a folder).
+    """Refuse an output path that exists and is not a regular file (a FIFO, a device, a folder)
+    or is a symbolic link (a file is replaced by renaming, which would replace the link itself
+    and leave the file it points to as it was).
 
     Raises:
         IsADirectoryError: ``path`` is a folder.
-        OSError: ``path`` is another kind of non-regular file.
+        OSError: ``path`` is a symbolic link or another kind of non-regular file.
     """
     path = Path(path)
+    if path.is_symlink():
+        raise OSError(f"{path}: is a symbolic link; aerodock replaces an output file by "
+                      "renaming and does not follow links: give the file it points to "
+                      f"({os.path.realpath(path)}) or a new name")
     try:
         mode = path.stat().st_mode
     except FileNotFoundError:

@@ -263,3 +263,19 @@ def test_npz_header_checks(tmp_path, members, needle):
     path = _npz(tmp_path, {"format.npy": _npy(np.array("fmt")), **members})
     with np.load(path, allow_pickle=False) as data, pytest.raises(ValueError, match=needle):
         check_npz_header(data, path, "fmt", 1, "thing", ValueError)
+
+
+def test_a_file_output_given_as_a_symlink_is_refused_and_left_alone(tmp_path):
+    """Writing replaces the file by renaming, which would replace the link itself: refused in
+    one line, the link and the file it points to as they were."""
+    from aerodock.fileio import write_json
+
+    target = tmp_path / "real.json"
+    target.write_text('{"old": 1}')
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    with pytest.raises(OSError, match="is a symbolic link") as info:
+        write_json(link, {"new": 2})
+    assert "\n" not in str(info.value)
+    assert link.is_symlink() and target.read_text() == '{"old": 1}'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json"]
