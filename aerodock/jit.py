@@ -204,11 +204,7 @@ def np_exp(loops: Any, x: Any, out: Any) -> None:
         for i in range(x.shape[0]):
             out[i] = math.exp(x[i])
         return
-    buf = np.empty(5, np.intp)
-    buf[0], buf[1], buf[2] = x.ctypes.data, out.ctypes.data, x.shape[0]
-    buf[3], buf[4] = x.strides[0], out.strides[0]
-    a = buf.ctypes.data
-    _call_loop(fn, a, a + 16, a + 24)
+    _unary(fn, x, out)
 
 
 @njit
@@ -219,7 +215,13 @@ def np_log(loops: Any, x: Any, out: Any) -> None:
         for i in range(x.shape[0]):
             out[i] = math.log(x[i]) if x[i] > 0 else (-math.inf if x[i] == 0 else math.nan)
         return
-    buf = np.empty(5, np.intp)
+    _unary(fn, x, out)
+
+
+@njit
+def _unary(fn: int, x: Any, out: Any) -> None:
+    """Call the one-input loop at ``fn`` over the rows ``x`` into ``out``."""
+    buf = np.empty(5, np.intp)  # the two arrays' addresses, the length, their strides
     buf[0], buf[1], buf[2] = x.ctypes.data, out.ctypes.data, x.shape[0]
     buf[3], buf[4] = x.strides[0], out.strides[0]
     a = buf.ctypes.data
@@ -228,6 +230,7 @@ def np_log(loops: Any, x: Any, out: Any) -> None:
 
 @njit
 def _binary(fn: int, x: Any, y: Any, out: Any) -> None:
+    """Call the two-input loop at ``fn`` over the rows ``x`` and ``y`` into ``out``."""
     buf = np.empty(7, np.intp)
     buf[0], buf[1], buf[2], buf[3] = x.ctypes.data, y.ctypes.data, out.ctypes.data, x.shape[0]
     buf[4], buf[5], buf[6] = x.strides[0], y.strides[0], out.strides[0]

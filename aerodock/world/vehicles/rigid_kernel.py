@@ -67,6 +67,17 @@ def tuple28(a: np.ndarray) -> tuple:
 
 
 @njit
+def dot4(a0: float, a1: float, a2: float, a3: float, b0: float, b1: float, b2: float,
+         b3: float) -> float:
+    """``((a0 b0 + a1 b1) + a2 b2) + a3 b3``: a sum over four rotors in NumPy's order (each
+    product rounded, then added one by one)."""
+    s = a0 * b0 + a1 * b1
+    s += a2 * b2
+    s += a3 * b3
+    return s
+
+
+@njit
 def _max(a: float, b: float) -> float:
     """``np.maximum(a, b)``: NaN propagates, ties keep ``a``."""
     return a if (a >= b or a != a) else b
@@ -136,18 +147,11 @@ def mix(thrust: float, tau0: float, tau1: float, tau2: float, mixer_inv: tuple,
     collective shifted (down when a rotor exceeds its maximum, up when one would go below
     zero) so the torque differences survive, then every rotor clipped to
     ``[0, rotor_thrust_max]``."""
-    f0 = mixer_inv[0] * thrust + mixer_inv[4] * tau0
-    f0 += mixer_inv[8] * tau1
-    f0 += mixer_inv[12] * tau2
-    f1 = mixer_inv[1] * thrust + mixer_inv[5] * tau0
-    f1 += mixer_inv[9] * tau1
-    f1 += mixer_inv[13] * tau2
-    f2 = mixer_inv[2] * thrust + mixer_inv[6] * tau0
-    f2 += mixer_inv[10] * tau1
-    f2 += mixer_inv[14] * tau2
-    f3 = mixer_inv[3] * thrust + mixer_inv[7] * tau0
-    f3 += mixer_inv[11] * tau1
-    f3 += mixer_inv[15] * tau2
+    m = mixer_inv
+    f0 = dot4(m[0], m[4], m[8], m[12], thrust, tau0, tau1, tau2)
+    f1 = dot4(m[1], m[5], m[9], m[13], thrust, tau0, tau1, tau2)
+    f2 = dot4(m[2], m[6], m[10], m[14], thrust, tau0, tau1, tau2)
+    f3 = dot4(m[3], m[7], m[11], m[15], thrust, tau0, tau1, tau2)
     lo = -_min(_min(_min(f0, f1), f2), f3)
     hi = rotor_thrust_max - _max(_max(_max(f0, f1), f2), f3)
     shift = _min(_max(lo, 0.0), hi)
@@ -224,15 +228,9 @@ def rotor_wrench(o0: float, o1: float, o2: float, o3: float, kc: float, torque_g
     f1 = o1 * o1 * kc
     f2 = o2 * o2 * kc
     f3 = o3 * o3 * kc
-    tq0 = tm[0] * f0 + tm[3] * f1
-    tq0 += tm[6] * f2
-    tq0 += tm[9] * f3
-    tq1 = tm[1] * f0 + tm[4] * f1
-    tq1 += tm[7] * f2
-    tq1 += tm[10] * f3
-    tq2 = tm[2] * f0 + tm[5] * f1
-    tq2 += tm[8] * f2
-    tq2 += tm[11] * f3
+    tq0 = dot4(tm[0], tm[3], tm[6], tm[9], f0, f1, f2, f3)
+    tq1 = dot4(tm[1], tm[4], tm[7], tm[10], f0, f1, f2, f3)
+    tq2 = dot4(tm[2], tm[5], tm[8], tm[11], f0, f1, f2, f3)
     tq2 *= torque_gain
     thrust = f0 + f1
     thrust += f2
@@ -285,10 +283,7 @@ def rotor_wrench(o0: float, o1: float, o2: float, o3: float, kc: float, torque_g
 @njit
 def _drag_sum(o0: float, o1: float, o2: float, o3: float, ds: tuple, c: int) -> float:
     """Column ``c`` of the rotor drag's weighted sums, ``sum_i omega_i ds[i, c]`` in order."""
-    s = ds[c] * o0 + ds[7 + c] * o1
-    s += ds[14 + c] * o2
-    s += ds[21 + c] * o3
-    return s
+    return dot4(ds[c], ds[7 + c], ds[14 + c], ds[21 + c], o0, o1, o2, o3)
 
 
 @njit
