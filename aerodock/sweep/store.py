@@ -35,6 +35,7 @@ from aerodock.fileio import (
     read_input_text,
     refuse_symlink,
 )
+from aerodock.mission.spec import AbortReason
 from aerodock.sweep.spec import Cell
 
 CELL_FORMAT = 1
@@ -63,6 +64,38 @@ def code_version() -> str:
     return str(version)
 
 
+def code_digest(cfg: Config | None = None) -> str:
+    """SHA-256 over aerodock's sources (every module of the package, by path and bytes) and,
+    when ``cfg`` names a plug-in field outside aerodock, that module's source: a cell flown
+    by other code is never reused (an editable install keeps one version number across
+    commits)."""
+    import aerodock
+
+    h = hashlib.sha256()
+    root = Path(aerodock.__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode() + b"\0")
+        h.update(path.read_bytes())
+    plugin = _plugin_source(cfg)
+    if plugin is not None:
+        h.update(b"plugin\0" + plugin.read_bytes())
+    return h.hexdigest()
+
+
+def _plugin_source(cfg: Config | None) -> Path | None:
+    """The source file of the plug-in field ``cfg`` names, if it is not aerodock's own (the
+    config's trust check has imported it already; nothing is imported here)."""
+    import sys
+
+    name = str(((cfg.data.get("downwash") or {}) if cfg is not None else {}).get("field") or "")
+    module = name.split(":", 1)[0]
+    if not module or module == "aerodock" or module.startswith("aerodock."):
+        return None
+    loaded = sys.modules.get(module)
+    origin = getattr(loaded, "__file__", None)
+    return Path(origin) if origin and Path(origin).is_file() else None
+
+
 def model_digest(model: str | Path | None) -> str | None:
     """SHA-256 over a model folder's files (names and bytes), or None without a model."""
     if model is None:
@@ -78,10 +111,11 @@ def model_digest(model: str | Path | None) -> str | None:
 def cell_settings(cell_cfg: Config, cell: Cell, trials: int, model_sha256: str | None
                   ) -> dict[str, Any]:
     """Everything a cell's outcomes depend on (JSON-ready): its resolved configuration and
-    campaign, the model's digest (:func:`model_digest`; compensation ``model`` only) and
-    aerodock's version."""
+    campaign, the model's digest (:func:`model_digest`; compensation ``model`` only),
+    aerodock's version and the digest of the code that flies it (:func:`code_digest`)."""
     offset = cell.cable_length_m
-    return {"format": CELL_FORMAT, "aerodock": code_version(), "config": cell_cfg.data,
+    return {"format": CELL_FORMAT, "aerodock": code_version(), "code": _code_digest(cell_cfg),
+            "config": cell_cfg.data,
             "campaign": {"trials": trials,
                          "cable_length_m": (cell_cfg.platform.cable_length_m if offset is None
                                             else offset),
@@ -120,18 +154,22 @@ class CellStore:
         """The indices of the cells flown (and saved)."""
         self.keys: dict[int, str] = {}
         """Every cell's key by index (set by :func:`aerodock.sweep.run.run_sweep`)."""
+        self.validated: dict[str, Path] = {}
+        """The folder each reused cell's file was read (and checked) from, by key."""
 
     def load(self, key: str, trials: int) -> list[dict[str, Any]] | None:
         """The outcomes of the cell ``key`` (one dict per trial), or None if no folder holds a
-        valid file for it."""
+        valid file for it (a damaged or crafted file is flown again, never an error)."""
         for folder in self.reuse_from:
             try:
                 doc = json.loads(read_input_text(folder / f"{key}.json", "sweep cell",
-                                                 MAX_JSON_BYTES))
-            except (OSError, InputError, ValueError, RecursionError):
+                                                 MAX_JSON_BYTES), parse_constant=_no_constant)
+                if _valid(doc, key, trials):
+                    outcomes = [_outcome(o) for o in doc["outcomes"]]
+                    self.validated[key] = folder
+                    return outcomes
+            except (OSError, InputError, ValueError, OverflowError, TypeError, RecursionError):
                 continue
-            if _valid(doc, key, trials):
-                return [_outcome(o) for o in doc["outcomes"]]
         return None
 
     def save(self, key: str, settings: dict[str, Any], outcomes: list[dict[str, Any]]) -> Path:
@@ -149,7 +187,10 @@ class CellStore:
         target = Path(target)
         target.mkdir(parents=True, exist_ok=True)
         for key in keys:
-            for folder in (self.folder, *self.reuse_from):
+            # a reused cell from the file that was checked; a flown one from what this run saved
+            folders = ((self.validated[key],) if key in self.validated
+                       else (self.folder, *self.reuse_from))
+            for folder in folders:
                 source = folder / f"{key}.json"
                 if source.is_file() and not source.is_symlink():
                     shutil.copyfile(source, target / source.name)
@@ -181,8 +222,29 @@ def _valid_outcome(o: Any, trial: int) -> bool:
     """One trial's outcome as :func:`aerodock.sweep.run.run_cell` writes it (typed columns)."""
     return (isinstance(o, dict) and tuple(o) == OUTCOME_NAMES and o["trial"] == trial
             and type(o["trial"]) is int and all(isinstance(o[k], bool) for k in _BOOLS)
-            and isinstance(o["abort_reason"], str)
-            and all(o[k] is None or _is_number(o[k]) for k in (*_FLOATS, "capture_time_s")))
+            and o["abort_reason"] in _ABORT_NAMES
+            and all(o[k] is None or (_is_number(o[k]) and math.isfinite(float(o[k])))
+                    for k in (*_FLOATS, "capture_time_s")))
+
+
+_ABORT_NAMES = frozenset(reason.name.lower() for reason in AbortReason)
+
+
+def _no_constant(name: str) -> float:
+    """``json.loads``'s ``parse_constant``: a cell file holds no NaN or Infinity."""
+    raise ValueError(f"a sweep cell file holds no {name}")
+
+
+_DIGESTS: dict[tuple[str, ...], str] = {}
+
+
+def _code_digest(cfg: Config) -> str:
+    """:func:`code_digest`, computed once per process and plug-in module."""
+    plugin = _plugin_source(cfg)
+    key = (str(plugin),)
+    if key not in _DIGESTS:
+        _DIGESTS[key] = code_digest(cfg)
+    return _DIGESTS[key]
 
 
 def _outcome(o: dict[str, Any]) -> dict[str, Any]:
