@@ -2,35 +2,40 @@
 judged on the held-out swap_sl 08-11 (each follower apart) and swap_ss 05-06.
 
     .venv/bin/python studies/pairing_heldout.py ss_train.npz sl_train.npz ss_test.npz \\
-        sl_test.npz KIND [KIND ...] [--smoke]    # the first kind, two seeds, a few epochs
+        sl_test.npz KIND [KIND ...] [--smoke]
 
 The data files are ``aerodock ingest`` of swap_ss 00-04, swap_sl 00-07, swap_ss 05-06 and
 swap_sl 08-11 (docs/results/so2-pair.md gives the commands). Prints, per kind and seed 0, 1, 2, the
 reduction of the interaction region's vertical RMSE against the zero model (``evaluate``'s
 ``interaction.model.rmse_mps2.z`` against ``interaction.zero.rmse_mps2.z``, the leader-aware
 kinds given the data's wake scales), then mean (sd, min-max): the same figures as
-``aerodock train`` then ``aerodock evaluate`` on the flights of one follower.
+``aerodock train`` then ``aerodock evaluate`` on the flights of one follower. Last, the table
+(docs/results/deep-sets.md): one row per kind. ``--smoke``: seed 0 and at most
+:data:`SMOKE_EPOCHS` epochs (a test's size; its figures are no result).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from _smoke import SMOKE_EPOCHS, add_smoke_option
-from pairing_validation import SEEDS, score_seeds  # studies/ is the script's folder, on sys.path
+from pairing_validation import SEEDS, score_seeds, summary  # studies/ is on sys.path
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
 from aerodock.learning.features import KINDS
 
+SMOKE_EPOCHS = 10
+"""``--smoke``'s epoch limit."""
 
-def main() -> int:
+
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for name in ("ss_train", "sl_train", "ss_test", "sl_test"):
         parser.add_argument(name)
     parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
-    add_smoke_option(parser)
-    args = parser.parse_args()
+    parser.add_argument("--smoke", action="store_true",
+                        help=f"seed 0, at most {SMOKE_EPOCHS} epochs (a test's size)")
+    args = parser.parse_args(argv)
     bad = [k for k in args.kinds if k not in KINDS]
     if bad:
         parser.error(f"unknown model kind {bad[0]!r}")
@@ -42,12 +47,13 @@ def main() -> int:
     judged = {"ss 05-06": load_data_paths([args.ss_test]),
               "small under large": sl_test.subset(follower == "cf51"),
               "large under small": sl_test.subset(follower == "cf101")}
-    for kind in args.kinds[:1] if args.smoke else args.kinds:
-        if args.smoke:
-            score_seeds("HELDOUT", kind, kind, fit, judged, {"max_epochs": SMOKE_EPOCHS},
-                        seeds=SEEDS[:2])
-        else:
-            score_seeds("HELDOUT", kind, kind, fit, judged)
+    seeds, options = ((0,), {"max_epochs": SMOKE_EPOCHS}) if args.smoke else (SEEDS, {})
+    rows = {kind: score_seeds("HELDOUT", kind, kind, fit, judged, options, seeds)
+            for kind in args.kinds}
+    print(f"\n| model, seeds {', '.join(map(str, seeds))} | {' | '.join(judged)} |")
+    print("|---" * (len(judged) + 1) + "|")
+    for kind, scores in rows.items():
+        print(f"| `{kind}` | {' | '.join(summary(v) for v in scores.values())} |")
     return 0
 
 

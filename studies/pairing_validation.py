@@ -29,6 +29,7 @@ CANDIDATES: dict[str, tuple[str, bool, dict]] = {
     "so2": ("so2", True, {}),
     "so2-leader": ("so2-leader", True, {}),
     "so2-pair": ("so2-pair", True, {}),
+    "deepsets": ("deepsets", True, {}),
     "so2 patience40": ("so2", True, {"patience": 40}),
     "so2 hidden128": ("so2", True, {"hidden": (128, 128)}),
     "so2 hidden32": ("so2", True, {"hidden": (32, 32)}),
@@ -43,9 +44,10 @@ FIT_LAST, VALIDATION = 4, (5, 6, 7)
 def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, Dataset],
                 options: dict | None = None, seeds: tuple[int, ...] = SEEDS
                 ) -> dict[str, list[float]]:
-    """Train ``kind`` on ``fit`` for each of ``seeds`` (:data:`SEEDS`) and print, per data set of
-    ``judged``, the interaction region's vertical RMSE reduction against the zero model (%), per
-    seed and then as ``TAG NAME WHO: mean % (sd, min-max)``; returns the reductions."""
+    """Train ``kind`` on ``fit`` for each of ``seeds`` and print, per data set of ``judged``,
+    the interaction region's vertical RMSE reduction against the zero model (%), per seed and
+    then as ``TAG NAME WHO: mean % (sd, min-max)`` (the sd with two seeds or more); returns the
+    reductions."""
     scores: dict[str, list[float]] = {who: [] for who in judged}
     for seed in seeds:
         predictor = train_model(kind, fit, seed=seed, **(options or {})).predictor()
@@ -55,10 +57,15 @@ def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, 
                                       / ev["zero"]["rmse_mps2"]["z"]))
         print(name, seed, {who: round(v[-1], 1) for who, v in scores.items()}, flush=True)
     for who, v in scores.items():
-        arr = np.array(v)
-        print(f"{tag} {name} {who}: {arr.mean():.1f} % ({arr.std(ddof=1):.1f}, "
-              f"{arr.min():.1f}-{arr.max():.1f})", flush=True)
+        print(f"{tag} {name} {who}: {summary(v)}", flush=True)
     return scores
+
+
+def summary(values: list[float]) -> str:
+    """``mean % (sd, min-max)`` of reductions in %, the sd with two values or more."""
+    arr = np.array(values)
+    sd = f"{arr.std(ddof=1):.1f}, " if arr.size > 1 else ""
+    return f"{arr.mean():.1f} % ({sd}{arr.min():.1f}-{arr.max():.1f})"
 
 
 def main() -> int:

@@ -39,6 +39,7 @@ from aerodock.fileio import dumps_json, json_ready
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import euler_to_rotmat, rotmat_to_quat
 from aerodock.learning.features import N_FEATURES, N_OUTPUTS
+from aerodock.learning.kinds import get_kind
 from aerodock.learning.modelfile import ModelSpec, save_model_dir
 from aerodock.node.core import (
     DEFAULT_PUBLISH_MODE,
@@ -51,11 +52,12 @@ from aerodock.node.core import (
 
 def random_model(path: Path, kind: str = "so2", seed: int = 3,
                  hidden: tuple[int, ...] = (64, 64)) -> Path:
-    """A model directory with random weights (NumPy only), the default architecture."""
+    """A model directory with random weights (NumPy only), the default architecture (the
+    kind's network layout: a deep-sets kind's ``rho`` also reads the ego features)."""
     rng = np.random.default_rng(seed)
     sizes = (N_FEATURES[kind], *hidden, N_OUTPUTS[kind])
-    weights = [(rng.normal(0, 1 / np.sqrt(sizes[i]), (sizes[i + 1], sizes[i])),
-                rng.normal(0, 0.1, sizes[i + 1])) for i in range(len(sizes) - 1)]
+    weights = [(rng.normal(0, 1 / np.sqrt(w_shape[1]), w_shape), rng.normal(0, 0.1, b_shape))
+               for w_shape, b_shape in get_kind(kind).weight_shapes(sizes)]
     spec = ModelSpec(kind=kind, layer_sizes=sizes, activation="tanh",
                      in_mean=rng.normal(0, 0.2, sizes[0]), in_std=rng.uniform(0.5, 2, sizes[0]),
                      out_mean=rng.normal(0, 0.5, sizes[-1]),

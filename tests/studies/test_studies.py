@@ -106,8 +106,10 @@ STUDY_CASES = (
            rf"^deep model over 1 seeds: {NUMBER}% mean$"), slow=True),
     Study("pairing_heldout.py", ("{files}/ss_train.npz", "{files}/sl_train.npz",
                                  "{files}/ss_test.npz", "{files}/sl_test.npz", "so2-pair", "so2"),
-          tuple(rf"^HELDOUT so2-pair {who}: {NUMBER} % \({NUMBER}, {NUMBER}-{NUMBER}\)$"
-                for who in ("ss 05-06", "small under large", "large under small")),
+          (r"^\| model, seeds 0 \| ss 05-06 \| small under large \| large under small \|$",
+           *(rf"^HELDOUT {kind} {who}: {NUMBER} % \({NUMBER}-{NUMBER}\)$"
+             for kind in ("so2-pair", "so2")
+             for who in ("ss 05-06", "small under large", "large under small"))),
           frozenset({"files"})),
     Study("pairing_validation.py", ("{files}/ss_train.npz", "{files}/sl_train.npz"),
           tuple(rf"^VAL so2 {who}: {NUMBER} % \({NUMBER}, {NUMBER}-{NUMBER}\)$"
