@@ -194,3 +194,40 @@ def test_a_damaged_cell_file_is_flown_again(tmp_path, flights):
     res = run_cli(["sweep", spec, "--out", out, "--jobs", "1", "--resume", "--json"])
     assert res.rc == 0, res.err
     assert json.loads(res.out)["reused"] == 1 and len(flights) == before + 2
+
+
+def test_crafted_cell_files_are_flown_again_not_errors(tmp_path, flights):
+    """Numbers a flown cell never holds (NaN, Infinity, an integer too large for a float, an
+    abort reason that is no reason) make the file unusable, not the resume."""
+    spec = _study(tmp_path, 'compensation = ["oracle"]', seeds="[0, 1, 2]")
+    out = tmp_path / "out"
+    assert run_cli(["sweep", spec, "--out", out, "--jobs", "1"]).rc == 0
+    cells = sorted((out / "cells").glob("*.json"))
+    edits = ('"min_clearance_m": NaN', '"min_clearance_m": ' + "9" * 400,
+             '"abort_reason": "gremlins"')
+    for path, edit in zip(cells, edits, strict=True):
+        text = path.read_text()
+        key = edit.split(":")[0]
+        start = text.index(key)
+        end = text.index(",", start)
+        path.write_text(text[:start] + edit + text[end:])
+    before = len(flights)
+    res = run_cli(["sweep", spec, "--out", out, "--jobs", "1", "--resume", "--json"])
+    assert res.rc == 0, res.err
+    assert json.loads(res.out)["reused"] == 0 and len(flights) == before + 3
+
+
+def test_a_cell_flown_by_other_code_is_not_reused(tmp_path, flights, monkeypatch):
+    """The version number stays the same across commits of an editable install: the cell's key
+    holds a digest of aerodock's sources."""
+    from aerodock.sweep import store
+
+    spec = _study(tmp_path, 'compensation = ["oracle"]')
+    out = tmp_path / "out"
+    assert run_cli(["sweep", spec, "--out", out, "--jobs", "1"]).rc == 0
+    monkeypatch.setattr(store, "_DIGESTS", {})
+    monkeypatch.setattr(store, "code_digest", lambda cfg=None: "other code")
+    before = len(flights)
+    res = run_cli(["sweep", spec, "--out", out, "--jobs", "1", "--resume", "--json"])
+    assert res.rc == 0, res.err
+    assert json.loads(res.out)["reused"] == 0 and len(flights) == before + 1
