@@ -24,7 +24,7 @@ from aerodock.experiments.records import (
 from aerodock.mission import CampaignResult, MissionSpec, Phase, run_campaign
 
 if TYPE_CHECKING:
-    from aerodock.experiments.reproduce import RunSize
+    from aerodock.experiments.run_size import RunSize
 
 
 def _window_mean(trace: dict[str, np.ndarray], t0: float, t1: float) -> AltitudeWindow:
