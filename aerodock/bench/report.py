@@ -172,6 +172,6 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
             add(f"peer batches: {key.replace('_', ' ')}, batch {n}", fig)
     for n, row in (batches.get("ratios") or {}).items():
         for key, ratio in row.items():
-            rows.append((f"ratio at batch {n}: {key.replace('_', ' ')}", f"{ratio:.1f}x", "",
+            rows.append((f"ratio at batch {n}: {key.replace('_', ' ')}", f"{ratio:.2g}x", "",
                          "", ""))
     return rows
