@@ -37,7 +37,10 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``gym_env_reset``: wall time of :meth:`aerodock.envs.DockingEnv.reset`: a trial settled alone,
   a reset that settles a block of upcoming trials, one served from the block, and the mean over
   a block's resets (:func:`aerodock.bench.env_reset.bench_env_reset`; needs ``aerodock[gym]``).
-- ``peer``: the RotorPy comparison of ``studies/compare_rotorpy.py`` (:func:`compare_rotorpy`).
+- ``peer``: the RotorPy comparison of ``studies/compare_rotorpy.py`` (:func:`compare_rotorpy`),
+  and ``peer_crazyflow``: crazyflow, aerodock's rigid body and aerodock's full world on the same
+  scenario at batches of 1, 256 and 1024 (:func:`compare_crazyflow`; needs ``aerodock[peer]``,
+  else one line says why).
 
 The same functions serve ``studies/compare_rotorpy.py`` and the pytest-benchmark tests.
 :func:`run_all` measures them all (or one part, :data:`PARTS`) as one JSON-ready document.
@@ -47,7 +50,8 @@ Modules: :mod:`~aerodock.bench.timing` (how a figure is measured), :mod:`~aerodo
 (training and the predictor), :mod:`~aerodock.bench.memory` (a campaign in a fresh process,
 ``python -m aerodock.bench.memory``), :mod:`~aerodock.bench.vector_env`,
 :mod:`~aerodock.bench.env_reset`,
-:mod:`~aerodock.bench.peer` (RotorPy), :mod:`~aerodock.bench.report` (machine, targets, the
+:mod:`~aerodock.bench.peer` (RotorPy), :mod:`~aerodock.bench.peer_batches` (crazyflow),
+:mod:`~aerodock.bench.report` (machine, targets, the
 table's rows) and :mod:`~aerodock.bench.node` (the ROS 2 node's latency, on its own:
 ``python -m aerodock.bench.node``).
 """
@@ -77,6 +81,7 @@ from aerodock.bench.peer import (
     peer_rotorpy,
     peer_rotorpy_batched,
 )
+from aerodock.bench.peer_batches import PEER_BATCHES, compare_crazyflow
 from aerodock.bench.report import TARGETS, machine_info, table_rows, targets
 from aerodock.bench.simulator import (
     SIM_BATCHES,
@@ -89,10 +94,11 @@ from aerodock.bench.simulator import (
 from aerodock.bench.timing import Progress, failure_reason, figure, measure, quiet, unavailable
 
 __all__ = [
-    "PARTS", "PEER_CONTROL_HZ", "PEER_HOVER_S", "PEER_MOVE_NED_M", "PEER_MOVE_S",
+    "PARTS", "PEER_BATCHES", "PEER_CONTROL_HZ", "PEER_HOVER_S", "PEER_MOVE_NED_M", "PEER_MOVE_S",
     "PEER_PHYSICS_HZ", "SIM_BATCHES", "TARGETS", "Progress", "SimLoop", "bench_docking",
     "bench_predictor", "bench_reproduce", "bench_simulator", "bench_training",
-    "bench_vehicle_step", "compare_rotorpy", "figure", "machine_info", "measure",
+    "bench_vehicle_step", "compare_crazyflow", "compare_rotorpy", "figure", "machine_info",
+    "measure",
     "peer_aerodock", "peer_reference", "peer_rotorpy", "peer_rotorpy_batched",
     "predictor_inputs", "run_all", "synthetic_dataset", "table_rows", "targets", "unavailable",
 ]
@@ -153,6 +159,7 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
             figs["gym_env_reset"] = bench_env_reset(cfg, quick=quick, progress=progress)
     if include_peer and wanted("peer"):
         figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
+        figs["peer_crazyflow"] = compare_crazyflow(cfg, quick=quick, progress=progress)
     return {
         "machine": machine_info(),
         "settings": {"quick": quick, "physics_rate_hz": cfg.sim.physics_rate_hz,

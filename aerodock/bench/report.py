@@ -162,4 +162,16 @@ def table_rows(doc: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
             add(f"peer scenario: {key.replace('_', ' ')}", fig)
     for key, ratio in (peer.get("ratios") or {}).items():
         rows.append((f"ratio: {key.replace('_', ' ')}", f"{ratio:.1f}x", "", "", ""))
+    batches = figs.get("peer_crazyflow") or {}
+    for key in ("crazyflow", "aerodock_rigid_body", "aerodock_world"):
+        part = batches.get(key)
+        if isinstance(part, dict) and "unit" in part:  # not measured: its reason
+            add(f"peer batches: {key.replace('_', ' ')}", part)
+            continue
+        for n, fig in (part or {}).items():
+            add(f"peer batches: {key.replace('_', ' ')}, batch {n}", fig)
+    for n, row in (batches.get("ratios") or {}).items():
+        for key, ratio in row.items():
+            rows.append((f"ratio at batch {n}: {key.replace('_', ' ')}", f"{ratio:.2g}x", "",
+                         "", ""))
     return rows

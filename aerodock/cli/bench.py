@@ -37,7 +37,8 @@ def bench_command(
         "--only", help="Measure one part alone.")] = None,
 ) -> None:
     """Measure the speed of every hot path: simulator, docking, learnt model, training,
-    `reproduce --quick`, memory, and RotorPy on the same scenario (if installed)."""
+    `reproduce --quick`, memory, and RotorPy and crazyflow on the same scenario (if
+    installed)."""
     if only is not None and only not in PARTS:
         fail(f"unknown --only {only!r}; choose one of {', '.join(PARTS)}")
 
