@@ -76,13 +76,13 @@ def main() -> int:
             paper = (learnt_mean_check(cfg, Predictor.load(paper_dir))[0]
                      if paper_dir.is_dir() else None)
             bias, samples = label_minus_mean_on_axis(folder)
-            row = {"seed": seed, "deep_relative_error": deep["relative_error"],
-                   "paper_relative_error": paper["relative_error"] if paper else None,
+            row = {"seed": seed, "deep_relative_error": deep.relative_error,
+                   "paper_relative_error": paper.relative_error if paper else None,
                    "label_minus_mean_on_axis_mps2": bias, "axis_samples": samples}
             rows.append(row)
             if not args.json:
-                paper_txt = ("-" if paper is None else f"{paper['relative_error']:+.1%}")
-                print(f"seed {seed}: deep model {deep['relative_error']:+.1%}, paper's "
+                paper_txt = ("-" if paper is None else f"{paper.relative_error:+.1%}")
+                print(f"seed {seed}: deep model {deep.relative_error:+.1%}, paper's "
                       f"{paper_txt}; labels minus the mean field on the axis 0.3-0.4 m "
                       f"{bias:+.3f} m/s^2 ({samples} samples)", flush=True)
     deep_all = np.array([r["deep_relative_error"] for r in rows])

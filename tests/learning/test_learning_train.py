@@ -186,8 +186,11 @@ def test_cli_train_evaluate_export(tmp_path, cli, synth_logs, held_out):
     assert json.loads(res.stdout)["max_abs_diff_vs_numpy_mps2"] < 1e-5
 
 
-def test_cli_errors_are_one_line(tmp_path, cli):
-    app, runner = cli
+def test_cli_errors_are_one_line(tmp_path, capsys):
+    """Through the command line as users run it (``aerodock.cli.app.run``: usage errors, such as
+    a kind that is not one of the choices, are one line too)."""
+    from aerodock.cli.app import run
+
     (tmp_path / "junk.npz").write_bytes(b"junk")
     cases = [
         ["train", "--model", "cnn", "--data", str(tmp_path), "--out", str(tmp_path / "m")],
@@ -197,11 +200,12 @@ def test_cli_errors_are_one_line(tmp_path, cli):
         ["export", "--model", str(tmp_path), "--out", str(tmp_path / "x.onnx")],
     ]
     for args in cases:
-        res = runner.invoke(app, args)
-        assert res.exit_code == 2, (args, res.output)
-        lines = res.stderr.strip().splitlines()
-        assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
-        assert "Traceback" not in res.output
+        capsys.readouterr()
+        assert run(args) == 2, args
+        out, err = capsys.readouterr()
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: "), err
+        assert "Traceback" not in out + err
 
 
 def test_so2_ext_expresses_a_tangential_force_the_paper_model_cannot():
