@@ -37,6 +37,8 @@ def view_command(
     cfg = load_cli_config(config, sets, trust)
     if rerun is not None:  # an output: refused now (a FIFO would block), not after rendering
         check_writable_target(rerun)
+    if max_frames < 1:
+        fail(f"--max-frames must be at least 1, got {max_frames}")
     logs = load_flightlogs(log)
     if not 0 <= flight < len(logs):
         fail(f"{log}: --flight {flight} out of range (the file holds {len(logs)} flights)")

@@ -102,7 +102,8 @@ def test_view_refuses_bad_input_in_one_line(sim_log, tmp_path):
     for args, text in (([str(junk)], "corrupt or unreadable"),
                        ([str(sim_log), "--out", str(tmp_path / "v.avi")], ".gif or .mp4"),
                        ([str(sim_log), "--flight", "3"], "out of range"),
-                       ([str(sim_log), "--start", "99"], "no samples")):
+                       ([str(sim_log), "--start", "99"], "no samples"),
+                       ([str(sim_log), "--max-frames", "0"], "--max-frames must be at least 1")):
         proc = aerodock("view", *args)
         assert proc.returncode == 2, proc.stderr
         assert text in proc.stderr and proc.stderr.strip().count("\n") == 0
