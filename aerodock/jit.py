@@ -24,7 +24,6 @@ from typing import Any
 if os.environ.get("AERODOCK_JIT", "1") == "0":  # before numba reads its configuration
     os.environ.setdefault("NUMBA_DISABLE_JIT", "1")
 
-import hashlib  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numba  # noqa: E402
@@ -32,6 +31,8 @@ import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
 from numba.core import cgutils, types  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
+
+from aerodock.sources import sources_digest  # noqa: E402
 
 JIT_ENABLED = not numba.config.DISABLE_JIT
 
@@ -43,14 +44,7 @@ def _kernel_sources_digest() -> str:
     helper from another module would go on running the helper's old code after the helper
     changed. So the cache lives in a folder named by this digest, and any change to any
     kernel's source starts a fresh one."""
-    digest = hashlib.sha256(numba.__version__.encode())
-    root = Path(__file__).resolve().parent
-    for path in sorted(root.rglob("*.py")):
-        text = path.read_bytes()
-        if b"njit" in text:
-            digest.update(str(path.relative_to(root)).encode())
-            digest.update(text)
-    return digest.hexdigest()[:16]
+    return sources_digest(b"njit", [numba.__version__.encode()])[:16]
 
 
 def cache_dir() -> Path:

@@ -36,6 +36,7 @@ from aerodock.fileio import (
     refuse_symlink,
 )
 from aerodock.mission.spec import AbortReason
+from aerodock.sources import sources_digest
 from aerodock.sweep.spec import Cell
 
 CELL_FORMAT = 1
@@ -69,17 +70,8 @@ def code_digest(cfg: Config | None = None) -> str:
     when ``cfg`` names a plug-in field outside aerodock, that module's source: a cell flown
     by other code is never reused (an editable install keeps one version number across
     commits)."""
-    import aerodock
-
-    h = hashlib.sha256()
-    root = Path(aerodock.__file__).resolve().parent
-    for path in sorted(root.rglob("*.py")):
-        h.update(str(path.relative_to(root)).encode() + b"\0")
-        h.update(path.read_bytes())
     plugin = _plugin_source(cfg)
-    if plugin is not None:
-        h.update(b"plugin\0" + plugin.read_bytes())
-    return h.hexdigest()
+    return sources_digest(extra=[] if plugin is None else [plugin.read_bytes()])
 
 
 def _plugin_source(cfg: Config | None) -> Path | None:
