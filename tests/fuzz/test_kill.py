@@ -432,6 +432,7 @@ def _numpy_loaded(pid: int) -> bool:
 @pytest.mark.parametrize("moment", ["loading", "flying"])
 def test_ctrl_c_in_dock_is_one_line(tmp_path, moment):
     """While the commands load, and in the middle of a campaign (2 s of CPU into it: loading
-    takes well under that, the campaign well over it)."""
+    takes well under that; 256 trials take over 6 s, even compiled, so the campaign cannot
+    end between the check and the signal)."""
     ready = _numpy_loaded if moment == "loading" else (lambda pid: _cpu_s(pid) >= 2.0)
-    _interrupted(*_ctrl_c(["dock", "--trials", "2", "--json"], ready))
+    _interrupted(*_ctrl_c(["dock", "--trials", "256", "--json"], ready))
