@@ -76,6 +76,7 @@ app.command("targets")(experiments.targets_command)
 field_app.command("probe")(field.field_probe)
 field_app.command("plot")(field.field_plot)
 field_app.command("fit")(field.field_fit)
+field_app.command("score")(field.field_score)
 
 
 def as_written(text: str | None) -> str | None:

@@ -163,6 +163,7 @@ def field_plot(
 
 
 FIT_OUTPUTS = ("report.md", "fit.json", "wake.toml", "figures")
+JET_FIELD = "aerodock.downwash.jet:RoundJetField"
 
 
 def field_fit(
@@ -336,6 +337,148 @@ def field_fit(
     typer.echo(f"wrote {out / 'report.md'}" + (f" and {config_out}" if config_out else ""))
 
 
+def field_score(
+    fit: Annotated[Path, typer.Argument(
+        help="The wake to score: a `field fit --out` folder (its fit.json: the fitted "
+             "parameters and rotor radii) or a world's config (.toml: its [downwash.params]; "
+             "the default jet's field only).", show_default=False)],
+    more: Annotated[list[Path] | None, typer.Argument(
+        help="More FlightLog files (what follows --data's first file).", show_default=False,
+        metavar="[FLIGHTS]...")] = None,
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", help="FlightLog files (.npz, from `aerodock ingest`) with the follower below "
+                       "the leader; their meta must give both vehicles' masses and rotors and "
+                       "the follower's diagonal. Repeatable.", show_default=False)] = None,
+    torque_separation: Annotated[tuple[float, float], typer.Option(
+        "--torque-separation", help="The depths below the leader the torque is read over, "
+                                    "m: LOW HIGH.")] = (0.10, 0.70),
+    config: ConfigOpt = None,
+    sets: SetOpt = None,
+    trust: TrustOpt = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Score a wake on flights, pairing by pairing: the mean per separation bin, the half-width,
+    the vertical and lateral turbulence sd, and the inward torque 4-10 cm off the axis, each as
+    the world against the flights (signed: world over flights minus one), beside the flights'
+    own reference (one half of a pairing's flights against the other). The follower's inertia,
+    for the torque, is scaled from --config's vehicle (a fit folder) or FIT's (a config)."""
+    from aerodock.fileio import json_ready, one_line
+    from aerodock.flightlog import FlightLogError, load_flightlogs
+    from aerodock.identify import field_score as fs
+    from aerodock.identify import flights as fl
+    from aerodock.identify.wake_fit import WakeFitError
+
+    paths = list(data or []) + list(more or [])
+    lo, hi = torque_separation
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+        fail(f"--torque-separation must be two depths LOW < HIGH in metres, got {lo} {hi}")
+    if not paths:
+        fail("no flights: give FlightLog files with --data")
+    params, radii, cfg = _scored_wake(fit, config, sets, trust)
+    logs = []
+    for path in paths:
+        try:
+            logs += load_flightlogs(path)
+        except (FlightLogError, OSError) as err:
+            fail(one_line(err))
+    try:
+        flights = fl.prepare_flights(logs)
+        inertia = fs.scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
+                                    cfg.vehicle.inertia_kgm2)
+        scores = fs.score_field(params, flights, logs, inertia, rotor_radii_m=radii,
+                                torque_separation_m=(lo, hi))
+    except WakeFitError as err:
+        fail(one_line(err))
+    result = {"fit": str(fit), "params": params, "rotor_radii_m": radii,
+              "targets": fs.TARGETS, "torque_bins_m": [list(b) for b in fs.TORQUE_BINS_M],
+              "torque_separation_m": [lo, hi],
+              "pairs": [s.as_dict() for s in scores]}
+    if as_json:
+        print_json(json_ready(result))
+        return
+    _print_scores(scores)
+
+
+def _scored_wake(fit: Path, config: Path | None, sets: list[str] | None,
+                 trust: list[str] | None) -> tuple[dict[str, float], dict[str, float], Config]:
+    """``field score``'s FIT read: the jet's parameters, rotor radii by vehicle id, and the
+    config whose vehicle gives the inertia."""
+    import json
+
+    from aerodock.identify.wake_fit import FITTED_PARAMS, WORLD_PARAMS
+
+    if fit.is_dir():
+        path = fit / "fit.json"
+        try:
+            raw = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+            fail(f"{fit}: not a `field fit --out` folder (reading fit.json: "
+                 f"{type(err).__name__})")
+        params = raw.get("params") if isinstance(raw, dict) else None
+        radii = raw.get("rotor_radii_m", {}) if isinstance(raw, dict) else None
+        if not isinstance(params, dict) or set(params) != set(FITTED_PARAMS) \
+                or not all(_finite(v) for v in params.values()):
+            fail(f"{path}: 'params' must hold the fitted parameters "
+                 f"({', '.join(FITTED_PARAMS)}) as finite numbers")
+        if not isinstance(radii, dict) or not all(isinstance(k, str) and _finite(v) and v > 0
+                                                  for k, v in radii.items()):
+            fail(f"{path}: 'rotor_radii_m' must map vehicle ids to positive radii in metres")
+        return ({k: float(v) for k, v in params.items()},
+                {k: float(v) for k, v in radii.items()}, load_cli_config(config, sets, trust))
+    if config is not None:
+        fail("--config is FIT's own when FIT is a config: give one or the other")
+    if not fit.is_file():
+        fail(f"{fit}: no such file or folder")
+    cfg = load_cli_config(fit, sets, trust)
+    if cfg.downwash.field != JET_FIELD:
+        fail(f"{fit}: its field is {cfg.downwash.field}; field score scores the default jet "
+             f"({JET_FIELD})")
+    keys = FITTED_PARAMS + WORLD_PARAMS
+    return ({k: float(v) for k, v in cfg.downwash.params.items() if k in keys}, {}, cfg)
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) \
+        and bool(np.isfinite(value))
+
+
+def _print_scores(scores: list) -> None:
+    """``field score``'s human table: one row per pairing, each figure world / flights' own."""
+    from rich.table import Table
+
+    from aerodock.identify.field_score import TARGETS, TORQUE_BINS_M
+
+    def pct(x: float) -> str:
+        return f"{100 * x:+.0f} %" if np.isfinite(x) else "-"
+
+    def ratios(xs: list[float]) -> str:
+        return " ".join(f"{x:.2f}" if np.isfinite(x) else "-" for x in xs) or "no torque"
+
+    table = Table(title="The wake against the flights: world / flights - 1 (torque: world / "
+                        "flights); below each pairing, its flights' own: half / other half")
+    for name in ("follower under leader", "flights", "mean, worst bin", "half-width",
+                 "vertical sd", "lateral sd", "torque " + "/".join(
+                     f"{100 * lo:.0f}-{100 * hi:.0f}" for lo, hi in TORQUE_BINS_M) + " cm"):
+        table.add_column(name, no_wrap=True)
+    keys = ("mean_worst_bin_rel", "half_width_rel", "turb_vertical_rel", "turb_lateral_rel")
+    for s in scores:
+        table.add_row(f"{s.follower} under {s.leader}", str(s.flights),
+                      *(pct(getattr(s, k)) for k in keys), ratios(s.torque_ratio_bins))
+        table.add_row("  flights' own", "", *(pct(s.reference[k]) for k in keys),
+                      ratios(s.reference["torque_ratio_bins"]), style="dim")
+    from rich.console import Console
+
+    Console(width=max(120, Console().width)).print(table)
+    lo, hi = TARGETS["torque_ratio"]
+    typer.echo(f"targets: mean, half-width within {100 * TARGETS['mean_worst_bin_rel']:.0f} %; "
+               f"sd within {100 * TARGETS['turb_vertical_rel']:.0f} %; torque ratio "
+               f"{lo}-{hi}")
+    for s in scores:
+        met = [k for k, ok in s.met.items() if ok]
+        typer.echo(f"  {s.follower} under {s.leader}: met {len(met)}/5"
+                   + (f" ({', '.join(met)})" if met else ""))
+
+
 def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
                 flights: list[FlightSamples], fitted: list[FlightSamples],
                 held: list[FlightSamples]) -> dict:
@@ -346,6 +489,7 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
     from dataclasses import asdict
 
     from aerodock.identify import wake_fit as wf
+    from aerodock.identify.field_score import scaled_inertia
     from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
     from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
@@ -360,12 +504,8 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
                                            rotor_radii_m=fit.rotor_radii_m)
             for part, group in (("held_out", held), ("fitted", fitted)) if group}
     if any(has_motor_torque(log) for log in logs):
-        inertia = {}
-        for f in flights:
-            g = f.geometry
-            scale = (g["follower_mass_kg"] / cfg.vehicle.mass_kg
-                     * (g["follower_diagonal_m"] / cfg.vehicle.diagonal_m) ** 2)
-            inertia[f.vehicles.get("follower")] = [scale * j for j in cfg.vehicle.inertia_kgm2]
+        inertia = scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
+                                 cfg.vehicle.inertia_kgm2)
         try:
             profile = torque_profile(fit.params, flights, logs, inertia,
                                      rotor_radii_m=fit.rotor_radii_m)

@@ -47,6 +47,8 @@ from aerodock.identify.flights import (
 MEAN_PARAMS = ("width0_ratio", "spread_rate", "ingest_coeff", "ingest_exponent", "planar_ratio")
 TURBULENCE_PARAMS = ("turb_vertical", "turb_lateral", "turb_length_ratio", "turb_time_ratio")
 FITTED_PARAMS = MEAN_PARAMS + TURBULENCE_PARAMS
+WORLD_PARAMS = ("body_area_ratio", "body_drag_coeff", "disk_torque_gain")
+"""The jet's parameters a world sets that the fit does not (a scored config's, where given)."""
 # Start and bounds of each parameter (the start is momentum theory's contracted wake with a
 # round jet's spread; the bounds keep the jet physical).
 START = {"width0_ratio": CONTRACTED_WIDTH0_RATIO, "spread_rate": 0.1, "ingest_coeff": 0.5,
@@ -84,8 +86,9 @@ class WakeFit:
 
 # -- the model at the samples ---------------------------------------------------------------
 def build_jet(params: dict[str, float], geometry: dict[str, float]) -> RoundJetField:
-    """The jet with ``params`` (fitted keys) between the vehicles of ``geometry``."""
-    kwargs = {k: v for k, v in params.items() if k in FITTED_PARAMS}
+    """The jet with ``params`` (fitted keys, and :data:`WORLD_PARAMS` where given) between the
+    vehicles of ``geometry``."""
+    kwargs = {k: v for k, v in params.items() if k in FITTED_PARAMS or k in WORLD_PARAMS}
     return RoundJetField(
         **kwargs, leader_rotor_radius_m=geometry["leader_rotor_radius_m"],
         leader_n_rotors=int(geometry["leader_n_rotors"]),

@@ -8,12 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from wake_synth import synthetic_flights
+from wake_synth import answering_motors, synthetic_flights
 
 from aerodock.config import load_config
-from aerodock.downwash.base import BodyState
-from aerodock.flightlog import FlightLog
-from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
 from aerodock.identify import flights as fl
 from aerodock.identify import wake_fit as wf
 from aerodock.identify import wake_torque as wt
@@ -28,32 +25,13 @@ def params():
     return {k: float(cfg.downwash.params[k]) for k in wf.FITTED_PARAMS}
 
 
-def _answering(log: FlightLog, params: dict, gain: float, trim: np.ndarray,
-               rng: np.random.Generator) -> FlightLog:
-    """``log`` with motors that hold the follower level against ``gain`` times the jet's mean
-    disk torque (their torque: the trim minus it, plus noise) and no rotation."""
-    n = log.n_samples
-    geometry = fl.log_geometry(log)
-    jet = wf.build_jet(params, geometry)
-    m_l, m_f = geometry["leader_mass_kg"], geometry["follower_mass_kg"]
-    leader = BodyState(log.leader_pos_m, log.leader_vel_mps, quat_to_rotmat(log.leader_quat),
-                       np.full(n, m_l * GRAVITY_MPS2), np.full(n, m_l))
-    follower = BodyState(log.follower_pos_m, log.follower_vel_mps,
-                         quat_to_rotmat(log.follower_quat), np.full(n, m_f * GRAVITY_MPS2),
-                         np.full(n, m_f))
-    torque = jet.mean_disk_torque_nm(leader, follower)
-    motors = trim - gain * torque + rng.normal(0.0, 2e-5, (n, 3))
-    extra = {**log.extra, wt.MOTOR_TORQUE_KEY: motors, wt.BODY_RATES_KEY: np.zeros((n, 3))}
-    return replace(log, extra=extra)
-
-
 @pytest.mark.parametrize("gain", [1.0, 3.0])
 def test_profile_recovers_a_known_torque(params, gain):
     """Motors that answer ``gain`` times the jet's torque give ``real / jet`` = ``gain`` in every
     bin where the jet's torque is not small, and the inward torque is positive off the axis
     (it pushes the disks nearer the axis down); the trim is taken away."""
     rng = np.random.default_rng(0)
-    logs = [_answering(log, params, gain, np.array([3e-4, -2e-4, 1e-4]), rng)
+    logs = [answering_motors(log, params, gain, np.array([3e-4, -2e-4, 1e-4]), rng)
             for log in synthetic_flights(params, flights_per_pair=2, seed=3)]
     profile = wt.torque_profile(params, fl.prepare_flights(logs), logs, INERTIA,
                                 separation_m=(0.1, 0.65))

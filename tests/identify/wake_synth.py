@@ -5,12 +5,17 @@ carries white noise and a constant per-flight bias, as the Neural-Swarm residual
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from aerodock.downwash.base import BodyState
 from aerodock.downwash.jet import RoundJetField
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import GRAVITY_MPS2, rotmat_to_quat
+from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
+from aerodock.identify.flights import log_geometry
+from aerodock.identify.wake_fit import build_jet
+from aerodock.identify.wake_torque import BODY_RATES_KEY, MOTOR_TORQUE_KEY
 
 # Crazyflie-like vehicles: mass, rotor radius, diagonal.
 SMALL = (0.032, 0.0225, 0.092)
@@ -117,3 +122,22 @@ def synthetic_flights(params: dict, flights_per_pair: int = 4, seed: int = 0) ->
         logs += synthetic_pair(pair, flights, params, seeds=[seed + 100 * k + j for j in flights],
                                depths_m=depths[pair])
     return logs
+
+
+def answering_motors(log: FlightLog, params: dict, gain: float, trim: np.ndarray,
+               rng: np.random.Generator) -> FlightLog:
+    """``log`` with motors that hold the follower level against ``gain`` times the jet's mean
+    disk torque (their torque: the trim minus it, plus noise) and no rotation."""
+    n = log.n_samples
+    geometry = log_geometry(log)
+    jet = build_jet(params, geometry)
+    m_l, m_f = geometry["leader_mass_kg"], geometry["follower_mass_kg"]
+    leader = BodyState(log.leader_pos_m, log.leader_vel_mps, quat_to_rotmat(log.leader_quat),
+                       np.full(n, m_l * GRAVITY_MPS2), np.full(n, m_l))
+    follower = BodyState(log.follower_pos_m, log.follower_vel_mps,
+                         quat_to_rotmat(log.follower_quat), np.full(n, m_f * GRAVITY_MPS2),
+                         np.full(n, m_f))
+    torque = jet.mean_disk_torque_nm(leader, follower)
+    motors = trim - gain * torque + rng.normal(0.0, 2e-5, (n, 3))
+    extra = {**log.extra, MOTOR_TORQUE_KEY: motors, BODY_RATES_KEY: np.zeros((n, 3))}
+    return replace(log, extra=extra)
