@@ -19,6 +19,10 @@ from typing import Any
 
 from aerodock.learning.kinds import trained_kinds
 
+STACKS = ("generic", "arducopter", "crazyflie-pid", "crazyflie-sjc")
+"""``[autopilot] stack``'s choices: the flight stacks whose attitude loops a rigid-body vehicle
+flies (:mod:`aerodock.world.vehicles.stacks`)."""
+
 
 @dataclass(frozen=True)
 class Rule:
@@ -107,13 +111,39 @@ class VehicleSection:
 
 @dataclass(frozen=True)
 class AutopilotSection:
-    """``[autopilot]``: attitude P -> rate PI -> mixer (rigid-body vehicles)."""
+    """``[autopilot]``: the rigid-body vehicles' autopilot, a flight stack's attitude loops
+    (:mod:`aerodock.world.vehicles.stacks`) -> mixer."""
 
+    stack: str = choice(*STACKS)
     attitude_p: list[float] = numbers(3, 0, 1000)
     rate_p: list[float] = numbers(3, 0, 10000)
     rate_i: list[float] = numbers(3, 0, 100000)
     rate_integral_max_radps2: float = number(0, 10000)
     rate_max_dps: list[float] = numbers(3, 1, 3600)
+    ac_ang_p: list[float] = numbers(3, 0, 1000)
+    ac_accel_max_cdss: list[float] = numbers(3, 0, 1e7)
+    ac_input_tc_s: float = number(0, 10)
+    ac_rat_p: list[float] = numbers(3, 0, 100)
+    ac_rat_i: list[float] = numbers(3, 0, 100)
+    ac_rat_d: list[float] = numbers(3, 0, 10)
+    ac_rat_imax: list[float] = numbers(3, 0, 10)
+    ac_rat_fltt_hz: list[float] = numbers(3, 0, 10000)
+    ac_rat_flte_hz: list[float] = numbers(3, 0, 10000)
+    ac_rat_fltd_hz: list[float] = numbers(3, 0, 10000)
+    cf_att_kp: list[float] = numbers(3, 0, 1000)
+    cf_att_ki: list[float] = numbers(3, 0, 1000)
+    cf_att_ilimit_deg: list[float] = numbers(3, 0, 1e5)
+    cf_rate_kp: list[float] = numbers(3, 0, 1e6)
+    cf_rate_ki: list[float] = numbers(3, 0, 1e6)
+    cf_rate_kd: list[float] = numbers(3, 0, 1e5)
+    cf_rate_ilimit_deg: list[float] = numbers(3, 0, 1e5)
+    cf_thrust_max_n: float = number(1e-6, 1e4)
+    sjc_lambda: list[float] = numbers(3, 0, 1000)
+    sjc_k_nms: list[float] = numbers(3, 0, 100)
+    sjc_ki_nm: list[float] = numbers(3, 0, 100)
+    sjc_ilimit_rad: list[float] = numbers(3, 0, 1000)
+    sjc_kdw_nms2: list[float] = numbers(3, 0, 10)
+    sjc_jtune_kgm2: list[float] = numbers(3, 0, 10)
 
 
 @dataclass(frozen=True)

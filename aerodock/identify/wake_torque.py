@@ -146,10 +146,12 @@ def has_motor_torque(log: FlightLog) -> bool:
     return MOTOR_TORQUE_KEY in log.extra and BODY_RATES_KEY in log.extra
 
 
-def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float]) -> np.ndarray | None:
+def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float], *,
+                        free_air_offset_m: float = FREE_AIR_OFFSET_M) -> np.ndarray | None:
     """(T, 3) the wake's torque on the follower in its body frame (FRD), N·m, from Euler's
     equation (module docstring), or None when the flight has fewer than
-    ``MIN_FREE_SAMPLES`` samples in free air (no trim to take away).
+    ``MIN_FREE_SAMPLES`` samples in free air (farther than ``free_air_offset_m`` to the side or
+    above: no trim to take away).
 
     Raises:
         WakeFitError: the log has no motor torque or body rates.
@@ -160,7 +162,7 @@ def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float]) -> np.nda
     inertia = np.asarray(inertia_kgm2, dtype=float)
     motors = np.asarray(log.extra[MOTOR_TORQUE_KEY], dtype=float)
     rates = np.asarray(log.extra[BODY_RATES_KEY], dtype=float)
-    free = free_air_mask(log, FREE_AIR_OFFSET_M)
+    free = free_air_mask(log, free_air_offset_m)
     if free.sum() < MIN_FREE_SAMPLES or log.n_samples < 3:
         return None
     trim = np.median(motors[free], axis=0)
@@ -179,6 +181,7 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                    rotor_radii_m: dict[str, float] | None = None,
                    separation_m: tuple[float, float] = (0.15, 0.45),
                    bin_m: float = 0.02, max_offset_m: float = 0.16,
+                   free_air_offset_m: float = FREE_AIR_OFFSET_M,
                    ) -> dict[str, list[TorqueBin]]:
     """Per pairing (``FlightSamples.pair``), the inward wake torque against the horizontal
     offset from the leader's axis: the real flights' (module docstring) and the jet's with
@@ -191,6 +194,7 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
             or without free air are left out.
         inertia_kgm2: the follower's principal moments of inertia by vehicle id.
         rotor_radii_m: rotor radii by vehicle id overriding the logs' (as the fit's).
+        free_air_offset_m: where free air starts, for the trim (:func:`real_wake_torque_nm`).
 
     Raises:
         WakeFitError: no flight with the motor torque, or a follower without an inertia.
@@ -204,7 +208,8 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
         vehicle = flight.vehicles.get("follower")
         if vehicle not in inertia_kgm2:
             raise WakeFitError(f"{flight.name}: no inertia for the follower {vehicle!r}")
-        real_body = real_wake_torque_nm(log, inertia_kgm2[vehicle])
+        real_body = real_wake_torque_nm(log, inertia_kgm2[vehicle],
+                                        free_air_offset_m=free_air_offset_m)
         if real_body is None:
             continue
         i = flight.index

@@ -160,7 +160,7 @@ def record_rotor_commands(params: RigidBodyParams, duration_s: float = PEER_DURA
         yaw_sp = state.yaw_setpoint + targets.yaw_rate_radps * dt
         from dataclasses import replace
 
-        state = replace(state, rate_integral=integral, yaw_setpoint=yaw_sp)
+        state = replace(state, autopilot_state=integral, yaw_setpoint=yaw_sp)
     return cmds
 
 

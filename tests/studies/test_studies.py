@@ -74,6 +74,12 @@ def _sample_efficiency_json(out: str, tmp: Path) -> None:
 
 
 STUDY_CASES = (
+    Study("attitude_stacks.py", ("--data", "{data}"),
+          (rf"^  arducopter\s+paper\s+{NUMBER} / {NUMBER} / {NUMBER}, peak {NUMBER}$",
+           r"^32 g under 32 g: inward torque mN m, lean deg, mN m per rad, per offset bin$",
+           rf"^  real\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
+           rf"^  crazyflie-pid\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm"),
+          frozenset({"data"})),
     Study("baseline_ladder.py", ("--model", "{model}"),
           (r"^\s*\d/2 with,\s+\d/2 without\s+\(slips \d, err \d+\.\d{3} m\)\s+"
            r"then: the estimator",)),

@@ -17,7 +17,11 @@ import numpy as np
 import pytest
 
 GOLDEN = Path(__file__).resolve().parents[1] / "data" / "numpy_step_ea3179b.npz"
-_STATE = ("p", "v", "R", "w", "rotor_speed", "rate_integral", "yaw_setpoint", "thrust_n")
+# (the golden file's key, the state's attribute): the generic autopilot's rate integral is
+# the state's autopilot_state since the flight stacks (issue 39)
+_STATE = (("p", "p"), ("v", "v"), ("R", "R"), ("w", "w"), ("rotor_speed", "rotor_speed"),
+          ("rate_integral", "autopilot_state"), ("yaw_setpoint", "yaw_setpoint"),
+          ("thrust_n", "thrust_n"))
 
 
 def fly() -> dict[str, np.ndarray]:
@@ -35,10 +39,10 @@ def fly() -> dict[str, np.ndarray]:
                            seed=3)
             loop.run(40)
             world = loop.world
-            for name in _STATE:
+            for key, name in _STATE:
                 for who, state in (("lead", world.leader), ("fol", world.follower)):
                     if hasattr(state, name):
-                        out[f"{model}_{n}_{who}_{name}"] = np.asarray(getattr(state, name))
+                        out[f"{model}_{n}_{who}_{key}"] = np.asarray(getattr(state, name))
             out[f"{model}_{n}_bar_p"] = world.bar.p
             out[f"{model}_{n}_cable"] = world.cable_force_n
             if world.state.imu is not None:

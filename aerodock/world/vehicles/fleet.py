@@ -189,7 +189,7 @@ class RigidBodyFleet:
     def hovering(self, state: RigidBodyState, old: RigidBodyState,
                  rows: slice) -> RigidBodyState:
         """``state`` with ``rows`` held as in ``old`` (a leader on a rigid stand)."""
-        for name in ("p", "v", "R", "w", "rotor_speed", "rate_integral", "thrust_n"):
+        for name in ("p", "v", "R", "w", "rotor_speed", "autopilot_state", "thrust_n"):
             getattr(state, name)[rows] = getattr(old, name)[rows]
         return state
 

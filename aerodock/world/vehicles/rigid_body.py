@@ -38,6 +38,7 @@ from aerodock.world.vehicles import rigid_kernel
 from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
 from aerodock.world.vehicles.point_mass import AttitudeCommand
+from aerodock.world.vehicles.stacks import stack_constants, state_columns
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,9 @@ class RigidBodyParams:
     rotor_torque_map: np.ndarray  # (4, 3): rotor thrusts -> body torque
     rotor_drag_sums: np.ndarray  # (4, 7): rotor speeds -> sums of omega_i [1, -y, x, y, x^2, y^2,
     # xy] (the rotor drag's, _DRAG_SUM_COLUMNS)
+    stack_constants: np.ndarray | None = None  # the flight stack's loops in SI (stacks.py);
+    # None: the generic autopilot
+    autopilot_state_columns: int = 3  # numbers of autopilot state per vehicle
 
     @classmethod
     def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None) -> RigidBodyParams:
@@ -94,6 +98,7 @@ class RigidBodyParams:
         )
         inertia = np.array(v.inertia_kgm2, dtype=float)
         mixer_inv = np.linalg.inv(mixer).T.copy()
+        thrust_max = v.thrust_max_g * v.mass_kg * g / 4.0
         # Constants, read-only: the autopilot's gain columns and the downwash field's geometry
         # are cached by these arrays (autopilot_constants, RoundJetField.wrench).
         freeze(gains.attitude_p, gains.rate_p, gains.rate_i, gains.rate_max_radps, inertia,
@@ -105,10 +110,12 @@ class RigidBodyParams:
             motor_tau_s=v.motor_tau_s, rotor_drag_coeff=v.rotor_drag_coeff,
             rotor_drag_z_coeff=v.rotor_drag_z_coeff,
             parasitic_drag_coeff=v.parasitic_drag_coeff,
-            rotor_thrust_max_n=v.thrust_max_g * v.mass_kg * g / 4.0,
+            rotor_thrust_max_n=thrust_max,
             tilt_max_rad=np.deg2rad(v.tilt_max_deg), gravity_mps2=g, gains=gains,
             mixer_inv=mixer_inv, rotor_torque_map=torque_map,
             rotor_drag_sums=drag_sums,
+            stack_constants=stack_constants(a, arm, thrust_max, v.rotor_torque_ratio_m),
+            autopilot_state_columns=state_columns(a),
         )
 
     @property
@@ -131,7 +138,8 @@ class RigidBodyState:
     R: np.ndarray  # (n, 3, 3) body to world
     w: np.ndarray  # (n, 3) rad/s, body rates
     rotor_speed: np.ndarray  # (n, 4) rad/s
-    rate_integral: np.ndarray  # (n, 3) rad, the rate loop's integrator
+    autopilot_state: np.ndarray  # (n, k): the generic autopilot's rate integral (k = 3, rad),
+    # or a flight stack's loops' state (stack_kernel.STATE_COLUMNS)
     yaw_setpoint: np.ndarray  # (n,) rad, the autopilot's yaw target (integrated yaw rate)
     thrust_gain: np.ndarray  # (n,) multiplicative thrust error (mis-estimated k_T), ~1
     thrust_n: np.ndarray  # (n,) actual collective thrust, N (from the rotor speeds)
@@ -173,7 +181,8 @@ def hover_rigid_state(params: RigidBodyParams, p_m: np.ndarray, yaw_rad: np.ndar
     freeze(gain)  # constant: the step's k_T is cached by it (_thrust_coeffs)
     return RigidBodyState(
         p=np.array(p_m, dtype=float), v=np.zeros((n, 3)), R=rot, w=np.zeros((n, 3)),
-        rotor_speed=np.repeat(omega[:, None], 4, axis=1), rate_integral=np.zeros((n, 3)),
+        rotor_speed=np.repeat(omega[:, None], 4, axis=1),
+        autopilot_state=np.zeros((n, params.autopilot_state_columns)),
         yaw_setpoint=yaw, thrust_gain=gain,
         thrust_n=weight, body=body,
     )
@@ -232,19 +241,20 @@ def rotor_speed_command(targets: RigidTargets, state: RigidBodyState, params: Ri
                         attitude: np.ndarray | None = None,
                         gyro_noise_radps: np.ndarray | None = None,
                         ) -> tuple[np.ndarray, np.ndarray]:
-    """The autopilot: (commanded rotor speeds (n, 4) rad/s, new rate integral (n, 3)), on the
+    """The autopilot: (commanded rotor speeds (n, 4) rad/s, new autopilot state), on the
     gyro's rates (``gyro_radps`` plus ``gyro_noise_radps``) and its attitude estimate
     (``attitude``; None: the true attitude). Compiled: :func:`rigid_kernel.autopilot`."""
     n = state.R.shape[0]
-    cmd, integral = np.empty((n, 4)), np.empty((n, 3))
+    cmd, integral = np.empty((n, 4)), np.empty((n, params.autopilot_state_columns))
     ff = targets.torque_ff_nm
     consts, mixer, _, _ = kernel_constants(params)
     rigid_kernel.autopilot_batch(
         state.R if attitude is None else attitude, targets.R_des, targets.yaw_rate_radps,
         targets.thrust_n, _NO_ROWS if ff is None else ff, ff is not None, gyro_radps,
         _NO_ROWS if gyro_noise_radps is None else gyro_noise_radps,
-        gyro_noise_radps is not None, state.rate_integral, consts, mixer,
-        params.rotor_thrust_max_n, params.thrust_coeff, dt_s, cmd, integral)
+        gyro_noise_radps is not None, state.autopilot_state, consts,
+        params.stack_constants is not None, _stack(params), mixer, params.rotor_thrust_max_n,
+        params.thrust_coeff, dt_s, cmd, integral)
     return cmd, integral
 
 
@@ -333,7 +343,7 @@ def step_rigid_body(
     p, v, rot, w, omega, thrust, accel, _, _ = _step_arrays(state, rotor_speed_cmd,
                                                             ext_force_n, ext_torque_nm, params,
                                                             dt_s)
-    return RigidBodyState(p, v, rot, w, omega, state.rate_integral, state.yaw_setpoint,
+    return RigidBodyState(p, v, rot, w, omega, state.autopilot_state, state.yaw_setpoint,
                           state.thrust_gain, thrust, state.body), accel
 
 
@@ -351,7 +361,8 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
     alpha, inertia = _body_constants(body, dt_s)
     consts, mixer, torque_map, drag_sums = kernel_constants(params)
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
-           np.empty((n, 4)), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n))
+           np.empty((n, 4)), np.empty(n), np.empty((n, 3)),
+           np.empty((n, params.autopilot_state_columns)), np.empty(n))
     flown = targets is not None
     ff = targets.torque_ff_nm if flown else None
     rigid_kernel.step_vehicles(
@@ -365,7 +376,8 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
         targets.thrust_n if flown else _NO_VALUES, _NO_ROWS if ff is None else ff,
         ff is not None, state.w if gyro is None else gyro,
         _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
-        state.rate_integral, state.yaw_setpoint, consts, mixer, params.rotor_thrust_max_n,
+        state.autopilot_state, state.yaw_setpoint, consts, params.stack_constants is not None,
+        _stack(params), mixer, params.rotor_thrust_max_n,
         params.thrust_coeff, np.asarray(ext_force_n, dtype=float),
         _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
         ext_torque_nm is not None, torque_map, drag_sums, params.rotor_drag_coeff,
@@ -377,6 +389,11 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
 _NO_ATTITUDE = np.zeros((0, 3, 3))
 _NO_VALUES = np.zeros(0)
 freeze(_NO_ATTITUDE, _NO_VALUES)
+
+
+def _stack(params: RigidBodyParams) -> np.ndarray:
+    """The flight stack's constants as the kernel takes them (an empty array: none)."""
+    return _NO_VALUES if params.stack_constants is None else params.stack_constants
 
 
 def step_with_autopilot(

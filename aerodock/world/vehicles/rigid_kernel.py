@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from aerodock.jit import fma, njit
+from aerodock.world.vehicles.stack_kernel import stack_torque
 
 
 def flat(values: np.ndarray) -> np.ndarray:
@@ -216,6 +217,27 @@ def autopilot(att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff:
 
 
 @njit
+def stack_autopilot(state_new: np.ndarray, state: np.ndarray, i: int, stack_c: np.ndarray,
+                    att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff: bool,
+                    ff0: float, ff1: float, ff2: float, g0: float, g1: float, g2: float,
+                    mixer_inv: tuple, rotor_thrust_max: float, thrust_coeff: float,
+                    dt: float) -> tuple:
+    """One vehicle's flight-stack autopilot (:func:`stack_kernel.stack_torque`) with the
+    torque feed-forward, the mixer and the rotor speed commands; its state row copied from
+    ``state`` into ``state_new`` and advanced there."""
+    for col in range(state.shape[1]):
+        state_new[i, col] = state[i, col]
+    tau0, tau1, tau2 = stack_torque(state_new, i, stack_c, att, rd, yaw_rate, g0, g1, g2, dt)
+    if has_ff:
+        tau0 += ff0
+        tau1 += ff1
+        tau2 += ff2
+    f0, f1, f2, f3 = mix(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max)
+    return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
+            math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff))
+
+
+@njit
 def rotor_wrench(o0: float, o1: float, o2: float, o3: float, kc: float, torque_gain: float,
                  vb0: float, vb1: float, vb2: float, wx: float, wy: float, wz: float,
                  tm: tuple, ds: tuple, kd: float, kz: float) -> tuple:
@@ -294,6 +316,7 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
                   r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
                   torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
                   noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts_a: np.ndarray,
+                  stack_on: bool, stack_c: np.ndarray,
                   mixer_a: np.ndarray, rotor_thrust_max: float, thrust_coeff: float,
                   ext_force: np.ndarray, ext_torque: np.ndarray, has_ext_torque: bool,
                   torque_map_a: np.ndarray, drag_sums_a: np.ndarray, kd: float, kz: float,
@@ -332,11 +355,18 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
             ff0 = ff1 = ff2 = 0.0
             if has_ff:
                 ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
-            c0, c1, c2, c3, n0, n1, n2 = autopilot(
-                load3x3(att, i) if use_att else r, load3x3(r_des, i), yaw_rate[i],
-                thrust_cmd[i], has_ff, ff0, ff1, ff2, g0, g1, g2, integral[i, 0], integral[i, 1],
-                integral[i, 2], consts, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
-            integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = n0, n1, n2
+            if stack_on:
+                c0, c1, c2, c3 = stack_autopilot(
+                    integral_new, integral, i, stack_c, load3x3(att, i) if use_att else r,
+                    load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff, ff0, ff1, ff2, g0,
+                    g1, g2, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
+            else:
+                c0, c1, c2, c3, n0, n1, n2 = autopilot(
+                    load3x3(att, i) if use_att else r, load3x3(r_des, i), yaw_rate[i],
+                    thrust_cmd[i], has_ff, ff0, ff1, ff2, g0, g1, g2, integral[i, 0],
+                    integral[i, 1], integral[i, 2], consts, mixer_inv, rotor_thrust_max,
+                    thrust_coeff, dt)
+                integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = n0, n1, n2
             y = yaw_rate[i] * dt
             y += yaw_sp[i]
             y += math.pi
@@ -411,7 +441,8 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
 def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
                     thrust_cmd: np.ndarray, torque_ff: np.ndarray, has_ff: bool,
                     gyro: np.ndarray, gyro_noise: np.ndarray, noisy: bool,
-                    integral: np.ndarray, consts_a: np.ndarray, mixer_a: np.ndarray,
+                    integral: np.ndarray, consts_a: np.ndarray, stack_on: bool,
+                    stack_c: np.ndarray, mixer_a: np.ndarray,
                     rotor_thrust_max: float, thrust_coeff: float, dt: float,
                     cmd: np.ndarray, integral_new: np.ndarray) -> None:
     """:func:`autopilot` for ``n`` vehicles: rotor speed commands ``cmd`` (n, 4) and new
@@ -426,6 +457,12 @@ def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
         ff0 = ff1 = ff2 = 0.0
         if has_ff:
             ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
+        if stack_on:
+            c = stack_autopilot(integral_new, integral, i, stack_c, load3x3(att, i),
+                                load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff, ff0, ff1,
+                                ff2, g0, g1, g2, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
+            cmd[i, 0], cmd[i, 1], cmd[i, 2], cmd[i, 3] = c[0], c[1], c[2], c[3]
+            continue
         out = autopilot(load3x3(att, i), load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff,
                         ff0, ff1, ff2, g0, g1, g2, integral[i, 0], integral[i, 1], integral[i, 2],
                         consts, mixer_inv, rotor_thrust_max, thrust_coeff, dt)

@@ -1,0 +1,175 @@
+"""The flight stacks' attitude loops: their step responses, and how stiffly the Crazyflie world's
+follower holds the wake's torque beside the real Neural-Swarm flights (issue 39, items 1-2).
+
+    .venv/bin/python studies/attitude_stacks.py [--data $AERODOCK_DATA_DIR/neural-swarm]
+        [--flights 8] [--torque-gain 1] [--json] [--smoke]
+
+Step: a 5 deg roll step from hover, one exactly nominal vehicle, the ideal IMU chain; the fraction
+of the step reached at 0.05, 0.1 and 0.2 s and the peak, each stack on its vehicle (the paper's
+for ``generic`` and ``arducopter``, examples/crazyflie.toml for the Crazyflie stacks).
+
+Under the wake (``--data`` given or found): per pairing of the shared flights the Crazyflie world
+has (small under small: examples/crazyflie.toml; small under large:
+examples/crazyflie_small_under_large.toml), the follower's inward wake torque, its lean into the
+leader's axis and their ratio (N m per radian of lean: an apparent stiffness, the lean being the
+position loop's too) per 2 cm bin of horizontal offset, 4-10 cm, read by the same code
+(:func:`aerodock.identify.wake_torque.torque_profile`) from the real flights and from the world's
+wake-excitation flights (the sim-to-real study's, :func:`aerodock.experiments.sim_to_real.
+simulated_flights`) flown with each stack. The simulated logs' rotor torque (what the rotors
+explain from their speeds) stands for the real logs' motor torque (the Crazyflie's own mixer of
+its per-motor thrust estimates). ``--torque-gain`` scales the world's wake torque
+(``disk_torque_gain``). ``--smoke``: the step at two stacks, one flight in one band.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from _smoke import add_smoke_option  # studies/, on sys.path
+
+from aerodock.config import Config, load_config
+from aerodock.downwash import build_field
+from aerodock.ingest.data_dir import find_data_dir
+from aerodock.rng import TrialRNG
+from aerodock.world import World
+from aerodock.world.world import hover_command
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
+CRAZYFLIE = ROOT / "examples" / "crazyflie.toml"
+WORLDS = {"32 g under 32 g": (CRAZYFLIE, "swap_ss", None),
+          "32 g under 67 g": (ROOT / "examples" / "crazyflie_small_under_large.toml",
+                              "swap_sl_2020-06-19", "cf51=small,cf101=large")}
+STEP_STACKS = (("generic", None), ("arducopter", None), ("generic", CRAZYFLIE),
+               ("crazyflie-pid", CRAZYFLIE), ("crazyflie-sjc", CRAZYFLIE))
+CF_STACKS = ("generic", "crazyflie-pid", "crazyflie-sjc")
+STEP_RAD = math.radians(5.0)
+BINS_M = (0.04, 0.06, 0.08)
+
+
+def step_response(cfg: Config, seconds: float = 0.6) -> tuple[np.ndarray, np.ndarray]:
+    """(t, roll / step) of a hovering vehicle after a 5 deg roll step command."""
+    cfg = cfg.with_overrides({
+        "vehicle": {"mass_sd": 0.0, "inertia_sd": 0.0, "torque_coeff_sd": 0.0,
+                    "motor_tau_sd": 0.0, "thrust_gain_sd": 0.0},
+        "imu": {"chain": "ideal", "attitude_noise_rad": 0.0, "gyro_noise_radps": 0.0}})
+    world = World(cfg, 1, TrialRNG(0, 1), field=build_field(cfg))
+    world.reset(np.array([[0.0, 0.0, -2.5]]), np.array([[5.0, 0.0, -2.5]]))  # far apart
+    hover = hover_command(world.vehicle, 1)
+    command = replace(hover, roll_rad=np.full(1, STEP_RAD))
+    t, roll = [], []
+    for k in range(int(round(seconds / world.dt_control_s))):
+        world.advance(hover, command if k > 0 else hover)
+        rot = world.follower.R[0]
+        t.append(world.t_s)
+        roll.append(math.atan2(rot[2, 1], rot[2, 2]) / STEP_RAD)
+    return np.asarray(t) - t[0], np.asarray(roll)
+
+
+def step_rows(stacks) -> list[dict]:
+    rows = []
+    for stack, path in stacks:
+        cfg = load_config(path).with_overrides({"autopilot": {"stack": stack}})
+        t, roll = step_response(cfg)
+        at = {f"{s:g}s": float(np.interp(s, t, roll)) for s in (0.05, 0.1, 0.2)}
+        rows.append({"stack": stack, "vehicle": "crazyflie" if path else "paper",
+                     **at, "peak": float(roll.max())})
+    return rows
+
+
+def _torque_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, dict]:
+    """Per offset bin: inward torque (mN m), lean into the axis (deg), and their ratio."""
+    from aerodock.identify import flights as fl
+    from aerodock.identify.field_score import scaled_inertia
+    from aerodock.identify.wake_torque import torque_profile
+
+    flights = fl.prepare_flights(logs)
+    inertia = scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
+                             cfg.vehicle.inertia_kgm2)
+    params = dict(cfg.downwash.params)
+    profile = torque_profile(params, flights, logs, inertia, separation_m=(0.1, 0.7),
+                             free_air_offset_m=free_air_m)
+    out = {}
+    for b in profile.get(pair, []):
+        if any(abs(b.offset_lo_m - lo) < 1e-9 for lo in BINS_M):
+            out[round(b.offset_lo_m, 2)] = {"torque_mnm": 1e3 * b.real_nm,
+                                            "lean_deg": b.lean_in_deg,
+                                            "mnm_per_rad": 1e3 * b.nm_per_rad,
+                                            "samples": b.samples}
+    return out
+
+
+def _as_motor_torque(logs):
+    """Simulated logs with their rotor torque where the real logs carry the motors'."""
+    from aerodock.identify.wake_torque import MOTOR_TORQUE_KEY
+
+    return [replace(lg, extra={**lg.extra,
+                               MOTOR_TORQUE_KEY: lg.extra["follower_rotor_torque_nm"]})
+            for lg in logs]
+
+
+def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list[dict]:
+    from aerodock.experiments.sim_to_real import simulated_flights
+    from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M
+    from aerodock.ingest import read_logs
+
+    rows = []
+    for pair, (path, folder, vehicles) in WORLDS.items():
+        if smoke and pair != "32 g under 32 g":
+            continue
+        base = load_config(path)
+        real = read_logs("neural-swarm", [data / folder],
+                         **({"vehicle": vehicles} if vehicles else {}))
+        entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
+                 "world": {}}
+        for stack in CF_STACKS[:2] if smoke else CF_STACKS:
+            cfg = base.with_overrides({"autopilot": {"stack": stack},
+                                       "downwash": {"params": {"disk_torque_gain":
+                                                               torque_gain}}})
+            logs = simulated_flights(cfg, flights_per_band=flights,
+                                     bands=(0,) if smoke else None)
+            # the flights' free-air waypoints are curriculum.free_air_m to the side
+            entry["world"][stack] = _torque_rows(_as_motor_torque(logs), cfg, pair,
+                                                 0.8 * cfg.curriculum.free_air_m)
+        rows.append(entry)
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=DATA_DIR / "neural-swarm")
+    parser.add_argument("--flights", type=int, default=8, help="simulated flights per band")
+    parser.add_argument("--torque-gain", type=float, default=1.0)
+    parser.add_argument("--json", action="store_true")
+    add_smoke_option(parser)
+    args = parser.parse_args()
+    steps = step_rows(STEP_STACKS[:2] if args.smoke else STEP_STACKS)
+    wake = (wake_rows(args.data, 1 if args.smoke else args.flights, args.torque_gain,
+                      args.smoke) if args.data.is_dir() else [])
+    if args.json:
+        print(json.dumps({"step": steps, "wake": wake}, indent=2))
+        return 0
+    print("5 deg roll step, fraction reached at 0.05 / 0.1 / 0.2 s, peak:")
+    for r in steps:
+        print(f"  {r['stack']:<14} {r['vehicle']:<10} {r['0.05s']:.2f} / {r['0.1s']:.2f} / "
+              f"{r['0.2s']:.2f}, peak {r['peak']:.2f}")
+    if not wake:
+        print(f"no flights at {args.data}: the wake part skipped")
+    for entry in wake:
+        print(f"{entry['pair']}: inward torque mN m, lean deg, mN m per rad, per offset bin")
+        for who, bins in [("real", entry["real"])] + list(entry["world"].items()):
+            cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {b['torque_mnm']:.2f} / "
+                              f"{b['lean_deg']:.1f} / {b['mnm_per_rad']:.0f}"
+                              for lo, b in sorted(bins.items()))
+            print(f"  {who:<14} {cells or 'no bin with samples'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
