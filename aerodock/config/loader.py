@@ -83,9 +83,17 @@ class Config:
 
     @property
     def leader_differs(self) -> bool:
-        """The ``[leader]`` table sets a value other than the follower's."""
-        vehicle = self.data["vehicle"]
-        return any(vehicle[k] != v for k, v in self.data["leader"].items())
+        """The ``[leader]`` or ``[leader_autopilot]`` table sets a value other than the
+        follower's."""
+        vehicle, autopilot = self.data["vehicle"], self.data["autopilot"]
+        return (any(vehicle[k] != v for k, v in self.data["leader"].items())
+                or any(autopilot[k] != v for k, v in self.data["leader_autopilot"].items()))
+
+    @cached_property
+    def leader_autopilot(self) -> AutopilotSection:
+        """The leader's autopilot: ``[autopilot]`` with the ``[leader_autopilot]`` table's
+        values (a flight stack's gains are a vehicle type's)."""
+        return AutopilotSection(**{**self.data["autopilot"], **self.data["leader_autopilot"]})
 
     @cached_property
     def autopilot(self) -> AutopilotSection:
@@ -197,6 +205,9 @@ def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: st
         if dotted == "leader":
             _merge_leader(target[key], value, reference["vehicle"], source)
             continue
+        if dotted == "leader_autopilot":
+            _merge_leader(target[key], value, reference["autopilot"], source, key)
+            continue
         default = reference[key]
         if isinstance(default, dict):
             if not isinstance(value, Mapping):
@@ -214,18 +225,21 @@ def _merge(target: dict, user: Mapping, reference: dict, source: str, prefix: st
         target[key] = float(value) if isinstance(default, float) else value
 
 
-def _merge_leader(target: dict, user: Any, vehicle: dict, source: str) -> None:
-    """``[leader]``: ``[vehicle]`` keys where the leader differs (typed as ``[vehicle]``'s)."""
+def _merge_leader(target: dict, user: Any, vehicle: dict, source: str,
+                  table: str = "leader") -> None:
+    """``[leader]``: ``[vehicle]`` keys where the leader differs (typed as ``[vehicle]``'s);
+    ``[leader_autopilot]`` (``table``): ``[autopilot]`` keys, the same way."""
+    section = "vehicle" if table == "leader" else "autopilot"
     if not isinstance(user, Mapping):
-        raise ConfigError(f"{source}: 'leader' must be a table")
+        raise ConfigError(f"{source}: '{table}' must be a table")
     for key in user:
-        if key in LEADER_FIXED_KEYS:
+        if table == "leader" and key in LEADER_FIXED_KEYS:
             raise ConfigError(f"{source}: 'leader.{key}' cannot differ from 'vehicle.{key}'")
     scratch = {key: vehicle[key] for key in user if key in vehicle}
     try:
-        _merge(scratch, user, vehicle, source, prefix="vehicle.")
+        _merge(scratch, user, vehicle, source, prefix=f"{section}.")
     except ConfigError as err:
-        raise ConfigError(str(err).replace("'vehicle.", "'leader.")) from None
+        raise ConfigError(str(err).replace(f"'{section}.", f"'{table}.")) from None
     target.update(scratch)
 
 
@@ -296,8 +310,8 @@ def _validate(data: dict[str, Any], source: str, trusted: Iterable[str] = ()) ->
                 else:
                     _check_plugin_params(value, source, f"{dotted}.")
                 continue
-            if section == "leader":
-                _validate_leader_key(key, value, source)
+            if section in ("leader", "leader_autopilot"):
+                _validate_leader_key(key, value, source, section)
                 continue
             rule = RULES[dotted]
             bounds = (rule.low, rule.high)
@@ -325,11 +339,18 @@ def _validate(data: dict[str, Any], source: str, trusted: Iterable[str] = ()) ->
     resolve_factory(data["downwash"]["field"], source, trusted)
 
 
-def _validate_leader_key(key: str, value: Any, source: str) -> None:
-    """A ``[leader]`` value against its ``[vehicle]`` key's rule, named as the leader's."""
-    rule = RULES[f"vehicle.{key}"]
-    dotted, bounds = f"leader.{key}", (rule.low, rule.high)
+def _validate_leader_key(key: str, value: Any, source: str, table: str = "leader") -> None:
+    """A ``[leader]`` (``[leader_autopilot]``) value against its ``[vehicle]``
+    (``[autopilot]``) key's rule, named as the leader's."""
+    rule = RULES[f"{'vehicle' if table == 'leader' else 'autopilot'}.{key}"]
+    dotted, bounds = f"{table}.{key}", (rule.low, rule.high)
+    if rule.kind == "choice" and value not in rule.choices:
+        choices = "|".join(sorted(rule.choices))
+        raise ConfigError(f"{source}: '{dotted}' must be one of {choices}, got {value!r}")
     if rule.kind == "numbers":
+        if len(value) != rule.length or not all(_is_number(v) for v in value):
+            raise ConfigError(f"{source}: '{dotted}' must be {rule.length} numbers "
+                              f"{_range_text(*bounds)}, got {value!r}")
         for i, item in enumerate(value):
             _check_number(item, f"{dotted}[{i}]", source, bounds)
     elif _is_number(value):

@@ -18,6 +18,7 @@ from aerodock.world.vehicles.fleet import (
     PointMassFleet,
     RigidBodyFleet,
     build_fleet,
+    same_state_width,
 )
 from aerodock.world.vehicles.point_mass import VehicleParams
 
@@ -105,7 +106,10 @@ class WorldParams:
         dt_s = 1.0 / cfg.sim.physics_rate_hz
         substeps = int(round(cfg.sim.physics_rate_hz / cfg.sim.control_rate_hz))
         follower = build_fleet(cfg)
-        leader = build_fleet(cfg, cfg.leader) if cfg.leader_differs else follower
+        leader = (build_fleet(cfg, cfg.leader, cfg.leader_autopilot) if cfg.leader_differs
+                  else follower)
+        if leader is not follower:
+            leader, follower = same_state_width(leader, follower)
         return cls(
             vehicle=VehicleParams.from_config(cfg),
             leader_vehicle=VehicleParams.from_config(cfg, cfg.leader), leader_fleet=leader,

@@ -148,3 +148,35 @@ def test_a_batch_flies_as_its_trials(stack, path):
                                      np.full(1, p.hover_thrust_n)), 0.3)
         assert np.array_equal(batch.R[i], alone.R[0])
         assert np.array_equal(batch.autopilot_state[i], alone.autopilot_state[0])
+
+
+def test_the_leader_flies_its_own_autopilot(tmp_path):
+    """``[leader_autopilot]`` sets the leader's stack and gains alone (a stack's gains are a
+    vehicle type's); its values are checked as ``[autopilot]``'s, named as the leader's."""
+    from aerodock.config import ConfigError
+    from aerodock.world.params import WorldParams
+
+    path = tmp_path / "cf.toml"
+    path.write_text((EXAMPLES / "crazyflie.toml").read_text()
+                    + '\n[leader_autopilot]\nstack = "crazyflie-sjc"\n'
+                      'sjc_k_nms = [1.0e-2, 1.0e-2, 5.0e-4]\n')
+    cfg = load_config(path)
+    assert cfg.leader_differs
+    assert cfg.autopilot.stack == "generic" and cfg.leader_autopilot.stack == "crazyflie-sjc"
+    world = WorldParams.from_config(cfg)
+    lead, fol = world.leader_fleet.params, world.follower_fleet.params
+    assert fol.stack_constants is None
+    assert _rows(lead)[4].tolist() == [1.0e-2, 1.0e-2, 5.0e-4]
+    # the pair's halves are joined after every step: one state width for both
+    assert lead.autopilot_state_columns == fol.autopilot_state_columns \
+        == stack_kernel.STATE_COLUMNS
+    from aerodock.mission import MissionSpec, run_campaign
+
+    result = run_campaign(cfg, MissionSpec(trials=2, seed=1))
+    assert result.success.shape == (2,) and not result.nan_state.any()
+    path.write_text('[leader_autopilot]\nsjc_lambda = [1.0, 2.0]\n')
+    with pytest.raises(ConfigError, match="'leader_autopilot.sjc_lambda' must be 3 numbers"):
+        load_config(path)
+    path.write_text('[leader_autopilot]\nstack = "px4"\n')
+    with pytest.raises(ConfigError, match="'leader_autopilot.stack' must be one of"):
+        load_config(path)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.config.schema import VehicleSection
+from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.frozen import freeze
 from aerodock.world.vehicles.body import VehicleBody, body_rows, concat_bodies, nominal_body
 from aerodock.world.vehicles.point_mass import (
@@ -244,13 +244,26 @@ class PairFleet:
 Fleet = PointMassFleet | RigidBodyFleet | PairFleet
 
 
-def build_fleet(cfg: Config,
-                vehicle: VehicleSection | None = None) -> PointMassFleet | RigidBodyFleet:
-    """The fleet of ``cfg``'s ``[vehicle] model`` for the vehicle section ``vehicle`` (default
-    ``[vehicle]``, the follower's; ``cfg.leader`` for the leader's)."""
+def same_state_width(leader: Any, follower: Any) -> tuple[Any, Any]:
+    """Two rigid-body fleets whose autopilots keep the same number of state columns (a pair's
+    halves are joined after every step): the narrower one widened (its extra columns are
+    carried unread). Other fleets unchanged."""
+    if not (isinstance(leader, RigidBodyFleet) and isinstance(follower, RigidBodyFleet)):
+        return leader, follower
+    width = max(leader.params.autopilot_state_columns, follower.params.autopilot_state_columns)
+    return tuple(fleet if fleet.params.autopilot_state_columns == width else replace(
+        fleet, params=replace(fleet.params, autopilot_state_columns=width))
+        for fleet in (leader, follower))
+
+
+def build_fleet(cfg: Config, vehicle: VehicleSection | None = None,
+                autopilot: AutopilotSection | None = None) -> PointMassFleet | RigidBodyFleet:
+    """The fleet of ``cfg``'s ``[vehicle] model`` for the vehicle section ``vehicle`` and the
+    autopilot section ``autopilot`` (default ``[vehicle]`` and ``[autopilot]``, the
+    follower's; ``cfg.leader`` and ``cfg.leader_autopilot`` for the leader's)."""
     if cfg.vehicle.model == "point-mass":
         return PointMassFleet(VehicleParams.from_config(cfg, vehicle))
-    return RigidBodyFleet(RigidBodyParams.from_config(cfg, vehicle))
+    return RigidBodyFleet(RigidBodyParams.from_config(cfg, vehicle, autopilot))
 
 
 def concat_states(fleet: Fleet, lead: Any, fol: Any) -> Any:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.config.schema import VehicleSection
+from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles import rigid_kernel
@@ -69,10 +69,13 @@ class RigidBodyParams:
     autopilot_state_columns: int = 3  # numbers of autopilot state per vehicle
 
     @classmethod
-    def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None) -> RigidBodyParams:
-        """Bind ``[vehicle]`` (or the given vehicle section, e.g. ``cfg.leader``), ``[autopilot]``
-        and ``[sim]`` of ``cfg``."""
-        v, a = (cfg.vehicle if vehicle is None else vehicle), cfg.autopilot
+    def from_config(cls, cfg: Config, vehicle: VehicleSection | None = None,
+                    autopilot: AutopilotSection | None = None) -> RigidBodyParams:
+        """Bind ``[vehicle]`` (or the given vehicle section, e.g. ``cfg.leader``),
+        ``[autopilot]`` (or the given one, e.g. ``cfg.leader_autopilot``) and ``[sim]`` of
+        ``cfg``."""
+        v = cfg.vehicle if vehicle is None else vehicle
+        a = cfg.autopilot if autopilot is None else autopilot
         g = cfg.sim.gravity_mps2
         n_rotors = int(v.n_rotors)
         if n_rotors != 4:

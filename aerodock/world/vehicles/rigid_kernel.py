@@ -367,6 +367,8 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
                     integral[i, 1], integral[i, 2], consts, mixer_inv, rotor_thrust_max,
                     thrust_coeff, dt)
                 integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = n0, n1, n2
+                for col in range(3, integral.shape[1]):  # a wider state, carried unread
+                    integral_new[i, col] = integral[i, col]
             y = yaw_rate[i] * dt
             y += yaw_sp[i]
             y += math.pi
@@ -468,6 +470,8 @@ def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
                         consts, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
         cmd[i, 0], cmd[i, 1], cmd[i, 2], cmd[i, 3] = out[0], out[1], out[2], out[3]
         integral_new[i, 0], integral_new[i, 1], integral_new[i, 2] = out[4], out[5], out[6]
+        for col in range(3, integral.shape[1]):  # a wider state, carried unread
+            integral_new[i, col] = integral[i, col]
 
 
 @njit
