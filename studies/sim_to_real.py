@@ -3,11 +3,12 @@ worlds, judged on the real Neural-Swarm flights beside the zero model and a mode
 flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judged).
 
     .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
-        [--pair small_under_small|small_under_large] [--data $AERODOCK_DATA_DIR/neural-swarm]
+        [--pair small_under_small|small_under_large|large_under_small] [--data $AERODOCK_DATA_DIR/neural-swarm]
         [--out sim_to_real.json] [--json] [--smoke]
 
-The worlds are examples/crazyflie.toml (small under small) and
-examples/crazyflie_small_under_large.toml (small under large). ``--smoke``: small under small
+The worlds are examples/crazyflie.toml (small under small),
+examples/crazyflie_small_under_large.toml (small under large) and
+examples/crazyflie_large_under_small.toml (large under small). ``--smoke``: small under small
 only (unless ``--pair`` names one), one flight in two depth bands, 8 epochs.
 """
 
@@ -29,7 +30,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
 DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 WORLDS = {"small_under_small": ROOT / "examples" / "crazyflie.toml",
-          "small_under_large": ROOT / "examples" / "crazyflie_small_under_large.toml"}
+          "small_under_large": ROOT / "examples" / "crazyflie_small_under_large.toml",
+          "large_under_small": ROOT / "examples" / "crazyflie_large_under_small.toml"}
 
 
 def main() -> int:
@@ -37,7 +39,7 @@ def main() -> int:
     parser.add_argument("--data", type=Path,
                         default=DATA_DIR / "neural-swarm")
     parser.add_argument("--pair", choices=sorted(PAIRS), action="append",
-                        help="a pairing to judge (repeatable; default: both)")
+                        help="a pairing to judge (repeatable; default: all three)")
     parser.add_argument("--model", default="so2", choices=("so2", "so2-ext", "mlp"))
     parser.add_argument("--quick", action="store_true", help="2 flights per band, 40 epochs")
     parser.add_argument("--seed", type=int, default=0)

@@ -8,7 +8,9 @@ and a model of the same kind trained on real flights of that pair:
 - small under small: the ``swap_ss`` flights, real model trained on 00-04, all judged on 05-06
   (both vehicles in turn the follower);
 - small under large: the ``swap_sl_2020-06-19`` flights with the small ``cf51`` following, real
-  model trained on 00-07, all judged on 08-11.
+  model trained on 00-07, all judged on 08-11;
+- large under small: the same flights with the large ``cf101`` following
+  (``examples/crazyflie_large_under_small.toml``).
 
 The measure is the interaction region's vertical RMSE (follower below the other vehicle, within
 0.2 m horizontally; :func:`aerodock.learning.evaluate.evaluate`) and its reduction against the
@@ -80,6 +82,9 @@ PAIRS: dict[str, RealPair] = {
     "small_under_large": RealPair(
         "small under large", "swap_sl_2020-06-19", "cf51=small,cf101=large",
         ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf51"),
+    "large_under_small": RealPair(
+        "large under small", "swap_sl_2020-06-19", "cf51=small,cf101=large",
+        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf101"),
 }
 """The pairings the study judges, each with its world in ``examples/`` (see the module doc)."""
 

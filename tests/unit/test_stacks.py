@@ -162,14 +162,19 @@ def test_the_leader_flies_its_own_autopilot(tmp_path):
                       'sjc_k_nms = [1.0e-2, 1.0e-2, 5.0e-4]\n')
     cfg = load_config(path)
     assert cfg.leader_differs
-    assert cfg.autopilot.stack == "generic" and cfg.leader_autopilot.stack == "crazyflie-sjc"
+    assert cfg.autopilot.stack == "crazyflie-pid" and cfg.leader_autopilot.stack == "crazyflie-sjc"
     world = WorldParams.from_config(cfg)
     lead, fol = world.leader_fleet.params, world.follower_fleet.params
-    assert fol.stack_constants is None
+    assert _rows(fol)[11].tolist() == [1.0, 1.0, 1.0]  # the PID's D on the gyro
     assert _rows(lead)[4].tolist() == [1.0e-2, 1.0e-2, 5.0e-4]
-    # the pair's halves are joined after every step: one state width for both
     assert lead.autopilot_state_columns == fol.autopilot_state_columns \
         == stack_kernel.STATE_COLUMNS
+    # a generic leader beside a stack's follower: the pair's halves are joined after every
+    # step, so both keep the wider state
+    mixed = load_config(path).with_overrides({"leader_autopilot": {"stack": "generic"}})
+    world = WorldParams.from_config(mixed)
+    assert world.leader_fleet.params.stack_constants is None
+    assert world.leader_fleet.params.autopilot_state_columns == stack_kernel.STATE_COLUMNS
     from aerodock.mission import MissionSpec, run_campaign
 
     result = run_campaign(cfg, MissionSpec(trials=2, seed=1))

@@ -13,8 +13,9 @@ Per axis (body roll, pitch, yaw), at the physics rate:
    integral (the Crazyflie PID's) clipped to its limit, plus the commanded yaw rate.
 3. **The rate loop**: the reference rate low-passed (``FLTT``), the error to the gyro
    low-passed (``FLTE``), P and I on it (the integral of the error clipped to its limit), D on
-   the error's or the gyro's derivative low-passed (``FLTD``), plus the reference's rate of
-   change times an inertia (the SJC law's ``J_tune dw_r/dt``), clipped to the output limit.
+   the error's or the gyro's derivative low-passed (``FLTD``), plus the SJC law's
+   ``J_tune dw_r/dt = J_tune lambda (dq_r/dt - w)`` (the reference's feed-forward rate less
+   the gyro), clipped to the output limit.
    First-order low-passes as ArduPilot's: ``y += a (x - y)``, ``a = dt / (dt + 1 / (2 pi f))``
    (1 where ``f`` is 0).
 
@@ -22,7 +23,7 @@ The torques go to the vehicle's mixer (:func:`aerodock.world.vehicles.rigid_kern
 
 State per vehicle (:data:`STATE_COLUMNS` numbers; zeros start it, as a first call seeds the
 filters): per axis the angle integral, the rate integral, the filtered reference, the filtered
-error, the derivative's previous input, the filtered derivative, the previous reference; then
+error, the derivative's previous input, the filtered derivative; then
 the shaper's target roll and pitch and their rates, and whether the filters are seeded.
 """
 
@@ -34,15 +35,15 @@ import numpy as np
 
 from aerodock.jit import njit
 
-STATE_COLUMNS = 26
+STATE_COLUMNS = 23
 """Numbers of state per vehicle (module docstring)."""
 CONSTANTS = 46
 """Constants per stack: 15 rows of (roll, pitch, yaw), then the shaper's time constant (s).
 Rows: ang_p, ang_accel, ang_i, ang_ilim, rate_p, rate_i, rate_d, rate_ilim, fltt_hz, flte_hz,
 fltd_hz, d_on_gyro (0/1), ref_inertia, torque_max, shaper_accel."""
 
-_A_INT, _R_INT, _TGT, _ERR, _PREV, _DER, _REF = 0, 3, 6, 9, 12, 15, 18
-_PHI_T, _THETA_T, _PHI_RATE, _THETA_RATE, _SEEDED = 21, 22, 23, 24, 25
+_A_INT, _R_INT, _TGT, _ERR, _PREV, _DER = 0, 3, 6, 9, 12, 15
+_PHI_T, _THETA_T, _PHI_RATE, _THETA_RATE, _SEEDED = 18, 19, 20, 21, 22
 
 
 @njit
@@ -141,7 +142,6 @@ def stack_torque(s: np.ndarray, i: int, c: np.ndarray, att: tuple, rd: tuple,
             s[i, _TGT + j] = ref
             s[i, _ERR + j] = ref - gyro
             s[i, _PREV + j] = gyro if c[33 + j] != 0.0 else ref - gyro
-            s[i, _REF + j] = ref
         tgt = s[i, _TGT + j]
         tgt += _alpha(c[24 + j], dt) * (ref - tgt)
         s[i, _TGT + j] = tgt
@@ -162,8 +162,10 @@ def stack_torque(s: np.ndarray, i: int, c: np.ndarray, att: tuple, rd: tuple,
         der += _alpha(c[30 + j], dt) * (slope - der)
         s[i, _DER + j] = der
         t = c[12 + j] * err + c[15 + j] * integ + c[18 + j] * der
-        t += c[36 + j] * (ref - s[i, _REF + j]) / dt
-        s[i, _REF + j] = ref
+        # the SJC law's J_tune dw_r/dt: w_r = lambda (q_r - q) + dq_r/dt with the reference's
+        # second derivative zero, so dw_r/dt = lambda (dq_r/dt - dq/dt), dq/dt from the gyro
+        # (controller_sjc.c computes it so: Z(q) w; the identity at small angles)
+        t += c[36 + j] * c[j] * (ffs[j] - gyro)
         tmax = c[39 + j]
         torque[j] = min(max(t, -tmax), tmax)
     s[i, _SEEDED] = 1.0
