@@ -6,7 +6,14 @@ follower holds the wake's torque beside the real Neural-Swarm flights (issue 39,
 
 Step: a 5 deg roll step from hover, one exactly nominal vehicle, the ideal IMU chain; the fraction
 of the step reached at 0.05, 0.1 and 0.2 s and the peak, each stack on its vehicle (the paper's
-for ``generic`` and ``arducopter``, examples/crazyflie.toml for the Crazyflie stacks).
+for ``generic`` and ``arducopter``, examples/crazyflie.toml for the Crazyflie stacks, and
+``generic-fitted``: the generic loop with the gains the Crazyflie world flew before, fitted to
+drone-models' identified step response).
+
+Hover: 16 followers of the Crazyflie world (each vehicle drawn from the world's spread, the
+filtered IMU chain) holding station in free air for 3 s under the tuned controller, with each
+Crazyflie stack, and with SJC beside the ideal IMU chain and nominal motors: how many end more
+than 0.2 m from where they were held.
 
 Under the wake (``--data`` given or found): per pairing of the shared flights the Crazyflie world
 has (small under small: examples/crazyflie.toml; small under large:
@@ -46,9 +53,18 @@ CRAZYFLIE = ROOT / "examples" / "crazyflie.toml"
 WORLDS = {"32 g under 32 g": (CRAZYFLIE, "swap_ss", None),
           "32 g under 67 g": (ROOT / "examples" / "crazyflie_small_under_large.toml",
                               "swap_sl_2020-06-19", "cf51=small,cf101=large")}
-STEP_STACKS = (("generic", None), ("arducopter", None), ("generic", CRAZYFLIE),
+# The generic autopilot as the Crazyflie world flew it before the flight stacks: gains fitted to
+# drone-models' identified step response (studies/crazyflie_autopilot_fit.py).
+GENERIC_FITTED = {"stack": "generic", "attitude_p": [10.3, 10.3, 7.9],
+                  "rate_p": [26.3, 26.3, 28.6], "rate_i": [11.7, 11.7, 9.5]}
+STEP_STACKS = (("generic", None), ("arducopter", None), ("generic-fitted", CRAZYFLIE),
                ("crazyflie-pid", CRAZYFLIE), ("crazyflie-sjc", CRAZYFLIE))
-CF_STACKS = ("generic", "crazyflie-pid", "crazyflie-sjc")
+CF_STACKS = ("generic-fitted", "crazyflie-pid", "crazyflie-sjc")
+
+
+def _autopilot(stack: str) -> dict:
+    """The ``[autopilot]`` overrides of a row's stack (``generic-fitted``: see above)."""
+    return dict(GENERIC_FITTED) if stack == "generic-fitted" else {"stack": stack}
 STEP_RAD = math.radians(5.0)
 BINS_M = (0.04, 0.06, 0.08)
 
@@ -75,12 +91,37 @@ def step_response(cfg: Config, seconds: float = 0.6) -> tuple[np.ndarray, np.nda
 def step_rows(stacks) -> list[dict]:
     rows = []
     for stack, path in stacks:
-        cfg = load_config(path).with_overrides({"autopilot": {"stack": stack}})
+        cfg = load_config(path).with_overrides({"autopilot": _autopilot(stack)})
         t, roll = step_response(cfg)
         at = {f"{s:g}s": float(np.interp(s, t, roll)) for s in (0.05, 0.1, 0.2)}
         rows.append({"stack": stack, "vehicle": "crazyflie" if path else "paper",
                      **at, "peak": float(roll.max())})
     return rows
+
+
+HOVER_CASES = (("crazyflie-pid", {}), ("crazyflie-sjc", {}),
+               ("crazyflie-sjc", {"imu": {"chain": "ideal"}}),
+               ("crazyflie-sjc", {"vehicle": {"motor_tau_sd": 0.0}}))
+
+
+def hover_losses(stack: str, overrides: dict, n: int = 16, seconds: float = 3.0) -> int:
+    """How many of ``n`` followers holding station in free air end more than 0.2 m off."""
+    from aerodock.control.controller import PositionController, Reference
+    from aerodock.mission.settle import reset_controllers
+
+    cfg = load_config(CRAZYFLIE).with_overrides({"autopilot": {"stack": stack}, **overrides})
+    world = World(cfg, n, TrialRNG(0, n), field=build_field(cfg))
+    lead_p, fol_p = np.tile([0.0, 0.0, -2.5], (n, 1)), np.tile([3.0, 0.0, -2.5], (n, 1))
+    world.reset(lead_p, fol_p)
+    lead_ctl, fol_ctl = (PositionController(cfg, n, use_observer=True) for _ in range(2))
+    reset_controllers(world, lead_ctl, fol_ctl)
+    zero = np.zeros((n, 3))
+    refs = [Reference(p, zero, zero, np.zeros(n), np.zeros(n)) for p in (lead_p, fol_p)]
+    for _ in range(int(round(seconds / world.dt_control_s))):
+        obs_l, obs_f = world.observe()
+        world.advance(lead_ctl.step(obs_l.p, obs_l.v, obs_l.rpy, refs[0]).command,
+                      fol_ctl.step(obs_f.p, obs_f.v, obs_f.rpy, refs[1]).command)
+    return int((np.linalg.norm(world.follower.p - fol_p, axis=1) > 0.2).sum())
 
 
 def _torque_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, dict]:
@@ -129,7 +170,7 @@ def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
                  "world": {}}
         for stack in CF_STACKS[:2] if smoke else CF_STACKS:
-            cfg = base.with_overrides({"autopilot": {"stack": stack},
+            cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
                                                                torque_gain}}})
             logs = simulated_flights(cfg, flights_per_band=flights,
@@ -150,15 +191,23 @@ def main() -> int:
     add_smoke_option(parser)
     args = parser.parse_args()
     steps = step_rows(STEP_STACKS[:2] if args.smoke else STEP_STACKS)
+    hover = [{"stack": stack, "overrides": over,
+              "lost": hover_losses(stack, over, n=2 if args.smoke else 16,
+                                   seconds=0.5 if args.smoke else 3.0)}
+             for stack, over in (HOVER_CASES[:1] if args.smoke else HOVER_CASES)]
     wake = (wake_rows(args.data, 1 if args.smoke else args.flights, args.torque_gain,
                       args.smoke) if args.data.is_dir() else [])
     if args.json:
-        print(json.dumps({"step": steps, "wake": wake}, indent=2))
+        print(json.dumps({"step": steps, "hover": hover, "wake": wake}, indent=2))
         return 0
     print("5 deg roll step, fraction reached at 0.05 / 0.1 / 0.2 s, peak:")
     for r in steps:
         print(f"  {r['stack']:<14} {r['vehicle']:<10} {r['0.05s']:.2f} / {r['0.1s']:.2f} / "
               f"{r['0.2s']:.2f}, peak {r['peak']:.2f}")
+    print("hovering 3 s in free air, followers lost (> 0.2 m off) of 16:")
+    for r in hover:
+        how = json.dumps(r["overrides"]) if r["overrides"] else "as configured"
+        print(f"  {r['stack']:<14} {how}: {r['lost']}")
     if not wake:
         print(f"no flights at {args.data}: the wake part skipped")
     for entry in wake:

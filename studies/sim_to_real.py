@@ -3,7 +3,8 @@ worlds, judged on the real Neural-Swarm flights beside the zero model and a mode
 flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judged).
 
     .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
-        [--pair small_under_small|small_under_large|large_under_small] [--data $AERODOCK_DATA_DIR/neural-swarm]
+        [--pair small_under_small|small_under_large|large_under_small]
+        [--data $AERODOCK_DATA_DIR/neural-swarm]
         [--out sim_to_real.json] [--json] [--smoke]
 
 The worlds are examples/crazyflie.toml (small under small),

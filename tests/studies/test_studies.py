@@ -76,6 +76,7 @@ def _sample_efficiency_json(out: str, tmp: Path) -> None:
 STUDY_CASES = (
     Study("attitude_stacks.py", ("--data", "{data}"),
           (rf"^  arducopter\s+paper\s+{NUMBER} / {NUMBER} / {NUMBER}, peak {NUMBER}$",
+           r"^  crazyflie-pid\s+as configured: \d+$",
            r"^32 g under 32 g: inward torque mN m, lean deg, mN m per rad, per offset bin$",
            rf"^  real\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
            rf"^  crazyflie-pid\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm"),
