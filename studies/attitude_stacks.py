@@ -25,7 +25,8 @@ wake-excitation flights (the sim-to-real study's, :func:`aerodock.experiments.si
 simulated_flights`) flown with each stack. The simulated logs' rotor torque (what the rotors
 explain from their speeds) stands for the real logs' motor torque (the Crazyflie's own mixer of
 its per-motor thrust estimates). ``--torque-gain`` scales the world's wake torque
-(``disk_torque_gain``). ``--smoke``: the step at two stacks, one flight in one band.
+(``disk_torque_gain``). ``--smoke``: the step of ArduCopter, the hover of the stock PID (two
+vehicles, 0.5 s), its flights under the wake (one flight in one band).
 """
 
 from __future__ import annotations
@@ -169,7 +170,7 @@ def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list
                          **({"vehicle": vehicles} if vehicles else {}))
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
                  "world": {}}
-        for stack in CF_STACKS[:2] if smoke else CF_STACKS:
+        for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
                                                                torque_gain}}})
@@ -190,7 +191,7 @@ def main() -> int:
     parser.add_argument("--json", action="store_true")
     add_smoke_option(parser)
     args = parser.parse_args()
-    steps = step_rows(STEP_STACKS[:2] if args.smoke else STEP_STACKS)
+    steps = step_rows(STEP_STACKS[1:2] if args.smoke else STEP_STACKS)
     hover = [{"stack": stack, "overrides": over,
               "lost": hover_losses(stack, over, n=2 if args.smoke else 16,
                                    seconds=0.5 if args.smoke else 3.0)}

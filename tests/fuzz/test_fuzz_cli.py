@@ -64,7 +64,7 @@ def test_random_command_lines(flightlog_file, model_dir, tmp_path):
     rng = random.Random(2026)
     templates = _commands(flightlog_file, model_dir, tmp_path)
     results = [run_cli(_random_args(rng, templates, flightlog_file), family="cli-options")
-               for _ in range(n_cases(200))]
+               for _ in range(n_cases(100))]
     assert_clean(results)
     assert {r.rc for r in results} == {0, 2}
 

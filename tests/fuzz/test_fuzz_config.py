@@ -103,17 +103,17 @@ def test_random_config_values(tmp_path):
     rng = random.Random(12)
     loaded = 0
     path = tmp_path / "user.toml"
-    for _ in range(n_cases(1200)):
+    for _ in range(n_cases(600)):
         path.write_text(_random_toml(rng))
         loaded += _check(path) is not None
         count("config-values")
-    assert 0 < loaded < n_cases(1200)
+    assert 0 < loaded < n_cases(600)
 
 
 def test_damaged_defaults_file(tmp_path):
     rng = random.Random(5)
     path = tmp_path / "damaged.toml"
-    for _ in range(n_cases(500)):
+    for _ in range(n_cases(250)):
         path.write_bytes(mutate_bytes(DEFAULTS_TEXT.encode(), rng))
         _check(path)
         count("config-bytes")
@@ -123,7 +123,7 @@ def test_random_configs_through_the_cli(tmp_path):
     """``field probe`` (and a few ``dock`` runs) under random configs: 0 or 2, strict JSON."""
     rng = random.Random(99)
     results = []
-    for i in range(n_cases(120)):
+    for i in range(n_cases(60)):
         path = tmp_path / f"c{i}.toml"
         path.write_text(_random_toml(rng))
         if i % 12 == 0:
@@ -241,7 +241,7 @@ def test_code_naming_configs_run_nothing(tmp_path, monkeypatch):
     rng = random.Random(41)
     results = []
     cases = [*CODE_CALLS, (f"{names['evil']}:F", {}), (f"{names['evil']}:NotAField", {})]
-    for i in range(n_cases(40)):
+    for i in range(n_cases(20)):
         field, params = cases[i % len(cases)]
         params = _fill(params, names)
         path = tmp_path / f"evil{i}.toml"
@@ -413,7 +413,7 @@ def test_resolved_config_written_as_toml_loads_back(tmp_path):
     rng = random.Random(2041)
     path, again = tmp_path / "user.toml", tmp_path / "again.toml"
     loaded = 0
-    for i in range(n_cases(300)):
+    for i in range(n_cases(150)):
         path.write_text(_random_toml(rng))
         try:
             cfg = load_config(path)

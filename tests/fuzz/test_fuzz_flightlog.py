@@ -91,7 +91,7 @@ def test_damaged_flightlogs_are_refused_cleanly(flightlog_file, tmp_path):
     rng = random.Random(20261123)
     base_bytes = flightlog_file.read_bytes()
     outcomes = {"read": 0, "refused": 0}
-    for i in range(n_cases(800)):
+    for i in range(n_cases(400)):
         path = tmp_path / f"m{i % 50}.npz"
         if i % 3 == 0:
             path.write_bytes(mutate_bytes(base_bytes, rng))
@@ -142,7 +142,7 @@ def test_damaged_flightlogs_through_the_cli(flightlog_file, model_dir, tmp_path)
     base_bytes = flightlog_file.read_bytes()
     good_model = (model_dir / "model.json").read_text()
     results = []
-    for i in range(n_cases(80)):
+    for i in range(n_cases(40)):
         path = tmp_path / f"c{i}.npz"
         if i % 2:
             path.write_bytes(mutate_bytes(base_bytes, rng))
@@ -169,7 +169,7 @@ def test_damaged_dataset_files(flightlog_file, model_dir, tmp_path):
     blob = base.read_bytes()
     rng = random.Random(31)
     results = []
-    for i in range(n_cases(200)):
+    for i in range(n_cases(100)):
         path = tmp_path / f"d{i % 20}.npz"
         if i % 2:
             path.write_bytes(mutate_bytes(blob, rng))
@@ -181,7 +181,7 @@ def test_damaged_dataset_files(flightlog_file, model_dir, tmp_path):
             assert "\n" not in str(err)
         else:
             assert np.all(np.isfinite(ds.x)) and np.all(np.isfinite(ds.y))
-            if len(results) < n_cases(20):  # the loadable ones through the CLI as well
+            if len(results) < n_cases(10):  # the loadable ones through the CLI as well
                 args = (["evaluate", "--model", model_dir] if len(results) % 2 else
                         ["train", "--out", tmp_path / "t", "--max-epochs", "1"])
                 results.append(run_cli([*args, "--data", path, "--json"], family="cli-dataset"))

@@ -106,7 +106,7 @@ def test_damaged_model_json(model_dir, tmp_path):
     doc = json.loads((model_dir / "model.json").read_text())
     text = (model_dir / "model.json").read_text()
     outcomes = {"refused": 0, "loaded": 0}
-    for i in range(n_cases(800)):
+    for i in range(n_cases(400)):
         model = _copy(model_dir, tmp_path / "m")
         if i % 4 == 0:
             (model / "model.json").write_bytes(mutate_bytes(text.encode(), rng))
@@ -153,7 +153,7 @@ def test_damaged_weights(model_dir, tmp_path):
     rng = random.Random(4)
     blob = (model_dir / "weights.npz").read_bytes()
     doc = json.loads((model_dir / "model.json").read_text())
-    for i in range(n_cases(300)):
+    for i in range(n_cases(75)):
         model = _copy(model_dir, tmp_path / "m")
         weights = model / "weights.npz"
         if i % 2:
@@ -176,7 +176,7 @@ def test_damaged_models_through_the_cli(model_dir, tmp_path):
     rng = random.Random(8)
     doc = json.loads((model_dir / "model.json").read_text())
     results = []
-    for i in range(n_cases(150)):
+    for i in range(n_cases(75)):
         model = _copy(model_dir, tmp_path / f"m{i % 3}")
         (model / "model.json").write_text(json.dumps(_mutate_doc(doc, rng)))
         args = ["field", "probe", "--model", model, "--separation",
@@ -220,7 +220,7 @@ def test_tampered_model_json_through_the_cli(model_dir, tmp_path):
     doc = json.loads((model_dir / "model.json").read_text())
     fields = [p for p in _fields(doc) if p != (CHECKSUM_KEY,)]
     results = []
-    for i in range(n_cases(120)):
+    for i in range(n_cases(60)):
         model = _copy(model_dir, tmp_path / f"t{i % 3}")
         path = rng.choice(fields)
         bad = copy.deepcopy(doc)

@@ -52,7 +52,7 @@ def test_damaged_neural_swarm_flights(shared_data, tmp_path):
     texts = [(a.read_text(), b.read_text()) for a, b in pairs]
     rng = random.Random(11)
     results = []
-    for i in range(n_cases(60)):
+    for i in range(n_cases(15)):
         a_text, b_text = rng.choice(texts)
         (tmp_path / "cf50_00.csv").write_text(_mutate_csv(a_text, rng) if i % 2 else a_text)
         (tmp_path / "cf51_00.csv").write_text(_mutate_csv(b_text, rng))
@@ -69,7 +69,7 @@ def test_damaged_ulog(shared_data, tmp_path):
     blob = shared_data("px4-ulog", "sample_log_small.ulg").read_bytes()
     rng = random.Random(12)
     results = []
-    for _ in range(n_cases(30)):
+    for _ in range(n_cases(15)):
         path = tmp_path / "log.ulg"
         path.write_bytes(mutate_bytes(blob, rng))
         results.append(run_cli(["ingest", "--format", "ulog", "--single", path, "--out",

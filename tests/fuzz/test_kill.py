@@ -346,6 +346,12 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def _terminal_sigint() -> None:
+    """In the child: SIGINT's default action, as a command started at a terminal has it (a
+    suite run in the background of a non-interactive shell inherits SIGINT ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _ctrl_c(args: list, ready) -> tuple[int, str, str]:
     """Run ``aerodock ARGS`` in its own process group, wait until ``ready(pid)``, then send
     SIGINT to the whole group (what a terminal's Ctrl-C does: the workers get it too).
@@ -357,7 +363,7 @@ def _ctrl_c(args: list, ready) -> tuple[int, str, str]:
     count(f"ctrl-c-{args[0]}")
     proc = subprocess.Popen([sys.executable, "-c", ENTRY, *map(str, args)], text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_terminal_sigint)
     try:
         deadline = time.monotonic() + 300
         while proc.poll() is None and not ready(proc.pid) and time.monotonic() < deadline:
