@@ -12,8 +12,7 @@ drone-models' identified step response).
 
 Hover: 16 followers of the Crazyflie world (each vehicle drawn from the world's spread, the
 filtered IMU chain) holding station in free air for 3 s under the tuned controller, with each
-Crazyflie stack, and with SJC beside the ideal IMU chain and nominal motors: how many end more
-than 0.2 m from where they were held.
+Crazyflie stack: how many end more than 0.2 m from where they were held.
 
 Under the wake (``--data`` given or found): per pairing of the shared flights the Crazyflie world
 has (small under small: examples/crazyflie.toml; small under large:
@@ -33,20 +32,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from _smoke import add_smoke_option  # studies/, on sys.path
+from crazyflie_autopilot_fit import step_response  # the 5 deg roll step, as fitted there
 
 from aerodock.config import Config, load_config
 from aerodock.downwash import build_field
 from aerodock.ingest.data_dir import find_data_dir
 from aerodock.rng import TrialRNG
 from aerodock.world import World
-from aerodock.world.world import hover_command
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
@@ -66,27 +64,7 @@ CF_STACKS = ("generic-fitted", "crazyflie-pid", "crazyflie-sjc")
 def _autopilot(stack: str) -> dict:
     """The ``[autopilot]`` overrides of a row's stack (``generic-fitted``: see above)."""
     return dict(GENERIC_FITTED) if stack == "generic-fitted" else {"stack": stack}
-STEP_RAD = math.radians(5.0)
 BINS_M = (0.04, 0.06, 0.08)
-
-
-def step_response(cfg: Config, seconds: float = 0.6) -> tuple[np.ndarray, np.ndarray]:
-    """(t, roll / step) of a hovering vehicle after a 5 deg roll step command."""
-    cfg = cfg.with_overrides({
-        "vehicle": {"mass_sd": 0.0, "inertia_sd": 0.0, "torque_coeff_sd": 0.0,
-                    "motor_tau_sd": 0.0, "thrust_gain_sd": 0.0},
-        "imu": {"chain": "ideal", "attitude_noise_rad": 0.0, "gyro_noise_radps": 0.0}})
-    world = World(cfg, 1, TrialRNG(0, 1), field=build_field(cfg))
-    world.reset(np.array([[0.0, 0.0, -2.5]]), np.array([[5.0, 0.0, -2.5]]))  # far apart
-    hover = hover_command(world.vehicle, 1)
-    command = replace(hover, roll_rad=np.full(1, STEP_RAD))
-    t, roll = [], []
-    for k in range(int(round(seconds / world.dt_control_s))):
-        world.advance(hover, command if k > 0 else hover)
-        rot = world.follower.R[0]
-        t.append(world.t_s)
-        roll.append(math.atan2(rot[2, 1], rot[2, 2]) / STEP_RAD)
-    return np.asarray(t) - t[0], np.asarray(roll)
 
 
 def step_rows(stacks) -> list[dict]:
@@ -100,9 +78,7 @@ def step_rows(stacks) -> list[dict]:
     return rows
 
 
-HOVER_CASES = (("crazyflie-pid", {}), ("crazyflie-sjc", {}),
-               ("crazyflie-sjc", {"imu": {"chain": "ideal"}}),
-               ("crazyflie-sjc", {"vehicle": {"motor_tau_sd": 0.0}}))
+HOVER_CASES = (("crazyflie-pid", {}), ("crazyflie-sjc", {}))
 
 
 def hover_losses(stack: str, overrides: dict, n: int = 16, seconds: float = 3.0) -> int:
@@ -205,7 +181,8 @@ def main() -> int:
     for r in steps:
         print(f"  {r['stack']:<14} {r['vehicle']:<10} {r['0.05s']:.2f} / {r['0.1s']:.2f} / "
               f"{r['0.2s']:.2f}, peak {r['peak']:.2f}")
-    print("hovering 3 s in free air, followers lost (> 0.2 m off) of 16:")
+    print(f"hovering {0.5 if args.smoke else 3} s in free air, followers lost (> 0.2 m off) of "
+          f"{2 if args.smoke else 16}:")
     for r in hover:
         how = json.dumps(r["overrides"]) if r["overrides"] else "as configured"
         print(f"  {r['stack']:<14} {how}: {r['lost']}")

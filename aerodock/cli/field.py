@@ -219,7 +219,6 @@ def field_fit(
         one_line,
         write_json,
     )
-    from aerodock.flightlog import FlightLogError, load_flightlogs
     from aerodock.identify import flights as fl
     from aerodock.identify import wake_fit as wf
     from aerodock.identify import wake_score as ws
@@ -232,12 +231,7 @@ def field_fit(
     check_output_dir(out, FIT_OUTPUTS)
     if config_out is not None:
         check_writable_target(config_out)
-    logs = []
-    for path in data:
-        try:
-            logs += load_flightlogs(path)
-        except (FlightLogError, OSError) as err:
-            fail(one_line(err))
+    logs = _read_flightlogs(data)
     try:
         flights = fl.prepare_flights(logs)
         if noise == "speed":
@@ -363,7 +357,6 @@ def field_score(
     own reference (one half of a pairing's flights against the other). The follower's inertia,
     for the torque, is scaled from --config's vehicle (a fit folder) or FIT's (a config)."""
     from aerodock.fileio import json_ready, one_line
-    from aerodock.flightlog import FlightLogError, load_flightlogs
     from aerodock.identify import field_score as fs
     from aerodock.identify import flights as fl
     from aerodock.identify.wake_fit import WakeFitError
@@ -375,12 +368,7 @@ def field_score(
     if not paths:
         fail("no flights: give FlightLog files with --data")
     params, radii, cfg = _scored_wake(fit, config, sets, trust)
-    logs = []
-    for path in paths:
-        try:
-            logs += load_flightlogs(path)
-        except (FlightLogError, OSError) as err:
-            fail(one_line(err))
+    logs = _read_flightlogs(paths)
     try:
         flights = fl.prepare_flights(logs)
         inertia = fs.scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
@@ -397,6 +385,20 @@ def field_score(
         print_json(json_ready(result))
         return
     _print_scores(scores)
+
+
+def _read_flightlogs(paths: list[Path]) -> list[FlightLog]:
+    """Every FlightLog of ``paths``; a file that is not one is a one-line error."""
+    from aerodock.fileio import one_line
+    from aerodock.flightlog import FlightLogError, load_flightlogs
+
+    logs: list[FlightLog] = []
+    for path in paths:
+        try:
+            logs += load_flightlogs(path)
+        except (FlightLogError, OSError) as err:
+            fail(one_line(err))
+    return logs
 
 
 def _scored_wake(fit: Path, config: Path | None, sets: list[str] | None,

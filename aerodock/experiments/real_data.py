@@ -27,6 +27,9 @@ TEST_FLIGHTS = ("05", "06")
 # The sample-efficiency curve: minutes of training data (the five training flights hold about
 # four) and seeds, by run size (``reproduce``'s full, quick and smoke runs).
 SE_MINUTES = {"full": (0.5, 1, 2, 3), "quick": (0.5, 1, 2), "smoke": (0.5,)}
+SMOKE_MAX_EPOCHS = 25
+"""The held-out models' training under ``smoke`` (a check that every step runs; else up to 200
+epochs with early stopping)."""
 SE_SEEDS = {"full": (0, 1, 2), "quick": (0, 1), "smoke": (0,)}
 
 
@@ -102,9 +105,9 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
                     other_pair: Path | None = None, smoke: bool = False) -> dict[str, Any]:
     """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``. With
     ``other_pair`` (the small-large day's folder), the models are also judged on it
-    (:func:`transfer_to_other_pair`, ``transfer``). ``quick`` and ``smoke`` shorten the
-    sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)
-    and nothing else."""
+    (:func:`transfer_to_other_pair`, ``transfer``). ``smoke`` trains them for at most
+    :data:`SMOKE_MAX_EPOCHS` epochs. ``quick`` and ``smoke`` shorten the
+    sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)."""
     from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
@@ -118,7 +121,9 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     }
     predictors = {"zero": ZeroPredictor()}
     for kind in ("so2", "so2-ext", "mlp"):
-        predictors[kind] = train_model(kind, train_ds, seed=seed).predictor()
+        predictors[kind] = train_model(kind, train_ds, seed=seed,
+                                       max_epochs=SMOKE_MAX_EPOCHS if smoke else 200
+                                       ).predictor()
     for kind, pred in predictors.items():
         ev = evaluate(pred, test_ds)
         out["models"][kind] = {region: _rmse_parts(ev, region, "model")

@@ -101,7 +101,7 @@ def test_kill_during_ingest(shared_data, tmp_path):
     new_args = ["ingest", "--format", "neural-swarm", *files, "--out", out]
     duration = _run(new_args)
     n_new = len(load_flightlogs(out))
-    for delay in _moments(duration, 3, seed=1):
+    for delay in _moments(duration, 2, seed=1):
         assert run_cli(old_args).rc == 0
         old = _digest([out])
         assert len(load_flightlogs(out)) < n_new
@@ -269,7 +269,7 @@ def test_kill_during_sweep_leaves_one_study(tmp_path):
     old = _tree(out)
     assert _sweep_seeds(out) == {"csv:0", "summary:0"}
     snapshot = shutil.copytree(out, tmp_path / "old-study")
-    for delay in _moments(duration, 3, seed=4):
+    for delay in _moments(duration, 2, seed=4):
         _kill_at(new_args, delay)
         now = _tree(out)
         if now != old:
@@ -311,7 +311,7 @@ def test_kill_during_collect_leaves_one_collection(tmp_path):
     _in_process(old_args)  # the old collection replaces the new one
     assert _collect_seeds(out) == dict.fromkeys(complete, 1)
     snapshot = shutil.copytree(out, tmp_path / "old-collection")
-    for delay in _moments(duration, 3, seed=5):
+    for delay in _moments(duration, 2, seed=5):
         _kill_at(new_args, delay)
         seeds = _collect_seeds(out)
         assert set(seeds) == complete, f"incomplete folder after a kill at {delay:.2f} s"

@@ -158,15 +158,16 @@ def test_the_leader_flies_its_own_autopilot(tmp_path):
 
     path = tmp_path / "cf.toml"
     path.write_text((EXAMPLES / "crazyflie.toml").read_text()
-                    + '\n[leader_autopilot]\nstack = "crazyflie-sjc"\n'
-                      'sjc_k_nms = [1.0e-2, 1.0e-2, 5.0e-4]\n')
+                    + '\n[leader_autopilot]\nstack = "crazyflie-pid"\n')
     cfg = load_config(path)
     assert cfg.leader_differs
-    assert cfg.autopilot.stack == "crazyflie-pid" and cfg.leader_autopilot.stack == "crazyflie-sjc"
+    assert cfg.autopilot.stack == "crazyflie-sjc" and cfg.leader_autopilot.stack == "crazyflie-pid"
     world = WorldParams.from_config(cfg)
     lead, fol = world.leader_fleet.params, world.follower_fleet.params
-    assert _rows(fol)[11].tolist() == [1.0, 1.0, 1.0]  # the PID's D on the gyro
-    assert _rows(lead)[4].tolist() == [1.0e-2, 1.0e-2, 5.0e-4]
+    assert _rows(lead)[11].tolist() == [1.0, 1.0, 1.0]  # the PID's D on the gyro
+    assert _rows(fol)[4].tolist() == [2.0e-3, 2.0e-3, 1.0e-3]  # SJC's K, the small type's
+    # the SJC firmware's mixer clips each rotor on its own; the PID flies the world's
+    assert fol.stack_constants[46] == 1.0 and lead.stack_constants[46] == 0.0
     assert lead.autopilot_state_columns == fol.autopilot_state_columns \
         == stack_kernel.STATE_COLUMNS
     # a generic leader beside a stack's follower: the pair's halves are joined after every
@@ -185,3 +186,30 @@ def test_the_leader_flies_its_own_autopilot(tmp_path):
     path.write_text('[leader_autopilot]\nstack = "px4"\n')
     with pytest.raises(ConfigError, match="'leader_autopilot.stack' must be one of"):
         load_config(path)
+
+
+def test_sjc_holds_station_with_its_own_mixer():
+    """The Crazyflie world's SJC followers, drawn from the world's spread and flown on the
+    filtered IMU chain, hold station in free air: with the world's attitude-first mixer instead
+    of the firmware's (each rotor clipped on its own) a quarter of them fell into a limit cycle
+    that took the collective with them (docs/world.md, "The autopilots")."""
+    from aerodock.control.controller import PositionController, Reference
+    from aerodock.downwash import build_field
+    from aerodock.mission.settle import reset_controllers
+    from aerodock.rng import TrialRNG
+    from aerodock.world import World
+
+    n = 8
+    cfg = load_config(EXAMPLES / "crazyflie.toml")
+    assert cfg.autopilot.stack == "crazyflie-sjc"
+    world = World(cfg, n, TrialRNG(0, n), field=build_field(cfg))
+    lead_p, fol_p = np.tile([0.0, 0.0, -2.5], (n, 1)), np.tile([3.0, 0.0, -2.5], (n, 1))
+    world.reset(lead_p, fol_p)
+    ctls = [PositionController(cfg, n, use_observer=True) for _ in range(2)]
+    reset_controllers(world, *ctls)
+    zero = np.zeros((n, 3))
+    refs = [Reference(p, zero, zero, np.zeros(n), np.zeros(n)) for p in (lead_p, fol_p)]
+    for _ in range(200):  # 2 s
+        obs = world.observe()
+        world.advance(*(c.step(o.p, o.v, o.rpy, r).command for c, o, r in zip(ctls, obs, refs)))
+    assert np.linalg.norm(world.follower.p - fol_p, axis=1).max() < 0.1

@@ -165,6 +165,16 @@ def mix(thrust: float, tau0: float, tau1: float, tau2: float, mixer_inv: tuple,
 
 
 @njit
+def rotor_commands(thrust: float, tau0: float, tau1: float, tau2: float, mixer_inv: tuple,
+                   rotor_thrust_max: float, thrust_coeff: float) -> tuple:
+    """The mixer's four rotor thrusts (:func:`mix`) as rotor speed commands through the nominal
+    k_T ``thrust_coeff``, rad/s."""
+    f0, f1, f2, f3 = mix(thrust, tau0, tau1, tau2, mixer_inv, rotor_thrust_max)
+    return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
+            math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff))
+
+
+@njit
 def _rate_loop(sp: float, gyro: float, integral: float, limit: float, int_limit: float,
                rate_p: float, rate_i: float, inertia: float, dt: float) -> tuple:
     """One axis of the rate loop: the setpoint clipped to the rate limit, PI on the gyro with
@@ -211,9 +221,9 @@ def autopilot(att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff:
         tau0 += ff0
         tau1 += ff1
         tau2 += ff2
-    f0, f1, f2, f3 = mix(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max)
-    return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
-            math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff), n0, n1, n2)
+    c0, c1, c2, c3 = rotor_commands(thrust_cmd, tau0, tau1, tau2, mixer_inv,
+                                    rotor_thrust_max, thrust_coeff)
+    return c0, c1, c2, c3, n0, n1, n2
 
 
 @njit
@@ -232,9 +242,20 @@ def stack_autopilot(state_new: np.ndarray, state: np.ndarray, i: int, stack_c: n
         tau0 += ff0
         tau1 += ff1
         tau2 += ff2
-    f0, f1, f2, f3 = mix(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max)
-    return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
-            math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff))
+    if stack_c[46] != 0.0:  # each rotor clipped on its own (the SJC firmware's mixer)
+        m = mixer_inv
+        f0 = _min(_max(dot4(m[0], m[4], m[8], m[12], thrust_cmd, tau0, tau1, tau2), 0.0),
+                  rotor_thrust_max)
+        f1 = _min(_max(dot4(m[1], m[5], m[9], m[13], thrust_cmd, tau0, tau1, tau2), 0.0),
+                  rotor_thrust_max)
+        f2 = _min(_max(dot4(m[2], m[6], m[10], m[14], thrust_cmd, tau0, tau1, tau2), 0.0),
+                  rotor_thrust_max)
+        f3 = _min(_max(dot4(m[3], m[7], m[11], m[15], thrust_cmd, tau0, tau1, tau2), 0.0),
+                  rotor_thrust_max)
+        return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
+                math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff))
+    return rotor_commands(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max,
+                          thrust_coeff)
 
 
 @njit

@@ -37,10 +37,12 @@ from aerodock.jit import njit
 
 STATE_COLUMNS = 23
 """Numbers of state per vehicle (module docstring)."""
-CONSTANTS = 46
-"""Constants per stack: 15 rows of (roll, pitch, yaw), then the shaper's time constant (s).
-Rows: ang_p, ang_accel, ang_i, ang_ilim, rate_p, rate_i, rate_d, rate_ilim, fltt_hz, flte_hz,
-fltd_hz, d_on_gyro (0/1), ref_inertia, torque_max, shaper_accel."""
+CONSTANTS = 47
+"""Constants per stack: 15 rows of (roll, pitch, yaw), then the shaper's time constant (s) and
+the mixer (0: the world's, attitude first when a rotor saturates; 1: each rotor clipped on its
+own, as the SJC firmware's force-torque mixer). Rows: ang_p, ang_accel, ang_i, ang_ilim, rate_p,
+rate_i, rate_d, rate_ilim, fltt_hz, flte_hz, fltd_hz, d_on_gyro (0/1), ref_inertia, torque_max,
+shaper_accel."""
 
 _A_INT, _R_INT, _TGT, _ERR, _PREV, _DER = 0, 3, 6, 9, 12, 15
 _PHI_T, _THETA_T, _PHI_RATE, _THETA_RATE, _SEEDED = 18, 19, 20, 21, 22

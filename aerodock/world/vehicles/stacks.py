@@ -60,6 +60,7 @@ def stack_constants(autopilot: object, arm_m: float, rotor_thrust_max_n: float,
         "ang_p", "ang_accel", "ang_i", "ang_ilim", "rate_p", "rate_i", "rate_d", "rate_ilim",
         "fltt", "flte", "fltd", "d_on_gyro", "ref_inertia", "torque_max", "shaper_accel")}
     tc = 0.0
+    mixer = 0.0  # the world's: attitude first when a rotor saturates
     a = autopilot
     if stack == "arducopter":
         full = np.array([math.sqrt(2.0) * arm_m * rotor_thrust_max_n] * 2
@@ -102,12 +103,14 @@ def stack_constants(autopilot: object, arm_m: float, rotor_thrust_max_n: float,
         rows["rate_d"] = np.asarray(a.sjc_kdw_nms2, dtype=float)
         rows["ref_inertia"] = np.asarray(a.sjc_jtune_kgm2, dtype=float)
         rows["torque_max"] = np.full(3, np.inf)
+        mixer = 1.0  # powerDistributionForceTorque: each motor's force clipped on its own
+        # (whoenig/crazyflie-firmware 83efb361, power_distribution_stock.c:126-263)
     else:
         raise ValueError(f"unknown autopilot stack {stack!r} (one of {', '.join(STACKS)})")
     flat = np.concatenate([rows[k] for k in (
         "ang_p", "ang_accel", "ang_i", "ang_ilim", "rate_p", "rate_i", "rate_d", "rate_ilim",
         "fltt", "flte", "fltd", "d_on_gyro", "ref_inertia", "torque_max", "shaper_accel")]
-        + [np.array([tc])])
+        + [np.array([tc, mixer])])
     assert flat.shape == (stack_kernel.CONSTANTS,)
     flat.flags.writeable = False
     return flat
