@@ -72,6 +72,21 @@ def sqrt_controller(error: float, p: float, accel: float) -> float:
 
 
 @njit
+def _shape_axis(s: np.ndarray, i: int, k: int, accel: float, command: float, p: float,
+                dt: float) -> float:
+    """One shaped axis (roll ``k`` = 0, pitch 1) of vehicle ``i``: its target's new rate, the
+    target advanced by it in place."""
+    target = s[i, _PHI_T + k]
+    rate = s[i, _PHI_RATE + k]
+    wanted = sqrt_controller(command - target, p, accel)
+    if accel > 0.0:
+        wanted = min(max(wanted, rate - accel * dt), rate + accel * dt)
+    s[i, _PHI_RATE + k] = wanted
+    s[i, _PHI_T + k] = target + wanted * dt
+    return wanted
+
+
+@njit
 def _shape(s: np.ndarray, i: int, c: np.ndarray, rd: tuple, yaw_rate: float,
            dt: float) -> tuple:
     """The shaper's step for vehicle ``i``: the target rotation (row-major) and the target's
@@ -83,17 +98,8 @@ def _shape(s: np.ndarray, i: int, c: np.ndarray, rd: tuple, yaw_rate: float,
     if s[i, _SEEDED] == 0.0:
         s[i, _PHI_T], s[i, _THETA_T] = phi_cmd, theta_cmd
         s[i, _PHI_RATE] = s[i, _THETA_RATE] = 0.0
-    out = [0.0, 0.0]
-    for k in range(2):
-        accel = c[42 + k]
-        target = s[i, _PHI_T + k]
-        rate = s[i, _PHI_RATE + k]
-        wanted = sqrt_controller((phi_cmd if k == 0 else theta_cmd) - target, 1.0 / tc, accel)
-        if accel > 0.0:
-            wanted = min(max(wanted, rate - accel * dt), rate + accel * dt)
-        s[i, _PHI_RATE + k] = wanted
-        s[i, _PHI_T + k] = target + wanted * dt
-        out[k] = wanted
+    rate_phi = _shape_axis(s, i, 0, c[42], phi_cmd, 1.0 / tc, dt)
+    rate_theta = _shape_axis(s, i, 1, c[43], theta_cmd, 1.0 / tc, dt)
     phi, theta = s[i, _PHI_T], s[i, _THETA_T]
     cf, sf = math.cos(phi), math.sin(phi)
     ct, st = math.cos(theta), math.sin(theta)
@@ -102,10 +108,54 @@ def _shape(s: np.ndarray, i: int, c: np.ndarray, rd: tuple, yaw_rate: float,
           sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
           -st, ct * sf, ct * cf)
     # ZYX Euler rates to body rates at the target attitude
-    w0 = out[0] - st * yaw_rate
-    w1 = cf * out[1] + sf * ct * yaw_rate
-    w2 = -sf * out[1] + cf * ct * yaw_rate
+    w0 = rate_phi - st * yaw_rate
+    w1 = cf * rate_theta + sf * ct * yaw_rate
+    w2 = -sf * rate_theta + cf * ct * yaw_rate
     return rt, w0, w1, w2
+
+
+@njit
+def _axis(s: np.ndarray, i: int, c: np.ndarray, j: int, e: float, gyro: float, ff: float,
+          seeded: bool, dt: float) -> float:
+    """Axis ``j`` of vehicle ``i``'s loops (module docstring): its torque, N m, from the
+    attitude error ``e``, the gyro and the feed-forward rate ``ff``; its state in place."""
+    ref = sqrt_controller(e, c[j], c[3 + j])
+    if c[6 + j] != 0.0:
+        lim = c[9 + j]
+        acc = min(max(s[i, _A_INT + j] + e * dt, -lim), lim)
+        s[i, _A_INT + j] = acc
+        ref += c[6 + j] * acc
+    ref += ff
+    if not seeded:
+        s[i, _TGT + j] = ref
+        s[i, _ERR + j] = ref - gyro
+        s[i, _PREV + j] = gyro if c[33 + j] != 0.0 else ref - gyro
+    tgt = s[i, _TGT + j]
+    tgt += _alpha(c[24 + j], dt) * (ref - tgt)
+    s[i, _TGT + j] = tgt
+    err = s[i, _ERR + j]
+    err += _alpha(c[27 + j], dt) * ((tgt - gyro) - err)
+    s[i, _ERR + j] = err
+    lim = c[21 + j]
+    integ = min(max(s[i, _R_INT + j] + err * dt, -lim), lim)
+    s[i, _R_INT + j] = integ
+    if c[33 + j] != 0.0:  # D on the measurement: the gyro's rate of change, negated
+        x = gyro
+        slope = -(x - s[i, _PREV + j]) / dt
+    else:
+        x = err
+        slope = (x - s[i, _PREV + j]) / dt
+    s[i, _PREV + j] = x
+    der = s[i, _DER + j] if seeded else 0.0
+    der += _alpha(c[30 + j], dt) * (slope - der)
+    s[i, _DER + j] = der
+    t = c[12 + j] * err + c[15 + j] * integ + c[18 + j] * der
+    # the SJC law's J_tune dw_r/dt: w_r = lambda (q_r - q) + dq_r/dt with the reference's
+    # second derivative zero, so dw_r/dt = lambda (dq_r/dt - dq/dt), dq/dt from the gyro
+    # (controller_sjc.c computes it so: Z(q) w; the identity at small angles)
+    t += c[36 + j] * c[j] * (ff - gyro)
+    tmax = c[39 + j]
+    return min(max(t, -tmax), tmax)
 
 
 @njit
@@ -125,50 +175,9 @@ def stack_torque(s: np.ndarray, i: int, c: np.ndarray, att: tuple, rd: tuple,
     m20 = rt[2] * att[0] + rt[5] * att[3] + rt[8] * att[6]
     m10 = rt[1] * att[0] + rt[4] * att[3] + rt[7] * att[6]
     m01 = rt[0] * att[1] + rt[3] * att[4] + rt[6] * att[7]
-    errors = (-0.5 * (m21 - m12), -0.5 * (m02 - m20), -0.5 * (m10 - m01))
-    gyros = (g0, g1, g2)
-    ffs = (ff0, ff1, ff2)
     seeded = s[i, _SEEDED] != 0.0
-    torque = [0.0, 0.0, 0.0]
-    for j in range(3):
-        e = errors[j]
-        ref = sqrt_controller(e, c[j], c[3 + j])
-        if c[6 + j] != 0.0:
-            lim = c[9 + j]
-            acc = min(max(s[i, _A_INT + j] + e * dt, -lim), lim)
-            s[i, _A_INT + j] = acc
-            ref += c[6 + j] * acc
-        ref += ffs[j]
-        gyro = gyros[j]
-        if not seeded:
-            s[i, _TGT + j] = ref
-            s[i, _ERR + j] = ref - gyro
-            s[i, _PREV + j] = gyro if c[33 + j] != 0.0 else ref - gyro
-        tgt = s[i, _TGT + j]
-        tgt += _alpha(c[24 + j], dt) * (ref - tgt)
-        s[i, _TGT + j] = tgt
-        err = s[i, _ERR + j]
-        err += _alpha(c[27 + j], dt) * ((tgt - gyro) - err)
-        s[i, _ERR + j] = err
-        lim = c[21 + j]
-        integ = min(max(s[i, _R_INT + j] + err * dt, -lim), lim)
-        s[i, _R_INT + j] = integ
-        if c[33 + j] != 0.0:  # D on the measurement: the gyro's rate of change, negated
-            x = gyro
-            slope = -(x - s[i, _PREV + j]) / dt
-        else:
-            x = err
-            slope = (x - s[i, _PREV + j]) / dt
-        s[i, _PREV + j] = x
-        der = s[i, _DER + j] if seeded else 0.0
-        der += _alpha(c[30 + j], dt) * (slope - der)
-        s[i, _DER + j] = der
-        t = c[12 + j] * err + c[15 + j] * integ + c[18 + j] * der
-        # the SJC law's J_tune dw_r/dt: w_r = lambda (q_r - q) + dq_r/dt with the reference's
-        # second derivative zero, so dw_r/dt = lambda (dq_r/dt - dq/dt), dq/dt from the gyro
-        # (controller_sjc.c computes it so: Z(q) w; the identity at small angles)
-        t += c[36 + j] * c[j] * (ffs[j] - gyro)
-        tmax = c[39 + j]
-        torque[j] = min(max(t, -tmax), tmax)
+    t0 = _axis(s, i, c, 0, -0.5 * (m21 - m12), g0, ff0, seeded, dt)
+    t1 = _axis(s, i, c, 1, -0.5 * (m02 - m20), g1, ff1, seeded, dt)
+    t2 = _axis(s, i, c, 2, -0.5 * (m10 - m01), g2, ff2, seeded, dt)
     s[i, _SEEDED] = 1.0
-    return torque[0], torque[1], torque[2]
+    return t0, t1, t2
