@@ -51,7 +51,7 @@ def onnx_check(model_dir: Path, out: Path, x: np.ndarray, leader_R: np.ndarray,
     takes the name) and run it here with onnxruntime on ``x``: the largest difference."""
     import onnxruntime as ort
 
-    from aerodock.learning.export import export_checked
+    from aerodock.deploy.export import export_checked
 
     path, _ = export_checked(model_dir, out, dtype="float32")
     session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])

@@ -40,8 +40,8 @@ DEPTH_BAND_M = (0.3, 0.6)
 def simulated_logs(n_flights: int, seed: int = 0) -> tuple[list[FlightLog], list[FlightLog]]:
     """(training flights, held-out flight): ``n_flights`` wake-excitation flights flown at
     once in the default world; the last is held out."""
+    from aerodock.collect.curriculum import excitation_flights
     from aerodock.config import load_config
-    from aerodock.learning.curriculum import excitation_flights
 
     logs = excitation_flights(load_config(), n_flights, *DEPTH_BAND_M, seed=seed, name="sim")
     return logs[:-1], logs[-1:]

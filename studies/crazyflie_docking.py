@@ -66,7 +66,7 @@ def main() -> int:
             source=f"{args.config} + force at the centre of mass")
     curriculum = None
     if args.collect:
-        from aerodock.learning.curriculum import run_curriculum
+        from aerodock.collect.curriculum import run_curriculum
 
         curriculum = run_curriculum(base, args.models, seed=args.seed, progress=None if args.json
                                     else lambda m: print(m, flush=True),

@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 from _smoke import SMOKE_CURRICULUM, SMOKE_EPOCHS, add_smoke_option, smoke_config
 
+from aerodock.collect.curriculum import run_curriculum
 from aerodock.config import load_config
 from aerodock.experiments.targets import learnt_mean_check
 from aerodock.flightlog import load_flightlogs
-from aerodock.learning.curriculum import run_curriculum
 from aerodock.learning.labels import raw_labels
 from aerodock.learning.runtime import Predictor
 

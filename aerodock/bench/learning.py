@@ -181,7 +181,7 @@ def _bench_onnx(trained: Any, x1: np.ndarray, r1: np.ndarray, xb: np.ndarray, rb
     try:
         import onnxruntime as ort
 
-        from aerodock.learning.export import export_onnx
+        from aerodock.deploy.export import export_onnx
     except Exception as err:  # noqa: BLE001 - optional part
         return unavailable(f"ONNX export/runtime not available ({failure_reason(err)})", "us")
     try:

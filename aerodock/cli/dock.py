@@ -104,7 +104,7 @@ def dock(
 
         check_writable_target(save_logs / f"dock-{compensation.value}-seed{seed}.npz")
     predictor = _load_predictor(model, compensation)
-    from aerodock.learning.compatibility import model_warnings
+    from aerodock.deploy.compatibility import model_warnings
 
     for note in model_warnings(predictor, cfg):
         typer.echo(f"warning: {note}", err=True)

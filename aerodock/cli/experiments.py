@@ -113,7 +113,7 @@ def targets_command(
     # and targets.json or the new ones, never one run's data beside the other's results.
     with building_dir(out, TARGETS_OUTPUTS) as work:
         if model is None:
-            from aerodock.learning.curriculum import run_curriculum
+            from aerodock.collect.curriculum import run_curriculum
 
             say("curriculum (the paper's stages, then the deep ones)")
             run_curriculum(cfg, work / "data", seed=seed, progress=lambda m: say("  " + m),
@@ -122,7 +122,7 @@ def targets_command(
             model = out / "data" / "models" / "final"
         else:
             predictor = Predictor.load(model)
-        from aerodock.learning.compatibility import model_warnings
+        from aerodock.deploy.compatibility import model_warnings
 
         for note in model_warnings(predictor, cfg):
             typer.echo(f"warning: {note}", err=True)

@@ -338,7 +338,7 @@ def export_command(
     try:
         import onnx  # noqa: F401
 
-        from aerodock.learning.export import ExportCheckError, export_checked
+        from aerodock.deploy.export import ExportCheckError, export_checked
     except ImportError:
         fail("ONNX export needs onnx: pip install 'aerodock[export]'")
     try:  # checked against the NumPy predictor before it takes the name --out
@@ -378,7 +378,7 @@ def collect(
 ) -> None:
     """Curriculum data collection: each stage trains, deploys and flies curriculum.stage_step_m
     closer (0.3 m by default)."""
-    from aerodock.learning.curriculum import run_curriculum
+    from aerodock.collect.curriculum import run_curriculum
 
     cfg = load_cli_config(config, sets, trust)
     model = None if model is None else str(model)

@@ -99,9 +99,9 @@ def node_command(
         fail(one_line(f"{what}: {word!r} (ROS's own arguments go last, after --ros-args; "
                       "see 'aerodock node --help')"))
     from aerodock.config import ConfigError, load_config
+    from aerodock.deploy.compatibility import model_warnings
     from aerodock.ingest.errors import IngestError
     from aerodock.ingest.rosbag import load_mapping
-    from aerodock.learning.compatibility import model_warnings
     from aerodock.learning.modelfile import ModelFileError
     from aerodock.learning.runtime import Predictor
     from aerodock.node.core import STATE_TYPES, configured_wake_scales, output_frame_choice

@@ -91,8 +91,8 @@ def learning_data(cfg: Config, size: RunSize, data_dir: Path, seed: int = 0, *,
 
     ``train_kwargs`` go to each stage's training; ``name_as`` is the folder the results name
     (``data_dir`` itself unless it is being built under another name)."""
+    from aerodock.collect.curriculum import curriculum_stages, excitation_flights, run_curriculum
     from aerodock.flightlog import load_flightlogs
-    from aerodock.learning.curriculum import curriculum_stages, excitation_flights, run_curriculum
     from aerodock.learning.datafiles import save_dataset
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.runtime import Predictor
@@ -330,7 +330,7 @@ def _targets_step(run: _Run, learned: LearningData, ours: OursController
                   ) -> tuple[TargetsResult, dict[str, Any] | None]:
     """The targets beyond the paper for each (controller, model) row, and (in a full run) the
     learnt wrench's curriculum (returned beside the targets: ``None`` when not flown)."""
-    from aerodock.learning.curriculum import run_curriculum
+    from aerodock.collect.curriculum import run_curriculum
     from aerodock.learning.runtime import Predictor
 
     cfg, say, deep = run.cfg, run.say, learned.deep_predictor

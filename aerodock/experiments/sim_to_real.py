@@ -18,8 +18,8 @@ zero model; the issue's target is a cut of at least half by the simulation-train
 trained on real flights does about 70 %).
 
 The simulated flights are the curriculum's wake-excitation flights
-(:func:`aerodock.learning.curriculum.excitation_flights`) over the world's curriculum depth
-bands (:func:`aerodock.learning.curriculum.curriculum_stages`, the deep ones included), flown by
+(:func:`aerodock.collect.curriculum.excitation_flights`) over the world's curriculum depth
+bands (:func:`aerodock.collect.curriculum.curriculum_stages`, the deep ones included), flown by
 the nominal controller (bias observer, no model: the curriculum deploys models to fly closer
 safely, not to make other labels). In the real swaps the upper vehicle moves as fast as the lower
 one (0.27 m/s median, 0.53 m/s at the 95th percentile below the other vehicle), faster than the
@@ -125,7 +125,7 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
             of its own (its bar hangs out of the way at its own depth), so the cost grows with
             the number of bands more than with the flights per band.
     """
-    from aerodock.learning.curriculum import curriculum_stages, excitation_flights
+    from aerodock.collect.curriculum import curriculum_stages, excitation_flights
 
     overrides: dict[str, Any] = {"label_basis": "thrust"}
     if leader_drift_max_mps is not None:
@@ -178,7 +178,7 @@ def field_on_logs(cfg: Config, logs: list[FlightLog]) -> np.ndarray:
 def smoke_bands(cfg: Config) -> tuple[int, ...]:
     """The depth bands a smoke run flies: the curriculum's first (the far wake) and its last
     two (the docking depth), one batch each, instead of every band."""
-    from aerodock.learning.curriculum import curriculum_stages
+    from aerodock.collect.curriculum import curriculum_stages
 
     last = len(curriculum_stages(cfg)) - 1
     return tuple(sorted({0, max(last - 1, 0), last}))

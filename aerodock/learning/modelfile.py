@@ -23,7 +23,7 @@ computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_st
 ``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius and
 rotor count of the flights it was trained on (``None`` where the logs did not say; see
 :mod:`aerodock.learning.training_vehicles`), so that a model flown on other vehicles can be
-flagged (:mod:`aerodock.learning.compatibility`).
+flagged (:mod:`aerodock.deploy.compatibility`).
 
 The directory is written as a whole (:func:`aerodock.fileio.write_dir_atomic`): a kill at any
 moment leaves either the complete old model or the complete new one, never a mix, and a failed

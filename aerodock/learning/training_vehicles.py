@@ -3,7 +3,7 @@
 A model file (``model.json``'s ``vehicles``) and a data set's summary record them as
 ``{"leader": {mass_kg, rotor_radius_m, n_rotors}, "follower": {...}}``, each value a positive
 number, a sorted list of them (when the training flights disagree) or ``None`` (when the logs
-did not say). :mod:`aerodock.learning.compatibility` compares such a record with the vehicles a
+did not say). :mod:`aerodock.deploy.compatibility` compares such a record with the vehicles a
 config flies (:func:`configured_vehicles`).
 """
 

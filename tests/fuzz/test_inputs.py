@@ -222,7 +222,7 @@ def test_the_run_size_counts_every_mission_time(cfg):
 
 
 def test_a_long_curriculum_flight_is_refused(cfg, tmp_path):
-    from aerodock.learning.curriculum import run_curriculum
+    from aerodock.collect.curriculum import run_curriculum
     from aerodock.mission.limits import LimitError
 
     with pytest.raises(LimitError, match="curriculum flight"):

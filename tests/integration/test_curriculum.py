@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from aerodock.collect.curriculum import curriculum_stages, run_curriculum
 from aerodock.flightlog import load_flightlogs
-from aerodock.learning.curriculum import curriculum_stages, run_curriculum
 from aerodock.learning.runtime import Predictor
 
 
@@ -36,7 +36,7 @@ def collected(short_cfg, tmp_path_factory):
 
 
 def test_deep_stages_fly_the_bar_above_the_follower(cfg, collected):
-    from aerodock.learning.curriculum import _bar_out_of_the_way
+    from aerodock.collect.curriculum import _bar_out_of_the_way
 
     assert _bar_out_of_the_way(cfg, 0.5).platform.cable_length_m == 0.36  # paper's stages as is
     out, _, flown = collected
@@ -87,8 +87,8 @@ def test_the_fast_leader_curriculum_flies_the_targets_leader_speeds(short_cfg):
     (docs/results/fitted-wake-targets.md)."""
     from pathlib import Path
 
+    from aerodock.collect.curriculum import excitation_flights
     from aerodock.config import load_config
-    from aerodock.learning.curriculum import excitation_flights
 
     example = Path(__file__).resolve().parents[2] / "examples" / "curriculum_fast_leader.toml"
     fast = load_config(example).curriculum

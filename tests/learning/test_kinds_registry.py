@@ -55,7 +55,7 @@ def _scales_for(name: str, scales: np.ndarray) -> np.ndarray | None:
 
 @pytest.mark.parametrize("name", KINDS)
 def test_numpy_torch_and_onnx_agree(name, tmp_path):
-    from aerodock.learning.export import (
+    from aerodock.deploy.export import (
         OUTPUT_NAME,
         SCALES_INPUT_NAME,
         TORQUE_OUTPUT_NAME,

@@ -38,7 +38,7 @@ def test_deepsets_learns_both_followers(trained):
 
 def test_deepsets_model_file_and_onnx_run_like_the_others(trained, tmp_path):
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import export_checked, read_onnx_metadata
+    from aerodock.deploy.export import export_checked, read_onnx_metadata
 
     folder = trained.save(tmp_path / "deepsets")
     loaded = Predictor.load(folder)

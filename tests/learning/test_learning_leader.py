@@ -124,7 +124,7 @@ def test_leader_model_exports_to_onnx_with_its_scales(two_leader_models, tmp_pat
     """The ONNX graph takes a third input, wake_scales (n, 3), and passes the export's own
     parity check against the NumPy predictor (random leaders of 2-9 m/s induced velocity)."""
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import export_checked, onnx_differences
+    from aerodock.deploy.export import export_checked, onnx_differences
 
     model_dir = two_leader_models["so2-leader"].save(tmp_path / "m")
     out, diffs = export_checked(model_dir, tmp_path / f"m_{dtype}.onnx", dtype=dtype)

@@ -303,7 +303,7 @@ def test_a_leftover_temp_dir_is_removed_by_the_next_save(tmp_path):
 
 def test_onnx_metadata_carries_the_label_bases_and_checksum(tmp_path):
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import export_onnx, read_onnx_metadata
+    from aerodock.deploy.export import export_onnx, read_onnx_metadata
 
     path = _save("so2", tmp_path / "m")
     meta = read_onnx_metadata(export_onnx(path, tmp_path / "m.onnx"))
@@ -332,7 +332,7 @@ def _off_by(monkeypatch, delta: float) -> None:
 @pytest.mark.parametrize("dtype", ["float32", "float64"])
 def test_export_enforces_its_tolerance_and_leaves_no_file(tmp_path, monkeypatch, dtype):
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import TOLERANCE, ExportCheckError, export_checked
+    from aerodock.deploy.export import TOLERANCE, ExportCheckError, export_checked
 
     path = _save("so2", tmp_path / "m")
     out = tmp_path / "out" / "m.onnx"
@@ -360,14 +360,14 @@ def test_export_enforces_its_tolerance_and_leaves_no_file(tmp_path, monkeypatch,
 
 def test_a_kill_during_the_export_check_leaves_the_old_file(tmp_path):
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import export_onnx
+    from aerodock.deploy.export import export_onnx
 
     old_model = _save("so2", tmp_path / "old")
     new_model = _save("mlp", tmp_path / "new")
     out = export_onnx(old_model, tmp_path / "m.onnx")
     before = out.read_bytes()
     code = ("import os, signal\n"
-            "import aerodock.learning.export as e\n"
+            "import aerodock.deploy.export as e\n"
             "def die(*args): os.kill(os.getpid(), signal.SIGKILL)\n"
             "e._check_file = die\n"
             f"e.export_onnx({str(new_model)!r}, {str(out)!r})\n")

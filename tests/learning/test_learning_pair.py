@@ -99,7 +99,7 @@ def test_pair_model_exports_with_four_scales(two_follower_models, tmp_path):
     pytest.importorskip("onnxruntime")
     import onnxruntime as ort
 
-    from aerodock.learning.export import export_checked
+    from aerodock.deploy.export import export_checked
 
     out, diffs = export_checked(two_follower_models["so2-pair"].save(tmp_path / "m"),
                                 tmp_path / "m.onnx", dtype="float64")

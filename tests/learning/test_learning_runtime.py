@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import torch
 
+from aerodock.deploy.export import check_onnx, export_onnx
 from aerodock.downwash.base import BodyState
 from aerodock.geometry import euler_to_rotmat
-from aerodock.learning.export import check_onnx, export_onnx
 from aerodock.learning.modelfile import (
     CHECKSUM_KEY,
     ModelFileError,
@@ -358,7 +358,7 @@ def test_kill_during_saves_leaves_a_whole_model(tmp_path):
 
 def test_model_records_its_vehicles_and_flags_others(tmp_path):
     from aerodock.config import load_config
-    from aerodock.learning.compatibility import model_vehicle_warnings
+    from aerodock.deploy.compatibility import model_vehicle_warnings
     from aerodock.learning.training_vehicles import vehicles_from_flights
 
     trained = _random_trained("so2")
@@ -415,7 +415,7 @@ def test_onnx_export_matches_onnxruntime(tmp_path, kind):
 @pytest.mark.parametrize("kind", ["so2", "so2-ext", "mlp", "zero"])
 def test_onnx_float64_equals_numpy_and_carries_metadata(tmp_path, kind):
     pytest.importorskip("onnxruntime")
-    from aerodock.learning.export import read_onnx_metadata
+    from aerodock.deploy.export import read_onnx_metadata
     from aerodock.learning.training_vehicles import vehicles_from_flights
 
     trained = _random_trained(kind, activation="silu" if kind == "so2-ext" else "tanh")
@@ -448,7 +448,7 @@ def test_onnx_export_needs_no_torch(tmp_path):
     path = _random_trained("so2").save(tmp_path / "m")
     code = (
         "import sys\n"
-        "from aerodock.learning.export import export_onnx\n"
+        "from aerodock.deploy.export import export_onnx\n"
         f"export_onnx({str(path)!r}, {str(tmp_path / 'm.onnx')!r})\n"
         "assert 'torch' not in sys.modules, 'torch was imported'\n"
     )

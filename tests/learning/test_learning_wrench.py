@@ -35,7 +35,7 @@ def sim_logs(ideal_cfg):
     """Eight short simulated wake-excitation flights at 0.5-0.8 m (rigid bodies, torques), on the
     idealised world (the true attitude, a noisy unfiltered gyro, nominal vehicles): the labels'
     and the models' mechanisms, before a flight computer's filters blur them."""
-    from aerodock.learning.curriculum import excitation_flights
+    from aerodock.collect.curriculum import excitation_flights
 
     return excitation_flights(ideal_cfg, 8, 0.5, 0.8, seed=11)
 
@@ -125,7 +125,7 @@ def test_thrust_basis_labels_are_the_force_on_the_body():
     outward 15 %: the label bases are what is tested. The settled start cut to 1 s: measured,
     the thrust basis within 3.6 % of the true push (3.4 % after 3 s), the command basis at 14 %
     of it (10 %).)"""
-    from aerodock.learning.curriculum import excitation_flights
+    from aerodock.collect.curriculum import excitation_flights
 
     base = load_config(None).with_overrides({"downwash": {"params": {"planar_ratio": 0.15}},
                                              "mission": {"settle_s": 1.0}}, source="test")
@@ -263,7 +263,7 @@ def test_onnx_export_has_both_outputs_and_matches(tmp_path, dtype):
     pytest.importorskip("onnxruntime")
     import onnx
 
-    from aerodock.learning.export import (
+    from aerodock.deploy.export import (
         check_onnx,
         export_onnx,
         onnx_differences,
@@ -393,7 +393,7 @@ def test_a_torque_feedforward_on_command_basis_labels_is_warned_about(sim_ds, tr
                                                                        tmp_path):
     """The model file records its labels' basis; flying command-basis labels with the torque
     feed-forward draws a warning (README: Label basis), the thrust basis or no feed-forward none."""
-    from aerodock.learning.compatibility import model_warnings
+    from aerodock.deploy.compatibility import model_warnings
 
     assert sim_ds.summary()["label_bases"] == ["command"]
     trained_wrench.save(tmp_path / "model")

@@ -14,16 +14,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from aerodock.collect.curriculum import (
+    _bar_out_of_the_way,
+    excitation_flights,
+    label_free_air_radius_m,
+)
 from aerodock.config import load_config
 from aerodock.control.profiles import PAPER_Q_DIAG, controller_config, scaled_weights
 from aerodock.downwash import build_field
 from aerodock.downwash.probe import probe_bodies
 from aerodock.flightlog import FlightLog
-from aerodock.learning.curriculum import (
-    _bar_out_of_the_way,
-    excitation_flights,
-    label_free_air_radius_m,
-)
 from aerodock.learning.labels import FREE_AIR_RADIUS_M, free_air_radius_of
 from aerodock.mission import MissionSpec, run_campaign
 from aerodock.world.platform import rotor_strike

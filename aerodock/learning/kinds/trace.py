@@ -7,7 +7,7 @@ back-ends read the recorded graph:
 * :func:`compile_scalar` turns it into one straight-line Python function of floats (the NumPy
   runtime's one-sample hot path: as fast as arithmetic written out by hand, and the same
   operations in the same order as the batched path, so the same numbers);
-* the ONNX export (:mod:`aerodock.learning.export`) writes one graph node per recorded node.
+* the ONNX export (:mod:`aerodock.deploy.export`) writes one graph node per recorded node.
 
 The generated source depends only on the kind's code (this package): numbers from a model file
 (the regularisation constants) are bound as values, never written into the source.
