@@ -111,7 +111,7 @@ def bench_vehicle_step(cfg: Any, batches: tuple[int, ...] = (1, 256, 1024), quic
 
     out: dict[str, Any] = {}
     repeats = 3 if quick else 5
-    dt = 1.0 / cfg.sim.physics_rate_hz
+    dt = cfg.timing.physics_dt_s
     for model in ("rigid-body", "point-mass"):
         fleet = build_fleet(cfg.with_overrides({"vehicle": {"model": model}}, source="bench"))
         row: dict[str, Any] = {}

@@ -66,7 +66,7 @@ def field_probe(
     cfg = load_cli_config(config, sets, trust)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_mass = cfg.leader.mass_kg
-    dt = 1.0 / cfg.sim.physics_rate_hz
+    dt = cfg.timing.physics_dt_s
     if bar:
         if model is not None or leader_speed != 0.0:
             fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
@@ -153,7 +153,7 @@ def field_plot(
         mean_fn, title = predictor.predict_bodies, f"learnt model {model.name}"
     else:
         field = build_field(cfg)
-        mean_fn = mean_acceleration_fn(field, dt_s=1.0 / cfg.sim.physics_rate_hz)
+        mean_fn = mean_acceleration_fn(field, dt_s=cfg.timing.physics_dt_s)
         title = cfg.downwash.field.rsplit(":", 1)[-1]
         if isinstance(mean_fn, EstimatedMean):
             title += f" (mean estimated, {mean_fn.samples} samples)"

@@ -44,6 +44,7 @@ from aerodock.config.schema import (
     SimSection,
     VehicleSection,
 )
+from aerodock.config.timing import Timing
 from aerodock.config.toml_text import dumps_toml
 from aerodock.fileio import read_toml
 
@@ -114,6 +115,11 @@ class Config:
     def sim(self) -> SimSection:
         """``[sim]``."""
         return self._section("sim")
+
+    @cached_property
+    def timing(self) -> Timing:
+        """The simulation's clocks, bound once from ``[sim]`` and ``[control]``."""
+        return Timing.from_sections(self.sim, self.control)
 
     @cached_property
     def downwash(self) -> DownwashSection:

@@ -78,7 +78,7 @@ class PositionController:
         self.gain = lqr_gain(c.q_diag, c.r_diag)
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
         self.yaw_rate_max = c.yaw_rate_max_radps
-        self.dt_s = 1.0 / cfg.sim.control_rate_hz
+        self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
         if use_observer and c.bias_estimator == "freyja":
             self.observer = FreyjaBiasEstimator(n, self.dt_s,
@@ -95,7 +95,7 @@ class PositionController:
                                                   FreyjaStateFilterParams.from_control(c))
         # The controller's own rate: a new command every hold_ticks state messages (held in
         # between, as Freyja's timer does); the reference acceleration's share fed forward.
-        self.hold_ticks = int(round(cfg.sim.control_rate_hz / c.command_rate_hz))
+        self.hold_ticks = cfg.timing.command_ticks
         self.reference_ff_factor = float(c.reference_ff_factor)
         self._tick = 0
         self._held: ControlOutput | None = None

@@ -18,6 +18,7 @@ from aerodock.downwash.wrench import (
 )
 
 __all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "field_factory",
+           "field_kwargs",
            "follower_body_force_n", "follower_wrench", "mean_acceleration_fn",
            "quad_rotor_offsets_body_m"]
 
@@ -27,6 +28,30 @@ _WORLD_KWARGS = ("rotor_radius_m", "n_rotors", "air_density_kgpm3", "gravity_mps
                  "leader_rotor_radius_m", "leader_n_rotors", "leader_mass_kg",
                  "leader_diagonal_m", "follower_rotor_radius_m", "follower_n_rotors",
                  "follower_mass_kg", "follower_diagonal_m")
+
+
+def field_kwargs(cfg: Config, factory: Any) -> dict[str, Any]:
+    """The keyword arguments :func:`build_field` passes ``factory``: ``[downwash.params]`` of
+    ``cfg``, plus each world constant (:data:`_WORLD_KWARGS`: the vehicles' rotors, masses and
+    diagonals, air density, gravity) that the factory's signature names and the params do not
+    set. With the shipped defaults and :class:`~aerodock.downwash.jet.RoundJetField`, these are
+    the default jet's every parameter, from their one home in ``defaults.toml``."""
+    params: dict[str, Any] = dict(cfg.downwash.params)
+    try:
+        accepted = inspect.signature(factory).parameters
+    except (TypeError, ValueError):
+        accepted = {}
+    lead, fol = cfg.leader, cfg.vehicle
+    world = {"rotor_radius_m": fol.rotor_radius_m, "n_rotors": fol.n_rotors,
+             "air_density_kgpm3": cfg.sim.air_density_kgpm3, "gravity_mps2": cfg.sim.gravity_mps2,
+             "leader_rotor_radius_m": lead.rotor_radius_m, "leader_n_rotors": lead.n_rotors,
+             "leader_mass_kg": lead.mass_kg, "leader_diagonal_m": lead.diagonal_m,
+             "follower_rotor_radius_m": fol.rotor_radius_m, "follower_n_rotors": fol.n_rotors,
+             "follower_mass_kg": fol.mass_kg, "follower_diagonal_m": fol.diagonal_m}
+    for key in _WORLD_KWARGS:
+        if key in accepted and key not in params:
+            params[key] = world[key]
+    return params
 
 
 def build_field(cfg: Config) -> DownwashField:
@@ -43,21 +68,7 @@ def build_field(cfg: Config) -> DownwashField:
     """
     path = cfg.downwash.field
     factory = resolve_factory(path, cfg.source, (*cfg.trusted, path))
-    params: dict[str, Any] = dict(cfg.data["downwash"].get("params", {}))
-    try:
-        accepted = inspect.signature(factory).parameters
-    except (TypeError, ValueError):
-        accepted = {}
-    lead, fol = cfg.leader, cfg.vehicle
-    world = {"rotor_radius_m": fol.rotor_radius_m, "n_rotors": fol.n_rotors,
-             "air_density_kgpm3": cfg.sim.air_density_kgpm3, "gravity_mps2": cfg.sim.gravity_mps2,
-             "leader_rotor_radius_m": lead.rotor_radius_m, "leader_n_rotors": lead.n_rotors,
-             "leader_mass_kg": lead.mass_kg, "leader_diagonal_m": lead.diagonal_m,
-             "follower_rotor_radius_m": fol.rotor_radius_m, "follower_n_rotors": fol.n_rotors,
-             "follower_mass_kg": fol.mass_kg, "follower_diagonal_m": fol.diagonal_m}
-    for key in _WORLD_KWARGS:
-        if key in accepted and key not in params:
-            params[key] = world[key]
+    params = field_kwargs(cfg, factory)
     try:
         field = factory(**params)
     except TypeError as err:

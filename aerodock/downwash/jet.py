@@ -96,6 +96,10 @@ def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
 class RoundJetField:
     """Physically grounded default downwash field (see the module docstring).
 
+    Every parameter is required: their defaults live in one place, ``[downwash.params]`` and
+    the vehicles of ``aerodock/config/defaults.toml``, and reach the jet through
+    :func:`aerodock.downwash.build_field` (or :func:`aerodock.downwash.field_kwargs`).
+
     Args:
         width0_ratio: the wake's half-velocity width at the rotor plane over the leader's
             equivalent disk radius ``R sqrt(n)``.
@@ -127,28 +131,29 @@ class RoundJetField:
 
     def __init__(
         self,
-        width0_ratio: float = 1.008,
-        spread_rate: float = 0.02309,
-        ingest_coeff: float = 0.4989,
-        ingest_exponent: float = 0.5573,
-        planar_ratio: float = -0.004125,
-        body_area_ratio: float = 0.2,
-        body_drag_coeff: float = 1.2,
-        disk_torque_gain: float = 1.0,
-        turb_vertical: float = 0.2478,
-        turb_lateral: float = 0.05196,
-        turb_length_ratio: float = 0.4736,
-        turb_time_ratio: float = 3.829,
-        bar_drag_coeff: float = 1.2,
-        bar_turb_vertical: float = 0.22,
-        bar_turb_lateral: float = 0.08,
-        leader_rotor_radius_m: float = 0.0635,
-        leader_n_rotors: int = 4,
-        follower_rotor_radius_m: float = 0.0635,
-        follower_n_rotors: int = 4,
-        follower_diagonal_m: float = 0.27,
-        air_density_kgpm3: float = 1.225,
-        gravity_mps2: float = 9.81,
+        *,
+        width0_ratio: float,
+        spread_rate: float,
+        ingest_coeff: float,
+        ingest_exponent: float,
+        planar_ratio: float,
+        body_area_ratio: float,
+        body_drag_coeff: float,
+        disk_torque_gain: float,
+        turb_vertical: float,
+        turb_lateral: float,
+        turb_length_ratio: float,
+        turb_time_ratio: float,
+        bar_drag_coeff: float,
+        bar_turb_vertical: float,
+        bar_turb_lateral: float,
+        leader_rotor_radius_m: float,
+        leader_n_rotors: int,
+        follower_rotor_radius_m: float,
+        follower_n_rotors: int,
+        follower_diagonal_m: float,
+        air_density_kgpm3: float,
+        gravity_mps2: float,
     ):
         positive = (("width0_ratio", width0_ratio), ("ingest_exponent", ingest_exponent),
                     ("turb_length_ratio", turb_length_ratio),

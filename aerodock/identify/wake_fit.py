@@ -31,10 +31,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import cache
 from typing import Any
 
 import numpy as np
 
+from aerodock.config import load_config
+from aerodock.downwash import field_kwargs
 from aerodock.downwash.jet import CONTRACTED_WIDTH0_RATIO, RoundJetField
 from aerodock.identify.flights import (
     GRAVITY_MPS2,
@@ -87,14 +90,22 @@ class WakeFit:
 # -- the model at the samples ---------------------------------------------------------------
 def build_jet(params: dict[str, float], geometry: dict[str, float]) -> RoundJetField:
     """The jet with ``params`` (fitted keys, and :data:`WORLD_PARAMS` where given) between the
-    vehicles of ``geometry``."""
+    vehicles of ``geometry``; every other parameter (the bar's, the air's) is the shipped
+    default's (``defaults.toml``, their one home)."""
     kwargs = {k: v for k, v in params.items() if k in FITTED_PARAMS or k in WORLD_PARAMS}
-    return RoundJetField(
-        **kwargs, leader_rotor_radius_m=geometry["leader_rotor_radius_m"],
-        leader_n_rotors=int(geometry["leader_n_rotors"]),
-        follower_rotor_radius_m=geometry["follower_rotor_radius_m"],
-        follower_n_rotors=int(geometry["follower_n_rotors"]),
-        follower_diagonal_m=geometry["follower_diagonal_m"], gravity_mps2=GRAVITY_MPS2)
+    return RoundJetField(**{
+        **_default_jet_kwargs(), **kwargs,
+        "leader_rotor_radius_m": geometry["leader_rotor_radius_m"],
+        "leader_n_rotors": int(geometry["leader_n_rotors"]),
+        "follower_rotor_radius_m": geometry["follower_rotor_radius_m"],
+        "follower_n_rotors": int(geometry["follower_n_rotors"]),
+        "follower_diagonal_m": geometry["follower_diagonal_m"], "gravity_mps2": GRAVITY_MPS2})
+
+
+@cache
+def _default_jet_kwargs() -> dict[str, Any]:
+    """The default jet's keyword arguments under the shipped defaults (read once)."""
+    return field_kwargs(load_config(), RoundJetField)
 
 
 def geometry_with(flight: FlightSamples, rotor_radii_m: dict[str, float]) -> dict[str, float]:

@@ -45,7 +45,6 @@ from aerodock.mission.settle import CruiseStart, SettledStart, settle
 from aerodock.mission.setup import (
     MissionTiming,
     armed,
-    control_period_s,
     mission_timing,
     starts,
 )
@@ -312,8 +311,7 @@ class MissionBatch:
     @staticmethod
     def timing_of(cfg: Config, spec: MissionSpec) -> MissionTiming:
         """The timing of ``spec``'s campaign under ``cfg`` (without flying anything)."""
-        period = control_period_s(cfg.sim.physics_rate_hz, cfg.sim.control_rate_hz)
-        return mission_timing(MissionParams.from_config(cfg), spec, period)
+        return mission_timing(MissionParams.from_config(cfg), spec, cfg.timing.control_dt_s)
 
     # -- views ---------------------------------------------------------------------------------
     @property

@@ -7,8 +7,6 @@ hanging or exhausting memory. Measured on a 2-core machine (``aerodock dock --tr
 
 from __future__ import annotations
 
-import math
-
 from aerodock.config import Config
 
 MAX_TRIALS = 10_000
@@ -63,16 +61,17 @@ def check_campaign_size(cfg: Config, trials: int, keep_logs: bool = False) -> No
                          "run several campaigns with different --seed")
     duration_s = campaign_duration_s(cfg)
     check_flight_steps(cfg, duration_s, "trial")
-    control = trials * math.ceil(duration_s * cfg.sim.control_rate_hz)
-    physics = trials * math.ceil(duration_s * cfg.sim.physics_rate_hz)
+    timing = cfg.timing
+    control = trials * timing.control_periods(duration_s)
+    physics = trials * timing.physics_steps(duration_s)
     limit = MAX_LOGGED_TRIAL_STEPS if keep_logs else MAX_TRIAL_STEPS
     what = "trials x control steps with --save-logs" if keep_logs else "trials x control steps"
     if control > limit:
-        raise LimitError(f"{trials} trials of {duration_s:g} s at {cfg.sim.control_rate_hz:g} Hz "
+        raise LimitError(f"{trials} trials of {duration_s:g} s at {timing.control_rate_hz:g} Hz "
                          f"are {control} {what}, over the limit of {limit}; use fewer trials "
                          "or shorter mission times")
     if physics > MAX_PHYSICS_TRIAL_STEPS:
-        raise LimitError(f"{trials} trials of {duration_s:g} s at {cfg.sim.physics_rate_hz:g} Hz "
+        raise LimitError(f"{trials} trials of {duration_s:g} s at {timing.physics_rate_hz:g} Hz "
                          f"are {physics} trials x physics steps, over the limit of "
                          f"{MAX_PHYSICS_TRIAL_STEPS}; use fewer trials or a lower physics rate")
 
@@ -90,10 +89,11 @@ def check_flight_steps(cfg: Config, duration_s: float, what: str = "trial") -> N
     Raises:
         LimitError: the flight is too long; the message names the times and the rate to change.
     """
-    steps = math.ceil(duration_s * cfg.sim.physics_rate_hz)
+    timing = cfg.timing
+    steps = timing.physics_steps(duration_s)
     if steps > MAX_FLIGHT_PHYSICS_STEPS:
         raise LimitError(
-            f"one {what} of {duration_s:g} s at {cfg.sim.physics_rate_hz:g} Hz is {steps} physics "
+            f"one {what} of {duration_s:g} s at {timing.physics_rate_hz:g} Hz is {steps} physics "
             f"steps, over the limit of {MAX_FLIGHT_PHYSICS_STEPS}; shorten the mission's times "
             "(mission.settle_s, mission.dock_window_s, mission.backoff_s, the planner's horizons) "
             "or lower sim.physics_rate_hz")

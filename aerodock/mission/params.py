@@ -20,7 +20,6 @@ class MissionParams:
         geometry: the offsets between the leader, the bar and the follower at docking.
         mass_kg, gravity_mps2, rotor_radius_m: the follower's nominal values.
         leader_mass_kg: the leader's nominal mass.
-        control_rate_hz: the controllers' rate.
         torque_feedforward: ``control.torque_feedforward`` (with a model flown).
         label_basis: what recorded logs hold as the follower's explained acceleration.
         cable_length_m: ``d_p`` of this campaign (recorded in each log).
@@ -34,7 +33,6 @@ class MissionParams:
     leader_mass_kg: float
     gravity_mps2: float
     rotor_radius_m: float
-    control_rate_hz: float
     torque_feedforward: bool
     label_basis: str
     cable_length_m: float
@@ -48,7 +46,6 @@ class MissionParams:
             mission=cfg.mission, planner=cfg.planner, geometry=DockGeometry.from_config(cfg),
             mass_kg=v.mass_kg, leader_mass_kg=cfg.leader.mass_kg,
             gravity_mps2=cfg.sim.gravity_mps2, rotor_radius_m=v.rotor_radius_m,
-            control_rate_hz=cfg.sim.control_rate_hz,
             torque_feedforward=cfg.control.torque_feedforward,
             label_basis=cfg.curriculum.label_basis, cable_length_m=cfg.platform.cable_length_m,
             log_meta=vehicle_meta(cfg),

@@ -46,12 +46,6 @@ def mission_timing(params: MissionParams, spec: MissionSpec, dt_control_s: float
     )
 
 
-def control_period_s(physics_rate_hz: float, control_rate_hz: float) -> float:
-    """The control period the world flies: a whole number of physics steps, s."""
-    dt_s = 1.0 / physics_rate_hz
-    return int(round(physics_rate_hz / control_rate_hz)) * dt_s
-
-
 @dataclass(frozen=True)
 class Starts:
     """Where each trial begins (n, 3), NED, at t = 0, and the leader's cruise velocity."""

@@ -379,7 +379,7 @@ def render_env_frame(history: list[dict[str, Any]], cfg: Any) -> np.ndarray:
     """One RGB frame of a :class:`aerodock.envs.DockingEnv` episode so far (its ``render``)."""
     if not history:
         raise ValueError("nothing to render before reset()")
-    t = np.arange(len(history)) / cfg.sim.control_rate_hz
+    t = np.arange(len(history)) * cfg.timing.control_dt_s
     track = Track(t_s=t, leader_p=np.array([h["leader"] for h in history]),
                   follower_p=np.array([h["follower"] for h in history]),
                   bar_p=np.array([h["bar"] for h in history]),

@@ -39,7 +39,7 @@ class ImuParams:
     def from_config(cls, cfg: Config) -> ImuParams:
         """Bind ``[imu]`` of ``cfg``."""
         imu = cfg.imu
-        dt_s = 1.0 / cfg.sim.physics_rate_hz
+        dt_s = cfg.timing.physics_dt_s
         chain = ImuChainParams(
             gyro_cutoff_hz=imu.gyro_cutoff_hz, accel_cutoff_hz=imu.accel_cutoff_hz,
             delay_steps=int(round(imu.latency_s / dt_s)),
@@ -103,8 +103,8 @@ class WorldParams:
     @classmethod
     def from_config(cls, cfg: Config) -> WorldParams:
         """Bind every world constant of ``cfg``."""
-        dt_s = 1.0 / cfg.sim.physics_rate_hz
-        substeps = int(round(cfg.sim.physics_rate_hz / cfg.sim.control_rate_hz))
+        timing = cfg.timing
+        dt_s = timing.physics_dt_s
         follower = build_fleet(cfg)
         leader = (build_fleet(cfg, cfg.leader, cfg.leader_autopilot) if cfg.leader_differs
                   else follower)
@@ -119,7 +119,7 @@ class WorldParams:
             leader_spread=SpreadParams.from_section(cfg.leader),
             platform=PlatformParams.from_config(cfg), gripper=GripperParams.from_config(cfg),
             imu=ImuParams.from_config(cfg), mocap=MocapParams.from_config(cfg), dt_s=dt_s,
-            substeps=substeps, dt_control_s=substeps * dt_s,
+            substeps=timing.substeps, dt_control_s=timing.control_dt_s,
             latency_steps=int(round(cfg.mocap.latency_s / dt_s)),
         )
 

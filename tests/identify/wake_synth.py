@@ -8,9 +8,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from jets import default_jet
 
 from aerodock.downwash.base import BodyState
-from aerodock.downwash.jet import RoundJetField
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
 from aerodock.identify.flights import log_geometry
@@ -65,7 +65,7 @@ def synthetic_pair(pair: str, flights: list[int], params: dict, *, seeds: list[i
     gens = [np.random.default_rng(seed) for seed in seeds]
     rate, substeps = 100.0, 5
     dt = 1.0 / (rate * substeps)
-    field = RoundJetField(**params, leader_rotor_radius_m=r_l, follower_rotor_radius_m=r_f,
+    field = default_jet(**params, leader_rotor_radius_m=r_l, follower_rotor_radius_m=r_f,
                           follower_diagonal_m=d_f)
     offsets = np.stack([pass_path(depths_m, t_pass_s, rate, rng, reach_m=0.25) for rng in gens],
                        axis=1)  # (T, flights, 3)

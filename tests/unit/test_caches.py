@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from jets import default_jet
 
 from aerodock.downwash.base import BodyState
 from aerodock.downwash.jet import RoundJetField
@@ -43,7 +44,7 @@ def _pair(mass: np.ndarray) -> tuple[BodyState, BodyState]:
 
 
 def _field() -> RoundJetField:
-    field = RoundJetField()
+    field = default_jet()
     field.reset(N, TrialRNG(3, N))
     return field
 
@@ -56,7 +57,7 @@ def _assert_same(a, b) -> None:
 @pytest.mark.parametrize("call", ["acceleration", "wrench"])
 def test_the_field_after_the_mass_is_changed_in_place(call):
     mass = np.array([0.7, 0.8, 0.65])
-    offsets = RoundJetField().rotor_offsets_body_m
+    offsets = default_jet().rotor_offsets_body_m
 
     def run(field, masses):
         out = []
@@ -88,7 +89,7 @@ def test_the_field_after_a_parameter_is_changed():
     field.acceleration(leader, follower, DT)
     field.ingest_coeff = 0.3
     changed = field.acceleration(leader, follower, DT)
-    fresh = RoundJetField(ingest_coeff=0.3)
+    fresh = default_jet(ingest_coeff=0.3)
     fresh.reset(N, TrialRNG(3, N))
     fresh.acceleration(leader, follower, DT)
     np.testing.assert_array_equal(changed, fresh.acceleration(leader, follower, DT))
@@ -97,7 +98,7 @@ def test_the_field_after_a_parameter_is_changed():
 def test_the_wrench_after_the_offsets_are_changed_in_place():
     """The disks' points, torque arms and pair distance (the turbulence's share) follow the
     offsets' numbers."""
-    offsets = np.array(RoundJetField().rotor_offsets_body_m)
+    offsets = np.array(default_jet().rotor_offsets_body_m)
     leader, follower = _pair(np.array([0.7, 0.8, 0.65]))
     before = offsets.copy()
     in_place = _field()
@@ -111,7 +112,7 @@ def test_the_wrench_after_the_offsets_are_changed_in_place():
 
 def test_the_fields_own_offsets_are_read_only():
     with pytest.raises(ValueError):
-        RoundJetField().rotor_offsets_body_m[0, 0] = 0.2
+        default_jet().rotor_offsets_body_m[0, 0] = 0.2
 
 
 def _gains() -> AutopilotGains:
@@ -231,7 +232,7 @@ def test_copies_stay_read_only(cfg):
     """A copied or unpickled field, body or gripper keeps its arrays read-only (a copied array
     is writable): its caches still hold, and in-place writes still raise."""
     state = _world_state(cfg)
-    for obj, name in ((RoundJetField(), "rotor_offsets_body_m"),
+    for obj, name in ((default_jet(), "rotor_offsets_body_m"),
                       (state.both.body, "inertia_kgm2"), (state.gripper, "gate")):
         for copied in (copy.deepcopy(obj), pickle.loads(pickle.dumps(obj))):
             assert not getattr(copied, name).flags.writeable, (type(obj).__name__, name)

@@ -53,8 +53,9 @@ def fly() -> dict[str, np.ndarray]:
 def field_outputs() -> dict[str, np.ndarray]:
     """The jet's every output for random leader and follower states, with the default
     parameters and with exponents 1 and 2, a torque gain, no planar part and no gusts."""
+    from jets import default_jet
+
     from aerodock.downwash.base import BodyState
-    from aerodock.downwash.jet import RoundJetField
     from aerodock.geometry import rpy_to_rotmat
     from aerodock.rng import TrialRNG
 
@@ -64,7 +65,7 @@ def field_outputs() -> dict[str, np.ndarray]:
     for case, kwargs in enumerate(cases):
         n = 4
         rng = np.random.default_rng(case)
-        field = RoundJetField(**kwargs)
+        field = default_jet(**kwargs)
         field.reset(n, TrialRNG(7, n))
         for step in range(6):
             lp = rng.normal(0, 0.1, (n, 3)) + [0, 0, -2]

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from jets import default_jet
 
 from aerodock.downwash import build_field
 from aerodock.downwash.base import BodyState
@@ -28,7 +29,7 @@ def field(cfg):
 
 def _still(**kwargs) -> RoundJetField:
     """The default jet without turbulence (means, shapes, torques)."""
-    return RoundJetField(**{"turb_vertical": 0.0, "turb_lateral": 0.0, **kwargs})
+    return default_jet(**{"turb_vertical": 0.0, "turb_lateral": 0.0, **kwargs})
 
 
 def test_the_default_wake_is_the_fitted_one(cfg):
@@ -38,10 +39,13 @@ def test_the_default_wake_is_the_fitted_one(cfg):
 
     fitted = tomllib.loads(FITTED.read_text())["downwash"]["params"]
     assert fitted
-    defaults = inspect.signature(RoundJetField).parameters
     for key, value in fitted.items():
         assert cfg.downwash.params[key] == pytest.approx(value, rel=1e-12), key
-        assert defaults[key].default == pytest.approx(value, rel=1e-12), key  # no drift
+    # One home: the jet keeps no defaults of its own that could drift from defaults.toml.
+    params = inspect.signature(RoundJetField).parameters
+    assert all(p.default is inspect.Parameter.empty for p in params.values())
+    with pytest.raises(TypeError):
+        RoundJetField()
 
 
 @pytest.mark.parametrize("thrust_n, radius_m", [(0.7 * G, 0.0635), (0.032 * G, 0.0225),
@@ -50,7 +54,7 @@ def test_the_default_wake_is_the_fitted_one(cfg):
 def test_momentum_flux_through_any_plane_equals_the_thrust(depth_m, thrust_n, radius_m):
     """rho int w^2 dA over the plane ``depth_m`` below the leader, integrated numerically on a
     polar grid from the mean wake air velocity (``wind_mps``), equals the leader's thrust."""
-    field = RoundJetField(leader_rotor_radius_m=radius_m)
+    field = default_jet(leader_rotor_radius_m=radius_m)
     leader, _ = probe_bodies(1.0, 0.0, 0.0, MASS, G)
     leader = BodyState(leader.p, leader.v, leader.R, np.array([thrust_n]), leader.mass_kg)
     r = np.linspace(0.0, 2.0, 4001)
@@ -210,7 +214,7 @@ def test_each_disk_has_its_own_partly_shared_turbulence():
     total and the torque) fluctuates by turb_vertical of its mean, and the two are correlated
     by exp(-spacing / (turb_length_ratio * b)), the share the field says. (100 trials of 2 s,
     each its own random stream, from the stationary distribution: pooled statistics.)"""
-    field = RoundJetField(turb_vertical=0.3, turb_lateral=0.0, body_area_ratio=0.0,
+    field = default_jet(turb_vertical=0.3, turb_lateral=0.0, body_area_ratio=0.0,
                           turb_length_ratio=0.5)
     arm = 0.135
     offsets = np.array([[arm, 0.0, 0.0], [-arm, 0.0, 0.0]])
@@ -312,7 +316,7 @@ def test_wrench_torque_is_zero_on_the_axis(yaw):
     force, torque = field.wrench(leader, follower, ROTORS, 0.002)
     assert np.all(force[:, 2] > 0)
     assert np.allclose(torque, 0.0, atol=1e-12 * np.abs(force).max())
-    turbulent = RoundJetField()
+    turbulent = default_jet()
     n = 4000
     many_l, many_f = _bodies(np.tile([0.0, 0.0, 0.36], (n, 1)), fol_rpy=(0.0, 0.0, yaw))
     turbulent.reset(n, np.random.default_rng(2))
@@ -355,8 +359,8 @@ def test_disk_torque_gain_scales_the_torque_and_keeps_the_force(gain):
     pts = [[0.05, 0.0, 0.36], [0.07, -0.04, 0.5], [0.0, 0.1, 0.3]]
     for rpy in ((0.0, 0.0, 0.0), (0.1, -0.05, 0.7)):
         leader, follower = _bodies(pts, fol_rpy=rpy)
-        base = RoundJetField(planar_ratio=0.0)
-        scaled = RoundJetField(planar_ratio=0.0, disk_torque_gain=gain)
+        base = default_jet(planar_ratio=0.0)
+        scaled = default_jet(planar_ratio=0.0, disk_torque_gain=gain)
         np.testing.assert_allclose(scaled.mean_disk_torque_nm(leader, follower),
                                    gain * base.mean_disk_torque_nm(leader, follower),
                                    rtol=1e-9, atol=1e-15)
@@ -377,7 +381,7 @@ def test_disk_torque_gain_scales_the_torque_and_keeps_the_force(gain):
 
 def test_disk_torque_gain_must_not_be_negative():
     with pytest.raises(ValueError, match="disk_torque_gain must be >= 0"):
-        RoundJetField(disk_torque_gain=-1.0)
+        default_jet(disk_torque_gain=-1.0)
 
 
 def test_wrench_is_equivariant_about_the_leader_axis(cfg):
