@@ -19,11 +19,13 @@ from __future__ import annotations
 import os
 import shutil
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from aerodock.config import Config, load_config
 from aerodock.fileio import atomic_open
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat
@@ -35,7 +37,12 @@ GATE_COLOURS = {GateState.OPEN: "tab:green", GateState.CLOSING: "tab:orange",
                 GateState.CAPTURED: "tab:blue", GateState.MISSED: "tab:red"}
 FORCE_SCALE_M_PER_MPS2 = 0.05  # a 10 m/s² predicted force is drawn 0.5 m long
 CRAZYFLIE_DIAGONAL_M = 0.092  # motor-to-motor (real Crazyflie logs carry no size)
-SIM_DIAGONAL_M = 0.27
+
+
+@cache
+def _shipped() -> Config:
+    """The shipped defaults (``defaults.toml``): the sizes a log or trace does not carry."""
+    return load_config()
 FIGSIZE_IN = (10.0, 5.6)
 """Size of an animation's frame, inches (800 x 448 pixels at the default 80 dpi)."""
 LEADER_COLOUR, FOLLOWER_COLOUR, BAR_COLOUR, CABLE_COLOUR, FORCE_COLOUR = (
@@ -56,9 +63,10 @@ class Track:
     bar_p: np.ndarray | None = None
     gate: np.ndarray | None = None  # (T,) GateState values
     force_mps2: np.ndarray | None = None  # (T, 3) predicted external acceleration
-    diagonal_m: float = SIM_DIAGONAL_M
-    anchor_below_leader_m: float = 0.02
-    cable_spacing_m: float = 0.15
+    diagonal_m: float = field(default_factory=lambda: _shipped().vehicle.diagonal_m)
+    anchor_below_leader_m: float = field(
+        default_factory=lambda: _shipped().platform.anchor_below_leader_m)
+    cable_spacing_m: float = field(default_factory=lambda: _shipped().platform.cable_spacing_m)
     title: str = "trial"
     notes: list[str] = field(default_factory=list)
 
@@ -92,9 +100,10 @@ def track_from_flightlog(log: FlightLog, cfg: Any | None = None) -> Track:
     force = extra.get("feedforward_mps2")
     if force is not None and not np.any(force):
         force = None  # flown without a feed-forward model: nothing predicted
-    mass = float(log.meta.get("follower_mass_kg", 0.7))
+    shipped = _shipped()
+    mass = float(log.meta.get("follower_mass_kg", shipped.vehicle.mass_kg))
     diagonal = float(log.meta.get("diagonal_m", CRAZYFLIE_DIAGONAL_M if mass < 0.1
-                                  else SIM_DIAGONAL_M))
+                                  else shipped.vehicle.diagonal_m))
     notes = []
     if bar is None:
         notes.append("no bar in this log")
@@ -102,13 +111,12 @@ def track_from_flightlog(log: FlightLog, cfg: Any | None = None) -> Track:
         notes.append("no gate state in this log")
     if force is None:
         notes.append("no predicted force in this log")
-    plat = cfg.platform if cfg is not None else None
+    plat = (cfg if cfg is not None else shipped).platform
     return Track(
         t_s=log.t_s - log.t_s[0], leader_p=log.leader_pos_m, follower_p=log.follower_pos_m,
         leader_R=quat_to_rotmat(log.leader_quat), follower_R=quat_to_rotmat(log.follower_quat),
         bar_p=bar, gate=gate, force_mps2=force, diagonal_m=diagonal,
-        anchor_below_leader_m=plat.anchor_below_leader_m if plat else 0.02,
-        cable_spacing_m=plat.cable_spacing_m if plat else 0.15,
+        anchor_below_leader_m=plat.anchor_below_leader_m, cable_spacing_m=plat.cable_spacing_m,
         title=f"{log.name} ({log.meta.get('source', 'log')})", notes=notes)
 
 
