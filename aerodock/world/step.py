@@ -7,7 +7,8 @@ follower, the ground), then ``commit`` makes the new state current and advances 
 sensors sample the end of the step. Random numbers are drawn in this order too: the field's
 turbulence (follower, then bar), the gyros (and, with the filtered IMU chain, the
 accelerometers), the strain gauge. A new effect is one function in :mod:`aerodock.world.terms`
-and one ``Term`` here (or in a tuple of one's own, passed to :class:`aerodock.world.World`).
+and one ``Term`` here, or, outside the package, a step of one's own (:func:`with_term`) passed to
+:class:`aerodock.world.World`; :mod:`aerodock.world.term_template` is a documented one to copy.
 """
 
 from __future__ import annotations
@@ -49,6 +50,22 @@ WORLD_STEP: tuple[Term, ...] = (
     Term("motion capture", terms.motion_capture),
 )
 """The world's step, in order."""
+
+
+def with_term(step: tuple[Term, ...], term: Term, after: str) -> tuple[Term, ...]:
+    """``step`` with ``term`` inserted after the term named ``after``
+    (:mod:`aerodock.world.term_template` shows a term to insert).
+
+    Raises:
+        ValueError: ``step`` has no term named ``after``, or already one named as ``term``.
+    """
+    names = [t.name for t in step]
+    if term.name in names:
+        raise ValueError(f"the step already has a term named {term.name!r}")
+    if after not in names:
+        raise ValueError(f"no term named {after!r} in the step (its terms: {', '.join(names)})")
+    at = names.index(after) + 1
+    return (*step[:at], term, *step[at:])
 
 
 def begin_step(state: WorldState, params: WorldParams, targets: Any,
