@@ -94,6 +94,11 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
     force ``body`` (n, 3); else the whole force in ``force``. Always: the mean axial force per
     point ``axial`` (k + 1, n), the turbulence's correlation time ``tau_out`` and the disks'
     shared variance ``share_out`` (n,).
+
+    It is long on purpose: one compiled pass computes the wake at every point of every trial
+    in the order the NumPy field once did, so its numbers stay those of that code to the bit
+    (docs/performance.md); its parts that stand alone (the leader's wake, the profile at a
+    point, the turbulence's step) are the helpers above.
     """
     n = lead_r.shape[0]
     k = offsets.shape[0]
