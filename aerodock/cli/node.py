@@ -98,26 +98,11 @@ def node_command(
     """
     ros_args = list(ctx.args)
     _refuse_words_before_ros_args(ros_args)
-    from aerodock.config import ConfigError, load_config
-    from aerodock.ingest.errors import IngestError
-    from aerodock.ingest.rosbag import load_mapping
     from aerodock.learning.compatibility import model_warnings
-    from aerodock.learning.modelfile import ModelFileError
-    from aerodock.learning.runtime import Predictor
 
-    if not (rate > 0 and rate <= 1000):
-        fail(f"--rate must be in (0, 1000] Hz, got {rate}")
-    if not (max_age > 0 and max_age < 10):
-        fail(f"--max-age must be in (0, 10) s, got {max_age}")
-    if duration is not None and not duration > 0:
-        fail(f"--duration must be positive, got {duration}")
+    _check_numbers(rate, max_age, duration)
     types = _state_types(state_type or [])
-    try:
-        predictor = Predictor.load(model)
-        cfg = load_config(config, sets or (), trust or ())
-        merged, _ = load_mapping(mapping)
-    except (ModelFileError, ConfigError, IngestError) as err:
-        fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
+    predictor, cfg, merged = _load_inputs(model, config, sets, trust, mapping)
     aware = getattr(predictor, "needs_wake_scales", False)  # a leader-aware kind
     if aware and config is None and predictor.default_wake_scales is None:
         fail(f"a {predictor.kind} model needs the vehicles' wake scales and its model file "
@@ -160,6 +145,41 @@ def _refuse_words_before_ros_args(ros_args: list[str]) -> None:
         what = "no such option" if word.startswith("-") else "unexpected argument"
         fail(one_line(f"{what}: {word!r} (ROS's own arguments go last, after --ros-args; "
                       "see 'aerodock node --help')"))
+
+
+def _check_numbers(rate_hz: float, max_age_s: float, duration_s: float | None) -> None:
+    """Refuse (a one-line error) a --rate outside (0, 1000] Hz, a --max-age outside (0, 10) s
+    or a --duration that is not positive."""
+    if not (rate_hz > 0 and rate_hz <= 1000):
+        fail(f"--rate must be in (0, 1000] Hz, got {rate_hz}")
+    if not (max_age_s > 0 and max_age_s < 10):
+        fail(f"--max-age must be in (0, 10) s, got {max_age_s}")
+    if duration_s is not None and not duration_s > 0:
+        fail(f"--duration must be positive, got {duration_s}")
+
+
+def _load_inputs(model: Path, config: Path | None, sets: list[str] | None,
+                 trust: list[str] | None, mapping: Path | None,
+                 ) -> tuple[Any, Config, dict[str, Any]]:
+    """The model, the config and the merged topic mapping; one that cannot be read is a
+    one-line error (its text only, no type name).
+
+    Returns:
+        ``(predictor, cfg, mapping)``.
+    """
+    from aerodock.config import ConfigError, load_config
+    from aerodock.ingest.errors import IngestError
+    from aerodock.ingest.rosbag import load_mapping
+    from aerodock.learning.modelfile import ModelFileError
+    from aerodock.learning.runtime import Predictor
+
+    try:
+        predictor = Predictor.load(model)
+        cfg = load_config(config, sets or (), trust or ())
+        merged, _ = load_mapping(mapping)
+    except (ModelFileError, ConfigError, IngestError) as err:
+        fail(one_line(str(err)))  # str(): an empty text stays empty, no type name
+    return predictor, cfg, merged
 
 
 def _state_types(items: list[str]) -> dict[str, str]:
