@@ -198,6 +198,58 @@ def _rotorpy_batched_missing() -> str | None:
     return None
 
 
+_Runner = Callable[[int], tuple[float, float]]
+"""A timed side of the peer: ``runner(steps) -> (final error m, physics s)``."""
+_Run = tuple[float, float, float]
+"""One timed run: ``(wall s, physics s, final error m)``."""
+
+
+def _alternating_runs(ours: _Runner, theirs: _Runner | None, steps: int, reps: int,
+                      warm_theirs: int) -> tuple[list[_Run], list[_Run]]:
+    """Alternating timed runs of ``ours`` and ``theirs`` (aerodock, peer, aerodock, ...).
+
+    Args:
+        ours: aerodock's side.
+        theirs: the peer's side (None: ours only).
+        steps: physics steps per run.
+        reps: timed runs of each side.
+        warm_theirs: the peer's warm-up run's steps (ours warms up on ``steps``).
+
+    Returns:
+        ``(ours, theirs)`` runs, ``(wall s, physics s, final error m)`` each.
+    """
+    ours(steps)
+    if theirs is not None:
+        theirs(warm_theirs)
+    a: list[_Run] = []
+    b: list[_Run] = []
+    for _ in range(reps):
+        for runner, runs in ((ours, a), (theirs, b)):
+            if runner is None:
+                continue
+            t0 = time.perf_counter()
+            err, physics = runner(steps)
+            runs.append((time.perf_counter() - t0, physics, err))
+    return a, b
+
+
+def _run_figure(runs: list[_Run], vehicles: int, steps: int, note: str) -> dict[str, Any]:
+    """A side's figure: its wall times (:func:`aerodock.bench.timing.figure`), and the median
+    run's wall time (``value``), physics time, vehicle steps per second of each, and error."""
+    wall, physics, err = sorted(runs)[len(runs) // 2]  # the median run (odd counts)
+    out_fig = figure([r[0] for r in runs], "s", note)
+    out_fig.update({"value": wall, "physics_s": physics,
+                    "vehicle_steps_per_s": vehicles * steps / wall,
+                    "physics_vehicle_steps_per_s": vehicles * steps / physics,
+                    "final_error_m": err})
+    return out_fig
+
+
+def _pair_ratio(theirs: list[_Run], ours: list[_Run], index: int) -> float:
+    """The median over alternating pairs of their run's ``index`` figure over ours."""
+    return float(statistics.median(t[index] / o[index] for t, o in zip(theirs, ours)))
+
+
 @contextlib.contextmanager
 def _torch_threads(n: int) -> Iterator[None]:
     """Run with ``n`` torch threads (if torch is imported), then restore the setting."""
@@ -243,52 +295,23 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     except ImportError:
         have_rotorpy = False
 
-    Runner = Callable[[int], tuple[float, float]]
-
-    def pairs(ours: Runner, theirs: Runner | None, reps: int, warm_theirs: int
-              ) -> tuple[list[tuple[float, float, float]], list[tuple[float, float, float]]]:
-        """Alternating timed runs ``(wall, physics, error)`` of ``ours`` and ``theirs``."""
-        ours(steps)
-        if theirs is not None:
-            theirs(warm_theirs)
-        a, b = [], []
-        for _ in range(reps):
-            for runner, runs in ((ours, a), (theirs, b)):
-                if runner is None:
-                    continue
-                t0 = time.perf_counter()
-                err, physics = runner(steps)
-                runs.append((time.perf_counter() - t0, physics, err))
-        return a, b
-
-    def fig(runs: list[tuple[float, float, float]], vehicles: int, note: str) -> dict[str, Any]:
-        wall, physics, err = sorted(runs)[len(runs) // 2]  # the median run (odd counts)
-        out_fig = figure([r[0] for r in runs], "s", note)
-        out_fig.update({"value": wall, "physics_s": physics,
-                        "vehicle_steps_per_s": vehicles * steps / wall,
-                        "physics_vehicle_steps_per_s": vehicles * steps / physics,
-                        "final_error_m": err})
-        return out_fig
-
-    def ratio(theirs: list, ours: list, index: int) -> float:
-        return float(statistics.median(t[index] / o[index] for t, o in zip(theirs, ours)))
-
     reps = (3 if quick else 5) if not have_rotorpy else 3
     progress("peer: aerodock batch of 1" + (" and RotorPy Multirotor, alternating"
                                             if have_rotorpy else ""))
-    one, seq = pairs(lambda k: peer_aerodock(cfg, 1, k, ref),
-                     (lambda k: peer_rotorpy(cfg, k, ref)) if have_rotorpy else None, reps, 50)
-    out["aerodock_1"] = fig(one, 1, "rigid body + autopilot (step_with_autopilot) 500 Hz + LQR "
-                            "PositionController 100 Hz")
+    one, seq = _alternating_runs(
+        lambda k: peer_aerodock(cfg, 1, k, ref),
+        (lambda k: peer_rotorpy(cfg, k, ref)) if have_rotorpy else None, steps, reps, 50)
+    out["aerodock_1"] = _run_figure(one, 1, steps, "rigid body + autopilot (step_with_autopilot) "
+                                    "500 Hz + LQR PositionController 100 Hz")
     ratios: dict[str, float] = {}
     if have_rotorpy:
-        out["rotorpy_sequential"] = fig(
-            seq, 1, "Multirotor.step (RK45) 500 Hz + SE3Control at every step, aerodock's "
+        out["rotorpy_sequential"] = _run_figure(
+            seq, 1, steps, "Multirotor.step (RK45) 500 Hz + SE3Control at every step, aerodock's "
             "vehicle")
-        ratios["single_trial"] = ratio(seq, one, 0)
-        ratios["single_trial_physics_step"] = ratio(seq, one, 1)
+        ratios["single_trial"] = _pair_ratio(seq, one, 0)
+        ratios["single_trial_physics_step"] = _pair_ratio(seq, one, 1)
 
-    batched: Runner | None = None
+    batched: _Runner | None = None
     if have_rotorpy:
         missing = _rotorpy_batched_missing()
         if missing is None:
@@ -301,25 +324,27 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     ours = lambda k: peer_aerodock(cfg, batch, k, ref)  # noqa: E731
     try:
         with _torch_threads(1):
-            many, bat = pairs(ours, batched, 1 if (quick and batched) else 3, 20)
+            many, bat = _alternating_runs(ours, batched, steps,
+                                          1 if (quick and batched) else 3, 20)
     except Exception as err:  # noqa: BLE001 - RotorPy's batched simulator failed: go on
         if batched is None:
             raise
         out["rotorpy_batched"] = unavailable(
             f"RotorPy's batched simulator failed ({failure_reason(err)})", "s")
         batched = None
-        many, bat = pairs(ours, None, 3, 20)
-    out[f"aerodock_{batch}"] = fig(many, batch, f"the same, {batch} vehicles at once")
+        many, bat = _alternating_runs(ours, None, steps, 3, 20)
+    out[f"aerodock_{batch}"] = _run_figure(many, batch, steps,
+                                           f"the same, {batch} vehicles at once")
     if have_rotorpy:
         ratios[f"aerodock_batch_{batch}_vs_rotorpy_sequential"] = (
             out[f"aerodock_{batch}"]["vehicle_steps_per_s"]
             / out["rotorpy_sequential"]["vehicle_steps_per_s"])
     if batched is not None:
-        out["rotorpy_batched"] = fig(
-            bat, batch, f"BatchedMultirotor (RK4) + BatchedSE3Control 500 Hz, {batch} vehicles, "
-            "CPU, 1 torch thread")
-        ratios[f"batched_{batch}"] = ratio(bat, many, 0)
-        ratios[f"batched_{batch}_physics_step"] = ratio(bat, many, 1)
+        out["rotorpy_batched"] = _run_figure(
+            bat, batch, steps, f"BatchedMultirotor (RK4) + BatchedSE3Control 500 Hz, {batch} "
+            "vehicles, CPU, 1 torch thread")
+        ratios[f"batched_{batch}"] = _pair_ratio(bat, many, 0)
+        ratios[f"batched_{batch}_physics_step"] = _pair_ratio(bat, many, 1)
     if not have_rotorpy:
         reason = "rotorpy not installed (pip install --no-deps rotorpy)"
         out["rotorpy_sequential"] = unavailable(reason, "s")

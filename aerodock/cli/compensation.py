@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -26,6 +26,9 @@ from aerodock.cli.common import (
 )
 from aerodock.fileio import one_line
 from aerodock.learning.kinds import REGISTRY
+
+if TYPE_CHECKING:
+    from aerodock.config import Config
 
 KINDS = tuple(name for name, k in REGISTRY.items() if k.has_network and not k.torque)
 """Model kinds it trains (the force models; ``so2-wrench`` needs torque labels the logs lack)."""
@@ -78,14 +81,6 @@ def evaluate_compensation_command(
     """Score the compensations on real flights: none, the paper's bias observer (Freyja's, at
     the paper's rates), our accelerometer observer, the learnt model, and each observer with the
     model, replayed causally over held-out flights (swap_ss 05-06, swap_sl 08-11)."""
-    from aerodock.experiments.compensation_study import (
-        compensation_study,
-        table_rows,
-        table_title,
-    )
-    from aerodock.ingest.errors import IngestError
-    from aerodock.learning.modelfile import ModelFileError
-
     check_number("--warmup", warmup, 0.0, 10.0)
     check_number("--lateral-radius", lateral_radius, 1e-3, 10.0)
     if model is None and kind not in KINDS:
@@ -102,6 +97,38 @@ def evaluate_compensation_command(
         fail(f"{root}: no such folder (give --data, the Neural-Swarm folder holding swap_ss and "
              "swap_sl_2020-06-19)")
     cfg = load_cli_config(config, sets, trust)
+    result = _run_study(root, cfg, model_dir=model, kind=str(kind), seed=seed, quick=quick,
+                        warmup_s=warmup, lateral_radius_m=lateral_radius, figure=figure)
+    if as_json:
+        print_json(result)
+        return
+    _print_study(result)
+
+
+def _run_study(root: Path, cfg: Config, *, model_dir: Path | None, kind: str, seed: int,
+               quick: bool, warmup_s: float, lateral_radius_m: float,
+               figure: Path | None) -> dict:
+    """:func:`aerodock.experiments.compensation_study.compensation_study` under a progress bar,
+    its messages dimmed on stderr; a missing PyTorch or unreadable flights or model is a
+    one-line error.
+
+    Args:
+        root: the Neural-Swarm folder.
+        cfg: the world's config.
+        model_dir: a trained model to fly (None: train one).
+        kind: the model kind to train without ``model_dir``.
+        seed: the training seed.
+        quick: train for at most 30 epochs.
+        warmup_s: unscored seconds at the start of each segment.
+        lateral_radius_m: the interaction region's radius, m.
+        figure: a PNG file to draw the residuals to (None: none).
+
+    Returns:
+        The study's result.
+    """
+    from aerodock.experiments.compensation_study import compensation_study
+    from aerodock.ingest.errors import IngestError
+    from aerodock.learning.modelfile import ModelFileError
 
     def say(msg: str) -> None:
         err_console.print(f"[dim]{msg}[/dim]")
@@ -110,18 +137,23 @@ def evaluate_compensation_command(
         update = bar_callback(bar)
         try:
             result = compensation_study(
-                root, cfg=cfg, model_dir=model, kind=str(kind), seed=seed, quick=quick,
-                warmup_s=warmup, lateral_radius_m=lateral_radius, figure=figure, say=say,
+                root, cfg=cfg, model_dir=model_dir, kind=kind, seed=seed, quick=quick,
+                warmup_s=warmup_s, lateral_radius_m=lateral_radius_m, figure=figure, say=say,
                 train_progress=lambda e, n, *_: update("training epochs", e, n))
         except ImportError:
             fail("training a model needs PyTorch: pip install 'aerodock[learn]' (or give --model)")
         except (FileNotFoundError, IngestError, ModelFileError) as err:
             fail(one_line(err, first_line=True))
-    if as_json:
-        print_json(result)
-        return
+    return result
+
+
+def _print_study(result: dict) -> None:
+    """The study's human summary: the model and settings, then one table per region and axis
+    (:func:`aerodock.experiments.compensation_study.table_rows`), and the figure written."""
     from rich.console import Console
     from rich.table import Table
+
+    from aerodock.experiments.compensation_study import table_rows, table_title
 
     console = Console()
     m = result["model"]

@@ -207,20 +207,8 @@ def field_fit(
     turbulence and its time scale) to real flights; score held-out flights against the targets;
     write a report, figures and the TOML a world loads. The table of the report's last section
     is the fitted wake on the vehicles of --config (the paper's by default)."""
-    import shlex
-
-    from aerodock.experiments.wake_report import config_fragment, report_markdown, write_figures
-    from aerodock.fileio import (
-        atomic_open,
-        building_dir,
-        check_output_dir,
-        check_writable_target,
-        json_ready,
-        one_line,
-        write_json,
-    )
-    from aerodock.identify import flights as fl
-    from aerodock.identify import wake_fit as wf
+    from aerodock.experiments.wake_report import config_fragment
+    from aerodock.fileio import check_output_dir, check_writable_target, json_ready
     from aerodock.identify import wake_score as ws
 
     if not 0 <= bootstrap <= 1000:
@@ -232,64 +220,15 @@ def field_fit(
     if config_out is not None:
         check_writable_target(config_out)
     logs = _read_flightlogs(data)
-    try:
-        flights = fl.prepare_flights(logs)
-        if noise == "speed":
-            from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
-
-            flights = with_speed_noise(flights, noise_by_speed(logs))
-            pooled = sorted({str(f.vehicles.get("follower")) for f in flights
-                             if f.noise_var_mps4 is None})
-            if pooled and not as_json:
-                err_console.print(f"warning: too little free air to table the noise by speed "
-                                  f"for {', '.join(pooled)}: their flights keep the pooled "
-                                  f"noise")
-        fitted, held = fl.select_flights(flights, holdout or [])
-        if holdout and not held:
-            fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "
-                 f"(flights: {', '.join(sorted({f.flight for f in flights}))})")
-        if not fitted:
-            fail("--holdout leaves no flight to fit")
-
-        def say(done: int, total: int) -> None:
-            if not as_json:
-                err_console.print(f"[dim]bootstrap {done}/{total}[/dim]")
-
-        fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor or [], bootstrap=bootstrap,
-                          seed=seed, progress=say)
-        cross = None
-        if folds:
-            from aerodock.identify.wake_folds import cross_validate, flight_turbulence
-
-            def say_fold(done: int, total: int) -> None:
-                if not as_json:
-                    err_console.print(f"[dim]cross-validation fold {done}/{total}[/dim]")
-
-            cross = cross_validate(flights, folds, estimate_rotor_for=estimate_rotor or [],
-                                   progress=say_fold)
-            cross["per_flight"] = flight_turbulence(fit.params, flights, fit.rotor_radii_m)
-    except wf.WakeFitError as err:
-        fail(one_line(err))
+    fit, flights, fitted, held, cross = _fit_flights(
+        logs, holdout or [], estimate_rotor or [], bootstrap=bootstrap, noise=noise,
+        folds=folds, seed=seed, quiet=as_json)
     scores = ws.score_wake(fit.params, held, fit.rotor_radii_m)
     fit_scores = ws.score_wake(fit.params, fitted, fit.rotor_radii_m)
     checks = _fit_checks(cfg, fit, logs, flights, fitted, held)
-    rows = ws.wake_at_separations(fit.params, cfg)
-    if fit.bootstrap_draws:
-        tables = [ws.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
-        for i, row in enumerate(rows):
-            row["bootstrap"] = {k: [float(np.percentile([t[i][k] for t in tables], q))
-                                    for q in (2.5, 97.5)]
-                                for k in row if k != "separation_m"}
-    paper = {"config": cfg.source, "rows": rows}
-    words = [str(p) for p in data]
-    words += [w for pattern in holdout or [] for w in ("--holdout", pattern)]
-    words += [w for vid in estimate_rotor or [] for w in ("--estimate-rotor", vid)]
-    words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
-    words += ["--noise", noise] if noise != "pooled" else []
-    words += ["--folds", str(folds)] if folds else []
-    words += ["--config", str(config)] if config is not None else []
-    words += [w for text in sets or [] for w in ("--set", text)]
-    command = "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
+    paper = {"config": cfg.source, "rows": _fitted_wake_table(fit, cfg)}
+    command = _fit_command(data, holdout or [], estimate_rotor or [], bootstrap=bootstrap,
+                           seed=seed, noise=noise, folds=folds, config=config, sets=sets or [])
     held_names = sorted({f.flight for f in held})
     toml_text = config_fragment(fit, held_names, command)
     result = {
@@ -301,19 +240,166 @@ def field_fit(
         "world": paper, "command": command, "noise": noise, **checks,
         "cross_validation": cross,
     }
+    _write_fit_outputs(out, config_out, fit, scores, fit_scores, paper, command,
+                       {**checks, "cross_validation": cross, "noise": noise}, toml_text, result)
+    if as_json:
+        print_json(json_ready(result))
+        return
+    _print_fit(fit, held_names, scores, cross, out, config_out)
+
+
+def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list[str], *,
+                 bootstrap: int, noise: str, folds: int, seed: int, quiet: bool,
+                 ) -> tuple[WakeFit, list[FlightSamples], list[FlightSamples],
+                            list[FlightSamples], dict | None]:
+    """``field fit``'s fit: the flights, their split, the jet fitted and the cross-validation.
+
+    A fit that cannot be made (:class:`aerodock.identify.wake_fit.WakeFitError`) is a one-line
+    error, as is a ``--holdout`` that matches no flight or leaves none to fit.
+
+    Args:
+        logs: the FlightLogs.
+        holdout: ``--holdout`` patterns.
+        estimate_rotor: vehicle ids whose rotor radius is fitted too.
+        bootstrap: refits on resampled flights.
+        noise: ``"pooled"`` or ``"speed"`` (:class:`NoiseMode`).
+        folds: cross-validation folds (0: none).
+        seed: the bootstrap's seed.
+        quiet: no progress or warnings on stderr (``--json``).
+
+    Returns:
+        ``(fit, flights, fitted, held, cross)``: the fit, every flight, the flights fitted and
+        held out, and the cross-validation (None without ``folds``).
+    """
+    from aerodock.fileio import one_line
+    from aerodock.identify import flights as fl
+    from aerodock.identify import wake_fit as wf
+
+    try:
+        flights = _flights_with_noise(logs, noise, quiet)
+        fitted, held = fl.select_flights(flights, holdout)
+        if holdout and not held:
+            fail(f"--holdout {' '.join(holdout)} matches no flight with samples in the wake "
+                 f"(flights: {', '.join(sorted({f.flight for f in flights}))})")
+        if not fitted:
+            fail("--holdout leaves no flight to fit")
+
+        def say(done: int, total: int) -> None:
+            if not quiet:
+                err_console.print(f"[dim]bootstrap {done}/{total}[/dim]")
+
+        fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor, bootstrap=bootstrap,
+                          seed=seed, progress=say)
+        cross = None
+        if folds:
+            from aerodock.identify.wake_folds import cross_validate, flight_turbulence
+
+            def say_fold(done: int, total: int) -> None:
+                if not quiet:
+                    err_console.print(f"[dim]cross-validation fold {done}/{total}[/dim]")
+
+            cross = cross_validate(flights, folds, estimate_rotor_for=estimate_rotor,
+                                   progress=say_fold)
+            cross["per_flight"] = flight_turbulence(fit.params, flights, fit.rotor_radii_m)
+    except wf.WakeFitError as err:
+        fail(one_line(err))
+    return fit, flights, fitted, held, cross
+
+
+def _flights_with_noise(logs: list[FlightLog], noise: str, quiet: bool) -> list[FlightSamples]:
+    """The logs' flights, with the label noise by speed for ``noise == "speed"``.
+
+    A follower vehicle with too little free air to table its noise by speed keeps the pooled
+    noise (a warning on stderr unless ``quiet``).
+
+    Raises:
+        WakeFitError: the flights cannot be prepared (:mod:`aerodock.identify.flights`).
+    """
+    from aerodock.identify import flights as fl
+
+    flights = fl.prepare_flights(logs)
+    if noise == "speed":
+        from aerodock.identify.label_noise import noise_by_speed, with_speed_noise
+
+        flights = with_speed_noise(flights, noise_by_speed(logs))
+        pooled = sorted({str(f.vehicles.get("follower")) for f in flights
+                         if f.noise_var_mps4 is None})
+        if pooled and not quiet:
+            err_console.print(f"warning: too little free air to table the noise by speed "
+                              f"for {', '.join(pooled)}: their flights keep the pooled "
+                              f"noise")
+    return flights
+
+
+def _fitted_wake_table(fit: WakeFit, cfg: Config) -> list[dict]:
+    """The fitted wake on ``cfg``'s vehicles per separation, with each figure's 95 % bootstrap
+    interval (``"bootstrap"``: 2.5 and 97.5 percentiles over the draws) when there are draws."""
+    from aerodock.identify import wake_score as ws
+
+    rows = ws.wake_at_separations(fit.params, cfg)
+    if fit.bootstrap_draws:
+        tables = [ws.wake_at_separations({**fit.params, **d}, cfg) for d in fit.bootstrap_draws]
+        for i, row in enumerate(rows):
+            row["bootstrap"] = {k: [float(np.percentile([t[i][k] for t in tables], q))
+                                    for q in (2.5, 97.5)]
+                                for k in row if k != "separation_m"}
+    return rows
+
+
+def _fit_command(data: list[Path], holdout: list[str], estimate_rotor: list[str], *,
+                 bootstrap: int, seed: int, noise: str, folds: int, config: Path | None,
+                 sets: list[str]) -> str:
+    """The ``aerodock field fit`` command line that repeats this fit (for the report and TOML);
+    options at their defaults are left out, except ``--bootstrap`` and ``--seed``."""
+    import shlex
+
+    words = [str(p) for p in data]
+    words += [w for pattern in holdout for w in ("--holdout", pattern)]
+    words += [w for vid in estimate_rotor for w in ("--estimate-rotor", vid)]
+    words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
+    words += ["--noise", noise] if noise != "pooled" else []
+    words += ["--folds", str(folds)] if folds else []
+    words += ["--config", str(config)] if config is not None else []
+    words += [w for text in sets for w in ("--set", text)]
+    return "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
+
+
+def _write_fit_outputs(out: Path, config_out: Path | None, fit: WakeFit, scores: dict,
+                       fit_scores: dict, paper: dict, command: str, report_extras: dict,
+                       toml_text: str, result: dict) -> None:
+    """Write ``field fit``'s folder (figures/, report.md, wake.toml, fit.json; replaced as a
+    whole) and, with ``--config-out``, the TOML fragment there too.
+
+    Args:
+        out: the output folder.
+        config_out: where else to write the TOML fragment (None: nowhere).
+        fit: the fit.
+        scores: the held-out flights' scores.
+        fit_scores: the fitted flights' scores.
+        paper: the fitted wake on the configured vehicles (``config``, ``rows``).
+        command: the command line that repeats the fit.
+        report_extras: the checks, cross-validation and noise mode for the report.
+        toml_text: the TOML fragment a world loads.
+        result: fit.json's content.
+    """
+    from aerodock.experiments.wake_report import report_markdown, write_figures
+    from aerodock.fileio import atomic_open, building_dir, json_ready, write_json
+
     with building_dir(out, FIT_OUTPUTS) as work:
         figures = write_figures(fit, scores, fit_scores, work / "figures")
         (work / "report.md").write_text(report_markdown(
-            fit, scores, fit_scores, paper, command, [str(p) for p in figures],
-            {**checks, "cross_validation": cross, "noise": noise}))
+            fit, scores, fit_scores, paper, command, [str(p) for p in figures], report_extras))
         (work / "wake.toml").write_text(toml_text)
         write_json(work / "fit.json", json_ready(result))
     if config_out is not None:
         with atomic_open(config_out, "w") as fh:
             fh.write(toml_text)
-    if as_json:
-        print_json(json_ready(result))
-        return
+
+
+def _print_fit(fit: WakeFit, held_names: list[str], scores: dict, cross: dict | None,
+               out: Path, config_out: Path | None) -> None:
+    """``field fit``'s human summary: the fitted parameters and rotor radii, the targets met
+    by the held-out flights and the cross-validation folds, and what was written."""
     typer.echo(f"fitted on {len(fit.flights)} flights, held out {len(held_names)}:")
     for key, value in fit.field_params().items():
         typer.echo(f"  {key} = {value:.4g}")

@@ -104,42 +104,74 @@ def sample_efficiency(
             subset = take_minutes(train_ds, m, np.random.default_rng(10_000 + int(seed)),
                                   mode=mode)
             for kind in kinds:
-                trained = train_model(kind, subset, seed=int(seed), **kwargs)
-                ev = evaluate(trained.predictor(), test_ds)
-                result["models"][kind]["runs"].append({
-                    "minutes": m, "minutes_used": round(subset.minutes, 4), "seed": int(seed),
-                    "n_train": subset.n,
-                    "rmse_all": ev["all"]["model"]["rmse_mps2"]["overall"],
-                    "rmse_interaction": ev["interaction"]["model"]["rmse_mps2"]["overall"],
-                    "r2_all": ev["all"]["model"]["r2"]["overall"],
-                    "epochs": trained.info.get("epochs"),
-                    "split": trained.info.get("split"),
-                    "train_time_s": trained.info.get("train_time_s"),
-                })
+                result["models"][kind]["runs"].append(
+                    _run(kind, subset, test_ds, minutes=m, seed=int(seed), train_kwargs=kwargs))
                 done += 1
                 if progress is not None:
                     progress(f"{kind} {m:g} min seed {seed}", done, total)
     for kind in kinds:
         entry = result["models"][kind]
         for region in ("all", "interaction"):
-            means, sds = [], []
-            for m in used:
-                vals = [r[f"rmse_{region}"] for r in entry["runs"] if r["minutes"] == m]
-                vals = [v for v in vals if v is not None]
-                mean, sd = _mean_sd(vals) if vals else (float("nan"), float("nan"))
-                means.append(mean)
-                sds.append(sd)
-            entry[f"rmse_{region}_mean"] = means
-            entry[f"rmse_{region}_sd"] = sds
+            entry[f"rmse_{region}_mean"], entry[f"rmse_{region}_sd"] = _rmse_by_minutes(
+                entry["runs"], used, region)
         entry["rmse_mean"] = entry[f"rmse_{metric}_mean"]
         entry["rmse_sd"] = entry[f"rmse_{metric}_sd"]
     if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        result["figure"] = str(plot_sample_efficiency(result, out / FIGURE_NAME))
-        result["json"] = str(out / JSON_NAME)
-        write_json(out / JSON_NAME, json_ready(result), final_newline=True)
+        _write_outputs(result, Path(out_dir))
     return json_ready(result)  # a size with no finished run has a null mean
+
+
+def _run(kind: str, subset: Dataset, test_ds: Dataset, *, minutes: float, seed: int,
+         train_kwargs: dict[str, Any]) -> dict[str, Any]:
+    """Train ``kind`` on ``subset`` and evaluate it on ``test_ds``: one run's record.
+
+    Args:
+        kind: model kind.
+        subset: the training subset.
+        test_ds: held-out data.
+        minutes: the amount of data asked for, minutes.
+        seed: the training seed.
+        train_kwargs: extra keyword arguments for :func:`train_model`.
+
+    Returns:
+        ``minutes``, ``minutes_used``, ``seed``, ``n_train``, the held-out ``rmse_all``,
+        ``rmse_interaction`` (m/s²) and ``r2_all``, and the training's ``epochs``, ``split``
+        and ``train_time_s``.
+    """
+    trained = train_model(kind, subset, seed=seed, **train_kwargs)
+    ev = evaluate(trained.predictor(), test_ds)
+    return {
+        "minutes": minutes, "minutes_used": round(subset.minutes, 4), "seed": seed,
+        "n_train": subset.n,
+        "rmse_all": ev["all"]["model"]["rmse_mps2"]["overall"],
+        "rmse_interaction": ev["interaction"]["model"]["rmse_mps2"]["overall"],
+        "r2_all": ev["all"]["model"]["r2"]["overall"],
+        "epochs": trained.info.get("epochs"),
+        "split": trained.info.get("split"),
+        "train_time_s": trained.info.get("train_time_s"),
+    }
+
+
+def _rmse_by_minutes(runs: list[dict[str, Any]], minutes: list[float],
+                     region: str) -> tuple[list[float], list[float]]:
+    """Mean and sd over seeds of the runs' ``rmse_<region>``, per amount of data in ``minutes``
+    (NaN where no run of that amount has a value)."""
+    means, sds = [], []
+    for m in minutes:
+        vals = [r[f"rmse_{region}"] for r in runs if r["minutes"] == m]
+        vals = [v for v in vals if v is not None]
+        mean, sd = _mean_sd(vals) if vals else (float("nan"), float("nan"))
+        means.append(mean)
+        sds.append(sd)
+    return means, sds
+
+
+def _write_outputs(result: dict[str, Any], out: Path) -> None:
+    """Write the figure and the JSON into ``out`` (made if missing), noting both in ``result``."""
+    out.mkdir(parents=True, exist_ok=True)
+    result["figure"] = str(plot_sample_efficiency(result, out / FIGURE_NAME))
+    result["json"] = str(out / JSON_NAME)
+    write_json(out / JSON_NAME, json_ready(result), final_newline=True)
 
 
 def plot_sample_efficiency(result: dict[str, Any], path: str | Path) -> Path:

@@ -46,6 +46,7 @@ from aerodock.geometry import E3, GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
     ENU_TO_NED,
     FLIP_YZ,
+    CsvTable,
     check_finite,
     check_kinematics,
     check_mass,
@@ -122,70 +123,29 @@ def read_csv(path: Path, *, frame: str | None = None, mass_kg: float | None = No
     table = read_csv_table(path, header_in_comment=False)
     meta = _parse_meta(table.comments, where)
     columns = table.columns
-    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
-    if missing:
-        shown = ", ".join(missing[:6]) + (f" (+{len(missing) - 6} more)" if len(missing) > 6
-                                          else "")
-        raise IngestError(where, f"missing columns: {shown}")
-    dupes = sorted({c for c in columns if columns.count(c) > 1})
-    if dupes:
-        raise IngestError(where, f"duplicated column names: {', '.join(dupes)}")
+    _check_columns(columns, where)
     known = [c for c in ALL_COLUMNS if c in columns]
     check_time(table.column(TIME_COLUMN), where, column=TIME_COLUMN, row_name="line",
                rows=table.lines)
     check_time_unit(table.column(TIME_COLUMN), "s", where, column=TIME_COLUMN)
     check_finite({c: table.column(c) for c in known}, where, row_name="line", rows=table.lines)
 
-    def block(names: list[str] | tuple[str, ...]) -> np.ndarray:
-        return np.stack([table.column(c) for c in names], axis=1)
-
     frame_name = str(frame or meta.get("frame", "NED")).upper()
     if frame_name not in ("NED", "ENU"):
         raise IngestError(where, f"unknown frame {frame_name!r}; use NED or ENU")
     world, body = (ENU_TO_NED, FLIP_YZ) if frame_name == "ENU" else (np.eye(3), np.eye(3))
 
-    states = {}
-    for role in ("leader", "follower"):
-        cols = vehicle_columns(role)
-        quat = block(cols[6:10])
-        norm = np.linalg.norm(quat, axis=1)
-        if np.any(np.abs(norm - 1.0) > 0.1):
-            i = int(np.argmax(np.abs(norm - 1.0) > 0.1))
-            raise IngestError(where, f"{role}_qw..qz has norm {norm[i]:.3g} at line "
-                                     f"{table.lines[i]}, not a unit quaternion")
-        rot = convert_rotations(world, quat_to_rotmat(quat), body)
-        check_upright(rot, where, role, f"{role}_qw..qz in x, y, z, w order (the schema is w, "
-                                        "x, y, z), or an ENU file read as NED (add frame: ENU)?")
-        if frame_name != "NED":
-            quat = rotmat_to_quat(rot)
-        states[role] = (convert_vectors(world, block(cols[0:3])),
-                        convert_vectors(world, block(cols[3:6])), quat)
-        check_kinematics(table.column(TIME_COLUMN), states[role][0], states[role][1], where,
-                         role)
+    states = {role: _vehicle_state(table, role, world, body, frame_name, where)
+              for role in ("leader", "follower")}
     t_s = table.column(TIME_COLUMN)
-    cmd = convert_vectors(world, block(CMD_COLUMNS))
+    cmd = convert_vectors(world, _block(table, CMD_COLUMNS))
 
     masses = {}
     for role in ("leader", "follower"):
         value = mass_kg if mass_kg is not None else meta.get(f"{role}_mass_kg")
         masses[role] = None if value is None else check_mass(value, where, f"{role} mass")
-    if THRUST_COLUMN in columns:
-        thrust = table.column(THRUST_COLUMN)
-    elif masses["follower"] is not None:
-        thrust = masses["follower"] * np.linalg.norm(GRAVITY_MPS2 * E3 - cmd, axis=1)
-    else:
-        raise IngestError(where, f"no {THRUST_COLUMN} column and no follower mass to derive it "
-                                 f"(add it, or follower_mass_kg in '# meta:', or --mass-kg)")
-    present_obs = [c for c in OBS_COLUMNS if c in columns]
-    if len(present_obs) == 3:
-        obs = convert_vectors(world, block(OBS_COLUMNS))
-        obs_source = "column"
-    elif present_obs:
-        missing_obs = ", ".join(c for c in OBS_COLUMNS if c not in columns)
-        raise IngestError(where, f"missing columns: {missing_obs}")
-    else:
-        obs = differentiate(t_s, states["follower"][1])
-        obs_source = "differentiated follower velocity"
+    thrust = _follower_thrust(table, cmd, masses["follower"], where)
+    obs, obs_source = _observed_accel(table, world, t_s, states["follower"][1], where)
 
     extra = _read_extra(table.columns, table.data, where)
     check_finite(extra, where, row_name="line", rows=table.lines)
@@ -216,6 +176,97 @@ def read_csv(path: Path, *, frame: str | None = None, mass_kg: float | None = No
         meta=meta,
         extra=extra,
     )
+
+
+def _check_columns(columns: list[str], where: str) -> None:
+    """Refuse a header without every required column or with a name twice.
+
+    Raises:
+        IngestError: missing columns (the first six named) or duplicated column names.
+    """
+    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
+    if missing:
+        shown = ", ".join(missing[:6]) + (f" (+{len(missing) - 6} more)" if len(missing) > 6
+                                          else "")
+        raise IngestError(where, f"missing columns: {shown}")
+    dupes = sorted({c for c in columns if columns.count(c) > 1})
+    if dupes:
+        raise IngestError(where, f"duplicated column names: {', '.join(dupes)}")
+
+
+def _block(table: CsvTable, names: list[str] | tuple[str, ...]) -> np.ndarray:
+    """The columns ``names`` of ``table`` side by side, ``(n, len(names))``."""
+    return np.stack([table.column(c) for c in names], axis=1)
+
+
+def _vehicle_state(table: CsvTable, role: str, world: np.ndarray, body: np.ndarray,
+                   frame_name: str, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One vehicle's position (m), velocity (m/s) and attitude quaternion, in NED.
+
+    Args:
+        table: the CSV table.
+        role: ``"leader"`` or ``"follower"``.
+        world: the file's world frame to NED rotation.
+        body: the file's body frame to FRD rotation.
+        frame_name: ``"NED"`` or ``"ENU"`` (the quaternions are recomputed for ENU).
+        where: the file, for errors.
+
+    Returns:
+        ``(pos_m (n, 3), vel_mps (n, 3), quat (n, 4) w, x, y, z)``.
+
+    Raises:
+        IngestError: a quaternion far from unit norm, an attitude not upright, or positions
+            and velocities that disagree.
+    """
+    cols = vehicle_columns(role)
+    quat = _block(table, cols[6:10])
+    norm = np.linalg.norm(quat, axis=1)
+    if np.any(np.abs(norm - 1.0) > 0.1):
+        i = int(np.argmax(np.abs(norm - 1.0) > 0.1))
+        raise IngestError(where, f"{role}_qw..qz has norm {norm[i]:.3g} at line "
+                                 f"{table.lines[i]}, not a unit quaternion")
+    rot = convert_rotations(world, quat_to_rotmat(quat), body)
+    check_upright(rot, where, role, f"{role}_qw..qz in x, y, z, w order (the schema is w, "
+                                    "x, y, z), or an ENU file read as NED (add frame: ENU)?")
+    if frame_name != "NED":
+        quat = rotmat_to_quat(rot)
+    pos = convert_vectors(world, _block(table, cols[0:3]))
+    vel = convert_vectors(world, _block(table, cols[3:6]))
+    check_kinematics(table.column(TIME_COLUMN), pos, vel, where, role)
+    return pos, vel, quat
+
+
+def _follower_thrust(table: CsvTable, cmd: np.ndarray, follower_mass_kg: float | None,
+                     where: str) -> np.ndarray:
+    """The follower's collective thrust, N: its column, else ``m |g e3 - cmd|``.
+
+    Raises:
+        IngestError: no thrust column and no follower mass to derive it.
+    """
+    if THRUST_COLUMN in table.columns:
+        return table.column(THRUST_COLUMN)
+    if follower_mass_kg is not None:
+        return follower_mass_kg * np.linalg.norm(GRAVITY_MPS2 * E3 - cmd, axis=1)
+    raise IngestError(where, f"no {THRUST_COLUMN} column and no follower mass to derive it "
+                             f"(add it, or follower_mass_kg in '# meta:', or --mass-kg)")
+
+
+def _observed_accel(table: CsvTable, world: np.ndarray, t_s: np.ndarray,
+                    follower_vel_mps: np.ndarray, where: str) -> tuple[np.ndarray, str]:
+    """The follower's observed acceleration (m/s², NED) and where it came from: its three
+    columns, else the time derivative of its velocity.
+
+    Raises:
+        IngestError: some but not all of the three columns.
+    """
+    columns = table.columns
+    present_obs = [c for c in OBS_COLUMNS if c in columns]
+    if len(present_obs) == 3:
+        return convert_vectors(world, _block(table, OBS_COLUMNS)), "column"
+    if present_obs:
+        missing_obs = ", ".join(c for c in OBS_COLUMNS if c not in columns)
+        raise IngestError(where, f"missing columns: {missing_obs}")
+    return differentiate(t_s, follower_vel_mps), "differentiated follower velocity"
 
 
 def _read_extra(columns: list[str], data: np.ndarray, where: str) -> dict[str, np.ndarray]:

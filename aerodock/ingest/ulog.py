@@ -220,36 +220,9 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
     t_lp, lp = _topic(datasets, "vehicle_local_position", ["x", "y", "z", "vx", "vy", "vz"],
                       where)
     t_att, quat = _topic(datasets, "vehicle_attitude", [f"q[{k}]" for k in range(4)], where)
-    thrust_src = next(((t, f) for t, f in THRUST_TOPICS if t in datasets
-                       and (f"{f}[0]" in datasets[t] or f in datasets[t])), None)
-    if thrust_src is None:
-        present = [t for t in dict.fromkeys(t for t, _ in THRUST_TOPICS) if t in datasets]
-        raise IngestError(where, "missing topic: no thrust setpoint (none of "
-                                 f"{', '.join(dict.fromkeys(t for t, _ in THRUST_TOPICS))}"
-                                 + (f"; {', '.join(present)} without a thrust field)" if present
-                                    else ")"))
-    if f"{thrust_src[1]}[0]" in datasets[thrust_src[0]]:
-        t_thr, thrust_body = _topic(datasets, thrust_src[0],
-                                    [f"{thrust_src[1]}[{k}]" for k in range(3)], where)
-    else:  # PX4 <= 1.10: scalar thrust along -z_b
-        t_thr, scalar = _topic(datasets, thrust_src[0], [thrust_src[1]], where)
-        thrust_body = np.column_stack([np.zeros((len(t_thr), 2)), -scalar[:, 0]])
+    t_thr, thrust_body, thrust_topic = _thrust_setpoint(datasets, where)
     check_kinematics(t_lp, lp[:, :3], lp[:, 3:], where, "vehicle_local_position")
-    lp_fields = datasets["vehicle_local_position"]
-    if "vehicle_acceleration" in datasets:
-        t_acc, accel = _topic(datasets, "vehicle_acceleration", [f"xyz[{k}]" for k in range(3)],
-                              where)
-        accel_source = "vehicle_acceleration"
-    elif "ax" in lp_fields or "sensor_combined" not in datasets:
-        t_acc, accel = _topic(datasets, "vehicle_local_position", ["ax", "ay", "az"], where)
-        accel_source = "vehicle_local_position.ax/ay/az"
-    else:  # old logs: the raw accelerometer (body FRD specific force)
-        t_acc, accel = _topic(datasets, "sensor_combined",
-                              [f"accelerometer_m_s2[{k}]" for k in range(3)], where)
-        accel_source = "sensor_combined"
-    if accel_source != "vehicle_local_position.ax/ay/az":
-        check_specific_force(accel, where, f"{accel_source} (specific force, body FRD)",
-                             down_axis=E3, frame="body z already up? (PX4's body frame is FRD)")
+    t_acc, accel, accel_source = _acceleration_topic(datasets, where)
 
     start = max(t_lp[0], t_att[0], t_thr[0], t_acc[0])
     end = min(t_lp[-1], t_att[-1], t_thr[-1], t_acc[-1])
@@ -291,16 +264,10 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
         specific_force_to_accel(rot, acc)
 
     utc_offset = _utc_offset_s(datasets)
-    label_valid = None
-    land = datasets.get("vehicle_land_detected")
-    if land is not None and "landed" in land and len(land["timestamp"]):
-        # On the ground the support force, not the air, explains a_obs - cmd: not a label.
-        t_land = np.asarray(land["timestamp"], dtype=float) * 1e-6
-        order = np.argsort(t_land, kind="stable")
-        label_valid = resample_hold(t_land[order], np.asarray(land["landed"])[order] == 0, t)
+    label_valid = _label_valid(datasets, t)
     meta = {
         "file": where,
-        "thrust_topic": f"{thrust_src[0]}.{thrust_src[1]}",
+        "thrust_topic": thrust_topic,
         "thrust_model": thrust_model,
         "obs_accel_source": accel_source,
         "mass_kg": mass,
@@ -310,18 +277,100 @@ def read_ulog_vehicle(path: Path, *, mass_kg: float | None = None,
         "vehicle_type": vehicle_type,
         "landed_fraction": None if label_valid is None else float(np.mean(~label_valid)),
     }
+    _note_xy_valid(meta, datasets, keep, path)
+    return UlogTrack(
+        path=path, t_s=t, pos_m=lp[keep, :3], vel_mps=lp[keep, 3:], quat=q, cmd_accel_mps2=cmd,
+        thrust_n=mass * thrust_norm * accel_per_unit, obs_accel_mps2=obs, utc_offset_s=utc_offset,
+        meta=meta, label_valid=label_valid,
+    )
+
+
+def _thrust_setpoint(datasets: dict[str, dict[str, np.ndarray]],
+                     where: str) -> tuple[np.ndarray, np.ndarray, str]:
+    """The commanded thrust: the first topic of :data:`THRUST_TOPICS` present with its field.
+
+    A scalar thrust (PX4 1.10 and older) is the vector ``(0, 0, -thrust)`` (along ``-z_b``).
+
+    Returns:
+        ``(t_s, thrust_body (T, 3), "topic.field")``: time, s, and the normalised body-FRD
+        thrust vector.
+
+    Raises:
+        IngestError: no thrust setpoint topic (or none with a thrust field), or a bad topic.
+    """
+    thrust_src = next(((t, f) for t, f in THRUST_TOPICS if t in datasets
+                       and (f"{f}[0]" in datasets[t] or f in datasets[t])), None)
+    if thrust_src is None:
+        present = [t for t in dict.fromkeys(t for t, _ in THRUST_TOPICS) if t in datasets]
+        raise IngestError(where, "missing topic: no thrust setpoint (none of "
+                                 f"{', '.join(dict.fromkeys(t for t, _ in THRUST_TOPICS))}"
+                                 + (f"; {', '.join(present)} without a thrust field)" if present
+                                    else ")"))
+    if f"{thrust_src[1]}[0]" in datasets[thrust_src[0]]:
+        t_thr, thrust_body = _topic(datasets, thrust_src[0],
+                                    [f"{thrust_src[1]}[{k}]" for k in range(3)], where)
+    else:  # PX4 <= 1.10: scalar thrust along -z_b
+        t_thr, scalar = _topic(datasets, thrust_src[0], [thrust_src[1]], where)
+        thrust_body = np.column_stack([np.zeros((len(t_thr), 2)), -scalar[:, 0]])
+    return t_thr, thrust_body, f"{thrust_src[0]}.{thrust_src[1]}"
+
+
+def _acceleration_topic(datasets: dict[str, dict[str, np.ndarray]],
+                        where: str) -> tuple[np.ndarray, np.ndarray, str]:
+    """The observed acceleration's topic (see the module docstring), a body specific force
+    checked for plausibility.
+
+    Returns:
+        ``(t_s, accel (T, 3), source)``: ``source`` is ``"vehicle_acceleration"`` or
+        ``"sensor_combined"`` (body FRD specific force, m/s²) or
+        ``"vehicle_local_position.ax/ay/az"`` (NED acceleration, gravity removed).
+
+    Raises:
+        IngestError: a bad topic, or a specific force in g or pointing down.
+    """
+    lp_fields = datasets["vehicle_local_position"]
+    if "vehicle_acceleration" in datasets:
+        t_acc, accel = _topic(datasets, "vehicle_acceleration", [f"xyz[{k}]" for k in range(3)],
+                              where)
+        accel_source = "vehicle_acceleration"
+    elif "ax" in lp_fields or "sensor_combined" not in datasets:
+        t_acc, accel = _topic(datasets, "vehicle_local_position", ["ax", "ay", "az"], where)
+        accel_source = "vehicle_local_position.ax/ay/az"
+    else:  # old logs: the raw accelerometer (body FRD specific force)
+        t_acc, accel = _topic(datasets, "sensor_combined",
+                              [f"accelerometer_m_s2[{k}]" for k in range(3)], where)
+        accel_source = "sensor_combined"
+    if accel_source != "vehicle_local_position.ax/ay/az":
+        check_specific_force(accel, where, f"{accel_source} (specific force, body FRD)",
+                             down_axis=E3, frame="body z already up? (PX4's body frame is FRD)")
+    return t_acc, accel, accel_source
+
+
+def _label_valid(datasets: dict[str, dict[str, np.ndarray]], t: np.ndarray) -> np.ndarray | None:
+    """False where ``vehicle_land_detected`` says landed, held onto ``t`` (None: not logged).
+
+    On the ground the support force, not the air, explains ``a_obs - cmd``: not a label.
+    """
+    land = datasets.get("vehicle_land_detected")
+    if land is None or "landed" not in land or not len(land["timestamp"]):
+        return None
+    t_land = np.asarray(land["timestamp"], dtype=float) * 1e-6
+    order = np.argsort(t_land, kind="stable")
+    return resample_hold(t_land[order], np.asarray(land["landed"])[order] == 0, t)
+
+
+def _note_xy_valid(meta: dict[str, Any], datasets: dict[str, dict[str, np.ndarray]],
+                   keep: np.ndarray, path: Path) -> None:
+    """Add ``xy_valid_fraction`` to ``meta`` where the log has ``vehicle_local_position.xy_valid``
+    (over the ``keep`` samples), warning (for the caller of :func:`read_ulog_vehicle`) when it is
+    below one."""
     if "xy_valid" in datasets["vehicle_local_position"]:
         valid = np.asarray(datasets["vehicle_local_position"]["xy_valid"])[keep]
         meta["xy_valid_fraction"] = float(np.mean(valid != 0))
         if meta["xy_valid_fraction"] < 1.0:
             warnings.warn(ingest_warning(
                 path, f"horizontal position valid in only {100 * meta['xy_valid_fraction']:.0f}%"
-                " of vehicle_local_position samples"), stacklevel=2)
-    return UlogTrack(
-        path=path, t_s=t, pos_m=lp[keep, :3], vel_mps=lp[keep, 3:], quat=q, cmd_accel_mps2=cmd,
-        thrust_n=mass * thrust_norm * accel_per_unit, obs_accel_mps2=obs, utc_offset_s=utc_offset,
-        meta=meta, label_valid=label_valid,
-    )
+                " of vehicle_local_position samples"), stacklevel=3)
 
 
 def _hover_thrust(ulog: Any, datasets: dict[str, dict[str, np.ndarray]],

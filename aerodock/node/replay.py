@@ -137,8 +137,6 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
     os.environ.update(LOCALHOST_ENV)
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-    from geometry_msgs.msg import Vector3Stamped
     from nav_msgs.msg import Odometry
     from rclpy.executors import SingleThreadedExecutor
 
@@ -150,58 +148,14 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
     try:
         pubs = {"leader": node.create_publisher(Odometry, leader_topic, 10),
                 "follower": node.create_publisher(Odometry, follower_topic, 10)}
-
-        def on_output(msg: Any, info: Any) -> None:
-            stamp = _stamp(msg)
-            rec.outputs.append((time.time(), stamp, msg.vector.x, msg.vector.y, msg.vector.z))
-            rec.frame_ids.add(msg.header.frame_id)
-            rec.output_dds_s[stamp] = (_dds_time_s(info, "source_timestamp"),
-                                       _dds_time_s(info, "received_timestamp"))
-
-        def on_diag(msg: Any) -> None:
-            for status in msg.status:
-                rec.diagnostics.append((time.time(), _stamp(msg),
-                                        {kv.key: kv.value for kv in status.values}))
-
-        node.create_subscription(Vector3Stamped, output_topic, on_output, 100)
-        node.create_subscription(DiagnosticArray, diagnostics_topic, on_diag, 100)
-        deadline = time.monotonic() + wait_for_node_s
-        while not (all(p.get_subscription_count() > 0 for p in pubs.values()) and rec.outputs):
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"aerodock node did not subscribe to {leader_topic} and "
-                                   f"{follower_topic} within {wait_for_node_s:g} s")
-            executor.spin_once(timeout_sec=0.05)
-        rec.outputs.clear()
-        rec.diagnostics.clear()
-        rec.output_dds_s.clear()
+        _subscribe_outputs(node, rec, output_topic, diagnostics_topic)
+        _wait_for_node(executor, pubs, rec, wait_for_node_s, leader_topic, follower_topic)
         period = 1.0 / rate_hz if rate_hz else float(np.median(np.diff(log.t_s)))
-        rot_l, rot_f = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
+        rots = quat_to_rotmat(log.leader_quat), quat_to_rotmat(log.follower_quat)
         if on_send:
             on_send("start")
-        start = time.monotonic()
-        for i in range(log.n_samples):
-            t_log = float(log.t_s[i] - log.t_s[0])
-            states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
-                      "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
-            if leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
-                del states["leader"]
-            # built before the send time and stamped at it: the stamp is when the state is
-            # sent, not when this side's Python began building the messages
-            sample = {role: VehicleState(np.array(p, float), np.array(v, float), rot, 0.0)
-                      for role, (p, v, rot) in states.items()}
-            msgs = {role: odometry_message(Odometry, state, 0.0, frame, twist)
-                    for role, state in sample.items()}
-            target = start + i * period
-            while (now := time.monotonic()) < target:
-                executor.spin_once(timeout_sec=target - now)  # returns early for a callback
-            stamp = stamp_of(time.time())
-            for role, msg in msgs.items():
-                set_stamp(msg.header, stamp)
-                pubs[role].publish(msg)
-                if role == "follower":
-                    rec.published_s[stamp] = time.time()
-                rec.sent[role][stamp] = replace(sample[role], stamp_s=stamp)
-            rec.send_times_s.append(stamp)
+        _send_log(executor, pubs, rec, log, rots, period, Odometry, frame=frame, twist=twist,
+                  leader_gap_s=leader_gap_s)
         if on_send:
             on_send("end")
         end = time.monotonic() + tail_s
@@ -213,6 +167,117 @@ def replay(log: FlightLog, domain_id: int, *, leader_topic: str, follower_topic:
         node.destroy_node()
         rclpy.shutdown()
     return rec
+
+
+def _subscribe_outputs(node: Any, rec: ReplayRecord, output_topic: str,
+                       diagnostics_topic: str) -> None:
+    """Subscribe ``node`` to the node's f_ext and diagnostics topics, recording into ``rec``.
+
+    Args:
+        node: this side's rclpy node.
+        rec: the record the callbacks append to (outputs, frame ids, DDS times, diagnostics).
+        output_topic: the node's f_ext topic.
+        diagnostics_topic: the node's diagnostics topic.
+    """
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Vector3Stamped
+
+    def on_output(msg: Any, info: Any) -> None:
+        stamp = _stamp(msg)
+        rec.outputs.append((time.time(), stamp, msg.vector.x, msg.vector.y, msg.vector.z))
+        rec.frame_ids.add(msg.header.frame_id)
+        rec.output_dds_s[stamp] = (_dds_time_s(info, "source_timestamp"),
+                                   _dds_time_s(info, "received_timestamp"))
+
+    def on_diag(msg: Any) -> None:
+        for status in msg.status:
+            rec.diagnostics.append((time.time(), _stamp(msg),
+                                    {kv.key: kv.value for kv in status.values}))
+
+    node.create_subscription(Vector3Stamped, output_topic, on_output, 100)
+    node.create_subscription(DiagnosticArray, diagnostics_topic, on_diag, 100)
+
+
+def _wait_for_node(executor: Any, pubs: dict[str, Any], rec: ReplayRecord,
+                   wait_for_node_s: float, leader_topic: str, follower_topic: str) -> None:
+    """Spin until the node subscribes to both state topics and publishes, then clear ``rec``.
+
+    What came back while waiting (outputs, diagnostics, DDS times) is dropped: the record
+    starts with the replay.
+
+    Raises:
+        TimeoutError: the node did not show up on the graph within ``wait_for_node_s``.
+    """
+    deadline = time.monotonic() + wait_for_node_s
+    while not (all(p.get_subscription_count() > 0 for p in pubs.values()) and rec.outputs):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"aerodock node did not subscribe to {leader_topic} and "
+                               f"{follower_topic} within {wait_for_node_s:g} s")
+        executor.spin_once(timeout_sec=0.05)
+    rec.outputs.clear()
+    rec.diagnostics.clear()
+    rec.output_dds_s.clear()
+
+
+def _sample_messages(odometry_cls: Any, log: FlightLog, i: int, rot_l: np.ndarray,
+                     rot_f: np.ndarray, *, frame: str, twist: str,
+                     leader_gap_s: tuple[float, float] | None,
+                     ) -> tuple[dict[str, VehicleState], dict[str, Any]]:
+    """Sample ``i`` of ``log`` as states and unstamped Odometry messages, per role.
+
+    Args:
+        odometry_cls: ``nav_msgs/msg/Odometry``.
+        log: the flight (NED).
+        i: sample index.
+        rot_l: the leader's rotation matrices, ``(n, 3, 3)``.
+        rot_f: the follower's rotation matrices, ``(n, 3, 3)``.
+        frame: Odometry world frame.
+        twist: Odometry twist frame.
+        leader_gap_s: ``(start, end)`` in log time during which the leader is left out.
+
+    Returns:
+        ``(states, messages)``, both keyed by role (``"leader"`` missing inside the gap).
+    """
+    t_log = float(log.t_s[i] - log.t_s[0])
+    states = {"leader": (log.leader_pos_m[i], log.leader_vel_mps[i], rot_l[i]),
+              "follower": (log.follower_pos_m[i], log.follower_vel_mps[i], rot_f[i])}
+    if leader_gap_s and leader_gap_s[0] <= t_log < leader_gap_s[1]:
+        del states["leader"]
+    sample = {role: VehicleState(np.array(p, float), np.array(v, float), rot, 0.0)
+              for role, (p, v, rot) in states.items()}
+    msgs = {role: odometry_message(odometry_cls, state, 0.0, frame, twist)
+            for role, state in sample.items()}
+    return sample, msgs
+
+
+def _send_log(executor: Any, pubs: dict[str, Any], rec: ReplayRecord, log: FlightLog,
+              rots: tuple[np.ndarray, np.ndarray], period_s: float, odometry_cls: Any, *,
+              frame: str, twist: str, leader_gap_s: tuple[float, float] | None) -> None:
+    """Publish every sample of ``log`` every ``period_s``, recording what was sent in ``rec``.
+
+    ``rots`` are the leader's and the follower's rotation matrices (computed by the caller,
+    before the measured send window opens).
+
+    Each sample's messages are built before its send time and stamped at it: the stamp is
+    when the state is sent, not when this side's Python began building the messages. The
+    executor is spun while waiting for the send time (so callbacks are served meanwhile).
+    """
+    rot_l, rot_f = rots
+    start = time.monotonic()
+    for i in range(log.n_samples):
+        sample, msgs = _sample_messages(odometry_cls, log, i, rot_l, rot_f, frame=frame,
+                                        twist=twist, leader_gap_s=leader_gap_s)
+        target = start + i * period_s
+        while (now := time.monotonic()) < target:
+            executor.spin_once(timeout_sec=target - now)  # returns early for a callback
+        stamp = stamp_of(time.time())
+        for role, msg in msgs.items():
+            set_stamp(msg.header, stamp)
+            pubs[role].publish(msg)
+            if role == "follower":
+                rec.published_s[stamp] = time.time()
+            rec.sent[role][stamp] = replace(sample[role], stamp_s=stamp)
+        rec.send_times_s.append(stamp)
 
 
 def _dds_time_s(info: Any, key: str) -> float:

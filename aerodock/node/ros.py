@@ -178,19 +178,26 @@ def topic_name_error(name: str, node_name: str = NODE_NAME) -> str | None:
 
 def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_NAME,
               warnings_to_log: list[str] | None = None) -> Any:
-    """Build the node (``rclpy.init`` must have been called). See the module docstring."""
+    """Build the node (``rclpy.init`` must have been called). See the module docstring.
+
+    The ``Node`` subclass is made here because rclpy is imported only when a node is built
+    (the ``aerodock[ros]`` extra); its behaviour is :class:`_PredictorNodeMixin`'s.
+    """
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from geometry_msgs.msg import Vector3Stamped
     from rclpy.node import Node
     from rclpy.qos import HistoryPolicy, QoSProfile, qos_profile_sensor_data
 
-    class PredictorNode(Node):
+    class PredictorNode(_PredictorNodeMixin, Node):
         """Subscribes to both vehicles' states and publishes f_ext (see the module docstring)."""
 
         def __init__(self) -> None:
             super().__init__(node_name)
             self.predictor = predictor
             self.settings = settings
+            self._node_name = node_name
+            self._f_ext_type = Vector3Stamped
+            self._diag_types = (DiagnosticArray, DiagnosticStatus, KeyValue)
             self.wake_scales = (None if settings.wake_scales is None
                                 else np.asarray(settings.wake_scales, dtype=float))
             self.states: dict[str, VehicleState | None] = {"leader": None, "follower": None}
@@ -222,134 +229,189 @@ def make_node(predictor: Any, settings: NodeSettings, *, node_name: str = NODE_N
             if len(self.types) < 2:
                 self.graph_timer = self.create_timer(0.1, self._connect)
 
-        def _decide_frame(self, follower_type: str | None) -> None:
-            """Fix the output frame once it can be decided (see the module docstring)."""
-            if self.output_frame is not None:
-                return
-            frame, self.frame_rule = output_frame_choice(
-                self.settings.output_frame, self.settings.mapping["frame"], follower_type)
-            if frame is not None:
-                self.output_frame = frame
-                self.frame_id = self.settings.frame_ids[frame]
-                self.get_logger().info(f"f_ext in {frame.upper()} ({self.frame_id}): "
-                                       f"{self.frame_rule}")
+    return PredictorNode()
 
-        def _connect(self) -> None:
-            """Subscribe to the state topics whose type is known or now on the graph."""
-            graph = dict(self.get_topic_names_and_types())
-            for role, topic in self.topics.items():
-                if role in self.types:
+
+class _PredictorNodeMixin:
+    """The behaviour of :func:`make_node`'s node, mixed into ``rclpy.node.Node`` there.
+
+    Its attributes are set by the node's ``__init__`` (in :func:`make_node`); the methods use
+    ``Node``'s own (``get_logger``, ``create_subscription``, ``get_clock``, ...).
+    """
+
+    predictor: Any
+    settings: NodeSettings
+    states: dict[str, VehicleState | None]
+    topics: dict[str, str]
+    types: dict[str, str]
+    monitors: dict[str, InputMonitor]
+    output_frame: str | None
+    frame_rule: str
+    frame_id: str
+    publish_mode: PublishMode
+    period_s: float
+    last_follower_output_s: float | None
+    tick: int
+    refusals: RefusalLog
+    wake_scales: np.ndarray | None
+    pub: Any
+    diag_pub: Any
+    _node_name: str
+    _f_ext_type: Any
+    _diag_types: tuple[Any, Any, Any]
+    _qos: Any
+    _subs: list[Any]
+
+    def _decide_frame(self, follower_type: str | None) -> None:
+        """Fix the output frame once it can be decided (see the module docstring)."""
+        if self.output_frame is not None:
+            return
+        frame, self.frame_rule = output_frame_choice(
+            self.settings.output_frame, self.settings.mapping["frame"], follower_type)
+        if frame is not None:
+            self.output_frame = frame
+            self.frame_id = self.settings.frame_ids[frame]
+            self.get_logger().info(f"f_ext in {frame.upper()} ({self.frame_id}): "
+                                   f"{self.frame_rule}")
+
+    def _connect(self) -> None:
+        """Subscribe to the state topics whose type is known or now on the graph."""
+        graph = dict(self.get_topic_names_and_types())
+        for role, topic in self.topics.items():
+            if role in self.types:
+                continue
+            type_name = self.settings.state_types.get(topic)
+            if type_name is None:
+                found = [t for t in graph.get(topic, []) if t in STATE_TYPES]
+                if not found:
                     continue
-                type_name = self.settings.state_types.get(topic)
-                if type_name is None:
-                    found = [t for t in graph.get(topic, []) if t in STATE_TYPES]
-                    if not found:
-                        continue
-                    type_name = found[0]
-                cls = message_class(type_name)
-                self.types[role] = type_name
-                self._subs.append(self.create_subscription(
-                    cls, topic, self._callback(role, type_name), self._qos))
-                self.get_logger().info(f"{role} state: {topic} ({type_name})")
-                if role == "follower":
-                    self._decide_frame(type_name)
-            if len(self.types) == 2 and hasattr(self, "graph_timer"):
-                self.graph_timer.cancel()
+                type_name = found[0]
+            cls = message_class(type_name)
+            self.types[role] = type_name
+            self._subs.append(self.create_subscription(
+                cls, topic, self._callback(role, type_name), self._qos))
+            self.get_logger().info(f"{role} state: {topic} ({type_name})")
+            if role == "follower":
+                self._decide_frame(type_name)
+        if len(self.types) == 2 and hasattr(self, "graph_timer"):
+            self.graph_timer.cancel()
 
-        def _callback(self, role: str, type_name: str) -> Any:
-            mapping = self.settings.mapping
+    def _callback(self, role: str, type_name: str) -> Any:
+        mapping = self.settings.mapping
 
-            def on_state(msg: Any, info: Any) -> None:
-                received, received_wall = time.monotonic(), time.time()
-                try:
-                    state = state_from_message(type_name, msg, mapping, received)
-                except ValueError as err:  # a message we cannot use: the input goes stale
-                    why: str | None = f"unusable message ({err})"
-                    self.monitors[role].verdict = why
-                else:
-                    why = self.monitors[role].receive(state) or implausible(state)
-                    self.states[role] = state
-                if why:
-                    self.refusals.record(role, why)
-                if role != "follower":
-                    return
-                trigger = output_trigger(self.publish_mode, FOLLOWER_EVENT, received,
-                                         self.last_follower_output_s, self.period_s)
-                if trigger is not None:
-                    dds_ns = info.get("received_timestamp", 0) if info else 0
-                    queue_s = received_wall - dds_ns * 1e-9 if dds_ns else float("nan")
-                    self._publish(trigger, received, queue_s)
-
-            return on_state
-
-        def _on_tick(self) -> None:
-            now = time.monotonic()
-            trigger = output_trigger(self.publish_mode, TICK_EVENT, now,
+        def on_state(msg: Any, info: Any) -> None:
+            received, received_wall = time.monotonic(), time.time()
+            try:
+                state = state_from_message(type_name, msg, mapping, received)
+            except ValueError as err:  # a message we cannot use: the input goes stale
+                why: str | None = f"unusable message ({err})"
+                self.monitors[role].verdict = why
+            else:
+                why = self.monitors[role].receive(state) or implausible(state)
+                self.states[role] = state
+            if why:
+                self.refusals.record(role, why)
+            if role != "follower":
+                return
+            trigger = output_trigger(self.publish_mode, FOLLOWER_EVENT, received,
                                      self.last_follower_output_s, self.period_s)
             if trigger is not None:
-                self._publish(trigger, now, float("nan"))
+                dds_ns = info.get("received_timestamp", 0) if info else 0
+                queue_s = received_wall - dds_ns * 1e-9 if dds_ns else float("nan")
+                self._publish(trigger, received, queue_s)
 
-        def _publish(self, trigger: str, start: float, queue_s: float) -> None:
-            """One :func:`prediction_step` on the newest states, published with diagnostics
-            (the diagnostics only, while the output frame is undecided)."""
-            result = prediction_step(self.predictor, self.states["leader"],
-                                     self.states["follower"], start,
-                                     max_age_s=self.settings.max_age_s,
-                                     output_frame=self.output_frame or "ned",
-                                     faults={r: m.verdict for r, m in self.monitors.items()},
-                                     wake_scales=self.wake_scales)
-            stamp = self.get_clock().now().to_msg()
-            latency_ms = (time.monotonic() - start) * 1e3  # trigger to the output's stamp
-            if self.output_frame is None:
-                self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger,
-                                                        queue_s))
-                return
-            out = Vector3Stamped()
-            out.header.stamp = stamp
-            out.header.frame_id = self.frame_id
-            out.vector.x, out.vector.y, out.vector.z = (float(v) for v in result.f_ext_mps2)
-            self.pub.publish(out)
-            if trigger == TRIGGER_FOLLOWER:
-                self.last_follower_output_s = time.monotonic()
-            self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger, queue_s))
-            self.tick += 1
+        return on_state
 
-        def _diagnostics(self, result: StepResult, stamp: Any, latency_ms: float, trigger: str,
-                         queue_s: float) -> Any:
-            def ms(value: float) -> str:
-                return "inf" if not np.isfinite(value) else f"{value * 1e3:.4f}"
+    def _on_tick(self) -> None:
+        now = time.monotonic()
+        trigger = output_trigger(self.publish_mode, TICK_EVENT, now,
+                                 self.last_follower_output_s, self.period_s)
+        if trigger is not None:
+            self._publish(trigger, now, float("nan"))
 
-            status = DiagnosticStatus()
-            status.name = STATUS_NAME
-            status.hardware_id = node_name
-            status.level = DiagnosticStatus.STALE if result.stale else DiagnosticStatus.OK
-            status.message = (f"publishing zero: {result.reason}" if result.stale else "ok")
-            if self.output_frame is None:
-                status.level = DiagnosticStatus.STALE
-                status.message = f"publishing no f_ext: {self.frame_rule}"
-            values = {
-                "trigger": trigger,
-                "latency_ms": f"{latency_ms:.4f}",
-                "queue_ms": f"{queue_s * 1e3:.4f}",
-                "compute_ms": ms(result.compute_s),
-                "leader_age_ms": ms(result.leader_age_s),
-                "follower_age_ms": ms(result.follower_age_s),
-                "stale": "true" if result.stale else "false",
-                "stale_reason": result.reason,
-                "leader_stamp": repr(result.leader_stamp_s),
-                "follower_stamp": repr(result.follower_stamp_s),
-                "tick": str(self.tick),
-                "output_frame": self.output_frame or UNDECIDED,
-                "output_frame_rule": self.frame_rule,
-                **self.refusals.values(),
-            }
-            status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
-            array = DiagnosticArray()
-            array.header.stamp = stamp
-            array.status = [status]
-            return array
+    def _publish(self, trigger: str, start: float, queue_s: float) -> None:
+        """One :func:`prediction_step` on the newest states, published with diagnostics
+        (the diagnostics only, while the output frame is undecided)."""
+        result = prediction_step(self.predictor, self.states["leader"],
+                                 self.states["follower"], start,
+                                 max_age_s=self.settings.max_age_s,
+                                 output_frame=self.output_frame or "ned",
+                                 faults={r: m.verdict for r, m in self.monitors.items()},
+                                 wake_scales=self.wake_scales)
+        stamp = self.get_clock().now().to_msg()
+        latency_ms = (time.monotonic() - start) * 1e3  # trigger to the output's stamp
+        if self.output_frame is None:
+            self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger,
+                                                    queue_s))
+            return
+        out = self._f_ext_type()
+        out.header.stamp = stamp
+        out.header.frame_id = self.frame_id
+        out.vector.x, out.vector.y, out.vector.z = (float(v) for v in result.f_ext_mps2)
+        self.pub.publish(out)
+        if trigger == TRIGGER_FOLLOWER:
+            self.last_follower_output_s = time.monotonic()
+        self.diag_pub.publish(self._diagnostics(result, stamp, latency_ms, trigger, queue_s))
+        self.tick += 1
 
-    return PredictorNode()
+    def _diagnostics(self, result: StepResult, stamp: Any, latency_ms: float, trigger: str,
+                     queue_s: float) -> Any:
+        diagnostic_array, diagnostic_status, key_value = self._diag_types
+        status = diagnostic_status()
+        status.name = STATUS_NAME
+        status.hardware_id = self._node_name
+        status.level = diagnostic_status.STALE if result.stale else diagnostic_status.OK
+        status.message = (f"publishing zero: {result.reason}" if result.stale else "ok")
+        if self.output_frame is None:
+            status.level = diagnostic_status.STALE
+            status.message = f"publishing no f_ext: {self.frame_rule}"
+        values = _diagnostic_values(result, latency_ms, trigger, queue_s, tick=self.tick,
+                                    output_frame=self.output_frame, frame_rule=self.frame_rule,
+                                    refusals=self.refusals)
+        status.values = [key_value(key=k, value=v) for k, v in values.items()]
+        array = diagnostic_array()
+        array.header.stamp = stamp
+        array.status = [status]
+        return array
+
+
+def _diagnostic_values(result: StepResult, latency_ms: float, trigger: str, queue_s: float, *,
+                       tick: int, output_frame: str | None, frame_rule: str,
+                       refusals: RefusalLog) -> dict[str, str]:
+    """The diagnostics status's key-value pairs for one output (see the module docstring).
+
+    Args:
+        result: the prediction step.
+        latency_ms: trigger to the output's stamp, ms.
+        trigger: what triggered the output.
+        queue_s: the follower message's wait in the node, s (NaN: not follower-triggered).
+        tick: outputs published before this one.
+        output_frame: ``"ned"``, ``"enu"`` or None (undecided).
+        frame_rule: why that output frame.
+        refusals: the node's refused messages.
+
+    Returns:
+        key -> value, in the order they are published.
+    """
+    def ms(value: float) -> str:
+        return "inf" if not np.isfinite(value) else f"{value * 1e3:.4f}"
+
+    return {
+        "trigger": trigger,
+        "latency_ms": f"{latency_ms:.4f}",
+        "queue_ms": f"{queue_s * 1e3:.4f}",
+        "compute_ms": ms(result.compute_s),
+        "leader_age_ms": ms(result.leader_age_s),
+        "follower_age_ms": ms(result.follower_age_s),
+        "stale": "true" if result.stale else "false",
+        "stale_reason": result.reason,
+        "leader_stamp": repr(result.leader_stamp_s),
+        "follower_stamp": repr(result.follower_stamp_s),
+        "tick": str(tick),
+        "output_frame": output_frame or UNDECIDED,
+        "output_frame_rule": frame_rule,
+        **refusals.values(),
+    }
 
 
 def ros_args_error(ros_args: list[str]) -> str | None:
