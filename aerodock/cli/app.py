@@ -26,6 +26,7 @@ from aerodock.cli import (
     dock,
     experiments,
     field,
+    field_fit,
     ingest,
     learning,
     node,
@@ -75,8 +76,8 @@ app.command("reproduce")(experiments.reproduce)
 app.command("targets")(experiments.targets_command)
 field_app.command("probe")(field.field_probe)
 field_app.command("plot")(field.field_plot)
-field_app.command("fit")(field.field_fit)
-field_app.command("score")(field.field_score)
+field_app.command("fit")(field_fit.field_fit)
+field_app.command("score")(field_fit.field_score)
 
 
 def as_written(text: str | None) -> str | None:
