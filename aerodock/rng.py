@@ -29,16 +29,26 @@ class TrialRNG:
         first_trial: index of the first trial (a single trial ``i`` is ``TrialRNG(seed, 1, i)``).
         trials: explicit trial indices, one per row, instead of ``first_trial + i`` (e.g. the
             same trials flown by several policies: common random numbers).
+        seeds: explicit campaign seeds, one per row, instead of ``seed`` for every row: several
+            campaigns' trials flown as one batch, each row drawing the numbers it draws in its
+            own campaign. Such a batch draws no shared numbers (they would be ``seed``'s only).
     """
 
-    def __init__(self, seed: int, n: int, first_trial: int = 0, trials: Any = None):
+    def __init__(self, seed: int, n: int, first_trial: int = 0, trials: Any = None,
+                 seeds: Any = None):
         self.seed = int(seed)
         self.n = int(n)
         self.first_trial = int(first_trial)
         index = self.first_trial + np.arange(n) if trials is None else np.asarray(trials)
         if index.shape != (self.n,):
             raise ValueError(f"trials must hold {self.n} indices, got shape {index.shape}")
-        self._gens = [np.random.default_rng([self.seed, int(t)]) for t in index]
+        row_seeds = (np.full(self.n, self.seed, dtype=np.int64) if seeds is None
+                     else np.asarray(seeds, dtype=np.int64))
+        if row_seeds.shape != (self.n,):
+            raise ValueError(f"seeds must hold {self.n} seeds, got shape {row_seeds.shape}")
+        self.seeds = row_seeds
+        self._mixed = bool(np.any(row_seeds != self.seed))
+        self._gens = [np.random.default_rng([int(s), int(t)]) for s, t in zip(row_seeds, index)]
         self._shared = np.random.default_rng([self.seed, -1 & 0x7FFFFFFF])
         # Pre-drawn numbers, draw-major (draws, n): row j holds every trial's j-th next draw, so
         # a block of draws is a contiguous (k, n) slice (fast to compute with, no copy).
@@ -51,6 +61,7 @@ class TrialRNG:
         rows = np.asarray(rows, dtype=np.int64)
         out = copy.copy(self)
         out.n = int(rows.size)
+        out.seeds = self.seeds[rows]
         out._gens = [copy.deepcopy(self._gens[i]) for i in rows]
         out._shared = copy.deepcopy(self._shared)
         out._buf = {kind: buf[:, rows] for kind, buf in self._buf.items()}
@@ -88,6 +99,9 @@ class TrialRNG:
         shape = (size,) if isinstance(size, int | np.integer) else tuple(size or ())
         if not shape or shape[0] != self.n:
             # Not a per-trial draw: use a shared stream (still deterministic for a given seed).
+            if self._mixed:
+                raise ValueError("a batch of several campaigns' trials cannot draw shared "
+                                 "numbers: each campaign would draw its own")
             return (self._shared.standard_normal(shape) if kind == "normal"
                     else self._shared.random(shape))
         per_trial = 1

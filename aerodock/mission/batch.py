@@ -117,6 +117,7 @@ def run_campaign(
     record: str = "summary",
     progress: Callable[[float], None] | None = None,
     trials: np.ndarray | None = None,
+    seeds: np.ndarray | None = None,
 ) -> CampaignResult:
     """Fly ``spec.trials`` docking missions at once.
 
@@ -131,8 +132,11 @@ def run_campaign(
             trial flies the same with the same id in any batch, and its outcome is its own, so
             one batch can fly, e.g., the same trials armed and disarmed
             (:meth:`CampaignResult.take` splits it).
+        seeds: explicit campaign seeds, one per trial (default ``spec.seed`` for all): several
+            campaigns that differ only in their seed flown as one batch, each trial as in its
+            own campaign (:class:`aerodock.rng.TrialRNG`; the sweep flies its cells so).
     """
-    batch = MissionBatch(cfg, spec, predictor, record, trials)
+    batch = MissionBatch(cfg, spec, predictor, record, trials, seeds=seeds)
     while not batch.finished:
         batch.fly()
         if progress is not None and batch.k % 20 == 1:
@@ -143,21 +147,23 @@ def run_campaign(
 
 
 def settle_trials(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
-                  trials: np.ndarray | None = None) -> SettledStart:
+                  trials: np.ndarray | None = None,
+                  seeds: np.ndarray | None = None) -> SettledStart:
     """Fly the settled start of ``spec``'s trials (or the explicit ``trials``): their world and
     controllers at t = 0, as :class:`MissionBatch` starts from them.
 
     Its rows serve single trials later (:meth:`SettledStart.take_rows`): a trial's start does not
     depend on the batch that settled it. Arguments as for :class:`MissionBatch`.
     """
-    cfg, comp, ids = _checked(cfg, spec, predictor, trials)
-    return _settle(cfg, spec, MissionParams.from_config(cfg), comp, predictor, ids)
+    cfg, comp, ids, row_seeds = _checked(cfg, spec, predictor, trials, seeds)
+    return _settle(cfg, spec, MissionParams.from_config(cfg), comp, predictor, ids, row_seeds)
 
 
 def _checked(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None,
-             trials: np.ndarray | None) -> tuple[Config, Compensation, np.ndarray]:
+             trials: np.ndarray | None, seeds: np.ndarray | None = None
+             ) -> tuple[Config, Compensation, np.ndarray, np.ndarray]:
     """The one validation of dock, sweep and the environments: (the configuration with the
-    cable length applied, the compensation, the trial ids)."""
+    cable length applied, the compensation, the trial ids, each trial's campaign seed)."""
     cfg = check_mission(cfg, spec, DOCK_NAMES)
     comp = Compensation(spec.compensation)
     if comp == Compensation.MODEL and predictor is None:
@@ -167,15 +173,20 @@ def _checked(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None,
            else np.asarray(trials, dtype=np.int64).copy())
     if ids.shape != (n,):
         raise ValueError(f"{n} trials asked for, {ids.size} trial ids given")
-    return cfg, comp, ids
+    row_seeds = (np.full(n, spec.seed, dtype=np.int64) if seeds is None
+                 else np.asarray(seeds, dtype=np.int64).copy())
+    if row_seeds.shape != (n,):
+        raise ValueError(f"{n} trials asked for, {row_seeds.size} seeds given")
+    return cfg, comp, ids, row_seeds
 
 
 def _settle(cfg: Config, spec: MissionSpec, params: MissionParams, comp: Compensation,
-            predictor: AccelPredictor | None, trials: np.ndarray) -> SettledStart:
+            predictor: AccelPredictor | None, trials: np.ndarray,
+            seeds: np.ndarray) -> SettledStart:
     """The settled start of ``trials`` (``cfg`` checked; the random draws in their order: the
     starts' jitter, the world's, then the settled flight's)."""
     n, m = trials.size, params.mission
-    rng = TrialRNG(spec.seed, n, trials=trials)
+    rng = TrialRNG(spec.seed, n, trials=trials, seeds=seeds)
     configured = GripperParams.from_config(cfg)
     world = World(cfg, n, rng, field=build_field(cfg), leader_fixed=spec.leader_fixed,
                   triggers=(armed(configured.passive, spec.passive_trigger, n),
@@ -244,21 +255,23 @@ class MissionBatch:
         settled: these trials' settled start, if already flown (:func:`settle_trials` for the
             same configuration and campaign, or rows of a larger one taken with
             :meth:`SettledStart.take_rows`); by default it is flown here.
+        seeds: explicit per-row campaign seeds (default ``spec.seed``; see :func:`run_campaign`).
     """
 
     def __init__(self, cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None = None,
                  record: str = "summary", trials: np.ndarray | None = None,
-                 settled: SettledStart | None = None):
+                 settled: SettledStart | None = None, seeds: np.ndarray | None = None):
         if record not in ("summary", "trace", "full"):
             raise ValueError(f"record must be summary, trace or full, got {record!r}")
-        cfg, comp, self.trials = _checked(cfg, spec, predictor, trials)
+        cfg, comp, self.trials, self.seeds = _checked(cfg, spec, predictor, trials, seeds)
         n = spec.trials
         self.params = params = MissionParams.from_config(cfg)
         self.spec, self.n, self.comp, self.record = spec, n, comp, record
         m = params.mission
         if settled is None:
-            settled = _settle(cfg, spec, params, comp, predictor, self.trials)
-        elif not np.array_equal(settled.trials, self.trials) or settled.rng.seed != spec.seed:
+            settled = _settle(cfg, spec, params, comp, predictor, self.trials, self.seeds)
+        elif not np.array_equal(settled.trials, self.trials) or settled.rng.seed != spec.seed \
+                or not np.array_equal(settled.rng.seeds, self.seeds):
             raise ValueError("the settled start is not of these trials of this campaign")
         world, rng, start = settled.world, settled.rng, settled.start
         self.predictor = settled.predictor
@@ -532,7 +545,7 @@ class MissionBatch:
         """The metadata of trial ``i``'s FlightLog."""
         spec, params = self.spec, self.params
         return {
-            "name": f"dock-seed{spec.seed}-trial{int(self.trials[i]):04d}",
+            "name": f"dock-seed{int(self.seeds[i])}-trial{int(self.trials[i]):04d}",
             "source": "aerodock-sim", "frame": "NED",
             "label_basis": self.recorder.label_basis,
             "leader_mass_kg": params.leader_mass_kg, "follower_mass_kg": params.mass_kg,
@@ -540,5 +553,5 @@ class MissionBatch:
             "compensation": Compensation(spec.compensation).value,
             "offset_m": params.cable_length_m,
             "leader_speed_mps": spec.leader_speed_mps,
-            "seed": spec.seed, "trial": int(self.trials[i]),
+            "seed": int(self.seeds[i]), "trial": int(self.trials[i]),
         }

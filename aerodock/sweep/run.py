@@ -1,9 +1,11 @@
 """Running a sweep: one docking campaign per cell, on local processes or on Ray.
 
-Every cell is :func:`aerodock.mission.batch.run_campaign` with its own seed, so a cell's numbers do
-not depend on where or in which order it runs: the local and the Ray backends give the same table
-(tested). The table is tidy: one row per trial, the cell's settings in columns beside the trial's
-outcome (:data:`OUTCOME_COLUMNS`).
+Every cell is a campaign of :func:`aerodock.mission.batch.run_campaign` with its own seed, so a
+cell's numbers do not depend on where or in which order it runs: the local and the Ray backends
+give the same table (tested). Cells that differ only in their seed share a world and are flown as
+one batch (:func:`batches`), each trial drawing its own cell's numbers: the same table, at the
+cost per trial of a larger batch. The table is tidy: one row per trial, the cell's settings in
+columns beside the trial's outcome (:data:`OUTCOME_COLUMNS`).
 
 With a :class:`aerodock.sweep.store.CellStore`, every cell is saved as it finishes and a cell
 already in the store's folders is taken from there instead of flown (``sweep --resume``).
@@ -21,6 +23,7 @@ import signal
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -60,36 +63,76 @@ def cell_rows(cell: Cell, cell_cfg: Config, outcomes: list[dict[str, Any]]) -> R
 def run_cell(cfg: Config, cell: Cell, trials: int, model: str | None) -> Rows:
     """Fly one cell's campaign on ``cfg`` (the sweep's configuration; the cell's config keys,
     controller and noise scale are applied here); its rows of the tidy table."""
+    return run_cells(cfg, (cell,), trials, model)[0][1]
+
+
+def run_cells(cfg: Config, cells: tuple[Cell, ...], trials: int, model: str | None
+              ) -> list[tuple[int, Rows]]:
+    """Fly cells that differ only in their campaign seed (:func:`same_world`) as one batch
+    (each trial draws the numbers it draws in its own cell's campaign:
+    :func:`aerodock.mission.batch.run_campaign`'s ``seeds``); (cell index, its rows) each."""
     from aerodock.mission import AbortReason, MissionSpec, run_campaign
 
-    cfg = cell_config(cfg, cell)
+    first = cells[0]
+    if any(same_world(c) != same_world(first) for c in cells):
+        raise ValueError("cells flown as one batch must differ only in their seed")
+    cfg = cell_config(cfg, first)
     predictor = None
-    if cell.compensation == "model":
+    if first.compensation == "model":
         from aerodock.learning.runtime import Predictor
 
         predictor = Predictor.load(model)
-    spec = MissionSpec(trials=trials, offset_m=cell.cable_length_m,
-                       leader_speed_mps=cell.leader_speed_mps, compensation=cell.compensation,
-                       seed=cell.seed, leader_dropout_s=cell.leader_dropout_s)
-    res = run_campaign(cfg, spec, predictor)
-    outcomes = []
-    for i in range(trials):
-        cap = float(res.capture_time_s[i])
-        outcomes.append({"trial": i, "docked": bool(res.success[i]),
-                     "missed": bool(res.missed[i]), "slipped": bool(res.slipped[i]),
-                     "aborted": bool(res.aborted[i]),
-                     "abort_reason": AbortReason(int(res.abort_reason[i])).name.lower(),
-                     "clearance_violation": bool(res.clearance_violation[i]),
-                     "min_clearance_m": float(res.min_clearance_m[i]),
-                     "capture_time_s": None if np.isnan(cap) else cap,
-                     "err_down_m": float(res.err_down_m[i]), "err_3d_m": float(res.err_3d_m[i])})
-    return cell_rows(cell, cfg, outcomes)
+    spec = MissionSpec(trials=trials * len(cells), offset_m=first.cable_length_m,
+                       leader_speed_mps=first.leader_speed_mps, compensation=first.compensation,
+                       seed=first.seed, leader_dropout_s=first.leader_dropout_s)
+    res = run_campaign(cfg, spec, predictor, trials=np.tile(np.arange(trials), len(cells)),
+                       seeds=np.repeat([c.seed for c in cells], trials))
+    out = []
+    for k, cell in enumerate(cells):
+        part = res.take(np.arange(k * trials, (k + 1) * trials))
+        outcomes = []
+        for i in range(trials):
+            cap = float(part.capture_time_s[i])
+            outcomes.append({"trial": i, "docked": bool(part.success[i]),
+                             "missed": bool(part.missed[i]), "slipped": bool(part.slipped[i]),
+                             "aborted": bool(part.aborted[i]),
+                             "abort_reason": AbortReason(int(part.abort_reason[i])).name.lower(),
+                             "clearance_violation": bool(part.clearance_violation[i]),
+                             "min_clearance_m": float(part.min_clearance_m[i]),
+                             "capture_time_s": None if np.isnan(cap) else cap,
+                             "err_down_m": float(part.err_down_m[i]),
+                             "err_3d_m": float(part.err_3d_m[i])})
+        out.append((cell.index, cell_rows(cell, cfg, outcomes)))
+    return out
 
 
-def _cell_job(cfg_data: dict[str, Any], cfg_source: str, cell: Cell, trials: int,
-              model: str | None) -> tuple[int, Rows]:
-    """A picklable job: (cell index, rows)."""
-    return cell.index, run_cell(Config(cfg_data, cfg_source), cell, trials, model)
+def same_world(cell: Cell) -> Cell:
+    """``cell`` without its index and seed: cells equal under it fly the same world and mission
+    and can be flown as one batch."""
+    return replace(cell, index=0, seed=0)
+
+
+def batches(cells: list[Cell], workers: int) -> list[tuple[Cell, ...]]:
+    """The cells grouped into batches of cells that share a world (:func:`same_world`), in the
+    order of their first cell; a batch is split in halves while there are fewer batches than
+    ``workers`` (each worker then has one to fly)."""
+    groups: dict[Cell, list[Cell]] = {}
+    for cell in cells:
+        groups.setdefault(same_world(cell), []).append(cell)
+    out = [tuple(g) for g in groups.values()]
+    while len(out) < workers:
+        big = max(range(len(out)), key=lambda i: len(out[i]))
+        if len(out[big]) < 2:
+            break
+        half = (len(out[big]) + 1) // 2
+        out[big:big + 1] = [out[big][:half], out[big][half:]]
+    return out
+
+
+def _cell_job(cfg_data: dict[str, Any], cfg_source: str, cells: tuple[Cell, ...], trials: int,
+              model: str | None) -> list[tuple[int, Rows]]:
+    """A picklable job: one batch of cells; (cell index, rows) each."""
+    return run_cells(Config(cfg_data, cfg_source), cells, trials, model)
 
 
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -148,10 +191,12 @@ def _stop_pool(pool: ProcessPoolExecutor, futures: list[Future]) -> None:
 
 
 def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], None]) -> None:
-    """The cells on ``workers`` local processes (or in this process for one worker)."""
+    """The batches of cells on ``workers`` local processes (or in this process for one
+    worker); ``finished(cell index, rows)`` for each cell."""
     if workers == 1:
         for a in args:
-            finished(*_cell_job(*a))
+            for done in _cell_job(*a):
+                finished(*done)
         return
     # Fresh interpreters with one BLAS/OpenMP thread each: N processes on N cores (inherited
     # thread pools oversubscribe the cores and spin in the kernel).
@@ -166,7 +211,8 @@ def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], 
             raise
     try:
         for fut in as_completed(futures):
-            finished(*fut.result())
+            for done in fut.result():
+                finished(*done)
     except BaseException:
         _stop_pool(pool, futures)
         raise
@@ -217,10 +263,12 @@ def run_sweep(spec: SweepSpec, cfg: Config, backend: str = "local", jobs: int | 
         if progress:
             progress(len(results), total)
 
-    args = [(cfg.data, cfg.source, c, spec.trials, model) for c in spec.cells
-            if c.index not in results]
+    left = [c for c in spec.cells if c.index not in results]
+    workers = jobs or os.cpu_count() or 1
+    args = [(cfg.data, cfg.source, batch, spec.trials, model)
+            for batch in batches(left, workers)]
     if args and backend == "local":
-        _run_local(args, min(jobs or os.cpu_count() or 1, len(args)), finished)
+        _run_local(args, min(workers, len(args)), finished)
     elif args:
         _run_ray(args, jobs, address, finished)
     return [row for idx in sorted(results) for row in results[idx]]
@@ -282,13 +330,15 @@ def _run_ray(args: list[tuple], jobs: int | None, address: str | None,
 
 
 def _ray_cells(ray: Any, args: list[tuple], finished: Callable[[int, Rows], None]) -> None:
-    """Submit every cell and collect the rows (waits in short slices: signals get through)."""
+    """Submit every batch of cells and collect each cell's rows (waits in short slices:
+    signals get through)."""
     job = ray.remote(num_cpus=1)(_cell_job)
     pending = [job.remote(*a) for a in args]
     while pending:
         done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
         for ref in done:
-            finished(*ray.get(ref))
+            for cell_done in ray.get(ref):
+                finished(*cell_done)
 
 
 def columns(rows: list[dict[str, Any]]) -> list[str]:

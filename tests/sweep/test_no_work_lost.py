@@ -105,14 +105,16 @@ def test_failing_figures_still_write_the_tables_and_summary(tmp_path, monkeypatc
 
 @pytest.fixture
 def flights(monkeypatch) -> list[int]:
-    """The campaigns flown in this process: one entry (its trials) per ``run_campaign``."""
+    """The cells flown in this process: one entry (its seed) per cell, however many cells one
+    ``run_campaign`` flies as a batch (one per campaign seed)."""
     import aerodock.mission as mission
 
     flown: list[int] = []
     real = mission.run_campaign
 
     def counting(cfg, spec, *args, **kwargs):
-        flown.append(spec.trials)
+        seeds = kwargs.get("seeds")
+        flown.extend([spec.seed] if seeds is None else sorted(set(int(s) for s in seeds)))
         return real(cfg, spec, *args, **kwargs)
 
     monkeypatch.setattr(mission, "run_campaign", counting)
@@ -157,13 +159,18 @@ def test_resume_after_an_interrupt_gives_the_uninterrupted_table(tmp_path, fligh
                                                                   monkeypatch):
     import aerodock.mission as mission
 
-    spec = _study(tmp_path, 'compensation = ["oracle"]', seeds="[0, 1, 2]")
+    # two points of two seeds: two batches (a batch flies a point's seeds together)
+    axes = 'compensation = ["oracle"]\ndownwash.params.turb_vertical = [0.1, 0.3]'
+    spec = _study(tmp_path, axes, seeds="[0, 1]")
     whole = tmp_path / "whole"
     assert run_cli(["sweep", spec, "--out", whole, "--jobs", "1"]).rc == 0
+    assert len(flights) == 4
     counting = mission.run_campaign
+    campaigns: list[int] = []
 
     def interrupted_second(cfg, spec, *args, **kwargs):
-        if len(flights) == 4:  # the second campaign of the run below
+        campaigns.append(spec.trials)
+        if len(campaigns) == 2:  # the second batch of the run below
             raise KeyboardInterrupt
         return counting(cfg, spec, *args, **kwargs)
 
@@ -172,11 +179,11 @@ def test_resume_after_an_interrupt_gives_the_uninterrupted_table(tmp_path, fligh
     res = run_cli(["sweep", spec, "--out", out, "--jobs", "1"])
     assert (res.rc, res.err.strip()) == (130, "interrupted")
     assert not out.exists()  # nothing half-written
-    assert len(list((tmp_path / ".out.cells").glob("*.json"))) == 1
+    assert len(list((tmp_path / ".out.cells").glob("*.json"))) == 2  # the first batch's cells
     monkeypatch.setattr(mission, "run_campaign", counting)
     res = run_cli(["sweep", spec, "--out", out, "--jobs", "1", "--resume", "--json"])
     assert res.rc == 0, res.err
-    assert (json.loads(res.out)["reused"], json.loads(res.out)["flown"]) == (1, 2)
+    assert (json.loads(res.out)["reused"], json.loads(res.out)["flown"]) == (2, 2)
     assert (out / "results.csv").read_bytes() == (whole / "results.csv").read_bytes()
     assert not (tmp_path / ".out.cells").exists()
 
