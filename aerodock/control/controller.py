@@ -18,13 +18,14 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
+from aerodock.control import command_kernel
 from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
-from aerodock.control.inversion import command_and_applied
-from aerodock.control.lqr import lqr_command, lqr_gain
+from aerodock.control.lqr import lqr_gain, rows1, rows3
 from aerodock.control.observer import BiasObserver
 from aerodock.geometry import rpy_to_rotmat
+from aerodock.jit import NUMPY_LOOPS
 from aerodock.rows import take_rows
 from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams
 
@@ -77,6 +78,13 @@ class PositionController:
         self.n = n
         self.gain = lqr_gain(c.q_diag, c.r_diag)
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
+        # What the compiled command reads: the gains (nominal, terminal), the limits.
+        self._gains = np.ascontiguousarray(np.stack([self.gain, self.gain_terminal]))
+        self._mass = np.array([self.params.mass_kg], dtype=float)
+        self._thrust_max = np.array([self.params.thrust_max_n], dtype=float)
+        if not 0.0 < self.params.tilt_max_rad < 0.5 * np.pi:
+            raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {self.params.tilt_max_rad}")
+        self._tan_tilt = float(np.tan(self.params.tilt_max_rad))
         self.yaw_rate_max = c.yaw_rate_max_radps
         self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
@@ -174,24 +182,24 @@ class PositionController:
                 raise ValueError("control.rejection = 'accelerometer' needs the accelerometer")
             self.accel_observer.update(accel_mps2, rpy_to_rotmat(rpy_meas), hold_accel_observer)
             residual = self.accel_observer.residual_mps2
-        gain = self.gain
-        if terminal is not None and np.any(terminal):
-            gain = np.where(terminal[:, None, None], self.gain_terminal, self.gain)
         ref_a = ref.a if self.reference_ff_factor == 1.0 else self.reference_ff_factor * ref.a
-        accel, yaw_rate = lqr_command(gain, p_meas, v_meas, rpy_meas[:, 2], ref.p, ref.v, ref_a,
-                                      ref.yaw_rad, ref.yaw_rate_radps)
         bias = self.observer.bias_mps2 if self.observer is not None else np.zeros((n, 3))
         if residual is not None:
             bias = bias + residual
-        desired = accel - bias
-        if feedforward_mps2 is None:  # x - 0 is x, bit for bit: nothing to subtract
-            ff = np.zeros((n, 3))
-        else:
-            ff = feedforward_mps2
-            desired -= ff
+        ff = np.zeros((n, 3)) if feedforward_mps2 is None else feedforward_mps2
+        which = (np.zeros(n, dtype=np.int64) if terminal is None
+                 else np.asarray(terminal, dtype=np.int64))
         p = self.params
-        roll, pitch, thrust, applied = command_and_applied(
-            desired, rpy_meas[:, 2], p.mass_kg, p.gravity_mps2, p.tilt_max_rad, p.thrust_max_n)
+        desired, applied = np.empty((n, 3)), np.empty((n, 3))
+        roll, pitch, thrust, yaw_rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        saturated = np.empty(n, dtype=np.bool_)
+        command_kernel.position_command(
+            NUMPY_LOOPS, self._gains, which, rows3(p_meas, n), rows3(v_meas, n),
+            rows1(rpy_meas[:, 2], n), rows3(ref.p, n), rows3(ref.v, n), rows3(ref_a, n),
+            rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), rows3(bias, n), rows3(ff, n),
+            feedforward_mps2 is not None, self._mass, p.gravity_mps2, self._tan_tilt,
+            self._thrust_max, self.yaw_rate_max, desired, roll, pitch, thrust, applied, yaw_rate,
+            saturated)
         if freyja:  # Freyja hands its estimator the command: by default the learnt
             # feed-forward is counted as known (the estimator sees what the model left); with
             # freyja_estimator_input = "command", the whole command (see docs/control.md)
@@ -201,9 +209,6 @@ class PositionController:
         self._last_input = applied + ff if residual is None else applied + ff + residual
         if self.accel_observer is not None:
             self.accel_observer.commanded(thrust, ff)
-        # np.clip's numbers, without its wrapper's cost
-        yaw_rate = np.minimum(np.maximum(yaw_rate, -self.yaw_rate_max), self.yaw_rate_max)
-        saturated = np.maximum.reduce(np.abs(applied - desired), axis=1) > 1e-6
         out = ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
                             saturated)
         if self.hold_ticks > 1:

@@ -28,7 +28,8 @@ import functools
 
 import numpy as np
 
-from aerodock.frozen import freeze
+from aerodock.control import command_kernel
+from aerodock.jit import NUMPY_LOOPS
 
 
 def accel_to_attitude_thrust(
@@ -60,11 +61,14 @@ def accel_to_attitude_thrust(
     """
     if not 0.0 < tilt_max_rad < 0.5 * np.pi:
         raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
-    accel = np.atleast_2d(np.asarray(accel_mps2, dtype=float))
+    accel = np.ascontiguousarray(np.atleast_2d(np.asarray(accel_mps2, dtype=float)))
     n = accel.shape[0]
-    roll_pitch, thrust = _inverse(accel, _cos_sin(_rows(yaw_rad, n), n), _rows(mass_kg, n),
-                                  gravity_mps2, tilt_max_rad, _rows(thrust_max_n, n))
-    return roll_pitch[0], roll_pitch[1], thrust
+    cos_yaw, sin_yaw = _cos_sin(_rows(yaw_rad, n), n)
+    roll, pitch, thrust = np.empty(n), np.empty(n), np.empty(n)
+    command_kernel.inverse_rows(NUMPY_LOOPS, accel, cos_yaw, sin_yaw, _per_trial(mass_kg, n),
+                                float(gravity_mps2), _tan(tilt_max_rad),
+                                _per_trial(thrust_max_n, n), roll, pitch, thrust)
+    return roll, pitch, thrust
 
 
 def command_and_applied(accel_mps2: np.ndarray, yaw_rad: np.ndarray, mass_kg: float,
@@ -76,98 +80,32 @@ def command_and_applied(accel_mps2: np.ndarray, yaw_rad: np.ndarray, mass_kg: fl
     computed once)."""
     if not 0.0 < tilt_max_rad < 0.5 * np.pi:
         raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
-    accel = np.asarray(accel_mps2, dtype=float)
+    accel = np.ascontiguousarray(accel_mps2, dtype=float)
     n = accel.shape[0]
-    cos_sin = _cos_sin(_rows(yaw_rad, n), n)
-    mass = _rows(mass_kg, n)
-    roll_pitch, thrust = _inverse(accel, cos_sin, mass, gravity_mps2, tilt_max_rad,
-                                  _rows(thrust_max_n, n))
-    applied = _forward(roll_pitch, cos_sin, thrust / mass, gravity_mps2)
-    return roll_pitch[0], roll_pitch[1], thrust, applied
+    cos_yaw, sin_yaw = _cos_sin(_rows(yaw_rad, n), n)
+    mass = _per_trial(mass_kg, n)
+    roll, pitch, thrust = np.empty(n), np.empty(n), np.empty(n)
+    command_kernel.inverse_rows(NUMPY_LOOPS, accel, cos_yaw, sin_yaw, mass, float(gravity_mps2),
+                                _tan(tilt_max_rad), _per_trial(thrust_max_n, n), roll, pitch,
+                                thrust)
+    applied = np.empty((n, 3))
+    command_kernel.forward_rows(roll, pitch, cos_yaw, sin_yaw, thrust / mass, float(gravity_mps2),
+                                applied)
+    return roll, pitch, thrust, applied
 
 
-def _cos_sin(yaw: np.ndarray, n: int) -> np.ndarray:
-    """(2, n) the yaws' cosines and sines (a scalar yaw: every trial's)."""
+def _cos_sin(yaw: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The yaws' cosines and sines, each (n,) (a scalar yaw: every trial's)."""
     out = np.empty((2, n))
     np.cos(yaw, out=out[0])
     np.sin(yaw, out=out[1])
-    return out
+    return out[0], out[1]
 
 
-def _inverse(accel: np.ndarray, cos_sin: np.ndarray, mass: np.ndarray, gravity_mps2: float,
-             tilt_max_rad: float, thrust_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`accel_to_attitude_thrust` on (n, 3) accelerations, the yaw's cosine and sine
-    (2, n) and (n,) or 0-d mass and thrust limit: (roll and pitch (2, n), thrust (n,))."""
-    n = accel.shape[0]
-    # f = m (g e3 - a), R e3 T = f; component-major (3, n): its rows are f_x, f_y, f_z.
-    force = np.subtract(_down(gravity_mps2), accel.T, out=np.empty((3, n)))
-    force *= mass
-    horizontal, f_z = force[:2], force[2]
-    sq = horizontal * horizontal
-    h_norm = np.add(sq[0], sq[1], out=sq[0])
-    np.sqrt(h_norm, out=h_norm)
-    can_lift = f_z > 0.0
-    f_z_pos = np.where(can_lift, f_z, 0.0)
-
-    # Tilt limit, then thrust limit: both only shrink the horizontal part (vertical first).
-    h_max = f_z_pos * _tan(tilt_max_rad)
-    h_max = np.minimum(h_max, np.sqrt(np.maximum(thrust_max**2 - f_z_pos**2, 0.0)))
-    f_z_sat = np.minimum(f_z_pos, thrust_max)
-    scale = np.where(h_norm > h_max, h_max / np.where(h_norm > 0.0, h_norm, 1.0), 1.0)
-    horizontal *= scale
-    h_sat = np.where(can_lift, horizontal, 0.0)  # (f_x, f_y) saturated
-
-    sq = h_sat * h_sat
-    thrust = np.add(sq[0], sq[1], out=sq[0])
-    thrust += f_z_sat * f_z_sat
-    np.sqrt(thrust, out=thrust)
-    safe = np.where(thrust > 0.0, thrust, 1.0)
-    z_xy = h_sat / safe
-    zz = f_z_sat / safe
-    if np.fmin.reduce(thrust) <= 0.0:  # a level command somewhere (fmin: NaN aside)
-        level = thrust <= 0.0
-        z_xy[:, level] = 0.0
-        zz[level] = 1.0
-
-    # In the yaw-aligned frame, R e3 = [cos(roll) sin(pitch), -sin(roll), cos(roll) cos(pitch)].
-    # Rz(yaw)^T z_body, written out (no einsum: faster, and independent of the batch size).
-    # The four products (cy, sy) x (z_x, z_y) at once: zx = cy z_x + sy z_y and
-    # zy = -sy z_x + cy z_y = cy z_y - sy z_x (the same addition, x + (-y) being x - y).
-    prod = np.multiply(cos_sin[:, None, :], z_xy)
-    zx = np.add(prod[0, 0], prod[1, 1])
-    zy = np.subtract(prod[0, 1], prod[1, 0])
-    roll_pitch = np.empty((2, n))
-    np.arctan2(np.negative(zy, out=zy), np.hypot(zx, zz), out=roll_pitch[0])
-    np.arctan2(zx, zz, out=roll_pitch[1])
-    return roll_pitch, thrust
-
-
-def _forward(roll_pitch: np.ndarray, cos_sin: np.ndarray, k: np.ndarray,
-             gravity_mps2: float) -> np.ndarray:
-    """:func:`attitude_thrust_to_accel` on roll and pitch (2, ...), the yaw's cosine and sine
-    (2, ...) and ``k = T / m``, all of the full shape: (..., 3)."""
-    # Third column of Rz(yaw) Ry(pitch) Rx(roll) (see aerodock.geometry.euler_to_rotmat):
-    # -(cy sp cr + sy sr) k, -(sy sp cr - cy sr) k (the two rows at once), g - cp cr k.
-    (cr, cp), (sr, sp) = np.cos(roll_pitch), np.sin(roll_pitch)
-    horizontal = np.multiply(cos_sin, sp)
-    horizontal *= cr
-    cross = np.multiply(cos_sin[::-1], sr)
-    np.add(horizontal[0, ...], cross[0, ...], out=horizontal[0, ...])  # (..., 0-d views too)
-    np.subtract(horizontal[1, ...], cross[1, ...], out=horizontal[1, ...])
-    np.negative(horizontal, out=horizontal)
-    horizontal *= k
-    out = np.empty(k.shape + (3,))
-    out[..., 0], out[..., 1] = horizontal
-    np.subtract(gravity_mps2, cp * cr * k, out=out[..., 2])
-    return out
-
-
-@functools.lru_cache(maxsize=16)
-def _down(gravity_mps2: float) -> np.ndarray:
-    """(3, 1) ``g e3`` as a read-only column."""
-    out = np.array([[0.0], [0.0], [gravity_mps2]])
-    freeze(out)
-    return out
+def _per_trial(value: np.ndarray | float, n: int) -> np.ndarray:
+    """``value`` as the kernels read a per-trial constant: (n,) or, one for all, (1,)."""
+    arr = np.asarray(value, dtype=float)
+    return np.ascontiguousarray(arr if arr.shape == (n,) else arr.reshape(-1)[:1])
 
 
 @functools.lru_cache(maxsize=16)
@@ -207,9 +145,10 @@ def attitude_thrust_to_accel(
     roll, pitch, yaw, thrust, mass = (np.asarray(v, dtype=float) for v in (
         roll_rad, pitch_rad, yaw_rad, thrust_n, mass_kg))
     shape = np.broadcast_shapes(roll.shape, pitch.shape, yaw.shape, thrust.shape, mass.shape)
-    roll_pitch = np.empty((2,) + shape)
-    roll_pitch[0], roll_pitch[1] = roll, pitch
-    cos_sin = np.empty((2,) + shape)
-    cos_sin[0], cos_sin[1] = np.cos(yaw), np.sin(yaw)
-    k = np.broadcast_to(thrust / mass, shape)  # every product below has the full shape
-    return _forward(roll_pitch, cos_sin, k, gravity_mps2)
+    flat = [np.ascontiguousarray(np.broadcast_to(v, shape)).reshape(-1)
+            for v in (roll, pitch, yaw)]
+    k = np.ascontiguousarray(np.broadcast_to(thrust / mass, shape)).reshape(-1)
+    out = np.empty((k.size, 3))
+    command_kernel.forward_rows(flat[0], flat[1], np.cos(flat[2]), np.sin(flat[2]), k,
+                                float(gravity_mps2), out)
+    return out.reshape(shape + (3,))

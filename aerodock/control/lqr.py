@@ -13,11 +13,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from aerodock.geometry import wrap_angle
+from aerodock.control import command_kernel
 
-N_STATE = 7
-N_INPUT = 4
-YAW_INDEX = 6
+N_STATE, N_INPUT, YAW_INDEX = (command_kernel.N_STATE, command_kernel.N_INPUT,
+                               command_kernel.YAW_INDEX)
 
 
 def lin_model() -> tuple[np.ndarray, np.ndarray]:
@@ -108,30 +107,32 @@ def lqr_command(
     Returns:
         ``(accel_mps2, yaw_rate_radps)`` with shapes ``(n, 3)`` and ``(n,)``.
     """
-    pos = np.atleast_2d(np.asarray(pos_m, dtype=float))
+    pos = rows3(pos_m)
     n = pos.shape[0]
-    err = np.empty((n, N_STATE))
-    err[:, 0:3] = pos - ref_pos_m
-    err[:, 3:6] = np.asarray(vel_mps, dtype=float) - ref_vel_mps
-    err[:, YAW_INDEX] = wrap_angle(np.asarray(yaw_rad, dtype=float) - ref_yaw_rad)
     k = np.asarray(gain, dtype=float)
     if k.shape[-2:] != (N_INPUT, N_STATE) or k.ndim not in (2, 3):
         raise ValueError(f"gain must be (4, 7) or (n, 4, 7), got {k.shape}")
-    # Broadcast-and-sum (not BLAS): a trial's result does not depend on the batch size. The sum
-    # over the 7 states written out in order from 0.0, as numpy's sum(-1) adds them.
-    if k.ndim == 2:  # one gain: input-major (4, n) rows, one contiguous row per state
-        # Every product k_ij e_j (4, 7, n) at once, then summed over j from 0.0 in order (an
-        # outer axis: added row by row, as the loop over j did). The errors made contiguous
-        # first: on err.T's strided rows numpy iterates a few elements at a time.
-        prod = np.multiply(k[:, :, None], np.ascontiguousarray(err.T))
-        u = np.add.reduce(prod, axis=1, initial=0.0).T
-    else:
-        prod = k * err[:, None, :]
-        u = np.add(0.0, prod[:, :, 0])
-        for j in range(1, N_STATE):
-            u += prod[:, :, j]
-    np.negative(u, out=u)
-    # out= fixes the shapes as np.broadcast_to((n, 3)) and ((n,)) did, without its cost.
-    accel = np.add(u[:, 0:3], np.asarray(ref_accel_mps2, dtype=float), out=np.empty((n, 3)))
-    yaw_rate = np.add(u[:, 3], np.asarray(ref_yaw_rate_radps, dtype=float), out=np.empty(n))
+    gains, which = ((k[None], np.zeros(n, dtype=np.int64)) if k.ndim == 2
+                    else (np.broadcast_to(k, (n, N_INPUT, N_STATE)), np.arange(n)))
+    accel, yaw_rate = np.empty((n, 3)), np.empty(n)
+    command_kernel.lqr_rows(np.ascontiguousarray(gains), which, pos, rows3(vel_mps, n),
+                            rows1(yaw_rad, n), rows3(ref_pos_m, n), rows3(ref_vel_mps, n),
+                            rows3(ref_accel_mps2, n), rows1(ref_yaw_rad, n),
+                            rows1(ref_yaw_rate_radps, n), accel, yaw_rate)
     return accel, yaw_rate
+
+
+def rows3(value: np.ndarray | Sequence[float], n: int | None = None) -> np.ndarray:
+    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given)."""
+    arr = np.atleast_2d(np.asarray(value, dtype=float))
+    if n is not None and arr.shape[0] != n:
+        arr = np.broadcast_to(arr, (n, 3))
+    return np.ascontiguousarray(arr)
+
+
+def rows1(value: np.ndarray | float, n: int) -> np.ndarray:
+    """``value`` as contiguous float rows (n,) (a scalar: every trial's)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n,):
+        arr = np.broadcast_to(arr, (n,))
+    return np.ascontiguousarray(arr)
