@@ -22,6 +22,7 @@ default settings.
 from __future__ import annotations
 
 import copy
+import sys
 
 import numpy as np
 
@@ -90,7 +91,10 @@ class BiasObserver:
         self.gain = p_prior @ h.T @ np.linalg.inv(h @ p_prior @ h.T + r)
         self._error_dyn = (np.eye(3) - self.gain @ h) @ self._f
         self._q, self._r, self._h = q, r, h
-        self._cov: np.ndarray | None = None  # time-varying covariance until it settles
+        # The time-varying gains from a reset prior until they settle (None: the steady
+        # state), and how many of them this filter has used.
+        self._schedule: _GainSchedule | None = None
+        self._step = 0
         self.state = np.zeros((self.n, 3, 3))
 
     @property
@@ -112,9 +116,11 @@ class BiasObserver:
                 started on the ground is) until it meets the steady-state gain; omitted, the
                 steady-state gain from the first update.
         """
-        self._cov = None
+        self._schedule, self._step = None, 0
         if bias_sd_mps2 is not None:
-            self._cov = np.diag([self._r[0, 0], self._r[1, 1], float(bias_sd_mps2) ** 2])
+            prior = np.diag([self._r[0, 0], self._r[1, 1], float(bias_sd_mps2) ** 2])
+            self._schedule = _GainSchedule.of(self._f, self._h, self._q, self._r, prior,
+                                              self.gain)
         self.state = np.zeros((self.n, 3, 3))
         self.state[:, :, 0] = p
         self.state[:, :, 1] = v
@@ -161,17 +167,67 @@ class BiasObserver:
 
     def _next_gain(self) -> np.ndarray:
         """This update's Kalman gain: time-varying from the reset prior, then steady-state."""
-        if self._cov is None:
+        if self._schedule is None:
             return self.gain
-        f, h = self._f, self._h
-        prior = f @ self._cov @ f.T + self._q
-        gain = prior @ h.T @ np.linalg.inv(h @ prior @ h.T + self._r)
-        self._cov = (np.eye(3) - gain @ h) @ prior
-        if np.max(np.abs(gain - self.gain)) < 1e-4 * np.max(np.abs(self.gain)):
-            self._cov = None  # settled: the steady-state gain from now on
+        gain = self._schedule.gain(self._step)
+        self._step += 1
+        if self._step >= self._schedule.settled_after:
+            self._schedule = None  # settled: the steady-state gain from now on
         return gain
+
+    @property
+    def settled(self) -> bool:
+        """Whether the filter runs the steady-state gain."""
+        return self._schedule is None
 
     @property
     def bias_mps2(self) -> np.ndarray:
         """Estimated disturbance acceleration ``b``, NED, ``(n, 3)`` (subtract it from ``u``)."""
         return self.state[:, :, 2].copy()
+
+
+class _GainSchedule:
+    """The time-varying Kalman gains from one prior, computed once and shared: they depend on the
+    filter's model and the prior only, not on the measurements, so every filter reset to the
+    same prior (every trial, every campaign of a process) runs the same sequence, and it is
+    computed once (the same operations in the same order: the same numbers).
+
+    ``gain(k)`` is the k-th update's gain; ``settled_after`` the number of updates after which
+    the gain has met the steady state (within 1e-4 of its largest entry), unknown (a large
+    number) until then.
+    """
+
+    _cache: dict[bytes, _GainSchedule] = {}
+    _MAX_CACHED = 64
+
+    def __init__(self, f: np.ndarray, h: np.ndarray, q: np.ndarray, r: np.ndarray,
+                 prior: np.ndarray, steady: np.ndarray) -> None:
+        self._f, self._h, self._q, self._r, self._steady = f, h, q, r, steady
+        self._cov = prior
+        self._gains: list[np.ndarray] = []
+        self.settled_after = sys.maxsize
+
+    @classmethod
+    def of(cls, f: np.ndarray, h: np.ndarray, q: np.ndarray, r: np.ndarray, prior: np.ndarray,
+           steady: np.ndarray) -> _GainSchedule:
+        """The schedule of this model and prior (shared when one was made before)."""
+        key = b"".join(np.ascontiguousarray(a).tobytes() for a in (f, h, q, r, prior, steady))
+        hit = cls._cache.get(key)
+        if hit is None:
+            if len(cls._cache) >= cls._MAX_CACHED:
+                cls._cache.clear()
+            hit = cls._cache[key] = cls(f, h, q, r, prior, steady)
+        return hit
+
+    def gain(self, k: int) -> np.ndarray:
+        """The k-th update's gain (computed now if it is the next one)."""
+        while len(self._gains) <= k:
+            f, h = self._f, self._h
+            prior = f @ self._cov @ f.T + self._q
+            gain = prior @ h.T @ np.linalg.inv(h @ prior @ h.T + self._r)
+            self._cov = (np.eye(3) - gain @ h) @ prior
+            self._gains.append(gain)
+            if np.max(np.abs(gain - self._steady)) < 1e-4 * np.max(np.abs(self._steady)):
+                self.settled_after = len(self._gains)
+                break
+        return self._gains[k]

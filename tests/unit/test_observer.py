@@ -117,4 +117,4 @@ def test_started_with_an_uninformative_prior_the_filter_converges_fast():
     assert np.all(np.abs(steady.bias_mps2 - bias)[0, 1:] > 0.1)  # the steady-state gain is slow
     for _ in range(int(30.0 / dt)):
         obs.update(p, v, np.zeros((n, 3)))
-    assert obs._cov is None  # settled onto the steady-state gain
+    assert obs.settled  # on the steady-state gain
