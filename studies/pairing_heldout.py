@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import argparse
 
-from pairing_validation import SEEDS, score_seeds, summary  # studies/ is on sys.path
+from pairing_validation import SEEDS, print_table, score_seeds  # studies/ is on sys.path
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
@@ -50,10 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds, options = ((0,), {"max_epochs": SMOKE_EPOCHS}) if args.smoke else (SEEDS, {})
     rows = {kind: score_seeds("HELDOUT", kind, kind, fit, judged, options, seeds)
             for kind in args.kinds}
-    print(f"\n| model, seeds {', '.join(map(str, seeds))} | {' | '.join(judged)} |")
-    print("|---" * (len(judged) + 1) + "|")
-    for kind, scores in rows.items():
-        print(f"| `{kind}` | {' | '.join(summary(v) for v in scores.values())} |")
+    print_table(f"model, seeds {', '.join(map(str, seeds))}", rows)
     return 0
 
 

@@ -61,6 +61,16 @@ def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, 
     return scores
 
 
+def print_table(title: str, rows: dict[str, dict[str, list[float]]]) -> None:
+    """The markdown table of ``rows`` (a row's name -> per judged set, its reductions in %):
+    ``title`` heads the first column, each judged set one more."""
+    judged = list(next(iter(rows.values()))) if rows else []
+    print(f"\n| {title} | {' | '.join(judged)} |")
+    print("|---" * (len(judged) + 1) + "|")
+    for name, scores in rows.items():
+        print(f"| `{name}` | {' | '.join(summary(v) for v in scores.values())} |")
+
+
 def summary(values: list[float]) -> str:
     """``mean % (sd, min-max)`` of reductions in %, the sd with two values or more."""
     arr = np.array(values)

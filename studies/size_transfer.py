@@ -23,7 +23,7 @@ import argparse
 import copy
 from dataclasses import replace
 
-from pairing_validation import SEEDS, summary  # studies/ is on sys.path
+from pairing_validation import SEEDS, print_table, summary  # studies/ is on sys.path
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
@@ -90,11 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     for name, scores in rows.items():
         for who, values in scores.items():
             print(f"SIZE {name} {who}: {summary(values)}", flush=True)
-    print(f"\n| model, trained on the small pair, seeds {', '.join(map(str, seeds))} | "
-          f"{' | '.join(FOLLOWERS)} |")
-    print("|---" * (len(FOLLOWERS) + 1) + "|")
-    for name, scores in rows.items():
-        print(f"| `{name}` | {' | '.join(summary(v) for v in scores.values())} |")
+    print_table(f"model, trained on the small pair, seeds {', '.join(map(str, seeds))}", rows)
     return 0
 
 
