@@ -18,11 +18,16 @@ from __future__ import annotations
 
 import argparse
 
-from pairing_validation import SEEDS, print_table, score_seeds  # studies/ is on sys.path
+from pairing_validation import (  # studies/ is on sys.path
+    SEEDS,
+    add_kinds_and_smoke,
+    check_kinds,
+    print_table,
+    score_seeds,
+)
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
-from aerodock.learning.features import KINDS
 
 SMOKE_EPOCHS = 10
 """``--smoke``'s epoch limit."""
@@ -32,13 +37,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for name in ("ss_train", "sl_train", "ss_test", "sl_test"):
         parser.add_argument(name)
-    parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
-    parser.add_argument("--smoke", action="store_true",
-                        help=f"seed 0, at most {SMOKE_EPOCHS} epochs (a test's size)")
+    add_kinds_and_smoke(parser, SMOKE_EPOCHS)
     args = parser.parse_args(argv)
-    bad = [k for k in args.kinds if k not in KINDS]
-    if bad:
-        parser.error(f"unknown model kind {bad[0]!r}")
+    check_kinds(parser, args.kinds)
     # loaded together, as ``aerodock train --data ss_train.npz sl_train.npz`` does: a flight
     # without free-air samples borrows the bias of its vehicle's flights across both files
     fit = load_data_paths([args.ss_train, args.sl_train])

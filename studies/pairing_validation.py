@@ -61,6 +61,25 @@ def score_seeds(tag: str, name: str, kind: str, fit: Dataset, judged: dict[str, 
     return scores
 
 
+def add_kinds_and_smoke(parser: argparse.ArgumentParser, smoke_epochs: int) -> None:
+    """The model kinds to train (positional, checked by :func:`check_kinds`) and ``--smoke``
+    (seed 0, at most ``smoke_epochs`` epochs)."""
+    from aerodock.learning.features import KINDS
+
+    parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
+    parser.add_argument("--smoke", action="store_true",
+                        help=f"seed 0, at most {smoke_epochs} epochs (a test's size)")
+
+
+def check_kinds(parser: argparse.ArgumentParser, kinds: list[str]) -> None:
+    """Refuse an unknown model kind (the parser's one-line error)."""
+    from aerodock.learning.features import KINDS
+
+    bad = [k for k in kinds if k not in KINDS]
+    if bad:
+        parser.error(f"unknown model kind {bad[0]!r}")
+
+
 def print_table(title: str, rows: dict[str, dict[str, list[float]]]) -> None:
     """The markdown table of ``rows`` (a row's name -> per judged set, its reductions in %):
     ``title`` heads the first column, each judged set one more."""

@@ -23,13 +23,18 @@ import argparse
 import copy
 from dataclasses import replace
 
-from pairing_validation import SEEDS, print_table, summary  # studies/ is on sys.path
+from pairing_validation import (  # studies/ is on sys.path
+    SEEDS,
+    add_kinds_and_smoke,
+    check_kinds,
+    print_table,
+    summary,
+)
 
 from aerodock.experiments.real_data import follower_vehicle
 from aerodock.learning.datafiles import load_data_paths
 from aerodock.learning.dataset import Dataset
 from aerodock.learning.evaluate import evaluate
-from aerodock.learning.features import KINDS
 from aerodock.learning.kinds import get_kind
 from aerodock.learning.train import train_model
 
@@ -55,16 +60,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("ss_train", help="swap_ss 00-04 (aerodock ingest)")
     parser.add_argument("sl_all", help="every swap_sl flight (aerodock ingest --vehicle ...)")
-    parser.add_argument("kinds", nargs="+", help=f"model kinds ({', '.join(KINDS)})")
+    add_kinds_and_smoke(parser, SMOKE_EPOCHS)
     parser.add_argument("--large-rotor-radius", type=float, nargs="+", default=[],
                         metavar="R", help="also judge with the large Crazyflie's rotor radius "
                                           "R m in the flights' metadata")
-    parser.add_argument("--smoke", action="store_true",
-                        help=f"seed 0, at most {SMOKE_EPOCHS} epochs (a test's size)")
     args = parser.parse_args(argv)
-    bad = [k for k in args.kinds if k not in KINDS]
-    if bad:
-        parser.error(f"unknown model kind {bad[0]!r}")
+    check_kinds(parser, args.kinds)
     if any(not r > 0 for r in args.large_rotor_radius):
         parser.error("--large-rotor-radius must be positive")
     fit = load_data_paths([args.ss_train])
