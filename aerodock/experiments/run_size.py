@@ -74,7 +74,7 @@ SMOKE = RunSize(cable_reps=1, cable_offsets_m=(0.36,), hover_trials=4, moving_tr
                 # curriculum flies seven stages of five to ten): every step, at its smallest
                 curriculum={"stage_step_m": 0.65, "deep_depths_m": [0.27],
                             "flights_per_stage": 2, "deep_flights_per_stage": 2},
-                train_max_epochs=20, tuned_row=False, overrides=SHORT_MISSION)
+                train_max_epochs=5, tuned_row=False, overrides=SHORT_MISSION)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
                test_flights_per_stage=4, se_max_time_s=None,
