@@ -259,6 +259,7 @@ class ControlSection:
     observer_bias_tau_s: float = number(0.01, 1e4)
     observer_pos_noise_m: float = number(0, 10)
     observer_vel_noise_mps: float = number(0, 100)
+    observer_accel_noise_mps2: float = number(1e-6, 1e4)
     freyja_estimator_rate_hz: float = number(0.5, 1000)
     freyja_estimator_coeffs: list[float] = numbers(5, 1e-6, 1e4)
     freyja_estimator_input: str = choice("command", "command-without-feedforward")

@@ -93,7 +93,8 @@ class PositionController:
                                                 FreyjaEstimatorParams.from_control(c))
         elif use_observer:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
-                                         c.observer_pos_noise_m, c.observer_vel_noise_mps)
+                                         c.observer_pos_noise_m, c.observer_vel_noise_mps,
+                                         c.observer_accel_noise_mps2)
         self.estimator_input_without_ff = (
             c.freyja_estimator_input == "command-without-feedforward")
         # Freyja's state manager filters motion capture's position into position and velocity.

@@ -48,7 +48,7 @@ class BiasObserver:
         bias_tau_s: float,
         pos_noise_m: float,
         vel_noise_mps: float,
-        accel_noise_mps2: float = 0.5,
+        accel_noise_mps2: float,
     ) -> None:
         """Build the filter and its steady-state gain.
 

@@ -22,7 +22,8 @@ def simulate(
     bias = rng.uniform(0.5, 2.0, (n, 3)) * rng.choice([-1.0, 1.0], (n, 3))
     p = rng.normal(0.0, 0.5, (n, 3))
     v = np.zeros((n, 3))
-    obs = BiasObserver(n, DT, tau_s, pos_noise_m=0.002, vel_noise_mps=0.02)
+    obs = BiasObserver(n, DT, tau_s, pos_noise_m=0.002, vel_noise_mps=0.02,
+                      accel_noise_mps2=0.5)
     obs.reset(p, v)
     snapshots = {}
     steps = round(duration_s / DT)
@@ -60,14 +61,16 @@ def test_is_slow_by_design():
 
 @pytest.mark.parametrize("tau_s", [1.0, 4.0, 10.0])
 def test_time_constant_matches_request(tau_s):
-    obs = BiasObserver(1, DT, tau_s, pos_noise_m=0.002, vel_noise_mps=0.02)
+    obs = BiasObserver(1, DT, tau_s, pos_noise_m=0.002, vel_noise_mps=0.02,
+                      accel_noise_mps2=0.5)
     assert obs.bias_time_constant_s == pytest.approx(tau_s, rel=0.01)
 
 
 def test_noise_free_step_response_is_first_order():
     """Exact measurements, bias step of 1: b_hat(t) follows 1 - exp(-t / tau)."""
     n = 1
-    obs = BiasObserver(n, DT, TAU, pos_noise_m=0.002, vel_noise_mps=0.02)
+    obs = BiasObserver(n, DT, TAU, pos_noise_m=0.002, vel_noise_mps=0.02,
+                      accel_noise_mps2=0.5)
     obs.reset(np.zeros((n, 3)), np.zeros((n, 3)))
     p, v = np.zeros((n, 3)), np.zeros((n, 3))
     b = np.array([[1.0, -2.0, 0.5]])
@@ -80,7 +83,7 @@ def test_noise_free_step_response_is_first_order():
 
 
 def test_reset_and_shapes():
-    obs = BiasObserver(3, DT, TAU, 0.002, 0.02)
+    obs = BiasObserver(3, DT, TAU, 0.002, 0.02, 0.5)
     assert obs.bias_mps2.shape == (3, 3)
     obs.reset(np.ones((3, 3)), np.zeros((3, 3)), bias_mps2=np.full((3, 3), 0.7))
     np.testing.assert_array_equal(obs.bias_mps2, 0.7)
@@ -93,17 +96,19 @@ def test_reset_and_shapes():
 
 def test_bad_arguments_raise():
     with pytest.raises(ValueError):
-        BiasObserver(2, DT, 0.0, 0.002, 0.02)
+        BiasObserver(2, DT, 0.0, 0.002, 0.02, 0.5)
     with pytest.raises(ValueError):
-        BiasObserver(2, -DT, TAU, 0.002, 0.02)
+        BiasObserver(2, -DT, TAU, 0.002, 0.02, 0.5)
 
 
 def test_started_with_an_uninformative_prior_the_filter_converges_fast():
     """A filter reset with a bias prior runs the time-varying Kalman gain: the bias is found in
     a fraction of the steady-state time constant, then the gain settles to the steady state."""
     dt, n = 0.01, 1
-    obs = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02)
-    steady = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02)
+    obs = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02,
+                      accel_noise_mps2=0.5)
+    steady = BiasObserver(n, dt, bias_tau_s=4.0, pos_noise_m=0.002, vel_noise_mps=0.02,
+                      accel_noise_mps2=0.5)
     bias = np.array([[0.0, 0.3, 0.6]])
     p, v = np.zeros((n, 3)), np.zeros((n, 3))
     obs.reset(p, v, None, bias_sd_mps2=2.0)
