@@ -15,7 +15,9 @@ products and sums of the maps as written below, NumPy's own ``arctan2`` loop
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -23,6 +25,41 @@ from aerodock.jit import njit, np_arctan2
 
 N_STATE, N_INPUT, YAW_INDEX = 7, 4, 6
 TWO_PI = 2.0 * np.pi
+
+
+# -- the kernels' inputs, shaped in Python ---------------------------------------------------------
+def rows3(value: np.ndarray | Sequence[float], n: int | None = None) -> np.ndarray:
+    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given)."""
+    arr = np.atleast_2d(np.asarray(value, dtype=float))
+    if n is not None and arr.shape[0] != n:
+        arr = np.broadcast_to(arr, (n, 3))
+    return np.ascontiguousarray(arr)
+
+
+def rows1(value: np.ndarray | float, n: int) -> np.ndarray:
+    """``value`` as contiguous float rows (n,) (a scalar: every trial's)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n,):
+        arr = np.broadcast_to(arr, (n,))
+    return np.ascontiguousarray(arr)
+
+
+def per_trial(value: np.ndarray | float, n: int) -> np.ndarray:
+    """A per-trial constant as the kernels read it: (n,), or (1,) when one serves every trial."""
+    arr = np.asarray(value, dtype=float)
+    return np.ascontiguousarray(arr if arr.shape == (n,) else arr.reshape(-1)[:1])
+
+
+@functools.lru_cache(maxsize=16)
+def tilt_tangent(tilt_max_rad: float) -> float:
+    """``tan`` of the tilt limit (``np.tan``'s number), checked to be in ``(0, pi/2)``.
+
+    Raises:
+        ValueError: the limit is outside ``(0, pi/2)``.
+    """
+    if not 0.0 < tilt_max_rad < 0.5 * np.pi:
+        raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
+    return float(np.tan(tilt_max_rad))
 
 
 @njit

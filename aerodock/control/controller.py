@@ -20,9 +20,10 @@ from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
 from aerodock.control import command_kernel
 from aerodock.control.accel_observer import AccelObserver
+from aerodock.control.command_kernel import per_trial, rows1, rows3, tilt_tangent
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
-from aerodock.control.lqr import lqr_gain, rows1, rows3
+from aerodock.control.lqr import lqr_gain
 from aerodock.control.observer import BiasObserver
 from aerodock.geometry import rpy_to_rotmat
 from aerodock.jit import NUMPY_LOOPS
@@ -80,11 +81,9 @@ class PositionController:
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
         # What the compiled command reads: the gains (nominal, terminal), the limits.
         self._gains = np.ascontiguousarray(np.stack([self.gain, self.gain_terminal]))
-        self._mass = np.array([self.params.mass_kg], dtype=float)
-        self._thrust_max = np.array([self.params.thrust_max_n], dtype=float)
-        if not 0.0 < self.params.tilt_max_rad < 0.5 * np.pi:
-            raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {self.params.tilt_max_rad}")
-        self._tan_tilt = float(np.tan(self.params.tilt_max_rad))
+        self._mass = per_trial(self.params.mass_kg, 1)
+        self._thrust_max = per_trial(self.params.thrust_max_n, 1)
+        self._tan_tilt = tilt_tangent(self.params.tilt_max_rad)
         self.yaw_rate_max = c.yaw_rate_max_radps
         self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None

@@ -24,11 +24,10 @@ Saturation policy (vertical first, because altitude errors are what make a dock 
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from aerodock.control import command_kernel
+from aerodock.control.command_kernel import per_trial, rows1, rows3, tilt_tangent
 from aerodock.jit import NUMPY_LOOPS
 
 
@@ -59,15 +58,14 @@ def accel_to_attitude_thrust(
     Raises:
         ValueError: if ``tilt_max_rad`` is not in ``(0, pi/2)``.
     """
-    if not 0.0 < tilt_max_rad < 0.5 * np.pi:
-        raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
-    accel = np.ascontiguousarray(np.atleast_2d(np.asarray(accel_mps2, dtype=float)))
+    tan_tilt = tilt_tangent(tilt_max_rad)
+    accel = rows3(accel_mps2)
     n = accel.shape[0]
-    cos_yaw, sin_yaw = _cos_sin(_rows(yaw_rad, n), n)
+    cos_yaw, sin_yaw = _cos_sin(rows1(yaw_rad, n))
     roll, pitch, thrust = np.empty(n), np.empty(n), np.empty(n)
-    command_kernel.inverse_rows(NUMPY_LOOPS, accel, cos_yaw, sin_yaw, _per_trial(mass_kg, n),
-                                float(gravity_mps2), _tan(tilt_max_rad),
-                                _per_trial(thrust_max_n, n), roll, pitch, thrust)
+    command_kernel.inverse_rows(NUMPY_LOOPS, accel, cos_yaw, sin_yaw, per_trial(mass_kg, n),
+                                float(gravity_mps2), tan_tilt, per_trial(thrust_max_n, n), roll,
+                                pitch, thrust)
     return roll, pitch, thrust
 
 
@@ -78,47 +76,23 @@ def command_and_applied(accel_mps2: np.ndarray, yaw_rad: np.ndarray, mass_kg: fl
     (the acceleration actually commanded), for (n, 3) accelerations and (n,) yaws: ``(roll,
     pitch, thrust, applied)``, the same numbers as the two calls (the yaw's cosine and sine
     computed once)."""
-    if not 0.0 < tilt_max_rad < 0.5 * np.pi:
-        raise ValueError(f"tilt_max_rad must be in (0, pi/2), got {tilt_max_rad}")
-    accel = np.ascontiguousarray(accel_mps2, dtype=float)
+    tan_tilt = tilt_tangent(tilt_max_rad)
+    accel = rows3(accel_mps2)
     n = accel.shape[0]
-    cos_yaw, sin_yaw = _cos_sin(_rows(yaw_rad, n), n)
-    mass = _per_trial(mass_kg, n)
+    cos_yaw, sin_yaw = _cos_sin(rows1(yaw_rad, n))
+    mass = per_trial(mass_kg, n)
     roll, pitch, thrust = np.empty(n), np.empty(n), np.empty(n)
     command_kernel.inverse_rows(NUMPY_LOOPS, accel, cos_yaw, sin_yaw, mass, float(gravity_mps2),
-                                _tan(tilt_max_rad), _per_trial(thrust_max_n, n), roll, pitch,
-                                thrust)
+                                tan_tilt, per_trial(thrust_max_n, n), roll, pitch, thrust)
     applied = np.empty((n, 3))
     command_kernel.forward_rows(roll, pitch, cos_yaw, sin_yaw, thrust / mass, float(gravity_mps2),
                                 applied)
     return roll, pitch, thrust, applied
 
 
-def _cos_sin(yaw: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The yaws' cosines and sines, each (n,) (a scalar yaw: every trial's)."""
-    out = np.empty((2, n))
-    np.cos(yaw, out=out[0])
-    np.sin(yaw, out=out[1])
-    return out[0], out[1]
-
-
-def _per_trial(value: np.ndarray | float, n: int) -> np.ndarray:
-    """``value`` as the kernels read a per-trial constant: (n,) or, one for all, (1,)."""
-    arr = np.asarray(value, dtype=float)
-    return np.ascontiguousarray(arr if arr.shape == (n,) else arr.reshape(-1)[:1])
-
-
-@functools.lru_cache(maxsize=16)
-def _tan(angle_rad: float) -> float:
-    """``np.tan`` of a limit (cached: the same few angles every call)."""
-    return np.tan(angle_rad)
-
-
-def _rows(value: np.ndarray | float, n: int) -> np.ndarray:
-    """``value`` as floats, broadcast to (n,) unless it is a scalar or already (n,) (elementwise
-    arithmetic broadcasts a scalar with the same numbers, without np.broadcast_to's cost)."""
-    arr = np.asarray(value, dtype=float)
-    return arr if arr.ndim == 0 or arr.shape == (n,) else np.broadcast_to(arr, (n,))
+def _cos_sin(yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The yaws' cosines and sines, each (n,)."""
+    return np.cos(yaw), np.sin(yaw)
 
 
 def attitude_thrust_to_accel(

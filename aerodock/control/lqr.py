@@ -14,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from aerodock.control import command_kernel
+from aerodock.control.command_kernel import rows1, rows3
 
 N_STATE, N_INPUT, YAW_INDEX = (command_kernel.N_STATE, command_kernel.N_INPUT,
                                command_kernel.YAW_INDEX)
@@ -120,19 +121,3 @@ def lqr_command(
                             rows3(ref_accel_mps2, n), rows1(ref_yaw_rad, n),
                             rows1(ref_yaw_rate_radps, n), accel, yaw_rate)
     return accel, yaw_rate
-
-
-def rows3(value: np.ndarray | Sequence[float], n: int | None = None) -> np.ndarray:
-    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given)."""
-    arr = np.atleast_2d(np.asarray(value, dtype=float))
-    if n is not None and arr.shape[0] != n:
-        arr = np.broadcast_to(arr, (n, 3))
-    return np.ascontiguousarray(arr)
-
-
-def rows1(value: np.ndarray | float, n: int) -> np.ndarray:
-    """``value`` as contiguous float rows (n,) (a scalar: every trial's)."""
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (n,):
-        arr = np.broadcast_to(arr, (n,))
-    return np.ascontiguousarray(arr)

@@ -155,15 +155,14 @@ def settle_trials(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | No
     Its rows serve single trials later (:meth:`SettledStart.take_rows`): a trial's start does not
     depend on the batch that settled it. Arguments as for :class:`MissionBatch`.
     """
-    cfg, comp, ids, row_seeds = _checked(cfg, spec, predictor, trials, seeds)
-    return _settle(cfg, spec, MissionParams.from_config(cfg), comp, predictor, ids, row_seeds)
+    cfg, comp, ids = _checked(cfg, spec, predictor, trials)
+    return _settle(cfg, spec, MissionParams.from_config(cfg), comp, predictor, ids, seeds)
 
 
 def _checked(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None,
-             trials: np.ndarray | None, seeds: np.ndarray | None = None
-             ) -> tuple[Config, Compensation, np.ndarray, np.ndarray]:
+             trials: np.ndarray | None) -> tuple[Config, Compensation, np.ndarray]:
     """The one validation of dock, sweep and the environments: (the configuration with the
-    cable length applied, the compensation, the trial ids, each trial's campaign seed)."""
+    cable length applied, the compensation, the trial ids)."""
     cfg = check_mission(cfg, spec, DOCK_NAMES)
     comp = Compensation(spec.compensation)
     if comp == Compensation.MODEL and predictor is None:
@@ -173,16 +172,12 @@ def _checked(cfg: Config, spec: MissionSpec, predictor: AccelPredictor | None,
            else np.asarray(trials, dtype=np.int64).copy())
     if ids.shape != (n,):
         raise ValueError(f"{n} trials asked for, {ids.size} trial ids given")
-    row_seeds = (np.full(n, spec.seed, dtype=np.int64) if seeds is None
-                 else np.asarray(seeds, dtype=np.int64).copy())
-    if row_seeds.shape != (n,):
-        raise ValueError(f"{n} trials asked for, {row_seeds.size} seeds given")
-    return cfg, comp, ids, row_seeds
+    return cfg, comp, ids
 
 
 def _settle(cfg: Config, spec: MissionSpec, params: MissionParams, comp: Compensation,
             predictor: AccelPredictor | None, trials: np.ndarray,
-            seeds: np.ndarray) -> SettledStart:
+            seeds: np.ndarray | None) -> SettledStart:
     """The settled start of ``trials`` (``cfg`` checked; the random draws in their order: the
     starts' jitter, the world's, then the settled flight's)."""
     n, m = trials.size, params.mission
@@ -263,16 +258,18 @@ class MissionBatch:
                  settled: SettledStart | None = None, seeds: np.ndarray | None = None):
         if record not in ("summary", "trace", "full"):
             raise ValueError(f"record must be summary, trace or full, got {record!r}")
-        cfg, comp, self.trials, self.seeds = _checked(cfg, spec, predictor, trials, seeds)
+        cfg, comp, self.trials = _checked(cfg, spec, predictor, trials)
         n = spec.trials
         self.params = params = MissionParams.from_config(cfg)
         self.spec, self.n, self.comp, self.record = spec, n, comp, record
         m = params.mission
         if settled is None:
-            settled = _settle(cfg, spec, params, comp, predictor, self.trials, self.seeds)
+            settled = _settle(cfg, spec, params, comp, predictor, self.trials, seeds)
         elif not np.array_equal(settled.trials, self.trials) or settled.rng.seed != spec.seed \
-                or not np.array_equal(settled.rng.seeds, self.seeds):
+                or not np.array_equal(settled.rng.seeds,
+                                      np.broadcast_to(spec.seed if seeds is None else seeds, n)):
             raise ValueError("the settled start is not of these trials of this campaign")
+        self.seeds = settled.rng.seeds  # each trial's campaign seed (TrialRNG checked them)
         world, rng, start = settled.world, settled.rng, settled.start
         self.predictor = settled.predictor
         # Torque feed-forward from the learnt model (rigid bodies, with the model flown).
