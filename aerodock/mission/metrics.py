@@ -91,12 +91,20 @@ class MissionMetrics:
                   & (t_grid < self.approach_end))
         win = np.where(in_win[..., None], self.hist, 0.0)
         cnt = np.maximum(in_win.sum(0), 1)
+        sums = _over_steps(win)
         return {
-            "err_down_m": win[..., 0].sum(0) / cnt,
-            "err_3d_m": win[..., 1].sum(0) / cnt,
-            "err_down_int_ms": win[..., 0].sum(0) * dt_s,
-            "err_3d_int_ms": win[..., 1].sum(0) * dt_s,
-            "ff_down_int_mps": win[..., 2].sum(0) * dt_s,
-            "tilt_rms_deg": np.sqrt((win[..., 3] ** 2).sum(0) / cnt),
-            "saturated_frac": win[..., 4].sum(0) / cnt,
+            "err_down_m": sums[:, 0] / cnt,
+            "err_3d_m": sums[:, 1] / cnt,
+            "err_down_int_ms": sums[:, 0] * dt_s,
+            "err_3d_int_ms": sums[:, 1] * dt_s,
+            "ff_down_int_mps": sums[:, 2] * dt_s,
+            "tilt_rms_deg": np.sqrt(_over_steps(win[..., 3:4] ** 2)[:, 0] / cnt),
+            "saturated_frac": sums[:, 4] / cnt,
         }
+
+
+def _over_steps(values: np.ndarray) -> np.ndarray:
+    """(steps, n, k) summed over the steps in order, one step after the other, (n, k): the same
+    numbers for a trial whatever the batch (``sum(0)`` of one trial's contiguous column sums it
+    pairwise, of several trials' strided columns in order)."""
+    return np.cumsum(values, axis=0)[-1]

@@ -23,6 +23,20 @@ def test_batch_equals_single_trials(short_cfg):
         assert one.err_down_m[0] == batch.err_down_m[i]
 
 
+def test_terminal_window_figures_do_not_depend_on_the_batch(short_cfg):
+    """Each trial's terminal-window figures (sums over the window's steps) are its own to the
+    bit in a batch of one and of three (a sum over one trial's steps is not rounded otherwise
+    than over several trials' steps)."""
+    keys = ("err_down_m", "err_3d_m", "err_down_int_ms", "err_3d_int_ms", "ff_down_int_mps",
+            "tilt_rms_deg", "saturated_frac")
+    batch = run_campaign(short_cfg, MissionSpec(trials=3, compensation="oracle", seed=4))
+    for i in range(3):
+        one = run_campaign(short_cfg, MissionSpec(trials=1, compensation="oracle", seed=4,
+                                                  first_trial=i))
+        for key in keys:
+            assert getattr(one, key)[0] == getattr(batch, key)[i], key
+
+
 def test_same_seed_same_numbers_different_seed_different(short_cfg):
     cfg = short_cfg  # the property holds whatever the mission's timing (tests/short_mission.py)
     a = run_campaign(cfg, MissionSpec(trials=3, seed=5), record="trace")
