@@ -2,7 +2,7 @@
 judged on the heterogeneous day's flights (all of swap_sl), each follower apart.
 
     .venv/bin/python studies/size_transfer.py ss_train.npz sl_all.npz KIND [KIND ...]
-        [--large-rotor-radius R [R ...]] [--smoke]
+        [--large-rotor-radius R [R ...]] [--footprint] [--smoke]
 
 ``ss_train.npz`` is ``aerodock ingest`` of swap_ss 00-04 and ``sl_all.npz`` of all swap_sl
 flights with ``--vehicle cf51=small,cf101=large`` (docs/results/size-transfer.md gives the
@@ -13,8 +13,10 @@ follower under the small one, then mean (sd, min-max). The large Crazyflie's rot
 documented nowhere: the leader-aware kinds' wake scales read it from the flights' metadata
 (the reader's assumption, 0.0325 m), and ``--large-rotor-radius`` judges them again with other
 values (e.g. the wake fit's 0.0239 m) in its place; a kind that reads no wake scale is judged
-once. ``--smoke``: seed 0 and at most :data:`SMOKE_EPOCHS` epochs (a test's size; its figures are
-no result).
+once. ``--footprint`` judges each model again with a larger follower's rotor footprint
+(:mod:`aerodock.learning.footprint`: the prediction averaged over the ring its wider diagonal
+adds, from the vehicles' diagonals, nothing fitted). ``--smoke``: seed 0 and at most
+:data:`SMOKE_EPOCHS` epochs (a test's size; its figures are no result).
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("ss_train", help="swap_ss 00-04 (aerodock ingest)")
     parser.add_argument("sl_all", help="every swap_sl flight (aerodock ingest --vehicle ...)")
     add_kinds_and_smoke(parser, SMOKE_EPOCHS)
+    parser.add_argument("--footprint", action="store_true",
+                        help="also judge each model over a larger follower's rotor footprint")
     parser.add_argument("--large-rotor-radius", type=float, nargs="+", default=[],
                         metavar="R", help="also judge with the large Crazyflie's rotor radius "
                                           "R m in the flights' metadata")
@@ -76,15 +80,20 @@ def main(argv: list[str] | None = None) -> int:
         radii: list[float | None] = [None]  # the flights' own metadata first
         if get_kind(kind).n_wake_scales:
             radii += args.large_rotor_radius
+        ways = [(radius, False) for radius in radii]
+        if args.footprint:
+            ways.append((None, True))
         for seed in seeds:
             predictor = train_model(kind, fit, seed=seed, **options).predictor()
-            for radius in radii:
+            for radius, footprint in ways:
                 judged = sl if radius is None else with_large_rotor(sl, radius)
                 follower = follower_vehicle(judged)
-                name = kind if radius is None else f"{kind}, large rotor {radius:g} m"
+                name = (f"{kind}, rotor footprint" if footprint else
+                        kind if radius is None else f"{kind}, large rotor {radius:g} m")
                 scores = rows.setdefault(name, {who: [] for who in FOLLOWERS})
                 for who, vehicle in FOLLOWERS.items():
-                    ev = evaluate(predictor, judged.subset(follower == vehicle))["interaction"]
+                    ev = evaluate(predictor, judged.subset(follower == vehicle),
+                                  footprint=footprint)["interaction"]
                     scores[who].append(100 * (1 - ev["model"]["rmse_mps2"]["z"]
                                               / ev["zero"]["rmse_mps2"]["z"]))
                 print(name, seed, {w: round(v[-1], 1) for w, v in scores.items()}, flush=True)

@@ -174,6 +174,16 @@ class Dataset:
                for name in OPTIONAL_ARRAYS + OPTIONAL_SCALARS},
         )
 
+    def follower_diagonals_m(self) -> np.ndarray:
+        """(n,) each sample's follower motor-to-motor diagonal (m) from its flight's metadata
+        (``follower_diagonal_m``), NaN where the flight does not say."""
+        out = np.full(self.n, np.nan)
+        for k in np.unique(self.flight_id):
+            value = self.meta["flights"][int(k)].get("follower_diagonal_m")
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                out[self.flight_id == k] = float(value)
+        return out
+
     def wake_scales(self, *, air_density_kgpm3: float = AIR_DENSITY_KGPM3,
                     gravity_mps2: float = GRAVITY_MPS2) -> np.ndarray:
         """The leader-aware kinds' wake scales (n, 4) (:data:`features.WAKE_SCALE_NAMES`).

@@ -105,24 +105,32 @@ def _torque_region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str,
     return out
 
 
-def predict_dataset(predictor: SupportsPredict, ds: Dataset) -> np.ndarray:
+def predict_dataset(predictor: SupportsPredict, ds: Dataset, *, footprint: bool = False
+                    ) -> np.ndarray:
     """``predictor``'s prediction (n, 3), m/s², NED, at every sample of ``ds`` (a leader-aware
-    model gets the data's wake scales, :meth:`Dataset.wake_scales`).
+    model gets the data's wake scales, :meth:`Dataset.wake_scales`). ``footprint``: a follower
+    larger than the model's training one gets the prediction over its wider rotor footprint
+    (:mod:`aerodock.learning.footprint`; the followers' diagonals from the flights' metadata).
 
     Raises:
         ValueError: the predictor returned another shape.
     """
+    extra: dict[str, Any] = {}
+    if footprint and getattr(predictor, "trained_follower_diagonal_m", None) is not None:
+        extra["follower_diagonal_m"] = ds.follower_diagonals_m()
     if getattr(predictor, "needs_wake_scales", False):
-        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales()), dtype=float)
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales(), **extra),
+                          dtype=float)
     else:
-        pred = np.asarray(predictor.predict(ds.x, ds.leader_R), dtype=float)
+        pred = np.asarray(predictor.predict(ds.x, ds.leader_R, **extra), dtype=float)
     if pred.shape != ds.y.shape:
         raise ValueError(f"predictor returned shape {pred.shape}, expected {ds.y.shape}")
     return pred
 
 
 def evaluate(
-    predictor: SupportsPredict, ds: Dataset, *, lateral_radius_m: float = INTERACTION_RADIUS_M
+    predictor: SupportsPredict, ds: Dataset, *, lateral_radius_m: float = INTERACTION_RADIUS_M,
+    footprint: bool = False,
 ) -> dict[str, Any]:
     """Evaluate ``predictor`` on ``ds`` (JSON-ready dict).
 
@@ -131,6 +139,8 @@ def evaluate(
             ``predict``).
         ds: held-out data.
         lateral_radius_m: horizontal radius of the interaction region.
+        footprint: predict a follower larger than the training one over its rotor footprint
+            (:func:`predict_dataset`).
 
     Returns:
         ``{"model": kind, "n_samples", "minutes", "interaction_region": description,
@@ -140,7 +150,7 @@ def evaluate(
         ``interaction`` torque regions, see the module docstring) when the predictor has a
         torque and the data torque labels.
     """
-    pred = predict_dataset(predictor, ds)
+    pred = predict_dataset(predictor, ds, footprint=footprint)
     out = {
         "model": getattr(predictor, "kind", type(predictor).__name__),
         "n_samples": ds.n,

@@ -20,10 +20,11 @@ deep-sets kind's network (``Kind.weight_shapes``), the first layer takes the nei
 features only and the first ``rho`` layer the ego features besides ``phi``'s output. The network
 computes ``c = (L_last o act o ... o act o L_0)((z - in_mean) / in_std) * out_std + out_mean``.
 
-``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius and
-rotor count of the flights it was trained on (``None`` where the logs did not say; see
-:mod:`aerodock.learning.training_vehicles`), so that a model flown on other vehicles can be
-flagged (:mod:`aerodock.deploy.compatibility`).
+``model.json`` also records ``vehicles``: the leader's and the follower's mass, rotor radius,
+rotor count and motor-to-motor diagonal of the flights it was trained on (``None`` where the
+logs did not say; see :mod:`aerodock.learning.training_vehicles`), so that a model flown on
+other vehicles can be flagged (:mod:`aerodock.deploy.compatibility`) and a larger follower
+predicted over its rotor footprint (:mod:`aerodock.learning.footprint`).
 
 The directory is written as a whole (:func:`aerodock.fileio.write_dir_atomic`): a kill at any
 moment leaves either the complete old model or the complete new one, never a mix, and a failed

@@ -39,6 +39,14 @@ first :data:`~aerodock.learning.features.N_WAKE_SCALES`; more may be given). Whe
   flights that differ, and none set) it falls back to the default scales.
 
 Other kinds ignore ``wake_scales``: they run exactly as before.
+
+A follower larger than the one the model was trained on feels the wake over a wider rotor
+footprint (:mod:`aerodock.learning.footprint`): :meth:`Predictor.predict` takes the follower's
+motor-to-motor diagonal (``follower_diagonal_m``, per sample or one value) and averages the
+prediction over the extra ring, where the model file records the training follower's diagonal
+(:attr:`Predictor.trained_follower_diagonal_m`); :meth:`Predictor.predict_bodies` does the same
+for the follower set with :meth:`Predictor.set_follower_diagonal` (from a config). Without them
+every path runs as before.
 """
 
 from __future__ import annotations
@@ -57,6 +65,7 @@ from aerodock.learning.features import (
     feature_map,
     wake_scales,
 )
+from aerodock.learning.footprint import footprint_average, footprint_radius_m
 from aerodock.learning.kinds import get_kind
 from aerodock.learning.kinds.trace import compile_scalar
 from aerodock.learning.modelfile import MODEL_JSON, ModelFileError, ModelSpec, load_model_dir
@@ -95,6 +104,8 @@ class Predictor:
         spec: the model's :class:`~aerodock.learning.modelfile.ModelSpec`.
         meta: the model's ``model.json`` document (training summary etc.).
         has_torque: the model also predicts the wake's torque (``"so2-wrench"``).
+        trained_follower_diagonal_m: the training follower's motor-to-motor diagonal (m), from
+            ``model.json``'s ``vehicles``; None when unknown or when the flights' differ.
     """
 
     def __init__(
@@ -112,6 +123,9 @@ class Predictor:
         self.meta = dict(meta or {})
         self.default_wake_scales = _recorded_wake_scales(self.meta, spec.kind)
         self.rotor_geometry = _recorded_rotor_geometry(self.meta)
+        self.trained_follower_diagonal_m = _recorded_follower_diagonal(self.meta)
+        self.follower_diagonal_m: float | None = None  # the flying follower's, once set
+        self._footprint_m = 0.0  # the ring :meth:`predict_bodies` averages over (0: none)
         if not get_kind(spec.kind).has_network:
             self._layers: list[tuple[np.ndarray, np.ndarray]] = []
             return
@@ -170,6 +184,21 @@ class Predictor:
             "leader": (float(leader_rotor_radius_m), int(leader_n_rotors)),
             "follower": (float(follower_rotor_radius_m), int(follower_n_rotors))}
 
+    def set_follower_diagonal(self, diagonal_m: float) -> None:
+        """The flying follower's motor-to-motor diagonal (m, e.g. a config's ``[vehicle]``):
+        :meth:`predict_bodies` predicts a follower larger than the training one over its rotor
+        footprint (:mod:`aerodock.learning.footprint`).
+
+        Raises:
+            ValueError: not a finite positive number.
+        """
+        if not (np.isfinite(float(diagonal_m)) and float(diagonal_m) > 0):
+            raise ValueError(f"the follower's diagonal must be a positive number, got "
+                             f"{diagonal_m!r}")
+        self.follower_diagonal_m = float(diagonal_m)
+        self._footprint_m = float(footprint_radius_m(self.trained_follower_diagonal_m,
+                                                     self.follower_diagonal_m))
+
     def _scales(self, wake_scales: np.ndarray | None, n: int) -> np.ndarray | None:
         """The wake scales a prediction of ``n`` samples uses (None for other kinds)."""
         if not self.needs_wake_scales:
@@ -200,7 +229,8 @@ class Predictor:
 
     # -- batched ---------------------------------------------------------------------------
     def predict(self, x: np.ndarray, leader_R: np.ndarray,
-                wake_scales: np.ndarray | None = None) -> np.ndarray:
+                wake_scales: np.ndarray | None = None,
+                follower_diagonal_m: float | np.ndarray | None = None) -> np.ndarray:
         """Predicted downwash acceleration on the follower, (n, 3), m/s², NED.
 
         Args:
@@ -208,7 +238,19 @@ class Predictor:
             leader_R: (n, 3, 3) leader attitude, body to world.
             wake_scales: (n, 3) or (3,), a leader-aware model's third input (default:
                 :attr:`default_wake_scales`); ignored by other kinds.
+            follower_diagonal_m: the flying follower's motor-to-motor diagonal (m), one value
+                or (n,): where it is larger than :attr:`trained_follower_diagonal_m`, the
+                prediction is averaged over the extra rotor footprint
+                (:mod:`aerodock.learning.footprint`); None (or an unknown training diagonal):
+                the model's own prediction.
         """
+        radius = footprint_radius_m(self.trained_follower_diagonal_m, follower_diagonal_m)
+        if np.any(radius > 0):
+            x, leader_R = check_inputs(x, leader_R)
+            if wake_scales is None or not self.needs_wake_scales:
+                return footprint_average(self.predict, x, leader_R, radius)
+            scales = self._scales(wake_scales, x.shape[0])
+            return footprint_average(self.predict, x, leader_R, radius, scales)
         if wake_scales is None:  # the call of every kind but the leader-aware ones, unchanged
             return self.predict_wrench(x, leader_R)[0]
         return self.predict_wrench(x, leader_R, wake_scales)[0]
@@ -292,8 +334,11 @@ class Predictor:
     def predict_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """Feed-forward ``f_ext`` (n, 3), m/s², NED, from the two vehicles' batched states."""
         x, rot = bodies_to_inputs(leader, follower)
+        footprint = {"follower_diagonal_m": self.follower_diagonal_m} if self._footprint_m else {}
         if self.needs_wake_scales:
-            return self.predict(x, rot, self.wake_scales_for_bodies(leader, follower))
+            return self.predict(x, rot, self.wake_scales_for_bodies(leader, follower), **footprint)
+        if footprint:
+            return self.predict(x, rot, **footprint)
         if x.shape[0] == 1:
             return self.predict_one(x[0], rot[0])[None, :]
         return self.predict(x, rot)
@@ -369,6 +414,17 @@ def _recorded_rotor_geometry(meta: dict[str, Any]) -> dict[str, tuple[float, int
     return out
 
 
+def _recorded_follower_diagonal(meta: dict[str, Any]) -> float | None:
+    """The training follower's diagonal (m) from a model document's ``vehicles``, or None
+    unless it is one known positive value."""
+    vehicles = meta.get("vehicles")
+    follower = vehicles.get("follower") if isinstance(vehicles, dict) else None
+    value = follower.get("diagonal_m") if isinstance(follower, dict) else None
+    if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
+        return float(value)
+    return None
+
+
 class ZeroPredictor(Predictor):
     """The zero model: predicts no downwash (the "without model" baseline)."""
 
@@ -377,7 +433,8 @@ class ZeroPredictor(Predictor):
         super().__init__(ModelSpec(kind="zero"), [], meta)
 
     def predict(self, x: np.ndarray, leader_R: np.ndarray,
-                wake_scales: np.ndarray | None = None) -> np.ndarray:
+                wake_scales: np.ndarray | None = None,
+                follower_diagonal_m: float | np.ndarray | None = None) -> np.ndarray:
         """Zeros (n, 3)."""
         x, _ = check_inputs(x, leader_R)
         return np.zeros((x.shape[0], 3))

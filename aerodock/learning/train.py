@@ -73,6 +73,7 @@ from aerodock.learning.records import (
 )
 from aerodock.learning.runtime import Predictor, ZeroPredictor
 from aerodock.learning.splits import flight_split_ids, time_block_split_mask
+from aerodock.learning.training_vehicles import normalise_vehicles
 
 ProgressFn = Callable[[int, int, float, float | None], None]
 """``progress(epoch, max_epochs, train_loss, val_loss)``, called after every epoch."""
@@ -109,8 +110,12 @@ class TrainedModel:
         self.model.eval()
         if not get_kind(self.kind).has_network:
             return ZeroPredictor(meta={"kind": self.kind, "training": self.info})
+        data = self.info.get("data")
+        vehicles = data.get("vehicles") if isinstance(data, dict) else None
+        # the same document a saved model's file holds (its training vehicles included)
         return Predictor(self.model.spec(), self.model.weights(),
-                         {"kind": self.kind, "training": self.info})
+                         {"kind": self.kind, "training": self.info,
+                          "vehicles": normalise_vehicles(vehicles)})
 
     @torch.no_grad()
     def predict(self, x: np.ndarray, leader_R: np.ndarray,

@@ -1,10 +1,11 @@
-"""The vehicles a model was trained on: each role's mass, rotor radius and rotor count.
+"""The vehicles a model was trained on: each role's mass, rotor radius, rotor count and
+motor-to-motor diagonal.
 
 A model file (``model.json``'s ``vehicles``) and a data set's summary record them as
-``{"leader": {mass_kg, rotor_radius_m, n_rotors}, "follower": {...}}``, each value a positive
-number, a sorted list of them (when the training flights disagree) or ``None`` (when the logs
-did not say). :mod:`aerodock.deploy.compatibility` compares such a record with the vehicles a
-config flies (:func:`configured_vehicles`).
+``{"leader": {mass_kg, rotor_radius_m, n_rotors, diagonal_m}, "follower": {...}}``, each value a
+positive number, a sorted list of them (when the training flights disagree) or ``None`` (when
+the logs did not say). :mod:`aerodock.deploy.compatibility` compares such a record with the
+vehicles a config flies (:func:`configured_vehicles`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,9 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-VEHICLE_KEYS = ("mass_kg", "rotor_radius_m", "n_rotors")
+VEHICLE_KEYS = ("mass_kg", "rotor_radius_m", "n_rotors", "diagonal_m")
+"""What is recorded of each vehicle (the diagonal sets a follower's rotor footprint,
+:mod:`aerodock.learning.footprint`)."""
 
 
 def _number(value: Any) -> float | None:
@@ -25,7 +28,8 @@ def _number(value: Any) -> float | None:
 
 
 def normalise_vehicles(vehicles: Mapping[str, Any] | None) -> dict[str, dict[str, Any]]:
-    """``{"leader": {mass_kg, rotor_radius_m, n_rotors}, "follower": {...}}``, None if unknown.
+    """``{"leader": {mass_kg, rotor_radius_m, n_rotors, diagonal_m}, "follower": {...}}``, None
+    if unknown.
 
     A value that is not a positive finite number (or a list of them, when the training flights
     disagree) becomes ``None``.
@@ -50,7 +54,8 @@ def normalise_vehicles(vehicles: Mapping[str, Any] | None) -> dict[str, dict[str
 
 
 def flight_vehicle_fields(meta: Mapping[str, Any]) -> dict[str, float | None]:
-    """A FlightLog ``meta``'s ``{leader,follower}_{mass_kg,rotor_radius_m,n_rotors}`` (or None)."""
+    """A FlightLog ``meta``'s ``{leader,follower}_{mass_kg,rotor_radius_m,n_rotors,diagonal_m}``
+    (or None)."""
     return {f"{role}_{key}": _number(meta.get(f"{role}_{key}"))
             for role in ("leader", "follower") for key in VEHICLE_KEYS}
 
@@ -80,5 +85,5 @@ def configured_vehicles(cfg: Any) -> dict[str, dict[str, Any]]:
     """The vehicles of an aerodock config (``[vehicle]``: both quadrotors are alike)."""
     vehicle = cfg.vehicle
     one = {"mass_kg": vehicle.mass_kg, "rotor_radius_m": vehicle.rotor_radius_m,
-           "n_rotors": vehicle.n_rotors}
+           "n_rotors": vehicle.n_rotors, "diagonal_m": vehicle.diagonal_m}
     return normalise_vehicles({"leader": one, "follower": one})

@@ -368,7 +368,7 @@ def test_model_records_its_vehicles_and_flags_others(tmp_path):
     path = trained.save(tmp_path / "m")
     doc = json.loads((path / "model.json").read_text())
     assert doc["vehicles"]["follower"] == {"mass_kg": 0.7, "rotor_radius_m": 0.0635,
-                                           "n_rotors": 4}
+                                           "n_rotors": 4, "diagonal_m": None}
     assert doc["units"] == "m/s^2 NED"
     cfg = load_config()
     pred = Predictor.load(path)
@@ -381,7 +381,8 @@ def test_model_records_its_vehicles_and_flags_others(tmp_path):
     mixed = vehicles_from_flights(flights + [{**flights[0], "follower_mass_kg": 0.5}])
     assert mixed["follower"]["mass_kg"] == [0.5, 0.7]
     unknown = vehicles_from_flights([{}])
-    assert unknown["leader"] == {"mass_kg": None, "rotor_radius_m": None, "n_rotors": None}
+    assert unknown["leader"] == {"mass_kg": None, "rotor_radius_m": None, "n_rotors": None,
+                                 "diagonal_m": None}
     bare = _random_trained("so2").save(tmp_path / "bare")
     assert "does not record" in model_vehicle_warnings(Predictor.load(bare), cfg)[-1]
 
