@@ -122,11 +122,12 @@ STUDY_CASES = (
           tuple(rf"^VAL so2 {who}: {NUMBER} % \({NUMBER}, {NUMBER}-{NUMBER}\)$"
                 for who in ("cf51", "cf101")), frozenset({"files"})),
     Study("size_transfer.py", ("{files}/ss_train.npz", "{files}/sl_test.npz", "so2",
-                               "so2-leader", "--large-rotor-radius", "0.0239"),
+                               "so2-leader", "--large-rotor-radius", "0.0239", "--footprint"),
           (r"^\| model, trained on the small pair, seeds 0 \| small under large \| large under "
            r"small \|$",
            *(rf"^SIZE {name} {who}: {NUMBER} % \({NUMBER}-{NUMBER}\)$"
-             for name in ("so2", "so2-leader", "so2-leader, large rotor 0.0239 m")
+             for name in ("so2", "so2-leader", "so2-leader, large rotor 0.0239 m",
+                          "so2, rotor footprint", "so2-leader, rotor footprint")
              for who in ("small under large", "large under small"))),
           frozenset({"files"})),
     Study("peer_rotorpy.py", (), (r"^rotor \+ parasitic drag on : over 0\.2 s at 500 Hz",),
