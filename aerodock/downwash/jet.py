@@ -367,15 +367,40 @@ class RoundJetField:
         draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
         noise = np.array(self._bar_noise, order="C")  # the kernel writes it in place
         out = np.empty((n, 3))
-        lr, lt, lv, lp = _leader_arrays(leader)
+        lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.bar_force(
             NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, _rows3(bar_p_m), _rows3(bar_v_mps),
             _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, noise,
-            draws, float(step) if advance else 0.0, advance,
-            np.array([0.5 * self.bar_turb_vertical, self.bar_turb_lateral,
-                      0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2]), out)
+            draws, float(step) if advance else 0.0, advance, self._bar_params(bar_area_m2), out)
         self._bar_noise = noise
         return out
+
+    def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
+        """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object
+        (the follower's wrench and the bar's drag read the same leader in one physics step). A
+        ``BodyState`` is frozen, so the same object holds the same arrays, and the kernels read
+        their numbers when called, as before; other leader types are converted every call."""
+        hit = self.__dict__.get("_leader_hit")
+        if hit is not None and hit[0] is leader:
+            return hit[1]
+        arrays = _leader_arrays(leader)
+        if type(leader) is BodyState:
+            self.__dict__["_leader_hit"] = (leader, arrays)
+        return arrays
+
+    def _bar_params(self, bar_area_m2: float) -> np.ndarray:
+        """The bar kernel's three float parameters, cached for the field's current values and
+        ``bar_area_m2`` (the same numbers as computing them afresh: the same expressions; the
+        kernel only reads them, and the array stays writable, the type it was compiled for)."""
+        key = (self.bar_turb_vertical, self.bar_turb_lateral, self.air_density_kgpm3,
+               self.bar_drag_coeff, bar_area_m2)
+        hit = self.__dict__.get("_bar_params_hit")
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        values = np.array([0.5 * self.bar_turb_vertical, self.bar_turb_lateral,
+                           0.5 * self.air_density_kgpm3 * self.bar_drag_coeff * bar_area_m2])
+        self.__dict__["_bar_params_hit"] = (key, values)
+        return values
 
     # -- internals -----------------------------------------------------------------------------
     def _draw_follower_noise(self, n: int, k: int) -> None:
@@ -419,7 +444,7 @@ class RoundJetField:
             self._set_processes(np.array(self._processes, order="C"))
         force, torque, body = np.empty((n, 3)), np.zeros((n, 3)), np.empty((n, 3))
         axial, tau, share = np.empty((k + 1, n)), np.empty(n), np.empty(n)
-        lr, lt, lv, lp = _leader_arrays(leader)
+        lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.jet_forces(
             NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
             np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
@@ -436,7 +461,7 @@ class RoundJetField:
         n = leader.n
         axis, speed, half_width, centre = np.empty((3, n)), np.empty(n), np.empty(n), \
             np.empty(n)
-        lr, lt, lv, lp = _leader_arrays(leader)
+        lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.point_wake(NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp,
                               _rows3(points_m), axis, speed, half_width, centre)
         return axis, speed, half_width, centre

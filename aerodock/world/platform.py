@@ -17,6 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.downwash.base import frozen_record
 from aerodock.jit import njit
 
 
@@ -117,7 +118,7 @@ def step_bar(
                     _per_bar(mass_kg, n),
                     params.cable_length_m, params.swing_damping, params.gravity_mps2,
                     params.yaw_omega2, params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
-    return BarState(p, v, yaw, yaw_rate), cable
+    return frozen_record(BarState, p=p, v=v, yaw_rad=yaw, yaw_rate_radps=yaw_rate), cable
 
 
 def _per_bar(values: np.ndarray | float, n: int) -> np.ndarray:

@@ -19,6 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from aerodock.downwash import BodyState
+from aerodock.downwash.base import frozen_record
 from aerodock.world import terms
 from aerodock.world.params import WorldParams
 from aerodock.world.state import StepFrame, WorldState
@@ -86,8 +87,10 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         targets=targets,
         close_command=state.constants.no_close if close_command is None else close_command,
         both=both, rot=rot, pos=pos, vel=vel,
-        lead=BodyState(pos[:n], vel[:n], rot[:n], thrust[:n], lead_mass),
-        fol=BodyState(pos[n:], vel[n:], rot[n:], thrust[n:], fol_mass),
+        lead=frozen_record(BodyState, p=pos[:n], v=vel[:n], R=rot[:n], thrust_n=thrust[:n],
+                           mass_kg=lead_mass),
+        fol=frozen_record(BodyState, p=pos[n:], v=vel[n:], R=rot[n:], thrust_n=thrust[n:],
+                          mass_kg=fol_mass),
         mass_kg=body.mass_kg, mass_rows_kg=body.mass_rows_kg, fol_mass_rows_kg=fol_mass_rows,
         captured=captured, any_captured=any_captured,
         bar_axis_t=bar_axis,

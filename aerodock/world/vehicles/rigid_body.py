@@ -32,6 +32,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import AutopilotSection, VehicleSection
+from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
 from aerodock.world.vehicles import rigid_kernel
@@ -420,8 +421,10 @@ def step_with_autopilot(
         gyro, noise = state.w, gyro_noise_radps
     p, v, rot, w, omega, thrust, accel, integral, yaw_sp = _step_arrays(
         state, None, ext_force_n, ext_torque_nm, params, dt_s, targets, gyro, noise, attitude)
-    return RigidBodyState(p, v, rot, w, omega, integral, yaw_sp, state.thrust_gain,
-                          thrust, state.body), accel
+    return frozen_record(RigidBodyState, p=p, v=v, R=rot, w=w, rotor_speed=omega,
+                         autopilot_state=integral, yaw_setpoint=yaw_sp,
+                         thrust_gain=state.thrust_gain, thrust_n=thrust,
+                         body=state.body), accel
 
 
 def _rotate(rot: np.ndarray, phi: np.ndarray) -> np.ndarray:
