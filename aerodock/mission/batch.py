@@ -48,7 +48,7 @@ from aerodock.mission.setup import (
     mission_timing,
     starts,
 )
-from aerodock.mission.spec import AbortReason, MissionSpec, Phase
+from aerodock.mission.spec import AbortCode, AbortReason, MissionSpec, Phase, PhaseCode
 from aerodock.rng import TrialRNG
 from aerodock.world import Observation, World
 from aerodock.world.gripper import GateState, GripperParams
@@ -332,7 +332,7 @@ class MissionBatch:
     @property
     def active(self) -> np.ndarray:
         """(n,) bool: trials still approaching."""
-        return (self.phase == Phase.APPROACH) | (self.phase == Phase.TERMINAL)
+        return (self.phase == PhaseCode.APPROACH) | (self.phase == PhaseCode.TERMINAL)
 
     def status(self) -> Status:
         """Each trial's phase, abort reason and clearance so far."""
@@ -389,7 +389,7 @@ class MissionBatch:
         # A dock is an outcome once confirmed: held through the confirmation window (or, from
         # the truth, at once).
         confirmed_now = captured_now if self.gate_truth else (
-            (phase == Phase.CAPTURED) & self.docked & ~self.confirmed
+            (phase == PhaseCode.CAPTURED) & self.docked & ~self.confirmed
             & (t - self.phase_t >= m.dock_confirm_s))
         self.confirmed |= confirmed_now
         self.capture_t = np.where(captured_now, t, np.where(missed_now, np.nan, self.capture_t))
@@ -398,7 +398,7 @@ class MissionBatch:
         phase = resolve.next_phases(phase, captured_now, missed_now, abort_now)
         self.phase_t = np.where(captured_now | backoff_now, t, self.phase_t)
         finished = resolve.finished(params, phase, t, self.phase_t)
-        phase = np.where(finished, Phase.DONE, phase).astype(np.int8)
+        phase = np.where(finished, PhaseCode.DONE, phase).astype(np.int8)
         # How far the pair has sunk when the post-dock window ends (the leader carries the
         # follower; it flies level, so its altitude is its start's).
         docked_end = finished & world.captured
@@ -428,7 +428,7 @@ class MissionBatch:
                                 aborts.GATE_STUCK_TRAVELS))
         if abort_now.any():
             world.disarm_gate(abort_now)  # an aborted approach never closes the gate
-        self.abort_reason = np.where(abort_now & (self.abort_reason == AbortReason.NONE),
+        self.abort_reason = np.where(abort_now & (self.abort_reason == AbortCode.NONE),
                                      reason, self.abort_reason).astype(np.int8)
         return abort_now
 
@@ -448,7 +448,7 @@ class MissionBatch:
         if residual_mps2 is not None:  # only on trials still approaching after this decision
             a_ref = a_ref + np.where(self.active[:, None], residual_mps2, 0.0)
         obs_f, obs_l_f, ff = d.follower_obs, d.leader_at_follower, d.feedforward_mps2
-        terminal_gains = (d.phase == Phase.TERMINAL) | d.holding
+        terminal_gains = (d.phase == PhaseCode.TERMINAL) | d.holding
         yaw0 = np.zeros(self.n)
         accel = hold = None
         if self.follower_ctl.uses_accelerometer:
@@ -481,7 +481,7 @@ class MissionBatch:
             self.recorder.after_step(world, self.docked, sensed=not self.gate_truth)
         self.last_fout = fout
         self.k += 1
-        if np.all(self.phase == Phase.DONE) or self.k >= self.steps:
+        if (self.phase == PhaseCode.DONE).all() or self.k >= self.steps:
             self.finished = True
             return Flown(track_err_m, violated, None)
         self.decision = self.decide()

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.mission.spec import Phase
+from aerodock.mission.phases.gate_sensing import GateCode
+from aerodock.mission.spec import PhaseCode
 from aerodock.world import World
-from aerodock.world.gripper import GateState
 from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
 
 TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
@@ -53,9 +53,9 @@ class MissionMetrics:
         hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
         hist[k, :, 3] = np.rad2deg(np.arccos(np.clip(fol.R[:, 2, 2], -1.0, 1.0)))
         hist[k, :, 4] = fout.saturated
-        ended = (~active | (world.gripper.gate != GateState.OPEN)) & (self.approach_end > t_s)
+        ended = (~active | (world.gripper.gate != GateCode.OPEN)) & (self.approach_end > t_s)
         self.approach_end = np.where(ended, t_s, self.approach_end)
-        live = phase != Phase.DONE  # this trial's mission is still on
+        live = phase != PhaseCode.DONE  # this trial's mission is still on
         self.ground_hit |= world.ground_contact & live
         arm = fol.p - fol.R[:, :, 2] * gp.mount_height_m
         was_clear = self.min_clear >= clearance_m

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import Phase
+from aerodock.mission.spec import PhaseCode
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import Observation
 
@@ -21,8 +21,8 @@ def enter_terminal(phase: np.ndarray, t_s: float, arrival_s: float,
                    terminal_s: float) -> np.ndarray:
     """(n,) the phases with approaching trials switched to ``TERMINAL`` ``terminal_s`` before
     arrival."""
-    return np.where((phase == Phase.APPROACH) & (t_s >= arrival_s - terminal_s),
-                    Phase.TERMINAL, phase).astype(np.int8)
+    return np.where((phase == PhaseCode.APPROACH) & (t_s >= arrival_s - terminal_s),
+                    PhaseCode.TERMINAL, phase).astype(np.int8)
 
 
 def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], leader: Observation,
