@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from aerodock.geometry import norm_rows
+
 from aerodock.mission.params import MissionParams
 from aerodock.mission.spec import AbortCode, PhaseCode
 
@@ -32,7 +34,7 @@ def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np
     up_err = -err_m[:, 2]
     unsafe = (phase == PhaseCode.TERMINAL) & (
         (up_err > m.abort_tracking_m / 2)
-        | ((np.linalg.norm(err_m, axis=1) > m.abort_tracking_m) & (up_err > 0))
+        | ((norm_rows(err_m) > m.abort_tracking_m) & (up_err > 0))
     )
     leader_lost = (t_s - last_fresh_leader_t_s) > m.leader_lost_s
     timeout = t_s >= timeout_s

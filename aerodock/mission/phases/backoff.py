@@ -16,7 +16,7 @@ def start_back_off(params: MissionParams, plan: MinJerk, t_s: float, follower: O
                    leader: Observation, now: np.ndarray) -> MinJerk:
     """The plan with the trials in ``now`` backing off ``backoff_distance_m`` away from the
     leader horizontally and as far down, over ``backoff_s``."""
-    if not np.any(now):
+    if not now.any():
         return plan
     m, n = params.mission, now.size
     zeros = np.zeros((n, 3))
@@ -34,13 +34,14 @@ def back_off_reference(plan: MinJerk, t_s: float, phase: np.ndarray, captured: n
     and not hanging from the bar, ``ref`` for the rest."""
     p_ref, v_ref, a_ref = ref
     backing = (phase == PhaseCode.MISSED) | (phase == PhaseCode.ABORT)
-    if np.any(backing):
+    if backing.any():
         pb, vb, ab = plan.sample(t_s)
         p_ref = np.where(backing[:, None], pb, p_ref)
         v_ref = np.where(backing[:, None], vb, v_ref)
         a_ref = np.where(backing[:, None], ab, a_ref)
     done_free = (phase == PhaseCode.DONE) & ~captured
-    p_ref = np.where(done_free[:, None], plan.pf, p_ref)
-    v_ref = np.where(done_free[:, None], 0.0, v_ref)
-    a_ref = np.where(done_free[:, None], 0.0, a_ref)
+    if done_free.any():
+        p_ref = np.where(done_free[:, None], plan.pf, p_ref)
+        v_ref = np.where(done_free[:, None], 0.0, v_ref)
+        a_ref = np.where(done_free[:, None], 0.0, a_ref)
     return p_ref, v_ref, a_ref

@@ -30,6 +30,8 @@ def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], le
     """(p, v, a) with the holding trials (past arrival, still approaching) at the docking point
     the leader's state predicts now, moving with it."""
     p_ref, v_ref, a_ref = ref
+    if not holding.any():
+        return p_ref, v_ref, a_ref
     target_now = docking_point_m(leader.p, leader.v, params.geometry)
     p_ref = np.where(holding[:, None], target_now, p_ref)
     v_ref = np.where(holding[:, None], leader.v, v_ref)
