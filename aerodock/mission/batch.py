@@ -407,7 +407,7 @@ class MissionBatch:
         phase = np.where(finished, PhaseCode.DONE, phase).astype(np.int8)
         # How far the pair has sunk when the post-dock window ends (the leader carries the
         # follower; it flies level, so its altitude is its start's).
-        docked_end = finished & world.captured
+        docked_end = finished & world.captured if finished.any() else finished
         if docked_end.any():
             self.post_dock_sink = np.where(
                 docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2], self.post_dock_sink)
