@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config.schema import ControlSection
+from aerodock.control.covariance_memo import CovarianceMemo
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,7 @@ class FreyjaBiasEstimator:
         self._q = np.diag(self.params.process_noise)
         self._r = np.diag(self.params.measurement_noise)
         self._limit = np.asarray(self.params.bias_limit_mps2, dtype=float)
+        self._covs = CovarianceMemo("freyja-estimator", self._a, self._q, self._r)
         self.reset(np.zeros((self.n, 3)), np.zeros((self.n, 3)))
 
     def reset(self, p: np.ndarray, v: np.ndarray) -> None:
@@ -130,19 +132,29 @@ class FreyjaBiasEstimator:
         state[..., 1] = s1 + a[1, 2] * s2 + b[1] * u
         state[..., 2] = np.clip(s2, -self._limit, self._limit)
         self.state = state
-        self.cov = a @ self.cov @ a.T + self._q
+        (self.cov,) = self._covs.step("propagate", self.cov, self._propagated_cov)
 
     def _update(self, p_meas: np.ndarray, v_meas: np.ndarray) -> None:
         self._propagations_since_measure = 0
-        c = np.eye(2, 3)
-        gain = self.cov @ c.T @ np.linalg.inv(c @ self.cov @ c.T + self._r)  # (3, 2)
+        gain, cov = self._covs.step("update", self.cov, self._updated_cov)  # gain (3, 2)
         ip = p_meas - self.state[..., 0]
         iv = v_meas - self.state[..., 1]
         state = np.empty_like(self.state)
         for i in range(3):
             state[..., i] = self.state[..., i] + gain[i, 0] * ip + gain[i, 1] * iv
         self.state = state
-        self.cov = (np.eye(3) - gain @ c) @ self.cov
+        self.cov = cov
+
+    def _propagated_cov(self, cov: np.ndarray) -> tuple[np.ndarray]:
+        """(P after one propagation,) (shared by the batch; see :class:`CovarianceMemo`)."""
+        a = self._a
+        return (a @ cov @ a.T + self._q,)
+
+    def _updated_cov(self, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the update's gain (3, 2), P after it) on position and velocity."""
+        c = np.eye(2, 3)
+        gain = cov @ c.T @ np.linalg.inv(c @ cov @ c.T + self._r)
+        return gain, (np.eye(3) - gain @ c) @ cov
 
     @property
     def bias_mps2(self) -> np.ndarray:

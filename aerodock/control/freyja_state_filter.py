@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config.schema import ControlSection
+from aerodock.control.covariance_memo import CovarianceMemo
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,8 @@ class FreyjaStateFilter:
         dt = self.prop_dt_s
         self._a = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
         self._q = np.diag(self.params.process_noise)
+        self._covs = CovarianceMemo("freyja-state-filter", self._a, self._q,
+                                    self.params.measurement_noise)
         self.state = np.zeros((self.n, 3, 3))
         self.cov = self.params.initial_cov * np.eye(3)
         self._t_to_propagation_s = self.prop_dt_s
@@ -95,13 +98,22 @@ class FreyjaStateFilter:
             state[..., 1] = s1 + a[1, 2] * s2
             state[..., 2] = s2
             self.state = state
-            self.cov = a @ self.cov @ a.T + self._q
+            (self.cov,) = self._covs.step("propagate", self.cov, self._propagated_cov)
             self._t_to_propagation_s += self.prop_dt_s
-        gain = self.cov[:, 0] / (self.cov[0, 0] + self.params.measurement_noise)  # (3,)
+        gain, self.cov = self._covs.step("update", self.cov, self._updated_cov)  # gain (3,)
         innov = np.asarray(p_meas, dtype=float) - self.state[..., 0]
         state = np.empty_like(self.state)
         for i in range(3):
             state[..., i] = self.state[..., i] + gain[i] * innov
         self.state = state
-        self.cov = self.cov - np.outer(gain, self.cov[0])
         return self.state[..., 0].copy(), self.state[..., 1].copy()
+
+    def _propagated_cov(self, cov: np.ndarray) -> tuple[np.ndarray]:
+        """(P after one propagation,) (shared by the batch; see :class:`CovarianceMemo`)."""
+        a = self._a
+        return (a @ cov @ a.T + self._q,)
+
+    def _updated_cov(self, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the update's gain (3,), P after it) on the position alone."""
+        gain = cov[:, 0] / (cov[0, 0] + self.params.measurement_noise)
+        return gain, cov - np.outer(gain, cov[0])

@@ -14,6 +14,7 @@ summary statistics, optional traces for figures and optional FlightLogs.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -48,7 +49,7 @@ from aerodock.mission.setup import (
     mission_timing,
     starts,
 )
-from aerodock.mission.spec import AbortReason, MissionSpec, Phase
+from aerodock.mission.spec import AbortCode, AbortReason, MissionSpec, Phase, PhaseCode
 from aerodock.rng import TrialRNG
 from aerodock.world import Observation, World
 from aerodock.world.gripper import GateState, GripperParams
@@ -295,7 +296,8 @@ class MissionBatch:
             self._shed_mps2 *= params.mass_kg / params.leader_mass_kg
         # The docking status reaches the leader over the network, status_delay_s late.
         delay_ticks = int(round(m.status_delay_s / self.dt_s))
-        self._status_sent = [np.zeros(n, dtype=bool)] * (delay_ticks + 1)
+        self._status_sent = deque([np.zeros(n, dtype=bool)] * (delay_ticks + 1),
+                                  maxlen=delay_ticks + 1)
         faults = tuple(spec.faults)
         if spec.leader_dropout_s is not None:
             t0, duration = spec.leader_dropout_s
@@ -332,7 +334,7 @@ class MissionBatch:
     @property
     def active(self) -> np.ndarray:
         """(n,) bool: trials still approaching."""
-        return (self.phase == Phase.APPROACH) | (self.phase == Phase.TERMINAL)
+        return (self.phase == PhaseCode.APPROACH) | (self.phase == PhaseCode.TERMINAL)
 
     def status(self) -> Status:
         """Each trial's phase, abort reason and clearance so far."""
@@ -358,7 +360,7 @@ class MissionBatch:
             self.faults.apply_to_world(t, world)
         # The leader: its own controller; it feeds forward the payload the follower sheds, once
         # the follower's docking status has arrived.
-        self._status_sent = self._status_sent[1:] + [self.docked.copy()]
+        self._status_sent.append(self.docked.copy())  # the oldest drops out
         self.lout = leader.leader_command(
             self.leader_ctl, obs_l,
             leader.leader_reference(self.leader_p0, self.lead_vel, self.lead_v, t,
@@ -389,20 +391,24 @@ class MissionBatch:
         # A dock is an outcome once confirmed: held through the confirmation window (or, from
         # the truth, at once).
         confirmed_now = captured_now if self.gate_truth else (
-            (phase == Phase.CAPTURED) & self.docked & ~self.confirmed
+            (phase == PhaseCode.CAPTURED) & self.docked & ~self.confirmed
             & (t - self.phase_t >= m.dock_confirm_s))
         self.confirmed |= confirmed_now
-        self.capture_t = np.where(captured_now, t, np.where(missed_now, np.nan, self.capture_t))
+        if captured_now.any() or missed_now.any():
+            self.capture_t = np.where(captured_now, t,
+                                      np.where(missed_now, np.nan, self.capture_t))
         backoff_now = (abort_now | missed_now) & ~captured_now
         plan = backoff.start_back_off(params, plan, t, obs_f, obs_l_f, backoff_now)
         phase = resolve.next_phases(phase, captured_now, missed_now, abort_now)
-        self.phase_t = np.where(captured_now | backoff_now, t, self.phase_t)
+        began = captured_now | backoff_now
+        if began.any():
+            self.phase_t = np.where(began, t, self.phase_t)
         finished = resolve.finished(params, phase, t, self.phase_t)
-        phase = np.where(finished, Phase.DONE, phase).astype(np.int8)
+        phase = np.where(finished, PhaseCode.DONE, phase).astype(np.int8)
         # How far the pair has sunk when the post-dock window ends (the leader carries the
         # follower; it flies level, so its altitude is its start's).
-        docked_end = finished & world.captured
-        if np.any(docked_end):
+        docked_end = finished & world.captured if finished.any() else finished
+        if docked_end.any():
             self.post_dock_sink = np.where(
                 docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2], self.post_dock_sink)
         ref = backoff.back_off_reference(plan, t, phase, self.docked, (p_ref, v_ref, a_ref))
@@ -428,8 +434,8 @@ class MissionBatch:
                                 aborts.GATE_STUCK_TRAVELS))
         if abort_now.any():
             world.disarm_gate(abort_now)  # an aborted approach never closes the gate
-        self.abort_reason = np.where(abort_now & (self.abort_reason == AbortReason.NONE),
-                                     reason, self.abort_reason).astype(np.int8)
+            self.abort_reason = np.where(abort_now & (self.abort_reason == AbortCode.NONE),
+                                         reason, self.abort_reason).astype(np.int8)
         return abort_now
 
     # -- the acting half -------------------------------------------------------------------------
@@ -448,7 +454,7 @@ class MissionBatch:
         if residual_mps2 is not None:  # only on trials still approaching after this decision
             a_ref = a_ref + np.where(self.active[:, None], residual_mps2, 0.0)
         obs_f, obs_l_f, ff = d.follower_obs, d.leader_at_follower, d.feedforward_mps2
-        terminal_gains = (d.phase == Phase.TERMINAL) | d.holding
+        terminal_gains = (d.phase == PhaseCode.TERMINAL) | d.holding
         yaw0 = np.zeros(self.n)
         accel = hold = None
         if self.follower_ctl.uses_accelerometer:
@@ -481,7 +487,7 @@ class MissionBatch:
             self.recorder.after_step(world, self.docked, sensed=not self.gate_truth)
         self.last_fout = fout
         self.k += 1
-        if np.all(self.phase == Phase.DONE) or self.k >= self.steps:
+        if (self.phase == PhaseCode.DONE).all() or self.k >= self.steps:
             self.finished = True
             return Flown(track_err_m, violated, None)
         self.decision = self.decide()
@@ -491,7 +497,7 @@ class MissionBatch:
         """Docked followers: level attitude; thrust is the configured fraction of the weight plus
         the follower's own prediction of the wake (the position loop would fight the cables)."""
         hanging = self.docked
-        if not np.any(hanging):
+        if not hanging.any():
             return fout
         cmd, params = fout.command, self.params
         hang_thrust = params.mass_kg * (params.mission.post_dock_thrust_fraction

@@ -8,9 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.mission.spec import Phase
+from aerodock.geometry import norm_rows
+
+from aerodock.mission.phases.gate_sensing import GateCode
+from aerodock.mission.spec import PhaseCode
 from aerodock.world import World
-from aerodock.world.gripper import GateState
 from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
 
 TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
@@ -49,18 +51,20 @@ class MissionMetrics:
         fol, lead = world.follower, world.leader
         true_err = fol.p - p_ref
         hist[k, :, 0] = np.abs(true_err[:, 2])
-        hist[k, :, 1] = track_err_m = np.linalg.norm(true_err, axis=1)
+        hist[k, :, 1] = track_err_m = norm_rows(true_err)
         hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
-        hist[k, :, 3] = np.rad2deg(np.arccos(np.clip(fol.R[:, 2, 2], -1.0, 1.0)))
+        # np.clip's numbers, without its wrapper's cost (as geometry.rotmat_to_rpy)
+        hist[k, :, 3] = np.rad2deg(np.arccos(np.minimum(np.maximum(fol.R[:, 2, 2], -1.0), 1.0)))
         hist[k, :, 4] = fout.saturated
-        ended = (~active | (world.gripper.gate != GateState.OPEN)) & (self.approach_end > t_s)
-        self.approach_end = np.where(ended, t_s, self.approach_end)
-        live = phase != Phase.DONE  # this trial's mission is still on
+        ended = (~active | (world.gripper.gate != GateCode.OPEN)) & (self.approach_end > t_s)
+        if ended.any():
+            self.approach_end = np.where(ended, t_s, self.approach_end)
+        live = phase != PhaseCode.DONE  # this trial's mission is still on
         self.ground_hit |= world.ground_contact & live
         arm = fol.p - fol.R[:, :, 2] * gp.mount_height_m
         was_clear = self.min_clear >= clearance_m
         self.min_clear = np.where(live, np.minimum(
-            self.min_clear, np.linalg.norm(arm - lead.p, axis=1)), self.min_clear)
+            self.min_clear, norm_rows(arm - lead.p)), self.min_clear)
         violated_now = was_clear & (self.min_clear < clearance_m)
         self.nan_seen |= ~(np.isfinite(fol.p).all(axis=1) & np.isfinite(lead.p).all(axis=1)
                            & np.isfinite(fout.command.thrust_n))

@@ -20,6 +20,20 @@ class Phase(IntEnum):
     DONE = 5
 
 
+class PhaseCode:
+    """The phases' plain int codes, for the arithmetic on (n,) int8 phase arrays each control
+    period (``phase == PhaseCode.DONE``). NumPy looks an IntEnum member's class up for its array
+    protocols each time the member meets an array (a few µs a use on Python 3.11), a plain int
+    it takes at once: the comparisons give the same booleans, the selections the same codes."""
+
+    APPROACH = int(Phase.APPROACH)
+    TERMINAL = int(Phase.TERMINAL)
+    CAPTURED = int(Phase.CAPTURED)
+    MISSED = int(Phase.MISSED)
+    ABORT = int(Phase.ABORT)
+    DONE = int(Phase.DONE)
+
+
 class AbortReason(IntEnum):
     """Why a trial aborted (0: it did not)."""
 
@@ -28,6 +42,16 @@ class AbortReason(IntEnum):
     LEADER_LOST = 2
     UNSAFE_TRACKING = 3
     GATE_FAULT = 4  # the gate did not finish closing long after it was commanded
+
+
+class AbortCode:
+    """The abort reasons' plain int codes (as :class:`PhaseCode` for the phases)."""
+
+    NONE = int(AbortReason.NONE)
+    TIMEOUT = int(AbortReason.TIMEOUT)
+    LEADER_LOST = int(AbortReason.LEADER_LOST)
+    UNSAFE_TRACKING = int(AbortReason.UNSAFE_TRACKING)
+    GATE_FAULT = int(AbortReason.GATE_FAULT)
 
 
 @dataclass(frozen=True)

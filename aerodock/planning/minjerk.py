@@ -12,6 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 _POWERS = np.arange(6)
+# The factors of the derivatives' terms: k for the velocity's, k (k - 1) for the acceleration's.
+_VEL_FACTORS = _POWERS[1:]
+_ACC_FACTORS = _POWERS[2:] * _POWERS[1:-1]
 
 
 @dataclass(frozen=True)
@@ -57,18 +60,28 @@ class MinJerk:
         """
         n = self.t0_s.shape[0]
         t = np.broadcast_to(np.asarray(t_s, dtype=float), (n,))
-        tau = np.clip(t - self.t0_s, 0.0, self.duration_s)[:, None, None]  # (n, 1, 1)
+        # tau clipped to [0, T] (np.clip's numbers, without its wrapper's cost), (n, 1, 1)
+        tau = np.minimum(np.maximum(t - self.t0_s, 0.0), self.duration_s)[:, None, None]
         c = self.coeffs
-        pos = np.sum(c * tau**_POWERS, axis=-1)
-        vel = np.sum(c[..., 1:] * _POWERS[1:] * tau ** _POWERS[:-1], axis=-1)
-        acc = np.sum(c[..., 2:] * (_POWERS[2:] * _POWERS[1:-1]) * tau ** _POWERS[:-2], axis=-1)
+        tau_k = tau**_POWERS  # tau^0 .. tau^5, each power computed once for the three sums
+        add = np.add.reduce  # np.sum's reduction, without its wrapper
+        pos = add(c * tau_k, axis=-1)
+        vel = add(c[..., 1:] * _VEL_FACTORS * tau_k[..., :-1], axis=-1)
+        acc = add(c[..., 2:] * _ACC_FACTORS * tau_k[..., :-2], axis=-1)
 
-        before = (t < self.t0_s)[:, None]
+        # Outside [t0, tf]: the start state, or the end extrapolated (each only where a trial is).
+        before = t < self.t0_s
         after_s = t - self.tf_s
-        after = (after_s > 0.0)[:, None]
-        pos = np.where(before, self.p0, np.where(after, self.pf + self.vf * after_s[:, None], pos))
-        vel = np.where(before, self.v0, np.where(after, self.vf, vel))
-        acc = np.where(before, self.a0, np.where(after, 0.0, acc))
+        after = after_s > 0.0
+        if after.any():
+            a = after[:, None]
+            pos = np.where(a, self.pf + self.vf * after_s[:, None], pos)
+            vel = np.where(a, self.vf, vel)
+            acc = np.where(a, 0.0, acc)
+        if before.any():
+            b = before[:, None]
+            pos, vel, acc = (np.where(b, self.p0, pos), np.where(b, self.v0, vel),
+                             np.where(b, self.a0, acc))
         return pos, vel, acc
 
 

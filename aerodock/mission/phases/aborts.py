@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from aerodock.geometry import norm_rows
+
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import AbortReason, Phase
+from aerodock.mission.spec import AbortCode, PhaseCode
 
 # A gate still closing this many servo travel times after it was commanded is jammed.
 GATE_STUCK_TRAVELS = 4.0
@@ -30,15 +32,15 @@ def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np
     """
     m = params.mission
     up_err = -err_m[:, 2]
-    unsafe = (phase == Phase.TERMINAL) & (
+    unsafe = (phase == PhaseCode.TERMINAL) & (
         (up_err > m.abort_tracking_m / 2)
-        | ((np.linalg.norm(err_m, axis=1) > m.abort_tracking_m) & (up_err > 0))
+        | ((norm_rows(err_m) > m.abort_tracking_m) & (up_err > 0))
     )
     leader_lost = (t_s - last_fresh_leader_t_s) > m.leader_lost_s
     timeout = t_s >= timeout_s
     abort_now = active & ((~gate_commanded & (unsafe | leader_lost | timeout)) | gate_jammed)
-    reason = np.where(gate_jammed, AbortReason.GATE_FAULT,
-                      np.where(leader_lost, AbortReason.LEADER_LOST,
-                               np.where(timeout, AbortReason.TIMEOUT,
-                                        AbortReason.UNSAFE_TRACKING)))
+    reason = np.where(gate_jammed, AbortCode.GATE_FAULT,
+                      np.where(leader_lost, AbortCode.LEADER_LOST,
+                               np.where(timeout, AbortCode.TIMEOUT,
+                                        AbortCode.UNSAFE_TRACKING)))
     return abort_now, reason

@@ -7,6 +7,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from aerodock.geometry import norm_rows
 from aerodock.mission.params import MissionParams
 from aerodock.planning.docking import docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
@@ -63,9 +64,9 @@ def replan(params: MissionParams, shape: ApproachShape, plan: MinJerk, t_s: floa
         return plan
     horizon = shape.plan_end_s - t_s
     target = docking_point_m(leader.p, leader.v, params.geometry, horizon) + shape.below_m
-    moved = np.linalg.norm(target - plan.pf, axis=1) > params.planner.replan_threshold_m
+    moved = norm_rows(target - plan.pf) > params.planner.replan_threshold_m
     need = active & moved
-    if not np.any(need):
+    if not need.any():
         return plan
     p_r, v_r, a_r = plan.sample(t_s)
     zeros = np.zeros_like(target)

@@ -14,17 +14,27 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import Phase
+from aerodock.mission.spec import PhaseCode
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import Observation
 from aerodock.world.gripper import GateState, GripperState
+
+
+class GateCode:
+    """The gate states' plain int codes (as :class:`~aerodock.mission.spec.PhaseCode` for the
+    phases: a plain int meets an array without NumPy probing its class)."""
+
+    OPEN = int(GateState.OPEN)
+    CLOSING = int(GateState.CLOSING)
+    CAPTURED = int(GateState.CAPTURED)
+    MISSED = int(GateState.MISSED)
 
 
 def commanded(gripper: GripperState, world_t_s: float, from_truth: bool = False) -> np.ndarray:
     """(n,) the servo has started to close the gate (the software knows it commanded it;
     ``from_truth``: the gate is not open, as the world knows it)."""
     if from_truth:
-        return gripper.gate != GateState.OPEN
+        return gripper.gate != GateCode.OPEN
     return gripper.servo_start_s <= world_t_s  # nan (never) compares False
 
 
@@ -33,7 +43,7 @@ def believed_closed(gripper: GripperState, world_t_s: float, close_time_s: float
     """(n,) the gate is closed as far as the software knows: the servo's position says so, or,
     without feedback, its nominal travel time since it started has passed."""
     if servo_feedback:
-        return (gripper.gate == GateState.CAPTURED) | (gripper.gate == GateState.MISSED)
+        return (gripper.gate == GateCode.CAPTURED) | (gripper.gate == GateCode.MISSED)
     return gripper.servo_start_s + close_time_s <= world_t_s
 
 
@@ -44,7 +54,7 @@ def jammed(gripper: GripperState, world_t_s: float, close_time_s: float,
     started (without feedback the software cannot tell)."""
     if not servo_feedback:
         return np.zeros(gripper.gate.shape, dtype=bool)
-    return (gripper.gate == GateState.CLOSING) & (
+    return (gripper.gate == GateCode.CLOSING) & (
         world_t_s - gripper.servo_start_s > travels * close_time_s)
 
 
@@ -52,9 +62,9 @@ def true_outcomes(gripper: GripperState, phase: np.ndarray,
                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(captured now, missed now) read from the world's gate (``mission.gate_state_from =
     "truth"``: the earlier worlds' mission, which knew what its sensors cannot tell)."""
-    captured_now = (gripper.gate == GateState.CAPTURED) & (phase != Phase.CAPTURED) & (
-        phase != Phase.DONE)
-    return captured_now, (gripper.gate == GateState.MISSED) & active
+    captured_now = (gripper.gate == GateCode.CAPTURED) & (phase != PhaseCode.CAPTURED) & (
+        phase != PhaseCode.DONE)
+    return captured_now, (gripper.gate == GateCode.MISSED) & active
 
 
 def dropped(params: MissionParams, follower: Observation, leader: Observation) -> np.ndarray:

@@ -36,6 +36,6 @@ def leader_command(ctl: PositionController, obs: Observation, ref: Reference,
     """The leader's command: it feeds forward the payload the docked follower sheds
     (``shed_mps2`` down), once the follower's docking status has reached it."""
     n = obs.p.shape[0]
-    payload = np.where(docked_known, shed_mps2, 0.0)
-    lff = np.stack([np.zeros(n), np.zeros(n), payload], axis=1)
+    lff = np.zeros((n, 3))
+    lff[:, 2] = np.where(docked_known, shed_mps2, 0.0)
     return ctl.step(obs.p, obs.v, obs.rpy, ref, feedforward_mps2=lff)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import Phase
+from aerodock.mission.spec import PhaseCode
 
 
 def gate_outcomes(closed: np.ndarray, dropped: np.ndarray, phase: np.ndarray,
@@ -17,7 +17,7 @@ def gate_outcomes(closed: np.ndarray, dropped: np.ndarray, phase: np.ndarray,
     """(docked now, missed now), each (n,): an approaching trial whose gate is believed closed
     acts as docked; a trial docked less than ``confirm_s`` ago that has dropped away missed."""
     captured_now = closed & active
-    missed_now = (phase == Phase.CAPTURED) & (t_s - phase_t_s < confirm_s) & dropped
+    missed_now = (phase == PhaseCode.CAPTURED) & (t_s - phase_t_s < confirm_s) & dropped
     return captured_now, missed_now
 
 
@@ -25,15 +25,15 @@ def next_phases(phase: np.ndarray, captured_now: np.ndarray, missed_now: np.ndar
                 abort_now: np.ndarray) -> np.ndarray:
     """(n,) the phases after this period's outcomes (a capture wins over a miss, a miss over an
     abort)."""
-    phase = np.where(captured_now, Phase.CAPTURED, phase)
-    phase = np.where(missed_now & ~captured_now, Phase.MISSED, phase)
-    return np.where(abort_now & ~captured_now & ~missed_now, Phase.ABORT, phase)
+    phase = np.where(captured_now, PhaseCode.CAPTURED, phase)
+    phase = np.where(missed_now & ~captured_now, PhaseCode.MISSED, phase)
+    return np.where(abort_now & ~captured_now & ~missed_now, PhaseCode.ABORT, phase)
 
 
 def finished(params: MissionParams, phase: np.ndarray, t_s: float,
              phase_t_s: np.ndarray) -> np.ndarray:
     """(n,) trials whose post-dock hold or back-off is over: their missions are done."""
     m = params.mission
-    return (((phase == Phase.CAPTURED) & (t_s - phase_t_s >= m.post_dock_s))
-            | (((phase == Phase.MISSED) | (phase == Phase.ABORT))
+    return (((phase == PhaseCode.CAPTURED) & (t_s - phase_t_s >= m.post_dock_s))
+            | (((phase == PhaseCode.MISSED) | (phase == PhaseCode.ABORT))
                & (t_s - phase_t_s >= m.backoff_s)))

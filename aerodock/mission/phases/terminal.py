@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import Phase
+from aerodock.mission.spec import PhaseCode
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import Observation
 
@@ -21,8 +21,8 @@ def enter_terminal(phase: np.ndarray, t_s: float, arrival_s: float,
                    terminal_s: float) -> np.ndarray:
     """(n,) the phases with approaching trials switched to ``TERMINAL`` ``terminal_s`` before
     arrival."""
-    return np.where((phase == Phase.APPROACH) & (t_s >= arrival_s - terminal_s),
-                    Phase.TERMINAL, phase).astype(np.int8)
+    return np.where((phase == PhaseCode.APPROACH) & (t_s >= arrival_s - terminal_s),
+                    PhaseCode.TERMINAL, phase).astype(np.int8)
 
 
 def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], leader: Observation,
@@ -30,6 +30,8 @@ def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], le
     """(p, v, a) with the holding trials (past arrival, still approaching) at the docking point
     the leader's state predicts now, moving with it."""
     p_ref, v_ref, a_ref = ref
+    if not holding.any():
+        return p_ref, v_ref, a_ref
     target_now = docking_point_m(leader.p, leader.v, params.geometry)
     p_ref = np.where(holding[:, None], target_now, p_ref)
     v_ref = np.where(holding[:, None], leader.v, v_ref)

@@ -36,6 +36,7 @@ def bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeo
     arm = follower.p - follower.R[:, :, 2] * gp.mount_height_m
     rel = bar - arm + rel_v * lead_time_s
     height = -rel[:, 2]
-    lateral = np.linalg.norm(rel[:, :2], axis=1)
+    # the horizontal distance (np.linalg.norm of the two columns' numbers, without its wrapper)
+    lateral = np.sqrt(rel[:, 0] * rel[:, 0] + rel[:, 1] * rel[:, 1])
     return (lateral < LATERAL_MARGIN * gp.aperture_m / 2) & (height > -gp.bar_radius_m) & (
         height < HEIGHT_MARGIN * gp.gate_height_m)
