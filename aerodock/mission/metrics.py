@@ -9,7 +9,6 @@ from typing import Any
 import numpy as np
 
 from aerodock.geometry import norm_rows
-
 from aerodock.mission.phases.gate_sensing import GateCode
 from aerodock.mission.spec import PhaseCode
 from aerodock.world import World

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.geometry import norm_rows
-
 from aerodock.mission.params import MissionParams
 from aerodock.mission.spec import AbortCode, PhaseCode
 
