@@ -132,3 +132,13 @@ def test_trained_on_one_size_judged_on_a_third():
     assert not np.allclose(predictor.predict_bodies(leader, follower), as_trained)
     with pytest.raises(ValueError, match="diagonal"):
         predictor.set_follower_diagonal(float("nan"))
+    # a campaign gives the model the configured follower (the paper's 0.27 m vehicle)
+    from aerodock.config import load_config
+    from aerodock.mission.params import fly_on_configured_rotors
+
+    cfg = load_config()
+    fly_on_configured_rotors(predictor, cfg)
+    assert predictor.follower_diagonal_m == cfg.vehicle.diagonal_m
+    np.testing.assert_array_equal(predictor.predict_bodies(leader, follower),
+                                  predictor.predict(x, rot,
+                                                    follower_diagonal_m=cfg.vehicle.diagonal_m))
