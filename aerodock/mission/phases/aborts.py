@@ -18,7 +18,9 @@ def decide_aborts(params: MissionParams, t_s: float, timeout_s: float, phase: np
                   active: np.ndarray, err_m: np.ndarray, last_fresh_leader_t_s: np.ndarray,
                   gate_commanded: np.ndarray,
                   gate_jammed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(abort now (n,), the reason of each (n,) int8, 0 where none): of the trials approaching.
+    """(abort now (n,), the reason each would have (n,) integer ``AbortCode``s): of the trials
+    approaching. The reason is meaningful only where ``abort now`` is set (elsewhere it reads
+    ``UNSAFE_TRACKING``, the last choice); the caller masks it.
 
     Args:
         params: the mission's constants.
