@@ -248,6 +248,7 @@ class RoundJetField:
         out._rng = rng
         out._set_processes(self._processes[:, rows])
         out._coeff = None  # of the whole batch's masses (keyed by that array: never these rows')
+        out.__dict__.pop("_leader_hit", None)  # the whole batch's leader, not these rows'
         out._bar_noise = self._bar_noise[:, rows]
         # Kept for the rest of one physics step only (keyed by the step's objects).
         out._body_key = out._body_force = None
