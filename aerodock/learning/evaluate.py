@@ -29,6 +29,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from aerodock.learning.dataset import INTERACTION_RADIUS_M, Dataset
+from aerodock.learning.footprint import footprint_radius_m
 
 AXES = ("x", "y", "z")
 
@@ -105,6 +106,24 @@ def _torque_region(pred: np.ndarray, ds: Dataset, mask: np.ndarray) -> dict[str,
     return out
 
 
+def footprint_diagonals_m(predictor: SupportsPredict, ds: Dataset) -> np.ndarray:
+    """(n,) the followers' diagonals a footprint prediction of ``ds`` reads (m).
+
+    Raises:
+        ValueError: the model records no training follower's diagonal, or no flight of ``ds``
+            records its follower's (the footprint would silently be no footprint).
+    """
+    if getattr(predictor, "trained_follower_diagonal_m", None) is None:
+        raise ValueError("the rotor footprint needs a model that records its training "
+                         "follower's diagonal (model.json vehicles.follower.diagonal_m: train it "
+                         "on flights that record follower_diagonal_m)")
+    diagonals = ds.follower_diagonals_m()
+    if not np.isfinite(diagonals).any():
+        raise ValueError("the rotor footprint needs flights that record follower_diagonal_m "
+                         "(ingest them again)")
+    return diagonals
+
+
 def predict_dataset(predictor: SupportsPredict, ds: Dataset, *, footprint: bool = False
                     ) -> np.ndarray:
     """``predictor``'s prediction (n, 3), m/s², NED, at every sample of ``ds`` (a leader-aware
@@ -113,11 +132,12 @@ def predict_dataset(predictor: SupportsPredict, ds: Dataset, *, footprint: bool 
     (:mod:`aerodock.learning.footprint`; the followers' diagonals from the flights' metadata).
 
     Raises:
-        ValueError: the predictor returned another shape.
+        ValueError: the predictor returned another shape, or ``footprint`` cannot apply
+            (:func:`footprint_diagonals_m`).
     """
     extra: dict[str, Any] = {}
-    if footprint and getattr(predictor, "trained_follower_diagonal_m", None) is not None:
-        extra["follower_diagonal_m"] = ds.follower_diagonals_m()
+    if footprint:
+        extra["follower_diagonal_m"] = footprint_diagonals_m(predictor, ds)
     if getattr(predictor, "needs_wake_scales", False):
         pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales(), **extra),
                           dtype=float)
@@ -140,7 +160,8 @@ def evaluate(
         ds: held-out data.
         lateral_radius_m: horizontal radius of the interaction region.
         footprint: predict a follower larger than the training one over its rotor footprint
-            (:func:`predict_dataset`).
+            (:func:`predict_dataset`; the result then holds ``footprint_radius_m``, the largest
+            extra ring used, 0 where every follower is the training size or smaller).
 
     Returns:
         ``{"model": kind, "n_samples", "minutes", "interaction_region": description,
@@ -151,7 +172,7 @@ def evaluate(
         torque and the data torque labels.
     """
     pred = predict_dataset(predictor, ds, footprint=footprint)
-    out = {
+    out: dict[str, Any] = {
         "model": getattr(predictor, "kind", type(predictor).__name__),
         "n_samples": ds.n,
         "minutes": round(ds.minutes, 4),
@@ -160,6 +181,10 @@ def evaluate(
         "all": _region(pred, ds, np.ones(ds.n, dtype=bool)),
         "interaction": _region(pred, ds, ds.interaction_mask(lateral_radius_m)),
     }
+    if footprint:  # the largest extra ring the followers were predicted over (0: none)
+        out["footprint_radius_m"] = float(np.max(footprint_radius_m(
+            predictor.trained_follower_diagonal_m, footprint_diagonals_m(predictor, ds)),
+            initial=0.0))
     if getattr(predictor, "has_torque", False) and ds.y_torque is not None:
         torque = np.asarray(predictor.predict_torque(ds.x, ds.leader_R), dtype=float)
         out["torque"] = {

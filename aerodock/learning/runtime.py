@@ -45,8 +45,9 @@ footprint (:mod:`aerodock.learning.footprint`): :meth:`Predictor.predict` takes 
 motor-to-motor diagonal (``follower_diagonal_m``, per sample or one value) and averages the
 prediction over the extra ring, where the model file records the training follower's diagonal
 (:attr:`Predictor.trained_follower_diagonal_m`); :meth:`Predictor.predict_bodies` does the same
-for the follower set with :meth:`Predictor.set_follower_diagonal` (from a config). Without them
-every path runs as before.
+for the follower set with :meth:`Predictor.set_follower_diagonal`. Campaigns do not set it (the
+footprint's second-order argument needs the extra ring small against the wake's width). The
+footprint carries the force only; without it every path runs as before.
 """
 
 from __future__ import annotations
@@ -184,17 +185,21 @@ class Predictor:
             "leader": (float(leader_rotor_radius_m), int(leader_n_rotors)),
             "follower": (float(follower_rotor_radius_m), int(follower_n_rotors))}
 
-    def set_follower_diagonal(self, diagonal_m: float) -> None:
-        """The flying follower's motor-to-motor diagonal (m, e.g. a config's ``[vehicle]``):
-        :meth:`predict_bodies` predicts a follower larger than the training one over its rotor
-        footprint (:mod:`aerodock.learning.footprint`).
+    def set_follower_diagonal(self, diagonal_m: float | None) -> None:
+        """The flying follower's motor-to-motor diagonal (m): :meth:`predict_bodies` then
+        predicts a follower larger than the training one over its rotor footprint
+        (:mod:`aerodock.learning.footprint`; the force only). None: as trained again.
 
         Raises:
-            ValueError: not a finite positive number.
+            ValueError: not a finite positive number (or None).
         """
-        if not (np.isfinite(float(diagonal_m)) and float(diagonal_m) > 0):
-            raise ValueError(f"the follower's diagonal must be a positive number, got "
-                             f"{diagonal_m!r}")
+        if diagonal_m is None:
+            self.follower_diagonal_m, self._footprint_m = None, 0.0
+            return
+        if (isinstance(diagonal_m, bool | str) or not np.isfinite(float(diagonal_m))
+                or float(diagonal_m) <= 0):
+            raise ValueError(f"the follower's diagonal must be a positive number of metres, "
+                             f"got {diagonal_m!r}")
         self.follower_diagonal_m = float(diagonal_m)
         self._footprint_m = float(footprint_radius_m(self.trained_follower_diagonal_m,
                                                      self.follower_diagonal_m))
@@ -242,7 +247,8 @@ class Predictor:
                 or (n,): where it is larger than :attr:`trained_follower_diagonal_m`, the
                 prediction is averaged over the extra rotor footprint
                 (:mod:`aerodock.learning.footprint`); None (or an unknown training diagonal):
-                the model's own prediction.
+                the model's own prediction. The force only: :meth:`predict_wrench` and
+                :meth:`predict_torque` predict as trained.
         """
         radius = footprint_radius_m(self.trained_follower_diagonal_m, follower_diagonal_m)
         if np.any(radius > 0):

@@ -82,8 +82,9 @@ def vehicles_from_flights(flights: Iterable[Mapping[str, Any]]) -> dict[str, dic
 
 
 def configured_vehicles(cfg: Any) -> dict[str, dict[str, Any]]:
-    """The vehicles of an aerodock config (``[vehicle]``: both quadrotors are alike)."""
-    vehicle = cfg.vehicle
-    one = {"mass_kg": vehicle.mass_kg, "rotor_radius_m": vehicle.rotor_radius_m,
-           "n_rotors": vehicle.n_rotors, "diagonal_m": vehicle.diagonal_m}
-    return normalise_vehicles({"leader": one, "follower": one})
+    """The vehicles of an aerodock config: the leader its ``[leader]`` (``[vehicle]`` where the
+    leader is alike), the follower its ``[vehicle]``."""
+    def entry(v: Any) -> dict[str, Any]:
+        return {"mass_kg": v.mass_kg, "rotor_radius_m": v.rotor_radius_m,
+                "n_rotors": v.n_rotors, "diagonal_m": v.diagonal_m}
+    return normalise_vehicles({"leader": entry(cfg.leader), "follower": entry(cfg.vehicle)})

@@ -68,18 +68,15 @@ def vehicle_meta(cfg: Config) -> dict[str, Any]:
 
 
 def fly_on_configured_rotors(predictor: Any, cfg: Config) -> None:
-    """Give a learnt model the configured vehicles: a leader-aware one (``needs_wake_scales``)
-    their rotors, and any model the follower's diagonal.
+    """Give a leader-aware model (``needs_wake_scales``) the configured vehicles' rotors.
 
-    A leader-aware model's wake scales come from the leader's thrust and rotors; without this it
-    would build them with the training flights' rotors, and a model trained under one leader
-    would be handed another leader's thrust with the first one's rotor size. The diagonal lets a
-    model trained on a smaller follower predict this one over its wider rotor footprint
-    (:mod:`aerodock.learning.footprint`; a model trained on this follower's size, or that records
-    none, predicts as before). Predictors without these are left alone.
+    Its wake scales come from the leader's thrust and rotors; without this it would build them
+    with the training flights' rotors, and a model trained under one leader would be handed
+    another leader's thrust with the first one's rotor size. Other predictors are left alone
+    (a larger follower's rotor footprint, :mod:`aerodock.learning.footprint`, is applied only
+    where a caller asks for it: its second-order argument needs the extra ring small against
+    the wake's width, which a Crazyflie's model on the paper's 0.27 m vehicle is not).
     """
-    if hasattr(predictor, "set_follower_diagonal"):
-        predictor.set_follower_diagonal(cfg.vehicle.diagonal_m)
     if getattr(predictor, "needs_wake_scales", False):
         lead, fol = cfg.leader, cfg.vehicle
         predictor.set_rotor_geometry(lead.rotor_radius_m, int(lead.n_rotors),

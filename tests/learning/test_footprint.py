@@ -132,13 +132,23 @@ def test_trained_on_one_size_judged_on_a_third():
     assert not np.allclose(predictor.predict_bodies(leader, follower), as_trained)
     with pytest.raises(ValueError, match="diagonal"):
         predictor.set_follower_diagonal(float("nan"))
-    # a campaign gives the model the configured follower (the paper's 0.27 m vehicle)
+    with pytest.raises(ValueError, match="diagonal"):
+        predictor.set_follower_diagonal(True)
+    predictor.set_follower_diagonal(None)  # as trained again
+    np.testing.assert_array_equal(predictor.predict_bodies(leader, follower), as_trained)
+    # a campaign leaves it alone (a Crazyflie's model on the paper's vehicle is no small ring)
     from aerodock.config import load_config
     from aerodock.mission.params import fly_on_configured_rotors
 
-    cfg = load_config()
-    fly_on_configured_rotors(predictor, cfg)
-    assert predictor.follower_diagonal_m == cfg.vehicle.diagonal_m
-    np.testing.assert_array_equal(predictor.predict_bodies(leader, follower),
-                                  predictor.predict(x, rot,
-                                                    follower_diagonal_m=cfg.vehicle.diagonal_m))
+    fly_on_configured_rotors(predictor, load_config())
+    assert predictor.follower_diagonal_m is None
+    # a footprint that cannot apply says so rather than scoring the plain model under its name
+    bare = _flights(rng, SMALL_M, 1, 50)
+    for flight in bare.meta["flights"]:
+        del flight["follower_diagonal_m"]
+    with pytest.raises(ValueError, match="follower_diagonal_m"):
+        evaluate(predictor, bare, footprint=True)
+    assert evaluate(predictor, third, footprint=True)["footprint_radius_m"] == pytest.approx(
+        footprint_radius_m(SMALL_M, THIRD_M))
+    with pytest.raises(ValueError, match="one per sample"):
+        predictor.predict(x, rot, follower_diagonal_m=np.full(k + 1, THIRD_M))
