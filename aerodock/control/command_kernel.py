@@ -29,7 +29,12 @@ TWO_PI = 2.0 * np.pi
 
 # -- the kernels' inputs, shaped in Python ---------------------------------------------------------
 def rows3(value: np.ndarray | Sequence[float], n: int | None = None) -> np.ndarray:
-    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given)."""
+    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given; an array
+    that already is one is returned as it is, checked first: the hot loop's common case)."""
+    if (type(value) is np.ndarray and value.dtype == np.float64 and value.ndim == 2
+            and value.shape[1] == 3 and (n is None or value.shape[0] == n)
+            and value.flags.c_contiguous):
+        return value
     arr = np.atleast_2d(np.asarray(value, dtype=float))
     if n is not None and arr.shape[0] != n:
         arr = np.broadcast_to(arr, (n, 3))

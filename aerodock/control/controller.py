@@ -33,16 +33,6 @@ from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams
 REJECTIONS = ("bias-observer", "accelerometer")
 
 
-def _rows3(value: np.ndarray, n: int) -> np.ndarray:
-    """:func:`~aerodock.control.command_kernel.rows3` with its common case first: an input
-    already contiguous float (n, 3) rows is what ``rows3`` would return (the array itself), so
-    it is passed on without the four NumPy calls that find that out."""
-    if (type(value) is np.ndarray and value.shape == (n, 3) and value.dtype == np.float64
-            and value.flags.c_contiguous):
-        return value
-    return rows3(value, n)
-
-
 @dataclass(frozen=True)
 class Reference:
     """Batch-first reference: position, velocity, acceleration (NED), yaw and yaw rate."""
@@ -204,9 +194,9 @@ class PositionController:
         roll, pitch, thrust, yaw_rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         saturated = np.empty(n, dtype=np.bool_)
         command_kernel.position_command(
-            NUMPY_LOOPS, self._gains, which, _rows3(p_meas, n), _rows3(v_meas, n),
-            rows1(rpy_meas[:, 2], n), _rows3(ref.p, n), _rows3(ref.v, n), _rows3(ref_a, n),
-            rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), _rows3(bias, n), _rows3(ff, n),
+            NUMPY_LOOPS, self._gains, which, rows3(p_meas, n), rows3(v_meas, n),
+            rows1(rpy_meas[:, 2], n), rows3(ref.p, n), rows3(ref.v, n), rows3(ref_a, n),
+            rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), rows3(bias, n), rows3(ff, n),
             feedforward_mps2 is not None, self._mass, p.gravity_mps2, self._tan_tilt,
             self._thrust_max, self.yaw_rate_max, desired, roll, pitch, thrust, applied, yaw_rate,
             saturated)

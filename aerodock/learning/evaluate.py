@@ -135,9 +135,16 @@ def predict_dataset(predictor: SupportsPredict, ds: Dataset, *, footprint: bool 
         ValueError: the predictor returned another shape, or ``footprint`` cannot apply
             (:func:`footprint_diagonals_m`).
     """
+    return _predicted(predictor, ds, footprint_diagonals_m(predictor, ds) if footprint else None)
+
+
+def _predicted(predictor: SupportsPredict, ds: Dataset,
+               follower_diagonal_m: np.ndarray | None) -> np.ndarray:
+    """:func:`predict_dataset` with the followers' diagonals already read (None: no
+    footprint)."""
     extra: dict[str, Any] = {}
-    if footprint:
-        extra["follower_diagonal_m"] = footprint_diagonals_m(predictor, ds)
+    if follower_diagonal_m is not None:
+        extra["follower_diagonal_m"] = follower_diagonal_m
     if getattr(predictor, "needs_wake_scales", False):
         pred = np.asarray(predictor.predict(ds.x, ds.leader_R, ds.wake_scales(), **extra),
                           dtype=float)
@@ -171,7 +178,8 @@ def evaluate(
         ``interaction`` torque regions, see the module docstring) when the predictor has a
         torque and the data torque labels.
     """
-    pred = predict_dataset(predictor, ds, footprint=footprint)
+    diagonals = footprint_diagonals_m(predictor, ds) if footprint else None
+    pred = _predicted(predictor, ds, diagonals)
     out: dict[str, Any] = {
         "model": getattr(predictor, "kind", type(predictor).__name__),
         "n_samples": ds.n,
@@ -181,10 +189,9 @@ def evaluate(
         "all": _region(pred, ds, np.ones(ds.n, dtype=bool)),
         "interaction": _region(pred, ds, ds.interaction_mask(lateral_radius_m)),
     }
-    if footprint:  # the largest extra ring the followers were predicted over (0: none)
+    if diagonals is not None:  # the largest extra ring the followers were predicted over
         out["footprint_radius_m"] = float(np.max(footprint_radius_m(
-            predictor.trained_follower_diagonal_m, footprint_diagonals_m(predictor, ds)),
-            initial=0.0))
+            predictor.trained_follower_diagonal_m, diagonals), initial=0.0))
     if getattr(predictor, "has_torque", False) and ds.y_torque is not None:
         torque = np.asarray(predictor.predict_torque(ds.x, ds.leader_R), dtype=float)
         out["torque"] = {
