@@ -17,6 +17,9 @@ Per vehicle and physics step (the IMU's sample rate here; an autopilot's fast lo
 The filtered, delayed gyro feeds the rate loop and the attitude estimator
 (:mod:`aerodock.world.attitude_estimator`); the filtered, delayed accelerometer feeds the
 estimator and, rotated to the world with the estimate, the follower's accelerometer reading.
+A physics step of both vehicles' chains and estimates is one compiled call (:func:`imu_step`,
+the world's ``imu`` term; the noise is drawn before it); the chain's memory (filters, delay
+lines, the navigation's ring) is held in preallocated rings it updates in place.
 """
 
 from __future__ import annotations
@@ -26,7 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import fma, njit
+from aerodock.jit import fma, njit, np_arctan2
+from aerodock.world.attitude_estimator import estimate_into
 
 
 @dataclass(frozen=True)
@@ -65,37 +69,52 @@ class Biquad:
 
 @dataclass
 class FilterState:
-    """One signal's filter and delay line, component-major (3, m)."""
+    """One signal's filter and delay line, component-major (3, m).
+
+    Attributes:
+        z1, z2: (3, m) the low-pass's states (transposed direct form).
+        delay: (d, 3, m) the delay line of ``d`` steps, a ring: the samples in it, the oldest at
+            ``head`` (d = 0: no delay).
+        head: the slot of the line's oldest sample (the next to come out; the new one takes
+            its place).
+
+    The step updates these arrays in place (they are the chain's memory, read by nothing else;
+    :meth:`ImuState.take_rows` copies them); what comes out of the line is a new array.
+    """
 
     z1: np.ndarray
     z2: np.ndarray
-    delay: list[np.ndarray]
+    delay: np.ndarray
+    head: int = 0
 
     @classmethod
     def at(cls, value: np.ndarray, biquad: Biquad | None, delay_steps: int) -> FilterState:
         """A filter settled at ``value`` (3, m) (a vehicle at rest since long)."""
         if biquad is None:
-            z1 = z2 = np.zeros_like(value)
+            z1, z2 = np.zeros(value.shape), np.zeros(value.shape)
         else:  # the steady state of the transposed direct form for a constant input
-            z2 = (biquad.b2 - biquad.a2) * value
-            z1 = (biquad.b1 - biquad.a1) * value + z2
-        return cls(z1, z2, [value.copy() for _ in range(delay_steps)])
+            z2 = np.ascontiguousarray((biquad.b2 - biquad.a2) * value)
+            z1 = np.ascontiguousarray((biquad.b1 - biquad.a1) * value + z2)
+        delay = np.empty((delay_steps, *value.shape))
+        delay[:] = value
+        return cls(z1, z2, delay)
+
+    def take_cols(self, cols: np.ndarray) -> FilterState:
+        """The filter and delay line of the columns ``cols`` (copies, C-ordered as the step's
+        kernels take them)."""
+        return FilterState(np.ascontiguousarray(self.z1[:, cols]),
+                           np.ascontiguousarray(self.z2[:, cols]),
+                           np.ascontiguousarray(self.delay[:, :, cols]), self.head)
 
 
 def filter_sample(state: FilterState, sample: np.ndarray, biquad: Biquad | None) -> np.ndarray:
-    """Filter one sample (3, m) and return what comes out of the delay line (in place; the
-    compiled low-pass of the world's chain, :func:`imu_samples`)."""
-    if biquad is None:
-        out = sample
-    else:
-        sample = np.asarray(sample, dtype=float)
-        out = np.empty(sample.shape)
-        z1, z2 = np.empty(sample.shape), np.empty(sample.shape)
-        _filter_rows(sample, biquad_coeffs(biquad), state.z1, state.z2, out, z1, z2)
-        state.z1, state.z2 = z1, z2
-    if state.delay:
-        state.delay.append(out)
-        out = state.delay.pop(0)
+    """Filter one sample (3, m) and return what comes out of the delay line (a new array; the
+    state is updated in place: the compiled low-pass and delay line of the world's chain,
+    :func:`imu_step`)."""
+    sample = np.ascontiguousarray(sample, dtype=float)
+    out = np.empty(sample.shape)
+    state.head = _filter_sample_into(sample, biquad_coeffs(biquad), state.z1, state.z2,
+                                     state.delay, state.head, out)
     return out
 
 
@@ -108,12 +127,19 @@ class ImuState:
         gyro_filter, accel_filter: the low-passes (None: none).
         bias_body_mps2: (2n, 3) each accelerometer's residual bias, body frame.
         attitude: (2n, 3, 3) the flight computers' attitude estimates, body to world.
-        accel_ring: the true accelerations of the last steps (oldest first), from which the
-            navigation's acceleration is taken one control period at a time, motion-capture late.
+        accel_ring: (k, 2n, 3) the true accelerations of the last ``k`` steps, a ring (the
+            oldest at ``ring_head``), from which the navigation's acceleration is taken one
+            control period at a time, motion-capture late.
+        ring_head: the slot of the ring's oldest sample (this step's takes its place).
         nav_accel_mps2: (2n, 3) the acceleration the navigation knows (the estimator's
             compensation).
         gyro_radps: (2n, 3) the rates out of the chain this step (what the rate loop reads).
         accel_t: (3, 2n) the specific force out of the chain this step.
+
+    The chain's memory (the filters' states, the delay lines, the ring and the navigation's
+    acceleration) is updated in place by the step: nothing else reads it, and
+    :meth:`take_rows` copies it. What the chain delivers (``gyro_radps``, ``accel_t``,
+    ``attitude``) is a new array every step, so a reference kept to it keeps its values.
     """
 
     gyro: FilterState
@@ -122,23 +148,23 @@ class ImuState:
     accel_filter: Biquad | None
     bias_body_mps2: np.ndarray
     attitude: np.ndarray
-    accel_ring: list[np.ndarray]
+    accel_ring: np.ndarray
     nav_accel_mps2: np.ndarray
     gyro_radps: np.ndarray
     accel_t: np.ndarray
+    ring_head: int = 0
 
     def take_rows(self, rows: np.ndarray) -> ImuState:
         """The chains of the vehicles at ``rows`` of the 2n batch (copies; the component-major
-        arrays by column)."""
-        def cols(f: FilterState) -> FilterState:
-            return FilterState(f.z1[:, rows], f.z2[:, rows], [d[:, rows] for d in f.delay])
-
+        arrays by column; C-ordered, as the step's kernels take them)."""
         return ImuState(
-            gyro=cols(self.gyro), accel=cols(self.accel), gyro_filter=self.gyro_filter,
-            accel_filter=self.accel_filter, bias_body_mps2=self.bias_body_mps2[rows],
-            attitude=self.attitude[rows], accel_ring=[a[rows] for a in self.accel_ring],
-            nav_accel_mps2=self.nav_accel_mps2[rows], gyro_radps=self.gyro_radps[rows],
-            accel_t=self.accel_t[:, rows])
+            gyro=self.gyro.take_cols(rows), accel=self.accel.take_cols(rows),
+            gyro_filter=self.gyro_filter, accel_filter=self.accel_filter,
+            bias_body_mps2=self.bias_body_mps2[rows], attitude=self.attitude[rows],
+            accel_ring=np.ascontiguousarray(self.accel_ring[:, rows]),
+            nav_accel_mps2=np.ascontiguousarray(self.nav_accel_mps2[rows]),
+            gyro_radps=self.gyro_radps[rows], accel_t=self.accel_t[:, rows],
+            ring_head=self.ring_head)
 
 
 def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: float,
@@ -153,7 +179,7 @@ def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: fl
         gyro=FilterState.at(rates, gyro_filter, chain.delay_steps),
         accel=FilterState.at(force, accel_filter, chain.delay_steps),
         gyro_filter=gyro_filter, accel_filter=accel_filter, bias_body_mps2=bias_body_mps2,
-        attitude=attitude.copy(), accel_ring=[np.zeros((m, 3)) for _ in range(ring_steps)],
+        attitude=attitude.copy(), accel_ring=np.zeros((ring_steps, m, 3)),
         nav_accel_mps2=np.zeros((m, 3)), gyro_radps=np.zeros((m, 3)), accel_t=force,
     )
 
@@ -196,7 +222,9 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
     ``noise`` (3, 2n; none when ``gyro_sd`` is 0), clipped and low-passed (``gyro_out``,
     3, 2n, before the delay line); the specific force ``R^T (a - g e3)`` plus the residual bias,
     white noise and vibration (its sd growing with the thrust), clipped and low-passed
-    (``accel_out``); the true acceleration for the navigation's ring (``ring``, 2n x 3)."""
+    (``accel_out``); the true acceleration for the navigation's ring (``ring``, 2n x 3). The
+    filters' new states go to ``gz1_new`` ... ``az2_new``, which may be ``gz1`` ... ``az2``
+    themselves (each element is read before it is written)."""
     for j in range(2 * n):
         h, i = (0, j) if j < n else (1, j - n)
         if h == 0:
@@ -232,11 +260,100 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
 
 
 @njit
-def _filter_rows(sample: np.ndarray, c: np.ndarray, z1: np.ndarray, z2: np.ndarray,
-                 out: np.ndarray, z1_new: np.ndarray, z2_new: np.ndarray) -> None:
-    """:func:`_biquad` over a (3, m) sample."""
+def _delay_slot(line: np.ndarray, head: int, out: np.ndarray) -> np.ndarray:
+    """Where a sample entering the delay ``line`` (d, 3, m) is written: with a line, its oldest
+    sample (slot ``head``) is copied to ``out`` (3, m: what leaves the line now) and that slot
+    is returned; without one (d = 0), ``out`` itself (the sample leaves at once)."""
+    if line.shape[0] == 0:
+        return out
+    slot = line[head]
+    out[:] = slot
+    return slot
+
+
+@njit
+def _next_slot(ring: np.ndarray, head: int) -> int:
+    """The slot after ``head`` of a ring of ``ring.shape[0]`` slots (0 for an empty ring)."""
+    k = ring.shape[0]
+    return (head + 1) % k if k else 0
+
+
+@njit
+def _filter_sample_into(sample: np.ndarray, c: np.ndarray, z1: np.ndarray, z2: np.ndarray,
+                        line: np.ndarray, head: int, out: np.ndarray) -> int:
+    """:func:`filter_sample`: :func:`_biquad` over a (3, m) sample, the states ``z1``, ``z2``
+    updated in place, through the delay ``line`` (slot ``head`` the oldest) into ``out``; the
+    line's new head."""
+    into = _delay_slot(line, head, out)
     for row in range(sample.shape[0]):
         for col in range(sample.shape[1]):
-            out[row, col], z1_new[row, col], z2_new[row, col] = _biquad(
+            into[row, col], z1[row, col], z2[row, col] = _biquad(
                 sample[row, col], c[0] != 0.0, c[1], c[2], c[3], c[4], c[5], z1[row, col],
                 z2[row, col])
+    return _next_slot(line, head)
+
+
+def ring_mean(ring: np.ndarray, oldest: int, count: int) -> np.ndarray:
+    """(m, 3) the mean of the ``count`` oldest samples of ``ring`` (k, m, 3), the oldest at slot
+    ``oldest`` (compiled: :func:`_ring_mean_into`, as :func:`imu_step` takes the navigation's
+    acceleration)."""
+    out = np.empty(ring.shape[1:])
+    _ring_mean_into(np.ascontiguousarray(ring, dtype=float), oldest, count, out)
+    return out
+
+
+@njit
+def _ring_mean_into(ring: np.ndarray, oldest: int, count: int, out: np.ndarray) -> None:
+    """The mean of the ``count`` oldest samples of ``ring`` (k, m, 3), the oldest at slot
+    ``oldest``, into ``out`` (m, 3): NumPy's ``np.mean(samples, axis=0)`` bit for bit (the
+    samples added in order, oldest first, onto +0.0, then divided by the count)."""
+    k = ring.shape[0]
+    for j in range(ring.shape[1]):
+        for c in range(ring.shape[2]):
+            total = 0.0
+            for i in range(count):
+                total += ring[(oldest + i) % k, j, c]
+            out[j, c] = total / count
+
+
+@njit
+def imu_step(loops: np.ndarray, n: int, w: np.ndarray, gyro_draws: np.ndarray,
+             gyro_sd: float, gyro_range: float, gyro_c: np.ndarray, gz1: np.ndarray,
+             gz2: np.ndarray, gyro_line: np.ndarray, gyro_head: int, lead_accel: np.ndarray,
+             fol_accel: np.ndarray, gravity: float, rot: np.ndarray, bias: np.ndarray,
+             thrust: np.ndarray, hover: np.ndarray, accel_noise_sq: float, vibration: float,
+             accel_draws: np.ndarray, accel_range: float, accel_c: np.ndarray,
+             az1: np.ndarray, az2: np.ndarray, accel_line: np.ndarray, accel_head: int,
+             ring: np.ndarray, ring_head: int, step_index: int, substeps: int,
+             nav_accel: np.ndarray, lead_att_ext: np.ndarray, fol_att_ext: np.ndarray,
+             rot_hat: np.ndarray, k_p: float, k_yaw: float, dt: float, noise: np.ndarray,
+             gyro_out: np.ndarray, accel_out: np.ndarray,
+             rot_hat_out: np.ndarray) -> tuple[int, int, int]:
+    """One physics step of both vehicles' chains and estimates (2n rows, leaders first), in one
+    call: the samples (:func:`imu_samples`, its arguments up to ``az2``; the filters' states
+    ``gz1``, ``gz2``, ``az1``, ``az2`` updated in place), each signal through its delay line
+    (``gyro_line``, ``accel_line``: (d, 3, 2n) rings, the oldest at ``gyro_head``,
+    ``accel_head``) into ``gyro_out`` and ``accel_out`` (3, 2n); the true acceleration into the
+    navigation's ``ring`` (k, 2n, 3; the oldest at ``ring_head``) and, at the first step of each
+    control period (``step_index`` a multiple of ``substeps``), the mean of its ``substeps``
+    oldest samples into ``nav_accel`` (2n, 3); the external heading, the yaw of the motion
+    capture's attitudes ``lead_att_ext`` and ``fol_att_ext`` (n, 3, 3: NumPy's ``arctan2``,
+    its own loop in ``loops``); and the attitude estimate's step from ``rot_hat`` into
+    ``rot_hat_out`` (:func:`~aerodock.world.attitude_estimator.estimate_into`, gains ``k_p``,
+    ``k_yaw``, 1/s, over ``dt`` s). Returns the new heads of the gyro's and the
+    accelerometer's delay lines and of the ring."""
+    gyro_into = _delay_slot(gyro_line, gyro_head, gyro_out)
+    accel_into = _delay_slot(accel_line, accel_head, accel_out)
+    imu_samples(n, w, gyro_draws, gyro_sd, gyro_range, gyro_c, gz1, gz2, lead_accel, fol_accel,
+                gravity, rot, bias, thrust, hover, accel_noise_sq, vibration, accel_draws,
+                accel_range, accel_c, az1, az2, noise, gyro_into, gz1, gz2, accel_into, az1,
+                az2, ring[ring_head])
+    ring_head = _next_slot(ring, ring_head)
+    if step_index % substeps == 0:
+        _ring_mean_into(ring, ring_head, min(substeps, ring.shape[0]), nav_accel)
+    yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
+    np_arctan2(loops, lead_att_ext[:, 1, 0], lead_att_ext[:, 0, 0], yaw_ext[:n])
+    np_arctan2(loops, fol_att_ext[:, 1, 0], fol_att_ext[:, 0, 0], yaw_ext[n:])
+    estimate_into(loops, rot_hat, gyro_out, accel_out, nav_accel, yaw_ext, k_p, k_yaw, dt,
+                  rot_hat_out)
+    return _next_slot(gyro_line, gyro_head), _next_slot(accel_line, accel_head), ring_head

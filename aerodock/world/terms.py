@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
+from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
-from aerodock.world.attitude_estimator import estimate_step
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
-from aerodock.world.imu import FilterState, ImuState, biquad_coeffs, imu_samples
+from aerodock.world.imu import ImuState, biquad_coeffs, imu_step, ring_mean
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
 from aerodock.world.state import StepFrame, WorldState
@@ -119,9 +119,10 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """What the flight computers sense at the step's start: the gyros' noise and, with the
     filtered chain, each IMU's samples (range, low-pass, latency) and the attitude estimate from
-    them (:mod:`aerodock.world.imu`, :mod:`aerodock.world.attitude_estimator`; compiled).
-    Random draws: the gyros' noise (per trial, the leader's then the follower's), then with the
-    filtered chain the accelerometers' noise (the same order)."""
+    them (:mod:`aerodock.world.imu`, :mod:`aerodock.world.attitude_estimator`; one compiled
+    call, :func:`~aerodock.world.imu.imu_step`). Random draws: the gyros' noise (per trial, the
+    leader's then the follower's), then with the filtered chain the accelerometers' noise (the
+    same order)."""
     n = state.n
     both = frame.both
     gyro_sd = params.imu.gyro_noise_radps if params.rigid else 0.0
@@ -133,44 +134,31 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
             np.multiply(gyro_draws.reshape(2, 3, n), gyro_sd, out=_halves(noise, n))
             frame.gyro_noise_radps = noise.T
         return
-    chain = params.imu.chain
-    m = 2 * n
-    noise = np.empty((3, m))
-    gyro_t, accel_t = np.empty((3, m)), np.empty((3, m))
-    gz1, gz2, az1, az2 = np.empty((3, m)), np.empty((3, m)), np.empty((3, m)), np.empty((3, m))
-    ring = np.empty((m, 3))
     # The specific force's noise is drawn after the gyros' (both drawn before the kernel).
     accel_draws = standard_normal_t(state.rng, n, 6)
-    gyro_c, accel_c = _imu_coeffs(ims)
-    imu_samples(n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, ims.gyro.z1,
-                ims.gyro.z2, state.leader_accel, state.follower_accel,
-                params.vehicle.gravity_mps2, frame.rot, ims.bias_body_mps2, both.thrust_n,
-                state.constants.hover_thrust_n, params.vehicle.accel_noise_mps2 ** 2,
-                params.imu.accel_vibration_mps2, accel_draws, chain.accel_range_mps2, accel_c,
-                ims.accel.z1, ims.accel.z2, noise, gyro_t, gz1, gz2, accel_t, az1, az2, ring)
-    if gyro_sd:
-        frame.gyro_noise_radps = noise.T
-    if ims.gyro_filter is not None:
-        ims.gyro.z1, ims.gyro.z2 = gz1, gz2
-    if ims.accel_filter is not None:
-        ims.accel.z1, ims.accel.z2 = az1, az2
-    gyro_t = _delayed(ims.gyro, gyro_t)
-    ims.accel_t = _delayed(ims.accel, accel_t)
-    # The navigation's acceleration: the mean over one control period, motion-capture late.
-    ims.accel_ring.append(ring)
-    ims.accel_ring.pop(0)
-    if state.step_index % params.substeps == 0:
-        ims.nav_accel_mps2 = _mean_of(ims.accel_ring, params.substeps)
-    # The heading the external source reports (the motion capture's, as late).
+    m = 2 * n
+    noise = np.empty((3, m)) if gyro_sd else _NO_DRAWS  # (untouched without gyro noise)
+    gyro_t, accel_t, attitude = np.empty((3, m)), np.empty((3, m)), np.empty((m, 3, 3))
+    # The heading the external source reports: the motion capture's, as late.
     latency = params.latency_steps
     att = state.history[(state.step_index - latency) % (latency + 1)]
-    yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
-    np.arctan2(att[2][:, 1, 0], att[2][:, 0, 0], out=yaw_ext[:n])
-    np.arctan2(att[5][:, 1, 0], att[5][:, 0, 0], out=yaw_ext[n:])
-    ims.attitude = estimate_step(ims.attitude, gyro_t, ims.accel_t, ims.nav_accel_mps2, yaw_ext,
-                                 params.imu.estimator, params.dt_s)
-    ims.gyro_radps = gyro_t.T
-    frame.gyro_radps, frame.attitude_est = ims.gyro_radps, ims.attitude
+    chain, estimator, vehicle = params.imu.chain, params.imu.estimator, params.vehicle
+    gyro, accel = ims.gyro, ims.accel
+    gyro_c, accel_c = _imu_coeffs(ims)
+    gyro.head, accel.head, ims.ring_head = imu_step(
+        NUMPY_LOOPS, n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, gyro.z1,
+        gyro.z2, gyro.delay, gyro.head, state.leader_accel, state.follower_accel,
+        vehicle.gravity_mps2, frame.rot, ims.bias_body_mps2, both.thrust_n,
+        state.constants.hover_thrust_n, vehicle.accel_noise_mps2 ** 2,
+        params.imu.accel_vibration_mps2, accel_draws, chain.accel_range_mps2, accel_c,
+        accel.z1, accel.z2, accel.delay, accel.head, ims.accel_ring, ims.ring_head,
+        state.step_index, params.substeps, ims.nav_accel_mps2, att[2], att[5], ims.attitude,
+        estimator.accel_gain_radps, estimator.heading_gain_radps, params.dt_s, noise, gyro_t,
+        accel_t, attitude)
+    if gyro_sd:
+        frame.gyro_noise_radps = noise.T
+    ims.accel_t, ims.attitude, ims.gyro_radps = accel_t, attitude, gyro_t.T
+    frame.gyro_radps, frame.attitude_est = ims.gyro_radps, attitude
 
 
 _NO_DRAWS = np.zeros((6, 0))
@@ -186,25 +174,14 @@ def _imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _mean_of(ring: list[np.ndarray], count: int) -> np.ndarray:
-    """``np.mean(ring[:count], axis=0)`` bit for bit, without stacking the list into an array:
-    NumPy's mean over the first axis adds the samples in order onto +0.0, then divides by the
-    count (checked against it, -0.0 and all, for 1 to 10 samples of 2 to 2048 rows)."""
+    """``np.mean(ring[:count], axis=0)`` bit for bit, by the compiled mean the ``imu`` term
+    takes of its navigation ring (:func:`~aerodock.world.imu.ring_mean`; it adds the samples in
+    order onto +0.0, then divides by the count, as NumPy's mean over the first axis does:
+    checked against it, -0.0 and all, in ``tests/unit/test_glue_helpers.py``)."""
     samples = ring[:count]
     if not samples:
         return np.mean(samples, axis=0)
-    total = np.zeros(samples[0].shape)
-    for sample in samples:
-        total += sample
-    total /= len(samples)
-    return total
-
-
-def _delayed(chain: FilterState, sample: np.ndarray) -> np.ndarray:
-    """``sample`` into the chain's delay line, and what comes out of it."""
-    if chain.delay:
-        chain.delay.append(sample)
-        return chain.delay.pop(0)
-    return sample
+    return ring_mean(np.stack(samples), 0, len(samples))
 
 
 def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
