@@ -16,7 +16,7 @@ from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, fo
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
-from aerodock.world.imu import ImuState, biquad_coeffs, imu_step, ring_mean
+from aerodock.world.imu import ImuState, biquad_coeffs, imu_step
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import step_bar
 from aerodock.world.state import StepFrame, WorldState
@@ -171,17 +171,6 @@ def _imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
         hit = (biquad_coeffs(ims.gyro_filter), biquad_coeffs(ims.accel_filter))
         ims.__dict__["_coeffs"] = hit
     return hit
-
-
-def _mean_of(ring: list[np.ndarray], count: int) -> np.ndarray:
-    """``np.mean(ring[:count], axis=0)`` bit for bit, by the compiled mean the ``imu`` term
-    takes of its navigation ring (:func:`~aerodock.world.imu.ring_mean`; it adds the samples in
-    order onto +0.0, then divides by the count, as NumPy's mean over the first axis does:
-    checked against it, -0.0 and all, in ``tests/unit/test_glue_helpers.py``)."""
-    samples = ring[:count]
-    if not samples:
-        return np.mean(samples, axis=0)
-    return ring_mean(np.stack(samples), 0, len(samples))
 
 
 def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

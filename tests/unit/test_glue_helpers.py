@@ -1,5 +1,5 @@
 """The hot loop's shortcuts equal what they replace: ``frozen_record`` the dataclass constructor,
-``_mean_of`` ``np.mean``, the plain int codes their enums."""
+the IMU ring's mean ``np.mean``, the plain int codes their enums."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ from aerodock.downwash.base import BodyState, frozen_record
 from aerodock.mission.phases.gate_sensing import GateCode
 from aerodock.mission.spec import AbortCode, AbortReason, Phase, PhaseCode
 from aerodock.world.gripper import GateState
+from aerodock.world.imu import ring_mean
 from aerodock.world.platform import BarState
-from aerodock.world.terms import _mean_of
 from aerodock.world.vehicles.rigid_body import RigidBodyState
 
 
@@ -34,7 +34,7 @@ def test_frozen_record_is_the_constructors_object(cls):
         quick.p = None
 
 
-def test_mean_of_is_numpys_mean_bit_for_bit():
+def test_ring_mean_is_numpys_mean_bit_for_bit():
     rng = np.random.default_rng(0)
     for count in range(1, 8):
         for rows in (1, 2, 7, 64):
@@ -43,7 +43,9 @@ def test_mean_of_is_numpys_mean_bit_for_bit():
             if count > 1:
                 ring[1][0, 0] = -0.0  # -0.0 + -0.0 onto +0.0 stays +0.0, as in np.mean
             want = np.mean(ring[:count], axis=0)
-            got = _mean_of(ring, count)
+            oldest = int(rng.integers(len(ring)))  # the ring's head anywhere
+            stored = np.stack(ring[-oldest:] + ring[:-oldest]) if oldest else np.stack(ring)
+            got = ring_mean(stored, oldest, count)
             assert want.tobytes() == got.tobytes(), (count, rows)
 
 
