@@ -51,7 +51,9 @@ serves every pair of vehicles: the world's rotor sizes and the leader's thrust g
 A field offers the two parts separately (:meth:`RoundJetField.wrench`: the disks' force and
 torque; :meth:`RoundJetField.body_force_n`: the body's force, of the same step's turbulence) and
 together (:meth:`RoundJetField.acceleration`, :meth:`RoundJetField.mean_acceleration`). The bar
-under the leader feels drag of the wake air (:meth:`RoundJetField.bar_force_n`).
+under the leader feels drag of the wake air (:meth:`RoundJetField.bar_force_n`). A physics step's
+wrench, body force and bar force are also one compiled call (:meth:`RoundJetField.wake_step`, the
+world's way: the same numbers and random draws as the three calls in turn).
 """
 
 from __future__ import annotations
@@ -73,6 +75,9 @@ _PLANAR_PEAK = float(np.sqrt(1.0 / (2.0 * _LN2)) * np.exp(-0.5))
 CONTRACTED_WIDTH0_RATIO = float(np.sqrt(_LN2))
 """``b0 / R_eq`` of momentum theory's fully contracted wake (area ``A/2`` moving at ``2 v_h``)."""
 _SHARED_ROWS = 3  # the follower's shared processes: axial, lateral 1, lateral 2
+# What RoundJetField.wake_step stands for: a subclass that replaces one of them keeps it only if
+# it replaces wake_step too (RoundJetField.__init_subclass__).
+_WAKE_STEP_PARTS = ("wrench", "body_force_n", "bar_force_n", "_run")
 
 
 def centreline_speed_mps(thrust_n: np.ndarray, half_width_m: np.ndarray,
@@ -223,6 +228,17 @@ class RoundJetField:
         self._coeff: tuple | None = None
         self._area_key: tuple | None = None
         self._area_cols = np.zeros((4, 0))
+
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        """A subclass that replaces the wrench, the body's or the bar's force (or ``_run``, which
+        they share) but not :meth:`wake_step` has no ``wake_step`` (None, as
+        :class:`~aerodock.downwash.at_centre.RoundJetAtCentre` has no ``wrench``): the world then
+        calls its parts one by one (:func:`aerodock.downwash.wrench.wake_step`), its own
+        included, rather than the jet's one call that would skip them."""
+        super().__init_subclass__(**kwargs)
+        if "wake_step" not in cls.__dict__ and any(name in cls.__dict__
+                                                   for name in _WAKE_STEP_PARTS):
+            cls.wake_step = None  # type: ignore[assignment]
 
     def __setstate__(self, state: dict) -> None:
         """A copy or an unpickled field: its offsets read-only again (a copied array is
@@ -375,6 +391,52 @@ class RoundJetField:
             draws, float(step) if advance else 0.0, advance, self._bar_params(bar_area_m2), out)
         self._bar_noise = noise
         return out
+
+    def wake_step(self, leader: BodyState, follower: BodyState,
+                  rotor_offsets_body_m: np.ndarray, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
+                  bar_area_m2: float, dt: float, bar_axis: np.ndarray | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One physics step's wake in one compiled call (:func:`jet_kernel.wake_step`): the
+        numbers, random draws and turbulence of ``wrench(leader, follower,
+        rotor_offsets_body_m, dt)``, then ``body_force_n(leader, follower)``, then
+        ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2, dt, bar_axis)``, bit for bit
+        (``tests/unit/test_fused_wake.py``). Both turbulences are drawn before the kernel, the
+        follower's first, as the three calls draw them; afterwards :meth:`body_force_n` of the
+        same states gives this step's body force, as after :meth:`wrench`.
+
+        Returns:
+            ``(force_n, torque_nm, body_force_n, bar_force_n)``, each (n, 3): the disks' force,
+            N, world NED; their torque about the centre of mass, N·m, body FRD; the body's
+            force and the bar's, N, NED (views of one array, made for this call).
+        """
+        offsets = _offsets(rotor_offsets_body_m)
+        n, k = leader.n, offsets.shape[0]
+        # the follower's turbulence, as _run draws it for wrench
+        if self._common.shape[1] != n or self._own.shape[0] != k:
+            self._draw_follower_noise(n, k)
+        self._pair_distance(offsets)
+        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
+        if not self._processes.flags.c_contiguous:
+            self._set_processes(np.array(self._processes, order="C"))
+        # then the bar's, as bar_force_n draws it
+        if self._bar_noise.shape[1] != n:
+            self._bar_noise = standard_normal_t(self._rng, n, 3)
+        bar_advance = dt > 0
+        bar_draws = standard_normal_t(self._rng, n, 3) if bar_advance else _NO_DRAWS
+        bar_noise = np.array(self._bar_noise, order="C")  # the kernel writes it in place
+        out = np.empty((4, n, 3))
+        lr, lt, lv, lp = self._leader_arrays(leader)
+        jet_kernel.wake_step(
+            NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
+            np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
+            self._force_coeff(follower.mass_kg, k), self._processes, draws, float(dt),
+            _rows3(bar_p_m), _rows3(bar_v_mps), _NO_ROWS if bar_axis is None else _rows3(bar_axis),
+            bar_axis is not None, bar_noise, bar_draws, float(dt) if bar_advance else 0.0,
+            bar_advance, self._bar_params(bar_area_m2), out)
+        self._last_dt = dt
+        self._bar_noise = bar_noise
+        self._body_key, self._body_force = (leader, follower), out[2]
+        return out[0], out[1], out[2], out[3]
 
     def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
         """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object

@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
+from aerodock.downwash.wrench import (
+    bar_wake_force_n,
+    follower_body_force_n,
+    follower_wrench,
+    wake_step,
+)
 from aerodock.rng import standard_normal_t
 from aerodock.world.attitude_estimator import estimate_step
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
@@ -27,11 +32,25 @@ def wake_on_rotor_disks(state: WorldState, frame: StepFrame, params: WorldParams
     """The leader's wake on a rigid follower's rotor disks: each disk takes the wake air it
     ingests, with its own (partly shared) turbulence, a force and a torque. A point mass takes
     the field's whole force (disks and body) at its centre here, and no torque. A field without
-    ``wrench`` gives its whole force here. Random draws: the field's turbulence."""
+    ``wrench`` gives its whole force here. Random draws: the field's turbulence.
+
+    A field with a ``wake_step`` (the default jet: :func:`~aerodock.downwash.wrench.wake_step`)
+    gives a rigid follower's disks, body and bar their forces in that one call here, drawing the
+    follower's turbulence, then the bar's, as the three terms would in turn; the body's and the
+    bar's forces wait on the frame for their own terms below, which add them where they always
+    did (so a step of one's own keeps these three terms together, in this order)."""
     n = state.n
     if params.rigid:
-        force, torque = follower_wrench(state.field, frame.lead, frame.fol,
-                                        state.constants.rotor_offsets_m, params.dt_s)
+        bar = state.bar
+        parts = wake_step(state.field, frame.lead, frame.fol, state.constants.rotor_offsets_m,
+                          bar.p, bar.v, params.platform.bar_area_m2, params.dt_s,
+                          frame.bar_axis_t.T)
+        if parts is None:
+            force, torque = follower_wrench(state.field, frame.lead, frame.fol,
+                                            state.constants.rotor_offsets_m, params.dt_s)
+        else:
+            force, torque, body, bar_force = parts
+            _keep_wake_forces(frame, body, bar_force)
         frame.wake_torque_nm = torque
         frame.torque_t[:, n:] += torque.T
     else:
@@ -46,8 +65,12 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     same step's turbulence (fields without a body force give none: their whole force is on the
     disks; a point mass took it with the disks'). No random draws."""
     n = state.n
-    force = (follower_body_force_n(state.field, frame.lead, frame.fol) if params.rigid
-             else None)
+    kept = _kept_wake_forces(frame)
+    if kept is not None:
+        force = kept[0]
+    else:
+        force = (follower_body_force_n(state.field, frame.lead, frame.fol) if params.rigid
+                 else None)
     total = frame.wake_force_n
     if force is not None:
         frame.force_n[n:] += force
@@ -57,12 +80,29 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 
 def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The wake's drag on the hanging bar (fields without a bar force give none). Random draws:
-    the bar's turbulence, if the field has it."""
-    bar = state.bar
-    force = bar_wake_force_n(state.field, frame.lead, bar.p, bar.v, params.platform.bar_area_m2,
-                             params.dt_s, frame.bar_axis_t.T)
+    the bar's turbulence, if the field has it (drawn by ``wake_on_rotor_disks`` with a field's
+    ``wake_step``)."""
+    kept = _kept_wake_forces(frame)
+    if kept is not None:
+        force = kept[1]
+    else:
+        bar = state.bar
+        force = bar_wake_force_n(state.field, frame.lead, bar.p, bar.v,
+                                 params.platform.bar_area_m2, params.dt_s, frame.bar_axis_t.T)
     if force is not None:
         frame.bar_force_n += force
+
+
+def _keep_wake_forces(frame: StepFrame, body_n: np.ndarray, bar_n: np.ndarray) -> None:
+    """Keep a field's ``wake_step`` forces on the body and the bar, (n, 3) N NED each, for
+    :func:`wake_on_body` and :func:`wake_on_bar` of the same step (on the frame, which lives
+    one step: not a field of it, as nothing but these terms reads them)."""
+    frame.__dict__["_wake_forces"] = (body_n, bar_n)
+
+
+def _kept_wake_forces(frame: StepFrame) -> tuple[np.ndarray, np.ndarray] | None:
+    """The body's and the bar's forces :func:`_keep_wake_forces` kept this step, or None."""
+    return frame.__dict__.get("_wake_forces")
 
 
 def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
