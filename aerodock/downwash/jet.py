@@ -407,7 +407,8 @@ class RoundJetField:
         Returns:
             ``(force_n, torque_nm, body_force_n, bar_force_n)``, each (n, 3): the disks' force,
             N, world NED; their torque about the centre of mass, N·m, body FRD; the body's
-            force and the bar's, N, NED (views of one array, made for this call).
+            force and the bar's, N, NED (views of one array, made for this call; the body's is
+            the one :meth:`body_force_n` copies for the rest of the step: read, not written).
         """
         offsets = _offsets(rotor_offsets_body_m)
         n, k = leader.n, offsets.shape[0]
@@ -435,8 +436,9 @@ class RoundJetField:
             bar_advance, self._bar_params(bar_area_m2), out)
         self._last_dt = dt
         self._bar_noise = bar_noise
-        self._body_key, self._body_force = (leader, follower), out[2]
-        return out[0], out[1], out[2], out[3]
+        force, torque, body, bar = out
+        self._body_key, self._body_force = (leader, follower), body  # body_force_n copies it
+        return force, torque, body, bar
 
     def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
         """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object
