@@ -377,18 +377,14 @@ class RoundJetField:
                 cylinder makes drag (cross-flow principle). ``None``: all of ``u_rel`` counts.
         """
         n = leader.n
-        if self._bar_noise.shape[1] != n:
-            self._bar_noise = standard_normal_t(self._rng, n, 3)
-        step = dt if dt is not None else self._last_dt
-        advance = step is not None and step > 0
-        draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
-        noise = np.array(self._bar_noise, order="C")  # the kernel writes it in place
+        noise, draws, step, advance = self._bar_draws(
+            n, dt if dt is not None else self._last_dt)
         out = np.empty((n, 3))
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.bar_force(
             NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, _rows3(bar_p_m), _rows3(bar_v_mps),
             _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, noise,
-            draws, float(step) if advance else 0.0, advance, self._bar_params(bar_area_m2), out)
+            draws, step, advance, self._bar_params(bar_area_m2), out)
         self._bar_noise = noise
         return out
 
@@ -412,28 +408,18 @@ class RoundJetField:
         """
         offsets = _offsets(rotor_offsets_body_m)
         n, k = leader.n, offsets.shape[0]
-        # the follower's turbulence, as _run draws it for wrench
-        if self._common.shape[1] != n or self._own.shape[0] != k:
-            self._draw_follower_noise(n, k)
+        draws = self._follower_draws(n, k, noisy=True, advance=True)  # as wrench's _run
         self._pair_distance(offsets)
-        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
-        if not self._processes.flags.c_contiguous:
-            self._set_processes(np.array(self._processes, order="C"))
-        # then the bar's, as bar_force_n draws it
-        if self._bar_noise.shape[1] != n:
-            self._bar_noise = standard_normal_t(self._rng, n, 3)
-        bar_advance = dt > 0
-        bar_draws = standard_normal_t(self._rng, n, 3) if bar_advance else _NO_DRAWS
-        bar_noise = np.array(self._bar_noise, order="C")  # the kernel writes it in place
+        bar_noise, bar_draws, bar_dt, bar_advance = self._bar_draws(n, dt)  # as bar_force_n
         out = np.empty((4, n, 3))
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.wake_step(
             NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
             np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
             self._force_coeff(follower.mass_kg, k), self._processes, draws, float(dt),
-            _rows3(bar_p_m), _rows3(bar_v_mps), _NO_ROWS if bar_axis is None else _rows3(bar_axis),
-            bar_axis is not None, bar_noise, bar_draws, float(dt) if bar_advance else 0.0,
-            bar_advance, self._bar_params(bar_area_m2), out)
+            _rows3(bar_p_m), _rows3(bar_v_mps),
+            _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, bar_noise,
+            bar_draws, bar_dt, bar_advance, self._bar_params(bar_area_m2), out)
         self._last_dt = dt
         self._bar_noise = bar_noise
         force, torque, body, bar = out
@@ -468,6 +454,29 @@ class RoundJetField:
         return values
 
     # -- internals -----------------------------------------------------------------------------
+    def _follower_draws(self, n: int, k: int, noisy: bool, advance: bool) -> np.ndarray:
+        """This step's draws for the follower's turbulence, (3 + k, n) (none unless
+        ``advance``), after starting the processes afresh for a new batch shape when ``noisy``;
+        the processes left contiguous for the kernel to advance in place."""
+        if noisy and (self._common.shape[1] != n or self._own.shape[0] != k):
+            self._draw_follower_noise(n, k)
+        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else _NO_DRAWS
+        if advance and not self._processes.flags.c_contiguous:
+            self._set_processes(np.array(self._processes, order="C"))
+        return draws
+
+    def _bar_draws(self, n: int, dt: float | None,
+                   ) -> tuple[np.ndarray, np.ndarray, float, bool]:
+        """The bar's turbulence for a step of ``dt`` (None or 0: no step): (its state, a copy
+        the kernel advances in place (3, n); this step's draws; the step, s, 0 without one;
+        whether it advances), after starting it afresh for a new batch size."""
+        if self._bar_noise.shape[1] != n:
+            self._bar_noise = standard_normal_t(self._rng, n, 3)
+        advance = dt is not None and dt > 0
+        draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
+        return (np.array(self._bar_noise, order="C"), draws, float(dt) if advance else 0.0,
+                advance)
+
     def _draw_follower_noise(self, n: int, k: int) -> None:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
         self._set_processes(np.array(draw, order="C"))
@@ -501,12 +510,8 @@ class RoundJetField:
         (the mean axial force per point (k + 1, n), the correlation time and the disks'
         shared variance (n,)))."""
         n, k = leader.n, offsets.shape[0]
-        if noisy and (self._common.shape[1] != n or self._own.shape[0] != k):
-            self._draw_follower_noise(n, k)
+        draws = self._follower_draws(n, k, noisy, advance)
         self._pair_distance(offsets)
-        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else _NO_DRAWS
-        if advance and not self._processes.flags.c_contiguous:
-            self._set_processes(np.array(self._processes, order="C"))
         force, torque, body = np.empty((n, 3)), np.zeros((n, 3)), np.empty((n, 3))
         axial, tau, share = np.empty((k + 1, n)), np.empty(n), np.empty(n)
         lr, lt, lv, lp = self._leader_arrays(leader)
