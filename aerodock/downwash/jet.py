@@ -51,7 +51,9 @@ serves every pair of vehicles: the world's rotor sizes and the leader's thrust g
 A field offers the two parts separately (:meth:`RoundJetField.wrench`: the disks' force and
 torque; :meth:`RoundJetField.body_force_n`: the body's force, of the same step's turbulence) and
 together (:meth:`RoundJetField.acceleration`, :meth:`RoundJetField.mean_acceleration`). The bar
-under the leader feels drag of the wake air (:meth:`RoundJetField.bar_force_n`).
+under the leader feels drag of the wake air (:meth:`RoundJetField.bar_force_n`). A physics step's
+wrench, body force and bar force are also one compiled call (:meth:`RoundJetField.wake_step`, the
+world's way: the same numbers and random draws as the three calls in turn).
 """
 
 from __future__ import annotations
@@ -73,6 +75,9 @@ _PLANAR_PEAK = float(np.sqrt(1.0 / (2.0 * _LN2)) * np.exp(-0.5))
 CONTRACTED_WIDTH0_RATIO = float(np.sqrt(_LN2))
 """``b0 / R_eq`` of momentum theory's fully contracted wake (area ``A/2`` moving at ``2 v_h``)."""
 _SHARED_ROWS = 3  # the follower's shared processes: axial, lateral 1, lateral 2
+# What RoundJetField.wake_step stands for: a subclass that replaces one of them keeps it only if
+# it replaces wake_step too (RoundJetField.__init_subclass__).
+_WAKE_STEP_PARTS = ("wrench", "body_force_n", "bar_force_n", "_run")
 
 
 def centreline_speed_mps(thrust_n: np.ndarray, half_width_m: np.ndarray,
@@ -224,6 +229,17 @@ class RoundJetField:
         self._area_key: tuple | None = None
         self._area_cols = np.zeros((4, 0))
 
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        """A subclass that replaces the wrench, the body's or the bar's force (or ``_run``, which
+        they share) but not :meth:`wake_step` has no ``wake_step`` (None, as
+        :class:`~aerodock.downwash.at_centre.RoundJetAtCentre` has no ``wrench``): the world then
+        calls its parts one by one (:func:`aerodock.downwash.wrench.wake_step`), its own
+        included, rather than the jet's one call that would skip them."""
+        super().__init_subclass__(**kwargs)
+        if "wake_step" not in cls.__dict__ and any(name in cls.__dict__
+                                                   for name in _WAKE_STEP_PARTS):
+            cls.wake_step = None  # type: ignore[assignment]
+
     def __setstate__(self, state: dict) -> None:
         """A copy or an unpickled field: its offsets read-only again (a copied array is
         writable), as the geometry's caches want them."""
@@ -361,20 +377,54 @@ class RoundJetField:
                 cylinder makes drag (cross-flow principle). ``None``: all of ``u_rel`` counts.
         """
         n = leader.n
-        if self._bar_noise.shape[1] != n:
-            self._bar_noise = standard_normal_t(self._rng, n, 3)
-        step = dt if dt is not None else self._last_dt
-        advance = step is not None and step > 0
-        draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
-        noise = np.array(self._bar_noise, order="C")  # the kernel writes it in place
+        noise, draws, step, advance = self._bar_draws(
+            n, dt if dt is not None else self._last_dt)
         out = np.empty((n, 3))
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.bar_force(
             NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, _rows3(bar_p_m), _rows3(bar_v_mps),
             _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, noise,
-            draws, float(step) if advance else 0.0, advance, self._bar_params(bar_area_m2), out)
+            draws, step, advance, self._bar_params(bar_area_m2), out)
         self._bar_noise = noise
         return out
+
+    def wake_step(self, leader: BodyState, follower: BodyState,
+                  rotor_offsets_body_m: np.ndarray, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
+                  bar_area_m2: float, dt: float, bar_axis: np.ndarray | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One physics step's wake in one compiled call (:func:`jet_kernel.wake_step`): the
+        numbers, random draws and turbulence of ``wrench(leader, follower,
+        rotor_offsets_body_m, dt)``, then ``body_force_n(leader, follower)``, then
+        ``bar_force_n(leader, bar_p_m, bar_v_mps, bar_area_m2, dt, bar_axis)``, bit for bit
+        (``tests/unit/test_fused_wake.py``). Both turbulences are drawn before the kernel, the
+        follower's first, as the three calls draw them; afterwards :meth:`body_force_n` of the
+        same states gives this step's body force, as after :meth:`wrench`.
+
+        Returns:
+            ``(force_n, torque_nm, body_force_n, bar_force_n)``, each (n, 3): the disks' force,
+            N, world NED; their torque about the centre of mass, N·m, body FRD; the body's
+            force and the bar's, N, NED (views of one array, made for this call; the body's is
+            the one :meth:`body_force_n` copies for the rest of the step: read, not written).
+        """
+        offsets = _offsets(rotor_offsets_body_m)
+        n, k = leader.n, offsets.shape[0]
+        draws = self._follower_draws(n, k, noisy=True, advance=True)  # as wrench's _run
+        self._pair_distance(offsets)
+        bar_noise, bar_draws, bar_dt, bar_advance = self._bar_draws(n, dt)  # as bar_force_n
+        out = np.empty((4, n, 3))
+        lr, lt, lv, lp = self._leader_arrays(leader)
+        jet_kernel.wake_step(
+            NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
+            np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
+            self._force_coeff(follower.mass_kg, k), self._processes, draws, float(dt),
+            _rows3(bar_p_m), _rows3(bar_v_mps),
+            _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, bar_noise,
+            bar_draws, bar_dt, bar_advance, self._bar_params(bar_area_m2), out)
+        self._last_dt = dt
+        self._bar_noise = bar_noise
+        force, torque, body, bar = out
+        self._body_key, self._body_force = (leader, follower), body  # body_force_n copies it
+        return force, torque, body, bar
 
     def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
         """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object
@@ -404,6 +454,29 @@ class RoundJetField:
         return values
 
     # -- internals -----------------------------------------------------------------------------
+    def _follower_draws(self, n: int, k: int, noisy: bool, advance: bool) -> np.ndarray:
+        """This step's draws for the follower's turbulence, (3 + k, n) (none unless
+        ``advance``), after starting the processes afresh for a new batch shape when ``noisy``;
+        the processes left contiguous for the kernel to advance in place."""
+        if noisy and (self._common.shape[1] != n or self._own.shape[0] != k):
+            self._draw_follower_noise(n, k)
+        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else _NO_DRAWS
+        if advance and not self._processes.flags.c_contiguous:
+            self._set_processes(np.array(self._processes, order="C"))
+        return draws
+
+    def _bar_draws(self, n: int, dt: float | None,
+                   ) -> tuple[np.ndarray, np.ndarray, float, bool]:
+        """The bar's turbulence for a step of ``dt`` (None or 0: no step): (its state, a copy
+        the kernel advances in place (3, n); this step's draws; the step, s, 0 without one;
+        whether it advances), after starting it afresh for a new batch size."""
+        if self._bar_noise.shape[1] != n:
+            self._bar_noise = standard_normal_t(self._rng, n, 3)
+        advance = dt is not None and dt > 0
+        draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
+        return (np.array(self._bar_noise, order="C"), draws, float(dt) if advance else 0.0,
+                advance)
+
     def _draw_follower_noise(self, n: int, k: int) -> None:
         draw = standard_normal_t(self._rng, n, _SHARED_ROWS + k)
         self._set_processes(np.array(draw, order="C"))
@@ -437,12 +510,8 @@ class RoundJetField:
         (the mean axial force per point (k + 1, n), the correlation time and the disks'
         shared variance (n,)))."""
         n, k = leader.n, offsets.shape[0]
-        if noisy and (self._common.shape[1] != n or self._own.shape[0] != k):
-            self._draw_follower_noise(n, k)
+        draws = self._follower_draws(n, k, noisy, advance)
         self._pair_distance(offsets)
-        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else _NO_DRAWS
-        if advance and not self._processes.flags.c_contiguous:
-            self._set_processes(np.array(self._processes, order="C"))
         force, torque, body = np.empty((n, 3)), np.zeros((n, 3)), np.empty((n, 3))
         axial, tau, share = np.empty((k + 1, n)), np.empty(n), np.empty(n)
         lr, lt, lv, lp = self._leader_arrays(leader)

@@ -460,3 +460,31 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
         norm = math.sqrt(norm) * drag
         for c in range(3):
             out[i, c] = norm * u[c]
+
+
+@njit
+def wake_step(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray,
+              lead_r: np.ndarray, lead_thrust: np.ndarray, lead_v: np.ndarray,
+              lead_p: np.ndarray, fol_r: np.ndarray, fol_p: np.ndarray, fol_v: np.ndarray,
+              coeff: np.ndarray, processes: np.ndarray, draws: np.ndarray, dt: float,
+              bar_p: np.ndarray, bar_v: np.ndarray, bar_axis: np.ndarray, has_axis: bool,
+              bar_noise: np.ndarray, bar_draws: np.ndarray, bar_dt: float, bar_advance: bool,
+              bar_consts: np.ndarray, out: np.ndarray) -> None:
+    """One physics step's wake on the follower and the bar in one call (the field's
+    ``wake_step``): :func:`jet_forces` as the field's ``wrench`` calls it (the turbulence
+    ``processes`` advanced by ``dt`` with ``draws``; the noisy, split forces and the torque),
+    then :func:`bar_force` as its ``bar_force_n`` does (``bar_noise`` advanced by ``bar_dt``
+    with ``bar_draws`` when ``bar_advance``). Their arguments are theirs; ``out`` (4, n, 3)
+    takes the disks' force (N, NED), their torque (N·m, body FRD), the body's force and the
+    bar's (N, NED). Nothing here computes: the two kernels are the physics, so the numbers are
+    theirs called one after the other."""
+    n = lead_r.shape[0]
+    npts = offsets.shape[0] + 1
+    axial = np.empty((npts, n))
+    tau = np.empty(n)
+    share = np.empty(n)
+    jet_forces(loops, jp, cols, offsets, lead_r, lead_thrust, lead_v, lead_p, fol_r, fol_p,
+               fol_v, coeff, processes, draws, dt, True, True, True, True, out[0], out[1],
+               out[2], axial, tau, share)
+    bar_force(loops, jp, lead_r, lead_thrust, lead_v, lead_p, bar_p, bar_v, bar_axis, has_axis,
+              bar_noise, bar_draws, bar_dt, bar_advance, bar_consts, out[3])

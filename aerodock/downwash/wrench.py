@@ -16,6 +16,12 @@ with only ``reset`` and ``acceleration`` keeps working:
 ``follower_wrench`` and ``bar_wake_force_n`` advance the field's turbulence by ``dt``: the world
 calls each once per physics step (not also ``acceleration``), then ``follower_body_force_n``,
 which reads the same step's turbulence.
+
+A field can also give all three at once: :func:`wake_step` calls its ``wake_step`` (the default
+jet's: one compiled call in place of three Python paths, with the numbers and random draws of
+the three calls in turn), and returns None for a field without one (then the world makes the
+three calls above). A subclass of the jet that replaces one of the three has none
+(:meth:`aerodock.downwash.jet.RoundJetField.__init_subclass__`).
 """
 
 from __future__ import annotations
@@ -124,6 +130,29 @@ def bar_wake_force_n(field: Any, leader: BodyState, bar_p_m: np.ndarray, bar_v_m
     if bar_axis is not None and "bar_axis" in accepts:
         kwargs["bar_axis"] = bar_axis
     return method(leader, bar_p_m, bar_v_mps, bar_area_m2, **kwargs)
+
+
+def wake_step(field: Any, leader: BodyState, follower: BodyState,
+              rotor_offsets_body_m: np.ndarray, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
+              bar_area_m2: float, dt: float, bar_axis: np.ndarray | None = None,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The whole physics step's wake from the field's ``wake_step`` in one call, None if the
+    field has none (or it is None).
+
+    Its numbers and random draws are those of :func:`follower_wrench`, then
+    :func:`follower_body_force_n`, then :func:`bar_wake_force_n` with the same arguments, so
+    it advances the follower's turbulence, then the bar's, by ``dt``.
+
+    Returns:
+        ``(force_n, torque_nm, body_force_n, bar_force_n)``, each (n, 3): the follower's
+        disks' force, N, world NED; their torque, N·m, body FRD, about the centre of mass; the
+        force on its body and on the bar, N, world NED.
+    """
+    method = getattr(field, "wake_step", None)
+    if method is None:
+        return None
+    return method(leader, follower, rotor_offsets_body_m, bar_p_m, bar_v_mps, bar_area_m2, dt,
+                  bar_axis)
 
 
 @lru_cache(maxsize=64)

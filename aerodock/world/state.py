@@ -236,6 +236,10 @@ class StepFrame:
         gyro_radps, attitude_est: (2n, 3), (2n, 3, 3) what the autopilots read, with the
             filtered IMU chain (None: the true attitude and the gyro's noisy rates).
         new, accel: the vehicles after the step and their accelerations (2n, 3).
+        wake_terms_together: the step runs the three wake terms one after the other, so the
+            field may give all three forces in one call (:func:`aerodock.world.step.step_world`).
+        wake_body_n, wake_bar_n: (n, 3) the wake's force on the followers' bodies and on the
+            bars from that one call, N, NED, for their own terms to add (None: not made).
     """
 
     targets: Any
@@ -264,3 +268,6 @@ class StepFrame:
     attitude_est: np.ndarray | None = None
     new: Any = None
     accel: np.ndarray | None = None
+    wake_terms_together: bool = False
+    wake_body_n: np.ndarray | None = None
+    wake_bar_n: np.ndarray | None = None

@@ -14,6 +14,7 @@ and one ``Term`` here, or, outside the package, a step of one's own (:func:`with
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -100,9 +101,29 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     )
 
 
+_WAKE_TERMS = (terms.wake_on_rotor_disks, terms.wake_on_body, terms.wake_on_bar)
+
+
+def wake_terms_together(step: tuple[Term, ...]) -> bool:
+    """Whether ``step`` runs the three wake terms one after the other, in :data:`WORLD_STEP`'s
+    order: only then may a field give their three forces in one call (its random draws, the
+    follower's then the bar's, are then those of the three calls in turn). Kept per step."""
+    try:
+        return _wake_terms_together(step)
+    except TypeError:  # a term of one's own that cannot be hashed: asked every step
+        return _wake_terms_together.__wrapped__(step)
+
+
+@lru_cache(maxsize=64)
+def _wake_terms_together(step: tuple[Term, ...]) -> bool:
+    applied = [term.apply for term in step]
+    return any(tuple(applied[i:i + 3]) == _WAKE_TERMS for i in range(len(applied) - 2))
+
+
 def step_world(state: WorldState, params: WorldParams, step: tuple[Term, ...], targets: Any,
                close_command: np.ndarray | None) -> None:
     """Advance every trial of ``state`` by one physics step of ``step``'s terms, in order."""
     frame = begin_step(state, params, targets, close_command)
+    frame.wake_terms_together = wake_terms_together(step)
     for term in step:
         term.apply(state, frame, params)

@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from aerodock.downwash.wrench import bar_wake_force_n, follower_body_force_n, follower_wrench
+from aerodock.downwash.wrench import (
+    bar_wake_force_n,
+    follower_body_force_n,
+    follower_wrench,
+    wake_step,
+)
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
@@ -27,11 +32,26 @@ def wake_on_rotor_disks(state: WorldState, frame: StepFrame, params: WorldParams
     """The leader's wake on a rigid follower's rotor disks: each disk takes the wake air it
     ingests, with its own (partly shared) turbulence, a force and a torque. A point mass takes
     the field's whole force (disks and body) at its centre here, and no torque. A field without
-    ``wrench`` gives its whole force here. Random draws: the field's turbulence."""
+    ``wrench`` gives its whole force here. Random draws: the field's turbulence.
+
+    A field with a ``wake_step`` (the default jet: :func:`~aerodock.downwash.wrench.wake_step`)
+    gives a rigid follower's disks, body and bar their forces in that one call here, drawing the
+    follower's turbulence, then the bar's, as the three terms would in turn; the body's and the
+    bar's forces wait on the frame for their own terms below, which add them where they always
+    did. It is made only when the step runs these three terms one after the other
+    (``frame.wake_terms_together``, :mod:`aerodock.world.step`): a step of one's own that puts a
+    term between them, or leaves one out, takes the three calls."""
     n = state.n
     if params.rigid:
-        force, torque = follower_wrench(state.field, frame.lead, frame.fol,
-                                        state.constants.rotor_offsets_m, params.dt_s)
+        bar = state.bar
+        parts = (wake_step(state.field, frame.lead, frame.fol, state.constants.rotor_offsets_m,
+                           bar.p, bar.v, params.platform.bar_area_m2, params.dt_s,
+                           frame.bar_axis_t.T) if frame.wake_terms_together else None)
+        if parts is None:
+            force, torque = follower_wrench(state.field, frame.lead, frame.fol,
+                                            state.constants.rotor_offsets_m, params.dt_s)
+        else:
+            force, torque, frame.wake_body_n, frame.wake_bar_n = parts
         frame.wake_torque_nm = torque
         frame.torque_t[:, n:] += torque.T
     else:
@@ -46,8 +66,11 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     same step's turbulence (fields without a body force give none: their whole force is on the
     disks; a point mass took it with the disks'). No random draws."""
     n = state.n
-    force = (follower_body_force_n(state.field, frame.lead, frame.fol) if params.rigid
-             else None)
+    if frame.wake_body_n is not None:  # from the field's one call (wake_on_rotor_disks)
+        force = frame.wake_body_n
+    else:
+        force = (follower_body_force_n(state.field, frame.lead, frame.fol) if params.rigid
+                 else None)
     total = frame.wake_force_n
     if force is not None:
         frame.force_n[n:] += force
@@ -57,10 +80,14 @@ def wake_on_body(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 
 def wake_on_bar(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The wake's drag on the hanging bar (fields without a bar force give none). Random draws:
-    the bar's turbulence, if the field has it."""
-    bar = state.bar
-    force = bar_wake_force_n(state.field, frame.lead, bar.p, bar.v, params.platform.bar_area_m2,
-                             params.dt_s, frame.bar_axis_t.T)
+    the bar's turbulence, if the field has it (drawn by ``wake_on_rotor_disks`` with a field's
+    ``wake_step``)."""
+    if frame.wake_bar_n is not None:  # from the field's one call (wake_on_rotor_disks)
+        force = frame.wake_bar_n
+    else:
+        bar = state.bar
+        force = bar_wake_force_n(state.field, frame.lead, bar.p, bar.v,
+                                 params.platform.bar_area_m2, params.dt_s, frame.bar_axis_t.T)
     if force is not None:
         frame.bar_force_n += force
 
