@@ -359,35 +359,67 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
     """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel, rate integral,
     yaw setpoint) from the compiled :func:`rigid_kernel.step_vehicles`: under the rotor speed
     commands ``rotor_speed_cmd``, or (None) flown by the autopilot to ``targets`` on ``gyro``
-    (plus ``gyro_noise``) and ``attitude`` (None: the true one)."""
-    body = state.body
+    (plus ``gyro_noise``) and ``attitude`` (None: the true attitude)."""
     n = state.p.shape[0]
-    alpha, inertia = _body_constants(body, dt_s)
-    consts, mixer, torque_map, drag_sums = kernel_constants(params)
+    (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
+     thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = _step_constants(
+        state.body, params, dt_s, state.thrust_gain)
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
            np.empty((n, 4)), np.empty(n), np.empty((n, 3)),
            np.empty((n, params.autopilot_state_columns)), np.empty(n))
-    flown = targets is not None
-    ff = targets.torque_ff_nm if flown else None
+    if targets is not None:
+        ff = targets.torque_ff_nm
+        rigid_kernel.step_vehicles(
+            state.p, state.v, state.R, state.w, state.rotor_speed, kc, torque_gain, mass_rows,
+            inertia, alpha, True, _NO_ROWS, _NO_ATTITUDE if attitude is None else attitude,
+            attitude is not None, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
+            _NO_ROWS if ff is None else ff, ff is not None, state.w if gyro is None else gyro,
+            _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
+            state.autopilot_state, state.yaw_setpoint, consts, has_stack, stack, mixer,
+            thrust_max, thrust_coeff, np.asarray(ext_force_n, dtype=float),
+            _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
+            ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity,
+            dt_s, *out)
+        return out
     rigid_kernel.step_vehicles(
-        state.p, state.v, state.R, state.w, state.rotor_speed,
-        _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain), body.torque_gain,
-        body.mass_rows_kg, inertia, alpha, flown,
-        _NO_ROWS if flown else np.asarray(rotor_speed_cmd, dtype=float),
-        _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
-        targets.R_des if flown else _NO_ATTITUDE,
-        targets.yaw_rate_radps if flown else _NO_VALUES,
-        targets.thrust_n if flown else _NO_VALUES, _NO_ROWS if ff is None else ff,
-        ff is not None, state.w if gyro is None else gyro,
+        state.p, state.v, state.R, state.w, state.rotor_speed, kc, torque_gain, mass_rows,
+        inertia, alpha, False, np.asarray(rotor_speed_cmd, dtype=float),
+        _NO_ATTITUDE if attitude is None else attitude, attitude is not None, _NO_ATTITUDE,
+        _NO_VALUES, _NO_VALUES, _NO_ROWS, False, state.w if gyro is None else gyro,
         _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
-        state.autopilot_state, state.yaw_setpoint, consts, params.stack_constants is not None,
-        _stack(params), mixer, params.rotor_thrust_max_n,
-        params.thrust_coeff, np.asarray(ext_force_n, dtype=float),
+        state.autopilot_state, state.yaw_setpoint, consts, has_stack, stack, mixer, thrust_max,
+        thrust_coeff, np.asarray(ext_force_n, dtype=float),
         _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
-        ext_torque_nm is not None, torque_map, drag_sums, params.rotor_drag_coeff,
-        params.rotor_drag_z_coeff, params.parasitic_drag_coeff, params.gravity_mps2, dt_s,
+        ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity, dt_s,
         *out)
     return out
+
+
+def _step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
+                    thrust_gain: np.ndarray) -> tuple:
+    """:func:`rigid_kernel.step_vehicles`'s arguments that stay the same from step to step for
+    one body, vehicle type, ``dt_s`` and thrust gain: (k_T per vehicle, torque gains, mass
+    rows, inertia, the motors' step factor, the autopilot's constants, whether a flight stack
+    flies, its constants, the mixer, the rotor thrust limit, k_T, the torque map, the rotor
+    drag's sums, the three drag coefficients, gravity). Kept on ``body`` for the last
+    ``params``, ``dt_s`` and ``thrust_gain`` while the arrays the numbers among them are
+    computed from are read-only (the checks of :func:`_body_constants` and
+    :func:`_thrust_coeffs`, which compute them); the rest are references to ``body``'s and
+    ``params``' own read-only fields."""
+    hit = body.__dict__.get("_step_arguments")  # not a field: numbers derived from it
+    if (hit is not None and hit[0] is params and hit[1] == dt_s and hit[2] is thrust_gain
+            and is_frozen(thrust_gain) and is_frozen(body.motor_tau_s)
+            and is_frozen(body.inertia_kgm2)):
+        return hit[3]
+    alpha, inertia = _body_constants(body, dt_s)
+    consts, mixer, torque_map, drag_sums = kernel_constants(params)
+    arguments = (_thrust_coeffs(body, params.thrust_coeff, thrust_gain), body.torque_gain,
+                 body.mass_rows_kg, inertia, alpha, consts, params.stack_constants is not None,
+                 _stack(params), mixer, params.rotor_thrust_max_n, params.thrust_coeff,
+                 torque_map, drag_sums, params.rotor_drag_coeff, params.rotor_drag_z_coeff,
+                 params.parasitic_drag_coeff, params.gravity_mps2)
+    body.__dict__["_step_arguments"] = (params, dt_s, thrust_gain, arguments)
+    return arguments
 
 
 _NO_ATTITUDE = np.zeros((0, 3, 3))
