@@ -238,3 +238,32 @@ def test_the_frame_is_its_constructors(cfg):
     assert frame.bar_axis_t.tobytes() == np.stack(
         [np.cos(world.bar.yaw_rad), np.sin(world.bar.yaw_rad),
          np.zeros(2)]).tobytes()
+
+
+# -- the gripper's tests: np.count_nonzero for ndarray.any ----------------------------------
+@pytest.mark.parametrize("a", [np.zeros(0, bool), np.zeros(1, bool), np.ones(1, bool),
+                               np.array([False, True, False]), np.zeros(3, np.int8),
+                               np.array([0, 2, 0], np.int8), np.array([0.0, -0.0]),
+                               np.array([0.0, np.nan]), np.array([1e-320, 0.0]),
+                               np.zeros((2, 3), bool), np.eye(2, dtype=bool), np.bool_(True),
+                               np.bool_(False)])
+def test_any_is_ndarray_any(a):
+    from aerodock.world.gripper import _any, _armed_any
+
+    assert _any(a) is bool(np.asarray(a).any())
+    assert _armed_any(a) is bool(np.asarray(a).any())
+
+
+def test_gripper_idle_is_the_reductions_it_replaced():
+    from aerodock.world.gripper import GripperState, _OPEN, gripper_idle
+
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 5):
+        for trial in range(50):
+            gate = rng.choice(np.array([0, 0, 0, 1, 2, 3], np.int8), n)
+            start = rng.choice(np.array([np.nan, np.inf, 1.0, -np.inf]), n)
+            nan = np.full(n, np.nan)
+            no = np.zeros(n, bool)
+            state = GripperState(gate, nan, nan, nan, start, no, no, no, nan, nan, nan)
+            want = bool((state.gate == _OPEN).all() and not (state.servo_start_s < np.inf).any())
+            assert gripper_idle(state) is want
