@@ -13,6 +13,7 @@ and one ``Term`` here, or, outside the package, a step of one's own (:func:`with
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -72,8 +73,9 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
                close_command: np.ndarray | None) -> StepFrame:
     """The step's frame: the vehicles as the terms see them, zeroed accumulators. Built as its
     constructor builds it, at a fraction of the cost (:func:`_record`: the frame's and the
-    halves' fields straight into their ``__dict__``; ``tests/unit/test_glue_rest.py`` holds
-    them to their classes' fields)."""
+    halves' fields straight into their ``__dict__``, the frame's defaulted fields from
+    :data:`_FRAME_DEFAULTS`; ``tests/unit/test_glue_rest.py`` holds them to their classes'
+    fields)."""
     n = state.n
     both = state.both
     rot, pos, vel = both.R, both.p, both.v
@@ -99,10 +101,14 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
         "force_n": np.zeros((2 * n, 3)),
         "torque_t": np.zeros((3, 2 * n)) if params.rigid else None,
         "bar_force_n": np.zeros((n, 3)),
-        "wake_force_n": None, "wake_torque_nm": None, "contact_n": None, "inside": None,
-        "gyro_noise_radps": None, "gyro_radps": None, "attitude_est": None, "new": None,
-        "accel": None,
+        **_FRAME_DEFAULTS,
     })
+
+
+# The frame's fields with a default (None, False: shared, immutable), in their order, after the
+# fields begin_step sets (a field added to StepFrame with a plain default needs nothing here).
+_FRAME_DEFAULTS: dict[str, Any] = {f.name: f.default for f in dataclasses.fields(StepFrame)
+                                   if f.default is not dataclasses.MISSING}
 
 
 def _record(cls: type, fields: dict[str, Any]) -> Any:

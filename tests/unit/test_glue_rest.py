@@ -225,6 +225,10 @@ def test_the_frame_is_its_constructors(cfg):
 
     for cls in (StepFrame, BodyState):
         assert not hasattr(cls, "__post_init__")
+    # a defaulted field's default is a shared immutable value (begin_step's template)
+    assert all(f.default_factory is dataclasses.MISSING for f in dataclasses.fields(StepFrame))
+    assert all(f.default in (None, False) for f in dataclasses.fields(StepFrame)
+               if f.default is not dataclasses.MISSING)
     world = World(cfg, 2, TrialRNG(1, 2))
     world.reset(np.array([0.0, 0.0, -2.0]), np.array([0.0, 0.0, -1.4]))
     world.step(hover_command(world.vehicle, 2), hover_command(world.vehicle, 2))
