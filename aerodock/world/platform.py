@@ -18,7 +18,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
-from aerodock.jit import njit
+from aerodock.jit import NUMPY_LOOPS, NUMPY_LOOPS_OK, fma, njit, np_arctan2
 
 
 @dataclass(frozen=True)
@@ -213,6 +213,121 @@ def step_bar_kernel(bar_p: np.ndarray, bar_v: np.ndarray, bar_yaw: np.ndarray,
         rate = acc * dt + bar_yaw_rate[i]
         yaw_rate_new[i] = rate
         yaw_new[i] = rate * dt + bar_yaw[i]
+
+
+def step_hanging_bar(
+    bar: BarState,
+    lead_p: np.ndarray,
+    lead_v: np.ndarray,
+    lead_a: np.ndarray,
+    lead_R: np.ndarray,  # noqa: N803
+    lead_p_next: np.ndarray,
+    leader_yaw_rad: np.ndarray | None,
+    force_n: np.ndarray,
+    mass_kg: np.ndarray,
+    params: PlatformParams,
+    dt_s: float,
+) -> tuple[BarState, np.ndarray]:
+    """:func:`step_bar` about the leaders' anchors, from the leaders' rows themselves: the
+    anchor ``p + R e3 d`` at the start of the step and ``p_next + R e3 d`` at its end (the
+    start-of-step attitude for both, as the world's step has it), and, for ``leader_yaw_rad``
+    None, the leaders' yaw ``arctan2(R10, R00)`` (NumPy's own loop). One compiled call
+    (:func:`hanging_bar_kernel`) instead of a dozen small NumPy ones, with the same numbers:
+    the anchor's products and sums are elementwise, rounded as NumPy rounds them
+    (``tests/unit/test_glue_rest.py``).
+
+    Args:
+        bar: current state.
+        lead_p, lead_v, lead_a: (m, 3) float64, the leaders' position, velocity and
+            acceleration at the start of the step (rows ``0..n-1`` are read: the world passes
+            its whole 2n batch).
+        lead_R: (m, 3, 3) float64, the leaders' attitude at the start of the step.
+        lead_p_next: (m, 3) float64, the leaders' position at the end of the step.
+        leader_yaw_rad: (n,) float64, the leaders' yaw (None: from ``lead_R``).
+        force_n: (n, 3) float64, every force on the hanging mass except gravity and the cables.
+        mass_kg: (n,) float64 hanging mass.
+        params: platform constants.
+        dt_s: physics step.
+    """
+    n = bar.p.shape[0]
+    p, v, yaw, yaw_rate, cable = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n),
+                                  np.empty((n, 3)))
+    if leader_yaw_rad is None and not NUMPY_LOOPS_OK:  # pragma: no cover - NumPy's arctan2 then
+        leader_yaw_rad = np.arctan2(lead_R[:n, 1, 0], lead_R[:n, 0, 0])
+    from_rot = leader_yaw_rad is None
+    hanging_bar_kernel(NUMPY_LOOPS, bar.p, bar.v, bar.yaw_rad, bar.yaw_rate_radps, lead_p,
+                       lead_v, lead_a, lead_R, lead_p_next,
+                       _NO_YAW if from_rot else leader_yaw_rad, from_rot, force_n, mass_kg,
+                       params.anchor_below_leader_m, params.cable_length_m,
+                       params.swing_damping, params.gravity_mps2, params.yaw_omega2,
+                       params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
+    return frozen_record(BarState, p=p, v=v, yaw_rad=yaw, yaw_rate_radps=yaw_rate), cable
+
+
+_NO_YAW = np.zeros(0)
+_NO_YAW.flags.writeable = False
+
+
+@njit
+def hanging_bar_kernel(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
+                       bar_yaw: np.ndarray, bar_yaw_rate: np.ndarray, lead_p: np.ndarray,
+                       lead_v: np.ndarray, lead_a: np.ndarray, lead_r: np.ndarray,
+                       lead_p_next: np.ndarray, lead_yaw: np.ndarray, yaw_from_rot: bool,
+                       force: np.ndarray, mass: np.ndarray, anchor_below: float,
+                       length: float, swing_damping: float, gravity: float,
+                       yaw_omega2: float, yaw_damping: float, dt: float, p_new: np.ndarray,
+                       v_new: np.ndarray, yaw_new: np.ndarray, yaw_rate_new: np.ndarray,
+                       cable: np.ndarray) -> None:
+    """:func:`step_hanging_bar`'s kernel: the anchors (``R[:, :, 2] * d`` added to the start
+    and end positions, NumPy's elementwise operations), the yaw by NumPy's arctan2 loop when
+    ``yaw_from_rot``, then :func:`step_bar_kernel` on the first ``n`` rows."""
+    n = bar_p.shape[0]
+    anchor_p, anchor_p_next = np.empty((n, 3)), np.empty((n, 3))
+    for i in range(n):
+        for k in range(3):
+            offset = lead_r[i, k, 2] * anchor_below
+            anchor_p[i, k] = lead_p[i, k] + offset
+            anchor_p_next[i, k] = lead_p_next[i, k] + offset
+    if yaw_from_rot:
+        yaw = np.empty(n)
+        np_arctan2(loops, lead_r[:n, 1, 0], lead_r[:n, 0, 0], yaw)
+        step_bar_kernel(bar_p, bar_v, bar_yaw, bar_yaw_rate, anchor_p, lead_v[:n], lead_a[:n],
+                        anchor_p_next, yaw, force, mass, length, swing_damping, gravity,
+                        yaw_omega2, yaw_damping, dt, p_new, v_new, yaw_new, yaw_rate_new, cable)
+    else:
+        step_bar_kernel(bar_p, bar_v, bar_yaw, bar_yaw_rate, anchor_p, lead_v[:n], lead_a[:n],
+                        anchor_p_next, lead_yaw, force, mass, length, swing_damping, gravity,
+                        yaw_omega2, yaw_damping, dt, p_new, v_new, yaw_new, yaw_rate_new, cable)
+
+
+@njit
+def cable_wrench_kernel(cable: np.ndarray, rot: np.ndarray, anchor_below: float,
+                        force: np.ndarray, torque_t: np.ndarray, rigid: bool) -> None:
+    """The cables' pull on the leaders (rows ``0..n-1`` of the world's accumulators), in the
+    order and rounding of NumPy's ``force[:n] += cable`` and, for rigid bodies,
+    ``c_b = matmul(cable[:, None, :], R[:n])[:, 0]`` (OpenBLAS's row vector times a matrix,
+    :func:`aerodock.jit.fma`), ``torque_t[0, :n] -= d c_b[:, 1]``,
+    ``torque_t[1, :n] += d c_b[:, 0]`` (the anchor ``d`` below the centre of mass)."""
+    for i in range(cable.shape[0]):
+        c0, c1, c2 = cable[i, 0], cable[i, 1], cable[i, 2]
+        force[i, 0] += c0
+        force[i, 1] += c1
+        force[i, 2] += c2
+        if rigid:
+            b0 = fma(c2, rot[i, 2, 0], fma(c1, rot[i, 1, 0], c0 * rot[i, 0, 0]))
+            b1 = fma(c2, rot[i, 2, 1], fma(c1, rot[i, 1, 1], c0 * rot[i, 0, 1]))
+            torque_t[0, i] -= anchor_below * b1
+            torque_t[1, i] += anchor_below * b0
+
+
+@njit
+def any_above(p: np.ndarray, z: float) -> bool:
+    """Whether any row's third component exceeds ``z`` (NaN aside): ``np.fmax.reduce(p[:, 2])
+    > z`` for a non-empty ``p``, without the reduction's call overhead (the ground's test)."""
+    for i in range(p.shape[0]):
+        if p[i, 2] > z:
+            return True
+    return False
 
 
 def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,

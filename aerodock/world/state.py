@@ -175,7 +175,7 @@ class WorldState:
         captured = gripper.gate == _CAPTURED
         freeze(captured)
         cached = self.__dict__["_gripper_flags"] = (
-            gripper, captured, bool(captured.any()), gripper_idle(gripper))
+            gripper, captured, bool(np.count_nonzero(captured)), gripper_idle(gripper))
         return cached[1:]
 
     def _split(self) -> None:

@@ -23,7 +23,7 @@ from aerodock.rng import standard_normal_t
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
 from aerodock.world.imu import ImuState, biquad_coeffs, imu_step
 from aerodock.world.params import WorldParams
-from aerodock.world.platform import step_bar
+from aerodock.world.platform import any_above, cable_wrench_kernel, step_hanging_bar
 from aerodock.world.state import StepFrame, WorldState
 
 
@@ -116,14 +116,13 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
 
 def cable_on_leader(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The cables pull the leader at their anchor, below its centre of mass (last step's
-    tension: the bar moves after the vehicles)."""
-    n = state.n
-    frame.force_n[:n] += state.cable_force_n
-    if frame.torque_t is not None:
-        cable_body = np.matmul(state.cable_force_n[:, None, :], frame.rot[:n])[:, 0]
-        d = params.platform.anchor_below_leader_m
-        frame.torque_t[0, :n] -= d * cable_body[:, 1]
-        frame.torque_t[1, :n] += d * cable_body[:, 0]
+    tension: the bar moves after the vehicles). Compiled (:func:`~aerodock.world.platform.
+    cable_wrench_kernel`: NumPy's ``force[:n] += cable`` and, for rigid bodies, the cable's
+    moment about the centre of mass from ``cable^T R`` in OpenBLAS's rounding)."""
+    torque = frame.torque_t
+    cable_wrench_kernel(state.cable_force_n, frame.rot, params.platform.anchor_below_leader_m,
+                        frame.force_n, _NO_TORQUE if torque is None else torque,
+                        torque is not None)
 
 
 def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -224,30 +223,31 @@ def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
 
 def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The bar on its cables below the leader's new anchor, with a captured follower hanging
-    from it: the follower's own forces go to the hanging mass, and it is carried with the bar."""
+    from it: the follower's own forces go to the hanging mass, and it is carried with the bar.
+    The anchors and the rigid leader's yaw are computed in the bar's compiled step
+    (:func:`~aerodock.world.platform.step_hanging_bar`)."""
     n, dt = state.n, params.dt_s
     new, platform, consts = frame.new, params.platform, state.constants
-    lead_R = frame.rot[:n]  # noqa: N806
-    lead_accel, fol_accel = frame.accel[:n], frame.accel[n:]
-    captured = frame.captured
+    accel = frame.accel
     if frame.any_captured:
+        captured = frame.captured
         hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
                              platform.bar_mass_kg)
-        fol_own = (fol_accel - consts.gravity_mps2) * frame.fol_mass_rows_kg
+        fol_own = (accel[n:] - consts.gravity_mps2) * frame.fol_mass_rows_kg
         frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
     else:
         hang_mass = consts.bar_mass_kg
-    anchor_offset = lead_R[:, :, 2] * platform.anchor_below_leader_m  # anchor_point()
-    lead_yaw = frame.both.rpy[:n, 2] if not params.rigid else _yaw(lead_R)
-    state.bar, state.cable_force_n = step_bar(
-        state.bar, frame.pos[:n] + anchor_offset, frame.vel[:n], lead_accel,
-        new.p[:n] + anchor_offset, lead_yaw, frame.bar_force_n, hang_mass, platform, dt,
+    state.bar, state.cable_force_n = step_hanging_bar(
+        state.bar, frame.pos, frame.vel, accel, frame.rot, new.p,
+        None if params.rigid else frame.both.rpy[:n, 2], frame.bar_force_n, hang_mass,
+        platform, dt,
     )
     if frame.any_captured:
         gp = params.gripper
+        fol_accel = accel[n:]
         up_new = -new.R[n:, :, 2]
         p_hang = state.bar.p - up_new * (gp.mount_height_m + gp.bar_radius_m)
-        cap = captured[:, None]
+        cap = frame.captured[:, None]
         np.copyto(new.p[n:], p_hang, where=cap)
         np.copyto(new.v[n:], state.bar.v, where=cap)
         np.copyto(fol_accel, (new.v[n:] - frame.vel[n:]) / dt, where=cap)
@@ -256,7 +256,7 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
     new, n = frame.new, state.n
-    if np.fmax.reduce(new.p[:, 2]) > 0.0:  # the highest z, NaN aside (fmax skips NaN)
+    if any_above(new.p, 0.0):  # np.fmax.reduce(z) > 0: some z above 0, NaN aside
         below = new.p[:, 2] > 0.0
         new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
         new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
@@ -306,6 +306,6 @@ def _halves(rows: np.ndarray, n: int) -> np.ndarray:
     return rows.reshape(3, 2, n).transpose(1, 0, 2)
 
 
-def _yaw(rot: np.ndarray) -> np.ndarray:
-    """(n,) yaw of (n, 3, 3) rotations (ZYX)."""
-    return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
+# cable_wrench_kernel's placeholder for a point mass's torques (writable: the kernel's type for
+# the accumulator it writes; empty, so nothing can be written into it)
+_NO_TORQUE = np.zeros((3, 0))

@@ -35,6 +35,7 @@ from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
+from aerodock.jit import njit
 from aerodock.world.vehicles import rigid_kernel
 from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
@@ -359,35 +360,165 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
     """:func:`step_rigid_body`'s new (p, v, R, w, rotor speeds, thrust, accel, rate integral,
     yaw setpoint) from the compiled :func:`rigid_kernel.step_vehicles`: under the rotor speed
     commands ``rotor_speed_cmd``, or (None) flown by the autopilot to ``targets`` on ``gyro``
-    (plus ``gyro_noise``) and ``attitude`` (None: the true one)."""
-    body = state.body
+    (plus ``gyro_noise``) and ``attitude`` (None: the true attitude), the world's step, through
+    :func:`_flown_step` with the constants packed (:func:`_packed_constants`)."""
     n = state.p.shape[0]
-    alpha, inertia = _body_constants(body, dt_s)
-    consts, mixer, torque_map, drag_sums = kernel_constants(params)
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
            np.empty((n, 4)), np.empty(n), np.empty((n, 3)),
            np.empty((n, params.autopilot_state_columns)), np.empty(n))
-    flown = targets is not None
-    ff = targets.torque_ff_nm if flown else None
+    if targets is not None:  # the world's step: its constants packed once they are kept
+        arguments, packed = _packed_constants(state.body, params, dt_s, state.thrust_gain)
+        ff = targets.torque_ff_nm
+        if packed is not None:
+            _flown_step(
+                packed, state.p, state.v, state.R, state.w, state.rotor_speed,
+                _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
+                targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
+                _NO_ROWS if ff is None else ff, ff is not None, state.w if gyro is None else gyro,
+                _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
+                state.autopilot_state, state.yaw_setpoint, np.asarray(ext_force_n, dtype=float),
+                _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
+                ext_torque_nm is not None, *out)
+            return out
+        (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer,
+         thrust_max, thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic,
+         gravity) = arguments
+        rigid_kernel.step_vehicles(
+            state.p, state.v, state.R, state.w, state.rotor_speed, kc, torque_gain, mass_rows,
+            inertia, alpha, True, _NO_ROWS, _NO_ATTITUDE if attitude is None else attitude,
+            attitude is not None, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
+            _NO_ROWS if ff is None else ff, ff is not None, state.w if gyro is None else gyro,
+            _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
+            state.autopilot_state, state.yaw_setpoint, consts, has_stack, stack, mixer,
+            thrust_max, thrust_coeff, np.asarray(ext_force_n, dtype=float),
+            _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
+            ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity,
+            dt_s, *out)
+        return out
+    (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
+     thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = _step_constants(
+        state.body, params, dt_s, state.thrust_gain)
     rigid_kernel.step_vehicles(
-        state.p, state.v, state.R, state.w, state.rotor_speed,
-        _thrust_coeffs(body, params.thrust_coeff, state.thrust_gain), body.torque_gain,
-        body.mass_rows_kg, inertia, alpha, flown,
-        _NO_ROWS if flown else np.asarray(rotor_speed_cmd, dtype=float),
-        _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
-        targets.R_des if flown else _NO_ATTITUDE,
-        targets.yaw_rate_radps if flown else _NO_VALUES,
-        targets.thrust_n if flown else _NO_VALUES, _NO_ROWS if ff is None else ff,
-        ff is not None, state.w if gyro is None else gyro,
+        state.p, state.v, state.R, state.w, state.rotor_speed, kc, torque_gain, mass_rows,
+        inertia, alpha, False, np.asarray(rotor_speed_cmd, dtype=float),
+        _NO_ATTITUDE if attitude is None else attitude, attitude is not None, _NO_ATTITUDE,
+        _NO_VALUES, _NO_VALUES, _NO_ROWS, False, state.w if gyro is None else gyro,
         _NO_ROWS if gyro_noise is None else gyro_noise, gyro_noise is not None,
-        state.autopilot_state, state.yaw_setpoint, consts, params.stack_constants is not None,
-        _stack(params), mixer, params.rotor_thrust_max_n,
-        params.thrust_coeff, np.asarray(ext_force_n, dtype=float),
+        state.autopilot_state, state.yaw_setpoint, consts, has_stack, stack, mixer, thrust_max,
+        thrust_coeff, np.asarray(ext_force_n, dtype=float),
         _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
-        ext_torque_nm is not None, torque_map, drag_sums, params.rotor_drag_coeff,
-        params.rotor_drag_z_coeff, params.parasitic_drag_coeff, params.gravity_mps2, dt_s,
+        ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity, dt_s,
         *out)
     return out
+
+
+def _step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
+                    thrust_gain: np.ndarray) -> tuple:
+    """:func:`rigid_kernel.step_vehicles`'s arguments that stay the same from step to step for
+    one body, vehicle type, ``dt_s`` and thrust gain: (k_T per vehicle, torque gains, mass
+    rows, inertia, the motors' step factor, the autopilot's constants, whether a flight stack
+    flies, its constants, the mixer, the rotor thrust limit, k_T, the torque map, the rotor
+    drag's sums, the three drag coefficients, gravity). Kept on ``body`` for the last
+    ``params``, ``dt_s`` and ``thrust_gain`` while the arrays the numbers among them are
+    computed from are read-only (the checks of :func:`_body_constants` and
+    :func:`_thrust_coeffs`, which compute them); the rest are references to ``body``'s and
+    ``params``' own read-only fields."""
+    hit = body.__dict__.get("_step_arguments")  # not a field: numbers derived from it
+    if (hit is not None and hit[0] is params and hit[1] == dt_s and hit[2] is thrust_gain
+            and is_frozen(thrust_gain) and is_frozen(body.motor_tau_s)
+            and is_frozen(body.inertia_kgm2)):
+        return hit[3]
+    alpha, inertia = _body_constants(body, dt_s)
+    consts, mixer, torque_map, drag_sums = kernel_constants(params)
+    arguments = (_thrust_coeffs(body, params.thrust_coeff, thrust_gain), body.torque_gain,
+                 body.mass_rows_kg, inertia, alpha, consts, params.stack_constants is not None,
+                 _stack(params), mixer, params.rotor_thrust_max_n, params.thrust_coeff,
+                 torque_map, drag_sums, params.rotor_drag_coeff, params.rotor_drag_z_coeff,
+                 params.parasitic_drag_coeff, params.gravity_mps2)
+    body.__dict__["_step_arguments"] = (params, dt_s, thrust_gain, arguments)
+    return arguments
+
+
+def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
+                      thrust_gain: np.ndarray) -> tuple[tuple, np.ndarray | None]:
+    """(:func:`_step_constants`' tuple, the same numbers and ``dt_s`` in one flat read-only
+    array as :func:`_flown_step` reads them, or None). The array is built the second time the
+    same tuple serves (a body and gains that stay, as in the world's step: one array to pass
+    instead of eleven arrays and eight numbers, at a batch of 1 the compiled call's cost is
+    mostly its arguments'); a tuple used once (a body split off for one step, a pair's half)
+    is not packed. The array, kept beside the tuple and under its checks: a header of
+    :data:`_PACK_HEADER` numbers (the lengths of the motors' step factor, the autopilot's
+    constants, the flight stack's constants, the mixer, the torque map and the drag sums;
+    whether a flight stack flies; the rotor thrust limit, k_T, the three drag coefficients,
+    gravity, ``dt_s``), then k_T per vehicle, the torque gains, the mass rows and the inertia
+    (row-major), the step factor, the autopilot's, the stack's, the mixer's, the torque map's
+    and the drag sums' numbers (copied, not computed)."""
+    arguments = _step_constants(body, params, dt_s, thrust_gain)
+    hit = body.__dict__.get("_packed_arguments")  # not a field: numbers derived from it
+    if hit is None or hit[0] is not arguments:
+        body.__dict__["_packed_arguments"] = (arguments, None)  # packed if used again
+        return arguments, None
+    if hit[1] is not None:
+        return hit
+    (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
+     thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = arguments
+    header = [alpha.size, consts.size, stack.size, mixer.size, torque_map.size,
+              drag_sums.size, float(has_stack), thrust_max, thrust_coeff, drag, drag_z,
+              parasitic, gravity, dt_s]
+    packed = np.concatenate([np.array(header, dtype=float)] + [
+        np.asarray(a, dtype=float).ravel() for a in (kc, torque_gain, mass_rows, inertia, alpha,
+                                                     consts, stack, mixer, torque_map,
+                                                     drag_sums)])
+    freeze(packed)
+    hit = body.__dict__["_packed_arguments"] = (arguments, packed)
+    return hit
+
+
+_PACK_HEADER = 14
+
+
+@njit
+def _flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+                w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
+                r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+                ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+    """:func:`rigid_kernel.step_vehicles` flown by the autopilots, its constants read from
+    :func:`_packed_constants`' array (views of it, the same numbers)."""
+    n = p.shape[0]
+    n_alpha, n_consts, n_stack = int(packed[0]), int(packed[1]), int(packed[2])
+    n_mixer, n_map, n_drag = int(packed[3]), int(packed[4]), int(packed[5])
+    o = _PACK_HEADER
+    kc = packed[o:o + n]
+    o += n
+    torque_gain = packed[o:o + n]
+    o += n
+    mass_rows = packed[o:o + 3 * n].reshape((n, 3))
+    o += 3 * n
+    inertia = packed[o:o + 3 * n].reshape((n, 3))
+    o += 3 * n
+    alpha = packed[o:o + n_alpha]
+    o += n_alpha
+    consts = packed[o:o + n_consts]
+    o += n_consts
+    stack = packed[o:o + n_stack]
+    o += n_stack
+    mixer = packed[o:o + n_mixer]
+    o += n_mixer
+    torque_map = packed[o:o + n_map]
+    o += n_map
+    drag_sums = packed[o:o + n_drag]
+    rigid_kernel.step_vehicles(
+        p, v, rot, w, omega, kc, torque_gain, mass_rows, inertia, alpha, True, omega[:0], att,
+        use_att, r_des, yaw_rate, thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy,
+        integral, yaw_sp, consts, packed[6] != 0.0, stack, mixer, packed[7], packed[8],
+        ext_force, ext_torque, has_ext_torque, torque_map, drag_sums, packed[9], packed[10],
+        packed[11], packed[12], packed[13], p_new, v_new, rot_new, w_new, omega_new,
+        thrust_new, accel, integral_new, yaw_sp_new)
 
 
 _NO_ATTITUDE = np.zeros((0, 3, 3))
