@@ -15,12 +15,13 @@ from aerodock.downwash.wrench import (
     follower_body_force_n,
     follower_wrench,
     quad_rotor_offsets_body_m,
+    wake_step,
 )
 
 __all__ = ["BodyState", "DownwashField", "bar_wake_force_n", "build_field", "field_factory",
            "field_kwargs",
            "follower_body_force_n", "follower_wrench", "mean_acceleration_fn",
-           "quad_rotor_offsets_body_m"]
+           "quad_rotor_offsets_body_m", "wake_step"]
 
 # World constants a field factory may accept; passed only when its signature names them. The
 # plain names are the follower's (both vehicles', for a field that does not tell them apart).
