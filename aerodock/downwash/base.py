@@ -37,10 +37,10 @@ import numpy as np
 
 
 def frozen_record(cls: type, **fields: object) -> object:
-    """``cls(**fields)`` for a frozen dataclass without ``__post_init__`` (whose ``__init__``
-    only sets its fields, one ``object.__setattr__`` each), built at a fraction of the cost: the
-    same object, fields in the instance ``__dict__``. For the per-step states of the hot loop;
-    ``fields`` must name every field."""
+    """``cls(**fields)`` for a dataclass without ``__post_init__`` (whose ``__init__`` only sets
+    its fields: for a frozen one, one ``object.__setattr__`` each), built at a fraction of the
+    cost: the same object, fields in the instance ``__dict__``. For the per-step states and the
+    step's frame in the hot loop; ``fields`` must name every field, defaults included."""
     record = object.__new__(cls)
     record.__dict__.update(fields)
     return record

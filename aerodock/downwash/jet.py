@@ -75,8 +75,8 @@ _PLANAR_PEAK = float(np.sqrt(1.0 / (2.0 * _LN2)) * np.exp(-0.5))
 CONTRACTED_WIDTH0_RATIO = float(np.sqrt(_LN2))
 """``b0 / R_eq`` of momentum theory's fully contracted wake (area ``A/2`` moving at ``2 v_h``)."""
 _SHARED_ROWS = 3  # the follower's shared processes: axial, lateral 1, lateral 2
-# What RoundJetField.wake_step stands for: a subclass that replaces one of them keeps it only if
-# it replaces wake_step too (RoundJetField.__init_subclass__).
+# What RoundJetField.wake_step stands for: it gives way (None) when any of them is not the jet's
+# own (RoundJetField._parts_are_the_jets).
 _WAKE_STEP_PARTS = ("wrench", "body_force_n", "bar_force_n", "_run")
 
 
@@ -229,17 +229,6 @@ class RoundJetField:
         self._area_key: tuple | None = None
         self._area_cols = np.zeros((4, 0))
 
-    def __init_subclass__(cls, **kwargs: object) -> None:
-        """A subclass that replaces the wrench, the body's or the bar's force (or ``_run``, which
-        they share) but not :meth:`wake_step` has no ``wake_step`` (None, as
-        :class:`~aerodock.downwash.at_centre.RoundJetAtCentre` has no ``wrench``): the world then
-        calls its parts one by one (:func:`aerodock.downwash.wrench.wake_step`), its own
-        included, rather than the jet's one call that would skip them."""
-        super().__init_subclass__(**kwargs)
-        if "wake_step" not in cls.__dict__ and any(name in cls.__dict__
-                                                   for name in _WAKE_STEP_PARTS):
-            cls.wake_step = None  # type: ignore[assignment]
-
     def __setstate__(self, state: dict) -> None:
         """A copy or an unpickled field: its offsets read-only again (a copied array is
         writable), as the geometry's caches want them."""
@@ -391,7 +380,7 @@ class RoundJetField:
     def wake_step(self, leader: BodyState, follower: BodyState,
                   rotor_offsets_body_m: np.ndarray, bar_p_m: np.ndarray, bar_v_mps: np.ndarray,
                   bar_area_m2: float, dt: float, bar_axis: np.ndarray | None = None,
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
         """One physics step's wake in one compiled call (:func:`jet_kernel.wake_step`): the
         numbers, random draws and turbulence of ``wrench(leader, follower,
         rotor_offsets_body_m, dt)``, then ``body_force_n(leader, follower)``, then
@@ -405,7 +394,12 @@ class RoundJetField:
             N, world NED; their torque about the centre of mass, N·m, body FRD; the body's
             force and the bar's, N, NED (views of one array, made for this call; the body's is
             the one :meth:`body_force_n` copies for the rest of the step: read, not written).
+            None, drawing nothing, when one of the parts it stands for is not the jet's own (a
+            subclass, a mixin or the instance replaced ``wrench``, ``body_force_n``,
+            ``bar_force_n`` or ``_run``, or set one to None): the world then calls the parts.
         """
+        if not self._parts_are_the_jets():
+            return None
         offsets = _offsets(rotor_offsets_body_m)
         n, k = leader.n, offsets.shape[0]
         draws = self._follower_draws(n, k, noisy=True, advance=True)  # as wrench's _run
@@ -425,6 +419,13 @@ class RoundJetField:
         force, torque, body, bar = out
         self._body_key, self._body_force = (leader, follower), body  # body_force_n copies it
         return force, torque, body, bar
+
+    def _parts_are_the_jets(self) -> bool:
+        """Whether the parts :meth:`wake_step` stands for are this class's own, as the field
+        finds them now (its class's, however inherited, and none set on the instance)."""
+        cls, own = type(self), vars(self)
+        return all(getattr(cls, name, None) is getattr(RoundJetField, name)
+                   and name not in own for name in _WAKE_STEP_PARTS)
 
     def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
         """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object

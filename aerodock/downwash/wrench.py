@@ -19,9 +19,9 @@ which reads the same step's turbulence.
 
 A field can also give all three at once: :func:`wake_step` calls its ``wake_step`` (the default
 jet's: one compiled call in place of three Python paths, with the numbers and random draws of
-the three calls in turn), and returns None for a field without one (then the world makes the
-three calls above). A subclass of the jet that replaces one of the three has none
-(:meth:`aerodock.downwash.jet.RoundJetField.__init_subclass__`).
+the three calls in turn), and returns None for a field without one, or whose ``wake_step``
+gives way (then the world makes the three calls above): the jet's gives way when a subclass, a
+mixin or the instance has replaced one of the parts it stands for.
 """
 
 from __future__ import annotations
@@ -137,7 +137,7 @@ def wake_step(field: Any, leader: BodyState, follower: BodyState,
               bar_area_m2: float, dt: float, bar_axis: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
     """The whole physics step's wake from the field's ``wake_step`` in one call, None if the
-    field has none (or it is None).
+    field has none (or it is None, or returns None: then nothing was drawn).
 
     Its numbers and random draws are those of :func:`follower_wrench`, then
     :func:`follower_body_force_n`, then :func:`bar_wake_force_n` with the same arguments, so

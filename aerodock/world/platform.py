@@ -18,7 +18,8 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
-from aerodock.jit import NUMPY_LOOPS, NUMPY_LOOPS_OK, fma, njit, np_arctan2
+from aerodock.frozen import freeze
+from aerodock.jit import NUMPY_LOOPS, fma, njit, np_arctan2
 
 
 @dataclass(frozen=True)
@@ -252,8 +253,11 @@ def step_hanging_bar(
     n = bar.p.shape[0]
     p, v, yaw, yaw_rate, cable = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n),
                                   np.empty((n, 3)))
-    if leader_yaw_rad is None and not NUMPY_LOOPS_OK:  # pragma: no cover - NumPy's arctan2 then
-        leader_yaw_rad = np.arctan2(lead_R[:n, 1, 0], lead_R[:n, 0, 0])
+    rows = min(lead_p.shape[0], lead_v.shape[0], lead_a.shape[0], lead_R.shape[0],
+               lead_p_next.shape[0])
+    if rows < n or force_n.shape[0] != n or mass_kg.shape[0] != n:
+        raise ValueError(f"step_hanging_bar: {n} bars need at least {n} leader rows and {n} "
+                         f"forces and masses, got {rows}, {force_n.shape[0]}, {mass_kg.shape[0]}")
     from_rot = leader_yaw_rad is None
     hanging_bar_kernel(NUMPY_LOOPS, bar.p, bar.v, bar.yaw_rad, bar.yaw_rate_radps, lead_p,
                        lead_v, lead_a, lead_R, lead_p_next,
@@ -265,7 +269,7 @@ def step_hanging_bar(
 
 
 _NO_YAW = np.zeros(0)
-_NO_YAW.flags.writeable = False
+freeze(_NO_YAW)
 
 
 @njit

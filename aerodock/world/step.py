@@ -21,6 +21,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from aerodock.downwash import BodyState
+from aerodock.downwash.base import frozen_record
 from aerodock.world import terms
 from aerodock.world.params import WorldParams
 from aerodock.world.state import StepFrame, WorldState
@@ -73,10 +74,10 @@ def with_term(step: tuple[Term, ...], term: Term, after: str) -> tuple[Term, ...
 def begin_step(state: WorldState, params: WorldParams, targets: Any,
                close_command: np.ndarray | None) -> StepFrame:
     """The step's frame: the vehicles as the terms see them, zeroed accumulators. Built as its
-    constructor builds it, at a fraction of the cost (:func:`_record`: the frame's and the
-    halves' fields straight into their ``__dict__``, the frame's defaulted fields from
-    :data:`_FRAME_DEFAULTS`; ``tests/unit/test_glue_rest.py`` holds them to their classes'
-    fields)."""
+    constructor builds it, at a fraction of the cost
+    (:func:`~aerodock.downwash.base.frozen_record`: the frame's and the halves' fields straight
+    into their ``__dict__``, the frame's defaulted fields from :data:`_FRAME_DEFAULTS`;
+    ``tests/unit/test_glue_rest.py`` holds them to their classes' fields)."""
     n = state.n
     both = state.both
     rot, pos, vel = both.R, both.p, both.v
@@ -88,13 +89,13 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
     bar_axis = np.zeros((3, n))  # (cos yaw, sin yaw, 0) per bar, component-major
     np.cos(yaw, out=bar_axis[0])
     np.sin(yaw, out=bar_axis[1])
-    return _record(StepFrame, {
+    return frozen_record(StepFrame, **{
         "targets": targets,
         "close_command": state.constants.no_close if close_command is None else close_command,
         "both": both, "rot": rot, "pos": pos, "vel": vel,
-        "lead": _record(BodyState, {"p": pos[:n], "v": vel[:n], "R": rot[:n],
+        "lead": frozen_record(BodyState, **{"p": pos[:n], "v": vel[:n], "R": rot[:n],
                                     "thrust_n": thrust[:n], "mass_kg": lead_mass}),
-        "fol": _record(BodyState, {"p": pos[n:], "v": vel[n:], "R": rot[n:],
+        "fol": frozen_record(BodyState, **{"p": pos[n:], "v": vel[n:], "R": rot[n:],
                                    "thrust_n": thrust[n:], "mass_kg": fol_mass}),
         "mass_kg": body.mass_kg, "mass_rows_kg": body.mass_rows_kg,
         "fol_mass_rows_kg": fol_mass_rows, "captured": captured, "any_captured": any_captured,
@@ -110,15 +111,6 @@ def begin_step(state: WorldState, params: WorldParams, targets: Any,
 # fields begin_step sets (a field added to StepFrame with a plain default needs nothing here).
 _FRAME_DEFAULTS: dict[str, Any] = {f.name: f.default for f in dataclasses.fields(StepFrame)
                                    if f.default is not dataclasses.MISSING}
-
-
-def _record(cls: type, fields: dict[str, Any]) -> Any:
-    """``cls(**fields)`` for a dataclass whose ``__init__`` only sets its fields (no
-    ``__post_init__``; frozen or not), ``fields`` naming every one of them, defaults included:
-    :func:`~aerodock.downwash.base.frozen_record` without building its keyword arguments."""
-    record = object.__new__(cls)
-    record.__dict__.update(fields)
-    return record
 
 
 _WAKE_TERMS = (terms.wake_on_rotor_disks, terms.wake_on_body, terms.wake_on_bar)

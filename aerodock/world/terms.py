@@ -4,8 +4,9 @@ A term reads the batch state (:class:`~aerodock.world.state.WorldState`) and the
 (:class:`~aerodock.world.state.StepFrame`), adds what it contributes into the frame's
 accumulators (forces, torques, the force on the hanging mass) or advances a part of the state, and
 returns nothing. Terms never copy the batch; they write in place into arrays the frame made for
-this step. :mod:`aerodock.world.step` names them in the order they run; a new effect (an IMU
-chain, ground effect) is one more function here and one more name there.
+this step (and the IMU term into the chain's own memory: :mod:`aerodock.world.state`).
+:mod:`aerodock.world.step` names them in the order they run; a new effect (an IMU chain, ground
+effect) is one more function here and one more name there.
 """
 
 from __future__ import annotations

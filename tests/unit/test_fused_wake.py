@@ -122,9 +122,9 @@ def test_a_step_of_no_time_leaves_the_bars_turbulence_and_draws_none_for_it():
 
 
 def test_a_jet_that_replaces_a_part_is_called_part_by_part():
-    """A subclass that replaces the wrench, the body's or the bar's force (or sets one to None)
-    has no one call, so the world calls its own; one that replaces the one call too keeps it; a
-    plug-in without one is told apart (None)."""
+    """A jet whose wrench, body's or bar's force is not the jet's own (a subclass's, a mixin's,
+    the instance's, or None) gives way to its parts, drawing nothing, so the world calls them;
+    one that replaces the one call too keeps it; a plug-in without one is told apart (None)."""
 
     class LouderBar(RoundJetField):
         def bar_force_n(self, *args, **kwargs):
@@ -144,17 +144,31 @@ def test_a_jet_that_replaces_a_part_is_called_part_by_part():
         def acceleration(self, leader, follower, dt):
             return np.zeros((leader.n, 3))
 
-    assert RoundJetAtCentre.wake_step is None  # its wrench is None
-    assert LouderBar.wake_step is None and Quieter.wake_step is None
-    assert RoundJetField.wake_step is not None and OwnStep.wake_step is not None
+    class LouderBarMixin:
+        def bar_force_n(self, *args, **kwargs):
+            return 2.0 * super().bar_force_n(*args, **kwargs)
+
+    class Mixed(LouderBarMixin, RoundJetField):  # the part inherited, not in its own dict
+        pass
+
     lead, fol, bar_p, bar_v, axis = _states(np.random.default_rng(3), 2, 1)
     args = (lead, fol, np.zeros((4, 3)), bar_p, bar_v, BAR_AREA_M2, DT_S, axis)
     assert wake_step(Minimal(), *args) is None
     jet = default_jet()
-    jet.__class__ = LouderBar  # the default jet's parameters, the subclasses' methods
-    assert wake_step(jet, *args) is None
+    assert wake_step(jet, *args) is not None
+    for cls in (RoundJetAtCentre, LouderBar, Quieter, Mixed):  # RoundJetAtCentre: wrench None
+        jet.__class__ = cls  # the default jet's parameters, the class's methods
+        state = jet._rng.bit_generator.state if hasattr(jet._rng, "bit_generator") else None
+        assert wake_step(jet, *args) is None, cls.__name__
+        if state is not None:  # gave way before drawing anything
+            assert jet._rng.bit_generator.state == state
     jet.__class__ = OwnStep
     assert wake_step(jet, *args) == "own"
+    jet.__class__ = RoundJetField
+    jet.bar_force_n = lambda *a, **k: np.zeros((2, 3))  # the instance's own part
+    assert wake_step(jet, *args) is None
+    del jet.bar_force_n
+    assert wake_step(jet, *args) is not None
 
 
 @pytest.mark.parametrize("n", [1, 3])

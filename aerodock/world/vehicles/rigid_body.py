@@ -452,8 +452,13 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
     whether a flight stack flies; the rotor thrust limit, k_T, the three drag coefficients,
     gravity, ``dt_s``), then k_T per vehicle, the torque gains, the mass rows and the inertia
     (row-major), the step factor, the autopilot's, the stack's, the mixer's, the torque map's
-    and the drag sums' numbers (copied, not computed)."""
+    and the drag sums' numbers (copied, not computed). Not packed unless the body's torque gains
+    and mass rows and the flight stack's constants are read-only (the tuple reads them live; a
+    copy would not see a write)."""
     arguments = _step_constants(body, params, dt_s, thrust_gain)
+    if not (is_frozen(body.torque_gain) and is_frozen(body.mass_rows_kg)
+            and (params.stack_constants is None or is_frozen(params.stack_constants))):
+        return arguments, None  # the tuple refers to them live; a copy could go stale
     hit = body.__dict__.get("_packed_arguments")  # not a field: numbers derived from it
     if hit is None or hit[0] is not arguments:
         body.__dict__["_packed_arguments"] = (arguments, None)  # packed if used again
