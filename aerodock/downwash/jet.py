@@ -64,6 +64,15 @@ import numpy as np
 
 from aerodock.downwash import jet_kernel
 from aerodock.downwash.base import BodyState
+from aerodock.downwash.jet_inputs import (
+    NO_DRAWS,
+    NO_PROCESSES,
+    NO_ROWS,
+    leader_arrays,
+    mean_pair_distance_m,
+    offsets_array,
+    rows3,
+)
 from aerodock.downwash.wrench import quad_rotor_offsets_body_m
 from aerodock.frozen import freeze, is_frozen
 from aerodock.jit import NUMPY_LOOPS
@@ -86,16 +95,6 @@ def centreline_speed_mps(thrust_n: np.ndarray, half_width_m: np.ndarray,
     flux equals ``thrust_n``: ``sqrt(2 ln2 T / (rho pi)) / b``, m/s."""
     thrust = np.maximum(np.asarray(thrust_n, dtype=float), 0.0)
     return np.sqrt(2.0 * _LN2 * thrust / (air_density_kgpm3 * np.pi)) / half_width_m
-
-
-def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
-    """Mean distance between the rotor-disk centres ``offsets_m`` (k, 3), m (0 for one disk)."""
-    k = offsets_m.shape[0]
-    if k < 2:
-        return 0.0
-    diff = offsets_m[:, None, :] - offsets_m[None, :, :]
-    dist = np.sqrt((diff * diff).sum(-1))
-    return float(dist[np.triu_indices(k, 1)].mean())
 
 
 class RoundJetField:
@@ -282,7 +281,7 @@ class RoundJetField:
         off the axis, pushing the disks nearer the axis down (the paper's oscillatory behaviour
         near the wake's edge).
         """
-        offsets = _offsets(rotor_offsets_body_m)
+        offsets = offsets_array(rotor_offsets_body_m)
         force, torque, body, _ = self._run(leader, follower, offsets, dt, advance=True,
                                            noisy=True, split=True, want_torque=True)
         self._body_key, self._body_force = (leader, follower), body
@@ -371,8 +370,8 @@ class RoundJetField:
         out = np.empty((n, 3))
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.bar_force(
-            NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, _rows3(bar_p_m), _rows3(bar_v_mps),
-            _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, noise,
+            NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, rows3(bar_p_m), rows3(bar_v_mps),
+            NO_ROWS if bar_axis is None else rows3(bar_axis), bar_axis is not None, noise,
             draws, step, advance, self._bar_params(bar_area_m2), out)
         self._bar_noise = noise
         return out
@@ -400,7 +399,7 @@ class RoundJetField:
         """
         if not self._parts_are_the_jets():
             return None
-        offsets = _offsets(rotor_offsets_body_m)
+        offsets = offsets_array(rotor_offsets_body_m)
         n, k = leader.n, offsets.shape[0]
         draws = self._follower_draws(n, k, noisy=True, advance=True)  # as wrench's _run
         self._pair_distance(offsets)
@@ -409,10 +408,10 @@ class RoundJetField:
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.wake_step(
             NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
-            np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
+            np.asarray(follower.R, dtype=float), rows3(follower.p), rows3(follower.v),
             self._force_coeff(follower.mass_kg, k), self._processes, draws, float(dt),
-            _rows3(bar_p_m), _rows3(bar_v_mps),
-            _NO_ROWS if bar_axis is None else _rows3(bar_axis), bar_axis is not None, bar_noise,
+            rows3(bar_p_m), rows3(bar_v_mps),
+            NO_ROWS if bar_axis is None else rows3(bar_axis), bar_axis is not None, bar_noise,
             bar_draws, bar_dt, bar_advance, self._bar_params(bar_area_m2), out)
         self._last_dt = dt
         self._bar_noise = bar_noise
@@ -428,14 +427,14 @@ class RoundJetField:
                    and name not in own for name in _WAKE_STEP_PARTS)
 
     def _leader_arrays(self, leader: BodyState) -> tuple[np.ndarray, ...]:
-        """:func:`_leader_arrays` of ``leader``, kept for the last :class:`BodyState` object
+        """:func:`~aerodock.downwash.jet_inputs.leader_arrays` of ``leader``, kept for the last :class:`BodyState` object
         (the follower's wrench and the bar's drag read the same leader in one physics step). A
         ``BodyState`` is frozen, so the same object holds the same arrays, and the kernels read
         their numbers when called, as before; other leader types are converted every call."""
         hit = self.__dict__.get("_leader_hit")
         if hit is not None and hit[0] is leader:
             return hit[1]
-        arrays = _leader_arrays(leader)
+        arrays = leader_arrays(leader)
         if type(leader) is BodyState:
             self.__dict__["_leader_hit"] = (leader, arrays)
         return arrays
@@ -461,7 +460,7 @@ class RoundJetField:
         the processes left contiguous for the kernel to advance in place."""
         if noisy and (self._common.shape[1] != n or self._own.shape[0] != k):
             self._draw_follower_noise(n, k)
-        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else _NO_DRAWS
+        draws = standard_normal_t(self._rng, n, _SHARED_ROWS + k) if advance else NO_DRAWS
         if advance and not self._processes.flags.c_contiguous:
             self._set_processes(np.array(self._processes, order="C"))
         return draws
@@ -474,7 +473,7 @@ class RoundJetField:
         if self._bar_noise.shape[1] != n:
             self._bar_noise = standard_normal_t(self._rng, n, 3)
         advance = dt is not None and dt > 0
-        draws = standard_normal_t(self._rng, n, 3) if advance else _NO_DRAWS
+        draws = standard_normal_t(self._rng, n, 3) if advance else NO_DRAWS
         return (np.array(self._bar_noise, order="C"), draws, float(dt) if advance else 0.0,
                 advance)
 
@@ -518,9 +517,9 @@ class RoundJetField:
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.jet_forces(
             NUMPY_LOOPS, self._jet_params(), self._columns(k), offsets, lr, lt, lv, lp,
-            np.asarray(follower.R, dtype=float), _rows3(follower.p), _rows3(follower.v),
+            np.asarray(follower.R, dtype=float), rows3(follower.p), rows3(follower.v),
             self._force_coeff(follower.mass_kg, k),
-            self._processes if noisy else _NO_PROCESSES, draws, float(dt), advance, noisy,
+            self._processes if noisy else NO_PROCESSES, draws, float(dt), advance, noisy,
             split, want_torque, force, torque, body, axial, tau, share)
         if advance:
             self._last_dt = dt
@@ -534,7 +533,7 @@ class RoundJetField:
             np.empty(n)
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.point_wake(NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp,
-                              _rows3(points_m), axis, speed, half_width, centre)
+                              rows3(points_m), axis, speed, half_width, centre)
         return axis, speed, half_width, centre
 
     def _columns(self, k: int) -> np.ndarray:
@@ -588,34 +587,3 @@ class RoundJetField:
                 self._offsets_key = key
                 self._pair_distance_m = mean_pair_distance_m(offsets)
             self._offsets_obj = offsets
-
-
-# The kernels' placeholders for an input they do not read this call (the processes' is
-# writable, as the kernel's argument always is; the draws are read-only, as a TrialRNG's are).
-_NO_DRAWS = np.zeros((0, 0))
-_NO_PROCESSES = np.zeros((3, 0))
-_NO_ROWS = np.zeros((0, 3))
-freeze(_NO_DRAWS, _NO_ROWS)
-
-
-def _rows3(values: np.ndarray) -> np.ndarray:
-    """(n, 3) float rows for a kernel (the array itself when it is one)."""
-    return np.asarray(values, dtype=float)
-
-
-def _leader_arrays(leader: BodyState) -> tuple[np.ndarray, ...]:
-    """The leader's attitude (n, 3, 3), thrust (n,), velocity and position (n, 3)."""
-    thrust = np.asarray(leader.thrust_n, dtype=float)
-    if thrust.shape != (leader.n,):
-        thrust = np.broadcast_to(thrust, (leader.n,))
-    return np.asarray(leader.R, dtype=float), thrust, _rows3(leader.v), _rows3(leader.p)
-
-
-def _offsets(rotor_offsets_body_m: np.ndarray) -> np.ndarray:
-    """The disks' centres as a (k, 3) float array: the array itself when it is one (the
-    geometry's caches are keyed by the object when it is read-only)."""
-    offsets = rotor_offsets_body_m
-    if (isinstance(offsets, np.ndarray) and offsets.dtype == np.float64 and offsets.ndim == 2
-            and offsets.shape[1] == 3):
-        return offsets
-    return np.asarray(offsets, dtype=float).reshape(-1, 3)
