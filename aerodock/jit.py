@@ -65,6 +65,72 @@ def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
     return numba.njit(cache=True, fastmath=False, nogil=True)(fn)
 
 
+# -- one signature for every layout ------------------------------------------------------------
+# numba compiles a kernel anew for every combination of its arrays' layouts (C, Fortran, strided)
+# and writability it is called with: the world's vehicle kernel (49 arguments) met 27 of them in
+# one run of the test suite, each some seconds of compiling, and a user's new configuration (a
+# frozen array here, a transposed one there) pays the same. A kernel marked with ``any_layout``
+# is sealed by :func:`seal` (which its Python callers call after calling it) once its first
+# signature is in, compiled or loaded from the cache: one more signature is added that takes
+# every array in any layout, and every array the kernel does not write read-only (so writable
+# and read-only ones alike), and compiling stops. A later call with other layouts or flags runs
+# that signature (numba's dispatcher picks it in C, converting the arguments' types, at the cost
+# of an exact call) and gives the same numbers: the same source, compiled without fast-math,
+# reads the same elements and computes them in the same order.
+
+_UNSEALED: dict[Any, tuple[tuple[bool, bool], ...]] = {}
+
+
+def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any], Any]:
+    """Decorator (above :func:`njit`): the kernel takes any layout once :func:`seal` has sealed
+    it. ``writes`` names the array arguments it writes (they stay writable in the general
+    signature; the others become read-only); ``contiguous`` those that must stay C-contiguous
+    (the kernel reshapes them).
+
+    Raises:
+        ValueError: a name is not one of the kernel's arguments.
+    """
+    def mark(kernel: Any) -> Any:
+        if not JIT_ENABLED:
+            return kernel
+        import inspect
+
+        names = list(inspect.signature(kernel.py_func).parameters)
+        unknown = sorted(set(writes + contiguous) - set(names))
+        if unknown:
+            raise ValueError(f"{kernel.py_func.__name__} has no argument(s) {unknown}")
+        _UNSEALED[kernel] = tuple((name in writes, name in contiguous) for name in names)
+        return kernel
+
+    return mark
+
+
+def general_signature(first: tuple[Any, ...],
+                      kinds: tuple[tuple[bool, bool], ...]) -> tuple[Any, ...]:
+    """``first`` (a compiled signature's argument types) with every array of any layout (C for
+    those marked contiguous) and read-only unless written (``kinds``: (written, contiguous) per
+    argument), and literal constants as their plain types."""
+    out = []
+    for typ, (written, contiguous) in zip(first, kinds, strict=True):
+        typ = types.unliteral(typ)
+        if isinstance(typ, types.Array):
+            typ = types.Array(typ.dtype, typ.ndim, "C" if contiguous else "A",
+                              readonly=not written)
+        out.append(typ)
+    return tuple(out)
+
+
+def seal(kernel: Any) -> None:
+    """Seal an :func:`any_layout` kernel that has been called: add its general signature
+    (:func:`general_signature` of its first; compiled once, then loaded from numba's cache) and
+    stop it compiling others. A dictionary lookup once it is sealed (or for any other kernel):
+    its Python callers call this after each call."""
+    kinds = _UNSEALED.pop(kernel, None)
+    if kinds is not None and kernel.overloads:
+        kernel.compile(general_signature(kernel.signatures[0], kinds))
+        kernel.disable_compile()
+
+
 @intrinsic
 def _fma_intrinsic(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
     """LLVM's ``llvm.fma.f64``: ``a * b + c`` rounded once (the FMA instruction)."""

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from aerodock.jit import njit, np_exp, np_log, np_power
+from aerodock.jit import any_layout, njit, np_exp, np_log, np_power
 
 # jet parameters (a float64 array)
 JP_B0, JP_SPREAD, JP_P, JP_JET_CONST, JP_TIME_RATIO, JP_LENGTH_RATIO, JP_PAIR_DIST = range(7)
@@ -76,6 +76,7 @@ def _depth_terms(r0: float, r1: float, r2: float, a0: float, a1: float, a2: floa
     return depth, half_width, centre, q0, q1, q2
 
 
+@any_layout("processes", "force", "torque", "body", "axial", "tau_out", "share_out")
 @njit
 def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray,
                lead_r: np.ndarray, lead_thrust: np.ndarray, lead_v: np.ndarray,
@@ -364,6 +365,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
             torque[i, 1] += u1
 
 
+@any_layout("axis", "speed", "half_width", "centre")
 @njit
 def point_wake(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
                lead_thrust: np.ndarray, lead_v: np.ndarray, lead_p: np.ndarray,
@@ -405,6 +407,7 @@ def point_wake(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
                 speed[i] *= arg[i]
 
 
+@any_layout("noise", "out")
 @njit
 def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
               lead_thrust: np.ndarray, lead_v: np.ndarray, lead_p: np.ndarray,
@@ -462,6 +465,7 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
             out[i, c] = norm * u[c]
 
 
+@any_layout("processes", "bar_noise", "out")
 @njit
 def wake_step(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray,
               lead_r: np.ndarray, lead_thrust: np.ndarray, lead_v: np.ndarray,

@@ -26,7 +26,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.frozen import freeze
-from aerodock.jit import njit
+from aerodock.jit import any_layout, njit, seal
 
 
 def _armed_any(flag: bool | np.ndarray) -> bool:
@@ -172,9 +172,11 @@ def contact_in_gripper(
                               params.bar_half_length_m, params.gate_height_m,
                               params.contact_stiffness_npm, params.contact_damping_nspm, force,
                               inside, up)
+    seal(contact_kernel)
     return (force if touching else None), inside, up
 
 
+@any_layout("force", "inside", "up")
 @njit
 def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
                    bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,

@@ -19,7 +19,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze
-from aerodock.jit import NUMPY_LOOPS, fma, njit, np_arctan2
+from aerodock.jit import NUMPY_LOOPS, any_layout, fma, njit, np_arctan2, seal
 
 
 @dataclass(frozen=True)
@@ -265,6 +265,7 @@ def step_hanging_bar(
                        params.anchor_below_leader_m, params.cable_length_m,
                        params.swing_damping, params.gravity_mps2, params.yaw_omega2,
                        params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
+    seal(hanging_bar_kernel)
     return frozen_record(BarState, p=p, v=v, yaw_rad=yaw, yaw_rate_radps=yaw_rate), cable
 
 
@@ -272,6 +273,7 @@ _NO_YAW = np.zeros(0)
 freeze(_NO_YAW)
 
 
+@any_layout("p_new", "v_new", "yaw_new", "yaw_rate_new", "cable")
 @njit
 def hanging_bar_kernel(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
                        bar_yaw: np.ndarray, bar_yaw_rate: np.ndarray, lead_p: np.ndarray,

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from aerodock.jit import fma, njit
+from aerodock.jit import any_layout, fma, njit
 from aerodock.world.vehicles.stack_kernel import stack_torque
 
 
@@ -329,6 +329,8 @@ def _drag_sum(o0: float, o1: float, o2: float, o3: float, ds: tuple, c: int) -> 
     return dot4(ds[c], ds[7 + c], ds[14 + c], ds[21 + c], o0, o1, o2, o3)
 
 
+@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
+            "integral_new", "yaw_sp_new")
 @njit
 def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
                   omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
