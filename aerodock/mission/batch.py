@@ -340,8 +340,8 @@ class MissionBatch:
 
     @property
     def active(self) -> np.ndarray:
-        """(n,) bool: trials still approaching."""
-        return (self.phase == PhaseCode.APPROACH) | (self.phase == PhaseCode.TERMINAL)
+        """(n,) bool: trials still approaching (``APPROACH`` or ``TERMINAL``, the first codes)."""
+        return self.phase <= PhaseCode.TERMINAL
 
     def status(self) -> Status:
         """Each trial's phase, abort reason and clearance so far."""

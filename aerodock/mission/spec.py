@@ -27,7 +27,8 @@ class PhaseCode:
     period (``phase == PhaseCode.DONE``). NumPy looks an IntEnum member's class up for its array
     protocols each time the member meets an array (a few µs a use on Python 3.11), a plain int
     it takes at once: the comparisons give the same booleans, the selections the same codes.
-    In their order, the phases after a miss (``MISSED``, ``ABORT``, ``DONE``) come last."""
+    In their order, the approaching phases (``APPROACH``, ``TERMINAL``) come first and the
+    phases after a miss (``MISSED``, ``ABORT``, ``DONE``) last."""
 
     APPROACH = int(Phase.APPROACH)
     TERMINAL = int(Phase.TERMINAL)
