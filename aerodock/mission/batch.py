@@ -49,7 +49,14 @@ from aerodock.mission.setup import (
     mission_timing,
     starts,
 )
-from aerodock.mission.spec import AbortCode, AbortReason, MissionSpec, Phase, PhaseCode
+from aerodock.mission.spec import (
+    AbortCode,
+    AbortReason,
+    MissionSpec,
+    Phase,
+    PhaseCode,
+    any_true,
+)
 from aerodock.rng import TrialRNG
 from aerodock.world import Observation, World
 from aerodock.world.gripper import GateState, GripperParams
@@ -333,8 +340,8 @@ class MissionBatch:
 
     @property
     def active(self) -> np.ndarray:
-        """(n,) bool: trials still approaching."""
-        return (self.phase == PhaseCode.APPROACH) | (self.phase == PhaseCode.TERMINAL)
+        """(n,) bool: trials still approaching (``APPROACH`` or ``TERMINAL``, the first codes)."""
+        return self.phase <= PhaseCode.TERMINAL
 
     def status(self) -> Status:
         """Each trial's phase, abort reason and clearance so far."""
@@ -394,23 +401,25 @@ class MissionBatch:
             (phase == PhaseCode.CAPTURED) & self.docked & ~self.confirmed
             & (t - self.phase_t >= m.dock_confirm_s))
         self.confirmed |= confirmed_now
-        if captured_now.any() or missed_now.any():
+        if any_true(captured_now) or any_true(missed_now):
             self.capture_t = np.where(captured_now, t,
                                       np.where(missed_now, np.nan, self.capture_t))
         backoff_now = (abort_now | missed_now) & ~captured_now
         plan = backoff.start_back_off(params, plan, t, obs_f, obs_l_f, backoff_now)
         phase = resolve.next_phases(phase, captured_now, missed_now, abort_now)
         began = captured_now | backoff_now
-        if began.any():
+        if any_true(began):
             self.phase_t = np.where(began, t, self.phase_t)
         finished = resolve.finished(params, phase, t, self.phase_t)
-        phase = np.where(finished, PhaseCode.DONE, phase).astype(np.int8)
-        # How far the pair has sunk when the post-dock window ends (the leader carries the
-        # follower; it flies level, so its altitude is its start's).
-        docked_end = finished & world.captured if finished.any() else finished
-        if docked_end.any():
-            self.post_dock_sink = np.where(
-                docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2], self.post_dock_sink)
+        if any_true(finished):
+            phase = np.where(finished, PhaseCode.DONE, phase).astype(np.int8)
+            # How far the pair has sunk when the post-dock window ends (the leader carries the
+            # follower; it flies level, so its altitude is its start's).
+            docked_end = finished & world.captured
+            if any_true(docked_end):
+                self.post_dock_sink = np.where(
+                    docked_end, world.leader.p[:, 2] - self.leader_p0[:, 2],
+                    self.post_dock_sink)
         ref = backoff.back_off_reference(plan, t, phase, self.docked, (p_ref, v_ref, a_ref))
         self.phase, self.plan = phase, plan
         return Decision(
@@ -432,7 +441,7 @@ class MissionBatch:
             gate_sensing.commanded(grip, world.t_s, self.gate_truth),
             gate_sensing.jammed(grip, world.t_s, close_s, self.servo_feedback,
                                 aborts.GATE_STUCK_TRAVELS))
-        if abort_now.any():
+        if reason is not None:  # some trial aborts now
             world.disarm_gate(abort_now)  # an aborted approach never closes the gate
             self.abort_reason = np.where(abort_now & (self.abort_reason == AbortCode.NONE),
                                          reason, self.abort_reason).astype(np.int8)
@@ -487,7 +496,7 @@ class MissionBatch:
             self.recorder.after_step(world, self.docked, sensed=not self.gate_truth)
         self.last_fout = fout
         self.k += 1
-        if (self.phase == PhaseCode.DONE).all() or self.k >= self.steps:
+        if not any_true(self.phase != PhaseCode.DONE) or self.k >= self.steps:
             self.finished = True
             return Flown(track_err_m, violated, None)
         self.decision = self.decide()
@@ -497,7 +506,7 @@ class MissionBatch:
         """Docked followers: level attitude; thrust is the configured fraction of the weight plus
         the follower's own prediction of the wake (the position loop would fight the cables)."""
         hanging = self.docked
-        if not hanging.any():
+        if not any_true(hanging):
             return fout
         cmd, params = fout.command, self.params
         hang_thrust = params.mass_kg * (params.mission.post_dock_thrust_fraction

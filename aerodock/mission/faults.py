@@ -198,7 +198,7 @@ def draw_faults(faults: tuple[Fault, ...], n: int, rng: Any) -> list[FaultDraw]:
 
 def _freeze(obs: Any, held: Any, mask: np.ndarray) -> Any:
     """``obs`` with the rows in ``mask`` replaced by ``held`` (same Observation type)."""
-    if held is None or not mask.any():
+    if held is None or not np.count_nonzero(mask):
         return obs
     m = mask[:, None]
     return type(obs)(np.where(m, held.p, obs.p), np.where(m, held.v, obs.v),
@@ -217,6 +217,7 @@ class FaultRuntime:
         self.draws = draws
         self.n = n
         self.kinds = {d.fault.kind for d in draws}
+        self._drawn = {kind: [d for d in draws if d.fault.kind == kind] for kind in self.kinds}
         spikes = [d.fault.magnitude for d in draws if d.fault.kind == "latency_spike"]
         self._delay_ticks = int(round(max(spikes, default=0.0) / dt_control_s))
         self._dt = dt_control_s
@@ -224,11 +225,14 @@ class FaultRuntime:
         self._held: dict[str, Any] = {"follower": None, "leader": None, "network": None}
         self.last_fresh_leader_t = np.zeros(n)
 
-    def _on(self, kind: str, t: float) -> np.ndarray:
+    def _on(self, kind: str, t: float) -> np.ndarray | None:
+        """(n,) bool: a fault of ``kind`` is on at ``t`` (None: no fault of that kind)."""
+        drawn = self._drawn.get(kind)
+        if not drawn:
+            return None
         on = np.zeros(self.n, dtype=bool)
-        for d in self.draws:
-            if d.fault.kind == kind:
-                on |= d.active(t)
+        for d in drawn:
+            on |= d.active(t)
         return on
 
     def observations(self, t: float, obs_l: Any, obs_f: Any) -> tuple[Any, Any, Any]:
@@ -241,6 +245,8 @@ class FaultRuntime:
                     obs_f = _freeze(obs_f, self._past_f[-1 - lag], d.active(t))
         for who in ("follower", "leader"):
             down = self._on(f"{who}_mocap_dropout", t)
+            if down is None:
+                continue  # this capture never freezes: nothing to hold
             obs = obs_f if who == "follower" else obs_l
             obs = _freeze(obs, self._held[who], down)
             self._held[who] = obs
@@ -249,6 +255,9 @@ class FaultRuntime:
             else:
                 obs_l = obs
         lost = self._on("leader_state_lost", t)
+        if lost is None:  # the leader's state always arrives, fresh
+            self.last_fresh_leader_t = np.full(self.n, t)
+            return obs_l, obs_f, obs_l
         obs_l_f = _freeze(obs_l, self._held["network"], lost)
         self._held["network"] = obs_l_f
         self.last_fresh_leader_t = np.where(lost, self.last_fresh_leader_t, t)

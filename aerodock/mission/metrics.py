@@ -10,7 +10,7 @@ import numpy as np
 
 from aerodock.geometry import norm_rows
 from aerodock.mission.phases.gate_sensing import GateCode
-from aerodock.mission.spec import PhaseCode
+from aerodock.mission.spec import PhaseCode, any_true
 from aerodock.world import World
 from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
 
@@ -56,7 +56,7 @@ class MissionMetrics:
         hist[k, :, 3] = np.rad2deg(np.arccos(np.minimum(np.maximum(fol.R[:, 2, 2], -1.0), 1.0)))
         hist[k, :, 4] = fout.saturated
         ended = (~active | (world.gripper.gate != GateCode.OPEN)) & (self.approach_end > t_s)
-        if ended.any():
+        if any_true(ended):
             self.approach_end = np.where(ended, t_s, self.approach_end)
         live = phase != PhaseCode.DONE  # this trial's mission is still on
         self.ground_hit |= world.ground_contact & live

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import IntEnum
 
+import numpy as np
+
 from aerodock.control.compensation import Compensation
 from aerodock.mission.faults import Fault
 
@@ -24,7 +26,9 @@ class PhaseCode:
     """The phases' plain int codes, for the arithmetic on (n,) int8 phase arrays each control
     period (``phase == PhaseCode.DONE``). NumPy looks an IntEnum member's class up for its array
     protocols each time the member meets an array (a few µs a use on Python 3.11), a plain int
-    it takes at once: the comparisons give the same booleans, the selections the same codes."""
+    it takes at once: the comparisons give the same booleans, the selections the same codes.
+    In their order, the approaching phases (``APPROACH``, ``TERMINAL``) come first and the
+    phases after a miss (``MISSED``, ``ABORT``, ``DONE``) last."""
 
     APPROACH = int(Phase.APPROACH)
     TERMINAL = int(Phase.TERMINAL)
@@ -32,6 +36,13 @@ class PhaseCode:
     MISSED = int(Phase.MISSED)
     ABORT = int(Phase.ABORT)
     DONE = int(Phase.DONE)
+
+
+def any_true(mask: np.ndarray) -> bool:
+    """Whether any entry of the boolean array ``mask`` is set: ``mask.any()`` without the
+    method's Python-level wrapper (a quarter of its cost on the (n,) masks the mission checks a
+    dozen times a control period, to skip the updates nothing needs)."""
+    return np.count_nonzero(mask) > 0
 
 
 class AbortReason(IntEnum):

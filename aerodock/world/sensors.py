@@ -4,6 +4,7 @@ accelerometer, its torque observations. Each reads the batch state; none changes
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -27,9 +28,10 @@ class Observation:
         """(n,) yaw."""
         return self.rpy[:, 2]
 
-    @property
+    @cached_property
     def R(self) -> np.ndarray:  # noqa: N802
-        """(n, 3, 3) body-to-world rotation."""
+        """(n, 3, 3) body-to-world rotation (built once per observation: the active trigger, the
+        predictor's bodies and the recorder each read it)."""
         return rpy_to_rotmat(self.rpy)
 
 
@@ -44,8 +46,9 @@ def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation,
     n, rng = state.n, state.rng
     pos_sd, vel_sd = params.mocap.pos_noise_m, params.mocap.vel_noise_mps
     att_sd = params.imu.attitude_noise_rad if params.rigid else 0.0
-    if state.imu is not None:
-        lr, fr, att_sd = state.imu.attitude[:n], state.imu.attitude[n:], 0.0
+    if state.imu is not None:  # the estimates' angles, the leaders' rows then the followers'
+        both = rotmat_to_rpy(state.imu.attitude)
+        lr, fr, att_sd = both[:n], both[n:], 0.0
     per_trial = isinstance(rng, TrialRNG) and rng.n == n
 
     def noisy(p: np.ndarray, v: np.ndarray, rot: np.ndarray) -> Observation:

@@ -153,3 +153,48 @@ def test_a_turning_leaders_reference_is_a_level_arc():
     np.testing.assert_allclose((ahead.v - behind.v) / (2 * h), now.a, atol=1e-8)
     straight = leader_reference(p0, v0, v0[None, :], 2.0)
     np.testing.assert_allclose(straight.p, [[2.0, 0.0, 0.0]])
+
+
+def _numpy_minjerk(p0, v0, a0, pf, vf, af, dur, t0, t):
+    """The NumPy expressions the kernels follow (the numbers they must give, to the bit)."""
+    big_t = dur[:, None]
+    dp = pf - p0
+    c = np.empty(p0.shape + (6,))
+    c[..., 0], c[..., 1], c[..., 2] = p0, v0, 0.5 * a0
+    c[..., 3] = (20 * dp - (8 * vf + 12 * v0) * big_t - (3 * a0 - af) * big_t**2) / (
+        2 * big_t**3)
+    c[..., 4] = (-30 * dp + (14 * vf + 16 * v0) * big_t + (3 * a0 - 2 * af) * big_t**2) / (
+        2 * big_t**4)
+    c[..., 5] = (12 * dp - 6 * (vf + v0) * big_t - (a0 - af) * big_t**2) / (2 * big_t**5)
+    tau = np.minimum(np.maximum(t - t0, 0.0), dur)[:, None, None]
+    powers = np.arange(6)
+    tau_k = tau**powers
+    pos = np.add.reduce(c * tau_k, axis=-1)
+    vel = np.add.reduce(c[..., 1:] * powers[1:] * tau_k[..., :-1], axis=-1)
+    acc = np.add.reduce(c[..., 2:] * (powers[2:] * powers[1:-1]) * tau_k[..., :-2], axis=-1)
+    after_s = t - (t0 + dur)
+    after, before = (after_s > 0.0)[:, None], (t < t0)[:, None]
+    pos = np.where(after, pf + vf * after_s[:, None], pos)
+    vel, acc = np.where(after, vf, vel), np.where(after, 0.0, acc)
+    return c, (np.where(before, p0, pos), np.where(before, v0, vel), np.where(before, a0, acc))
+
+
+@pytest.mark.parametrize("n", [1, 3, 16, 257])
+def test_kernels_give_numpys_numbers_to_the_bit(n):
+    """The compiled coefficients and samples equal the NumPy expressions bit for bit (NumPy's
+    own power loop, the sums in order), inside, before and after the plans."""
+    prob = random_problem(n, seed=n)
+    scale = np.exp(np.random.default_rng(n).normal(0.0, 3.0, 6))
+    for key, s in zip(("p0", "v0", "a0", "pf", "vf", "af"), scale, strict=True):
+        prob[key] = prob[key] * s
+    traj = minjerk(**prob)
+    dur, t0 = prob["duration_s"], prob["t0_s"]
+    for t in (t0 + 0.37 * dur, t0 - 1.0, t0 + dur + 0.5, np.full(n, 0.7)):
+        coeffs, expected = _numpy_minjerk(*(prob[k] for k in ("p0", "v0", "a0", "pf", "vf",
+                                                                "af")), dur, t0, t)
+        assert traj.coeffs.tobytes() == coeffs.tobytes()
+        for got, want in zip(traj.sample(t), expected, strict=True):
+            assert got.tobytes() == want.tobytes()
+    scalar = traj.sample(0.7)
+    for got, want in zip(scalar, traj.sample(np.full(n, 0.7)), strict=True):
+        assert got.tobytes() == want.tobytes()

@@ -3,12 +3,13 @@ when the prediction moves, optionally ending in a vertical rise (``planner.rise_
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from aerodock.geometry import norm_rows
 from aerodock.mission.params import MissionParams
+from aerodock.mission.spec import any_true
 from aerodock.planning.docking import docking_point_m
 from aerodock.planning.minjerk import MinJerk, minjerk
 from aerodock.world import Observation
@@ -48,12 +49,15 @@ def first_plan(params: MissionParams, shape: ApproachShape, start_m: np.ndarray,
 
 def merge_plans(old: MinJerk, new: MinJerk, mask: np.ndarray) -> MinJerk:
     """Per-trial choice between two plans (``new`` where ``mask``)."""
-    out = {}
-    for name in ("coeffs", "t0_s", "duration_s", "p0", "v0", "a0", "pf", "vf"):
-        a, b = getattr(old, name), getattr(new, name)
-        m = mask.reshape((-1,) + (1,) * (np.ndim(a) - 1))
-        out[name] = np.where(m, b, a)
-    return replace(old, **out)
+    if not any_true(~mask):
+        return new
+    rows, rows3 = mask[:, None], mask[:, None, None]
+    return MinJerk(coeffs=np.where(rows3, new.coeffs, old.coeffs),
+                   t0_s=np.where(mask, new.t0_s, old.t0_s),
+                   duration_s=np.where(mask, new.duration_s, old.duration_s),
+                   p0=np.where(rows, new.p0, old.p0), v0=np.where(rows, new.v0, old.v0),
+                   a0=np.where(rows, new.a0, old.a0), pf=np.where(rows, new.pf, old.pf),
+                   vf=np.where(rows, new.vf, old.vf))
 
 
 def replan(params: MissionParams, shape: ApproachShape, plan: MinJerk, t_s: float,
@@ -66,7 +70,7 @@ def replan(params: MissionParams, shape: ApproachShape, plan: MinJerk, t_s: floa
     target = docking_point_m(leader.p, leader.v, params.geometry, horizon) + shape.below_m
     moved = norm_rows(target - plan.pf) > params.planner.replan_threshold_m
     need = active & moved
-    if not need.any():
+    if not any_true(need):
         return plan
     p_r, v_r, a_r = plan.sample(t_s)
     zeros = np.zeros_like(target)

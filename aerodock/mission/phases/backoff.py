@@ -7,7 +7,7 @@ import numpy as np
 
 from aerodock.mission.params import MissionParams
 from aerodock.mission.phases.approach import merge_plans
-from aerodock.mission.spec import PhaseCode
+from aerodock.mission.spec import PhaseCode, any_true
 from aerodock.planning.minjerk import MinJerk, minjerk
 from aerodock.world import Observation
 
@@ -16,7 +16,7 @@ def start_back_off(params: MissionParams, plan: MinJerk, t_s: float, follower: O
                    leader: Observation, now: np.ndarray) -> MinJerk:
     """The plan with the trials in ``now`` backing off ``backoff_distance_m`` away from the
     leader horizontally and as far down, over ``backoff_s``."""
-    if not now.any():
+    if not any_true(now):
         return plan
     m, n = params.mission, now.size
     zeros = np.zeros((n, 3))
@@ -33,14 +33,16 @@ def back_off_reference(plan: MinJerk, t_s: float, phase: np.ndarray, captured: n
     """(p, v, a): the back-off plan for the trials backing off, its end (at rest) for those done
     and not hanging from the bar, ``ref`` for the rest."""
     p_ref, v_ref, a_ref = ref
+    if not any_true(phase >= PhaseCode.MISSED):  # none backing off or done: the rest's
+        return p_ref, v_ref, a_ref
     backing = (phase == PhaseCode.MISSED) | (phase == PhaseCode.ABORT)
-    if backing.any():
+    if any_true(backing):
         pb, vb, ab = plan.sample(t_s)
         p_ref = np.where(backing[:, None], pb, p_ref)
         v_ref = np.where(backing[:, None], vb, v_ref)
         a_ref = np.where(backing[:, None], ab, a_ref)
     done_free = (phase == PhaseCode.DONE) & ~captured
-    if done_free.any():
+    if any_true(done_free):
         p_ref = np.where(done_free[:, None], plan.pf, p_ref)
         v_ref = np.where(done_free[:, None], 0.0, v_ref)
         a_ref = np.where(done_free[:, None], 0.0, a_ref)

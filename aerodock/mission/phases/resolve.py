@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import PhaseCode
+from aerodock.mission.spec import PhaseCode, any_true
 
 
 def gate_outcomes(closed: np.ndarray, dropped: np.ndarray, phase: np.ndarray,
@@ -25,6 +25,8 @@ def next_phases(phase: np.ndarray, captured_now: np.ndarray, missed_now: np.ndar
                 abort_now: np.ndarray) -> np.ndarray:
     """(n,) the phases after this period's outcomes (a capture wins over a miss, a miss over an
     abort)."""
+    if not any_true(captured_now | missed_now | abort_now):
+        return phase
     phase = np.where(captured_now, PhaseCode.CAPTURED, phase)
     phase = np.where(missed_now & ~captured_now, PhaseCode.MISSED, phase)
     return np.where(abort_now & ~captured_now & ~missed_now, PhaseCode.ABORT, phase)
@@ -34,6 +36,7 @@ def finished(params: MissionParams, phase: np.ndarray, t_s: float,
              phase_t_s: np.ndarray) -> np.ndarray:
     """(n,) trials whose post-dock hold or back-off is over: their missions are done."""
     m = params.mission
-    return (((phase == PhaseCode.CAPTURED) & (t_s - phase_t_s >= m.post_dock_s))
+    elapsed_s = t_s - phase_t_s
+    return (((phase == PhaseCode.CAPTURED) & (elapsed_s >= m.post_dock_s))
             | (((phase == PhaseCode.MISSED) | (phase == PhaseCode.ABORT))
-               & (t_s - phase_t_s >= m.backoff_s)))
+               & (elapsed_s >= m.backoff_s)))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.mission.params import MissionParams
-from aerodock.mission.spec import PhaseCode
+from aerodock.mission.spec import PhaseCode, any_true
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import Observation
 
@@ -21,6 +21,8 @@ def enter_terminal(phase: np.ndarray, t_s: float, arrival_s: float,
                    terminal_s: float) -> np.ndarray:
     """(n,) the phases with approaching trials switched to ``TERMINAL`` ``terminal_s`` before
     arrival."""
+    if not t_s >= arrival_s - terminal_s:
+        return phase
     return np.where((phase == PhaseCode.APPROACH) & (t_s >= arrival_s - terminal_s),
                     PhaseCode.TERMINAL, phase).astype(np.int8)
 
@@ -30,7 +32,7 @@ def hold_at_docking_point(params: MissionParams, ref: tuple[np.ndarray, ...], le
     """(p, v, a) with the holding trials (past arrival, still approaching) at the docking point
     the leader's state predicts now, moving with it."""
     p_ref, v_ref, a_ref = ref
-    if not holding.any():
+    if not any_true(holding):
         return p_ref, v_ref, a_ref
     target_now = docking_point_m(leader.p, leader.v, params.geometry)
     p_ref = np.where(holding[:, None], target_now, p_ref)

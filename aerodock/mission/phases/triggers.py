@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from aerodock.mission.spec import any_true
 from aerodock.planning.docking import DockGeometry
 from aerodock.world import Observation
 from aerodock.world.gripper import GripperParams
@@ -19,7 +20,9 @@ def active_close_command(follower: Observation, leader: Observation, geom: DockG
                          gp: GripperParams, t_s: float, active_at_s: float,
                          active: np.ndarray) -> np.ndarray:
     """(n,) bool: command the gate to close now (trials approaching, from ``active_at_s``)."""
-    return (t_s >= active_at_s) & active & bar_will_be_inside(
+    if not (t_s >= active_at_s and any_true(active)):  # no prediction needed
+        return np.zeros(active.shape, dtype=bool)
+    return active & bar_will_be_inside(
         follower, leader, geom, gp, gp.latency_s + gp.close_time_s)
 
 
@@ -32,7 +35,7 @@ def bar_will_be_inside(follower: Observation, leader: Observation, geom: DockGeo
     Margins keep it away from the gate's edges.
     """
     rel_v = leader.v - follower.v
-    bar = leader.p + np.array([0.0, 0.0, geom.anchor_below_leader_m + geom.cable_length_m])
+    bar = leader.p + geom.bar_below_leader_m
     arm = follower.p - follower.R[:, :, 2] * gp.mount_height_m
     rel = bar - arm + rel_v * lead_time_s
     height = -rel[:, 2]
