@@ -12,7 +12,7 @@ from aerodock.geometry import norm_rows
 from aerodock.mission.phases.gate_sensing import GateCode
 from aerodock.mission.spec import PhaseCode, any_true
 from aerodock.world import World
-from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
+from aerodock.world.platform import platform_strike
 
 TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
 TERMINAL_WINDOW_S = 0.5
@@ -68,11 +68,9 @@ class MissionMetrics:
         self.nan_seen |= ~(np.isfinite(fol.p).all(axis=1) & np.isfinite(lead.p).all(axis=1)
                            & np.isfinite(fout.command.thrust_n))
         if world.rigid:
-            seg_a, seg_b = platform_segments(anchor_point(lead.p, lead.R, world.platform),
-                                             leader_yaw_rad, world.bar, world.platform)
-            offsets = world.follower_fleet.params.rotor_offsets_m
-            self.strikes |= live & rotor_strike(fol.p, fol.R, offsets, rotor_radius_m, seg_a,
-                                                seg_b, gp.bar_radius_m)
+            self.strikes |= live & platform_strike(
+                fol.p, fol.R, lead.p, lead.R, leader_yaw_rad, world.bar, world.platform,
+                world.follower_fleet.params.rotor_offsets_m, rotor_radius_m, gp.bar_radius_m)
         if self.trace:
             tr = self.trace
             tr["t_s"].append(t_s)
