@@ -7,6 +7,8 @@ The log readers and the simulator's recorder share :func:`thrust_accel` and :dat
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 E3 = np.array([0.0, 0.0, 1.0])
@@ -56,17 +58,35 @@ def rotmat_to_euler(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 def rotmat_to_rpy(rot: np.ndarray) -> np.ndarray:
     """Rotation matrices ``S + (3, 3)`` to ZYX Euler angles ``S + (3,)`` (roll, pitch, yaw),
-    radians: :func:`rotmat_to_euler` stacked on the last axis."""
+    radians: :func:`rotmat_to_euler` stacked on the last axis. The roll and yaw (``arctan2``)
+    and the clipped ``R20`` in one compiled call
+    (:func:`aerodock.geometry_kernels.roll_yaw_sin_pitch`), then NumPy's ``arcsin``: NumPy's
+    numbers, from three calls instead of nine."""
+    kernel, loops, seal = _COMPILED or _load_compiled()
     rot = np.asarray(rot, dtype=float)
     shape = rot.shape[:-1]
     rot = rot.reshape(-1, 3, 3)  # a single rotation too (its angles' out= are rows, not scalars)
     rpy = np.empty((rot.shape[0], 3))
-    np.arctan2(rot[:, 2, 1], rot[:, 2, 2], out=rpy[:, 0])
-    # -arcsin of the entry clipped to [-1, 1] (np.clip's numbers, without its wrapper's cost)
-    sin_pitch = np.minimum(np.maximum(rot[:, 2, 0], -1.0), 1.0)
-    np.negative(np.arcsin(sin_pitch, out=sin_pitch), out=rpy[:, 1])
-    np.arctan2(rot[:, 1, 0], rot[:, 0, 0], out=rpy[:, 2])
+    kernel(loops, rot, rpy)
+    seal(kernel)
+    pitch = rpy[:, 1]
+    np.negative(np.arcsin(pitch, out=pitch), out=pitch)
     return rpy.reshape(shape)
+
+
+_COMPILED: tuple[Any, ...] = ()
+
+
+def _load_compiled() -> tuple[Any, ...]:
+    """The compiled kernel of :func:`rotmat_to_rpy`, NumPy's loops' addresses and
+    :func:`aerodock.jit.seal`, imported on first use: the log readers and the flight node read
+    this module and load no compiled code (numba)."""
+    global _COMPILED
+    from aerodock.geometry_kernels import roll_yaw_sin_pitch
+    from aerodock.jit import NUMPY_LOOPS, seal
+
+    _COMPILED = (roll_yaw_sin_pitch, NUMPY_LOOPS, seal)
+    return _COMPILED
 
 
 def quat_to_rotmat(quat_wxyz: np.ndarray) -> np.ndarray:

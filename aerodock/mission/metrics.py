@@ -12,7 +12,7 @@ from aerodock.geometry import norm_rows
 from aerodock.mission.phases.gate_sensing import GateCode
 from aerodock.mission.spec import PhaseCode, any_true
 from aerodock.world import World
-from aerodock.world.platform import anchor_point, platform_segments, rotor_strike
+from aerodock.world.platform import platform_strike
 
 TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
 TERMINAL_WINDOW_S = 0.5
@@ -47,37 +47,35 @@ class MissionMetrics:
         """Measure control period ``k`` (before it is flown); returns the true tracking error
         (n,) m and the trials whose clearance was first violated now (n,)."""
         gp, hist = world.gripper_params, self.hist
-        fol, lead = world.follower, world.leader
-        true_err = fol.p - p_ref
+        lead_p, lead_r, fol_p, fol_r = world.poses()  # no split of the world's batch
+        true_err = fol_p - p_ref
         hist[k, :, 0] = np.abs(true_err[:, 2])
         hist[k, :, 1] = track_err_m = norm_rows(true_err)
         hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
         # np.clip's numbers, without its wrapper's cost (as geometry.rotmat_to_rpy)
-        hist[k, :, 3] = np.rad2deg(np.arccos(np.minimum(np.maximum(fol.R[:, 2, 2], -1.0), 1.0)))
+        hist[k, :, 3] = np.rad2deg(np.arccos(np.minimum(np.maximum(fol_r[:, 2, 2], -1.0), 1.0)))
         hist[k, :, 4] = fout.saturated
         ended = (~active | (world.gripper.gate != GateCode.OPEN)) & (self.approach_end > t_s)
         if any_true(ended):
             self.approach_end = np.where(ended, t_s, self.approach_end)
         live = phase != PhaseCode.DONE  # this trial's mission is still on
         self.ground_hit |= world.ground_contact & live
-        arm = fol.p - fol.R[:, :, 2] * gp.mount_height_m
+        arm = fol_p - fol_r[:, :, 2] * gp.mount_height_m
         was_clear = self.min_clear >= clearance_m
         self.min_clear = np.where(live, np.minimum(
-            self.min_clear, norm_rows(arm - lead.p)), self.min_clear)
+            self.min_clear, norm_rows(arm - lead_p)), self.min_clear)
         violated_now = was_clear & (self.min_clear < clearance_m)
-        self.nan_seen |= ~(np.isfinite(fol.p).all(axis=1) & np.isfinite(lead.p).all(axis=1)
+        self.nan_seen |= ~(np.isfinite(fol_p).all(axis=1) & np.isfinite(lead_p).all(axis=1)
                            & np.isfinite(fout.command.thrust_n))
         if world.rigid:
-            seg_a, seg_b = platform_segments(anchor_point(lead.p, lead.R, world.platform),
-                                             leader_yaw_rad, world.bar, world.platform)
-            offsets = world.follower_fleet.params.rotor_offsets_m
-            self.strikes |= live & rotor_strike(fol.p, fol.R, offsets, rotor_radius_m, seg_a,
-                                                seg_b, gp.bar_radius_m)
+            self.strikes |= live & platform_strike(
+                fol_p, fol_r, lead_p, lead_r, leader_yaw_rad, world.bar, world.platform,
+                world.follower_fleet.params.rotor_offsets_m, rotor_radius_m, gp.bar_radius_m)
         if self.trace:
             tr = self.trace
             tr["t_s"].append(t_s)
-            tr["follower_p"].append(fol.p.copy())
-            tr["leader_p"].append(lead.p.copy())
+            tr["follower_p"].append(fol_p.copy())
+            tr["leader_p"].append(lead_p.copy())
             tr["bar_p"].append(world.bar.p.copy())
             tr["ref_p"].append(p_ref.copy())
             tr["phase"].append(phase.copy())

@@ -341,17 +341,46 @@ def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: Bar
     """End points (a, b), each (n, 3 segments, 3), of the bar and its two cables.
 
     The cables hang from points ``cable_spacing_m`` apart along the leader's yaw axis at the
-    anchor, to the bar's ends.
+    anchor, to the bar's ends (:func:`segments_kernel`).
     """
-    half = 0.5 * params.bar_length_m
-    axis_bar = np.stack([np.cos(bar.yaw_rad), np.sin(bar.yaw_rad),
-                         np.zeros_like(bar.yaw_rad)], axis=1)
-    axis_lead = np.stack([np.cos(leader_yaw_rad), np.sin(leader_yaw_rad),
-                          np.zeros_like(leader_yaw_rad)], axis=1)
-    end_1, end_2 = bar.p - half * axis_bar, bar.p + half * axis_bar
-    top_1 = anchor_p - 0.5 * params.cable_spacing_m * axis_lead
-    top_2 = anchor_p + 0.5 * params.cable_spacing_m * axis_lead
-    return np.stack([end_1, top_1, top_2], axis=1), np.stack([end_2, end_1, end_2], axis=1)
+    n = bar.p.shape[0]
+    seg_a, seg_b = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+    segments_kernel(anchor_p, leader_yaw_rad, bar.p, bar.yaw_rad, 0.5 * params.bar_length_m,
+                    0.5 * params.cable_spacing_m, seg_a, seg_b)
+    seal(segments_kernel)
+    return seg_a, seg_b
+
+
+@any_layout("seg_a", "seg_b")
+@njit
+def segments_kernel(anchor_p: np.ndarray, leader_yaw: np.ndarray, bar_p: np.ndarray,
+                    bar_yaw: np.ndarray, half_bar_m: float, half_spacing_m: float,
+                    seg_a: np.ndarray, seg_b: np.ndarray) -> None:
+    """:func:`platform_segments`' kernel (:func:`_segments`)."""
+    _segments(anchor_p, leader_yaw, bar_p, bar_yaw, half_bar_m, half_spacing_m, seg_a, seg_b)
+
+
+@njit
+def _segments(anchor_p: np.ndarray, leader_yaw: np.ndarray, bar_p: np.ndarray,
+              bar_yaw: np.ndarray, half_bar_m: float, half_spacing_m: float, seg_a: np.ndarray,
+              seg_b: np.ndarray) -> None:
+    """:func:`platform_segments`' numbers, row by row: the bar's ends ``p -/+ half_bar_m
+    (cos yaw, sin yaw, 0)``, the cables' tops ``anchor -/+ half_spacing_m (cos, sin, 0)`` of
+    the leader's yaw (``math.cos`` and ``math.sin`` are NumPy's numbers here: NumPy's float64
+    ``cos`` and ``sin`` are the C library's); ``seg_a`` = (end 1, top 1, top 2), ``seg_b`` =
+    (end 2, end 1, end 2)."""
+    for i in range(bar_p.shape[0]):
+        bar_axis = (math.cos(bar_yaw[i]), math.sin(bar_yaw[i]), 0.0)
+        lead_axis = (math.cos(leader_yaw[i]), math.sin(leader_yaw[i]), 0.0)
+        for k in range(3):
+            end_1 = bar_p[i, k] - half_bar_m * bar_axis[k]
+            end_2 = bar_p[i, k] + half_bar_m * bar_axis[k]
+            seg_a[i, 0, k] = end_1
+            seg_a[i, 1, k] = anchor_p[i, k] - half_spacing_m * lead_axis[k]
+            seg_a[i, 2, k] = anchor_p[i, k] + half_spacing_m * lead_axis[k]
+            seg_b[i, 0, k] = end_2
+            seg_b[i, 1, k] = end_1
+            seg_b[i, 2, k] = end_2
 
 
 # Half the thickness of a rotor's swept disk (blade pitch and flapping): 1 cm on the paper's
@@ -359,6 +388,14 @@ def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: Bar
 # its size; written so that it is exactly 1 cm there).
 DISK_HALF_THICKNESS_M = 0.01
 PAPER_ROTOR_RADIUS_M = 0.0635
+
+
+def disk_half_thickness(rotor_radius_m: float, disk_half_thickness_m: float | None) -> float:
+    """Half the thickness of a rotor's swept disk, m: ``disk_half_thickness_m``, or for None
+    :data:`DISK_HALF_THICKNESS_M` scaled to the rotor radius."""
+    if disk_half_thickness_m is None:
+        return DISK_HALF_THICKNESS_M * (rotor_radius_m / PAPER_ROTOR_RADIUS_M)
+    return disk_half_thickness_m
 
 
 def rotor_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
@@ -371,21 +408,115 @@ def rotor_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
     thick, the blades' sweep; None: :data:`DISK_HALF_THICKNESS_M` scaled to the radius)
     about its centre; a segment (bar or cable, radius
     ``bar_radius_m``) strikes it when the segment's point closest to the disk centre lies inside
-    that cylinder grown by the segment's radius.
+    that cylinder grown by the segment's radius (:func:`strike_kernel`).
     """
-    if disk_half_thickness_m is None:
-        disk_half_thickness_m = DISK_HALF_THICKNESS_M * (rotor_radius_m / PAPER_ROTOR_RADIUS_M)
-    centres = follower_p[:, None, :] + np.matmul(follower_R[:, None], rotor_offsets_body_m[
-        None, :, :, None])[..., 0]  # (n, k, 3)
-    axis = follower_R[:, :, 2][:, None, None, :]  # rotor axis, (n, 1, 1, 3)
-    a, b = seg_a[:, None], seg_b[:, None]  # (n, 1, s, 3)
-    c = centres[:, :, None]  # (n, k, 1, 3)
-    ab = b - a
-    t = ((c - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12)
-    closest = a + np.clip(t, 0.0, 1.0)[..., None] * ab
-    rel = closest - c
-    axial = (rel * axis).sum(-1)
-    radial = np.sqrt(np.maximum((rel * rel).sum(-1) - axial * axial, 0.0))
-    hit = (np.abs(axial) < disk_half_thickness_m + bar_radius_m) & (
-        radial < rotor_radius_m + bar_radius_m)
-    return hit.any(axis=(1, 2))
+    hit = np.empty(follower_p.shape[0], dtype=bool)
+    strike_kernel(follower_p, follower_R, rotor_offsets_body_m, seg_a, seg_b,
+                  disk_half_thickness(rotor_radius_m, disk_half_thickness_m) + bar_radius_m,
+                  rotor_radius_m + bar_radius_m, hit)
+    seal(strike_kernel)
+    return hit
+
+
+def platform_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
+                    leader_p: np.ndarray, leader_R: np.ndarray,  # noqa: N803
+                    leader_yaw_rad: np.ndarray, bar: BarState, params: PlatformParams,
+                    rotor_offsets_body_m: np.ndarray, rotor_radius_m: float,
+                    bar_radius_m: float) -> np.ndarray:
+    """(n,) bool: :func:`rotor_strike` of the bar and cables of :func:`platform_segments` hung
+    at the leaders' :func:`anchor_point`, the same numbers in one compiled call
+    (:func:`platform_strike_kernel`; the mission's check every control period).
+
+    Args:
+        follower_p, leader_p: (n, 3) positions, m, NED.
+        follower_R, leader_R: (n, 3, 3) body-to-world rotations.
+        leader_yaw_rad: (n,) the leaders' yaw (as the follower sees it).
+        bar: the hanging bars.
+        params: platform constants.
+        rotor_offsets_body_m: (k, 3) the follower's rotor centres, body FRD, m.
+        rotor_radius_m, bar_radius_m: radii, m.
+    """
+    hit = np.empty(follower_p.shape[0], dtype=bool)
+    platform_strike_kernel(follower_p, follower_R, rotor_offsets_body_m, leader_p, leader_R,
+                           params.anchor_below_leader_m, leader_yaw_rad, bar.p, bar.yaw_rad,
+                           0.5 * params.bar_length_m, 0.5 * params.cable_spacing_m,
+                           disk_half_thickness(rotor_radius_m, None) + bar_radius_m,
+                           rotor_radius_m + bar_radius_m, hit)
+    seal(platform_strike_kernel)
+    return hit
+
+
+@any_layout("hit")
+@njit
+def platform_strike_kernel(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray,
+                           lead_p: np.ndarray, lead_r: np.ndarray, anchor_below_m: float,
+                           leader_yaw: np.ndarray, bar_p: np.ndarray, bar_yaw: np.ndarray,
+                           half_bar_m: float, half_spacing_m: float, axial_reach_m: float,
+                           radial_reach_m: float, hit: np.ndarray) -> None:
+    """:func:`platform_strike`: the anchors ``p + R[:, :, 2] d`` (NumPy's elementwise
+    numbers), the segments (:func:`_segments`), the strikes (:func:`_strikes`)."""
+    n = fol_p.shape[0]
+    anchor = np.empty((n, 3))
+    for i in range(n):
+        for k in range(3):
+            anchor[i, k] = lead_p[i, k] + lead_r[i, k, 2] * anchor_below_m
+    seg_a, seg_b = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+    _segments(anchor, leader_yaw, bar_p, bar_yaw, half_bar_m, half_spacing_m, seg_a, seg_b)
+    _strikes(fol_p, fol_r, offsets, seg_a, seg_b, axial_reach_m, radial_reach_m, hit)
+
+
+@any_layout("hit")
+@njit
+def strike_kernel(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray,
+                  seg_a: np.ndarray, seg_b: np.ndarray, axial_reach_m: float,
+                  radial_reach_m: float, hit: np.ndarray) -> None:
+    """:func:`rotor_strike`'s kernel (:func:`_strikes`)."""
+    _strikes(fol_p, fol_r, offsets, seg_a, seg_b, axial_reach_m, radial_reach_m, hit)
+
+
+@njit
+def _strikes(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray, seg_a: np.ndarray,
+             seg_b: np.ndarray, axial_reach_m: float, radial_reach_m: float,
+             hit: np.ndarray) -> None:
+    """:func:`rotor_strike` for each follower: a rotor ``c = p + R o`` (OpenBLAS's order for a
+    matrix times a column, :func:`aerodock.jit.fma`) and a segment ``a -> b`` meet when the
+    segment's point closest to ``c``, ``q = a + clip(t, 0, 1) (b - a)`` with
+    ``t = (c - a).(b - a) / max(|b - a|^2, 1e-12)``, lies within ``axial_reach_m`` of the
+    disk's plane (along ``R[:, 2]``) and ``radial_reach_m`` of its axis. Sums of three are
+    NumPy's ``sum(-1)`` (left to right), maxima and clips NumPy's (a NaN propagates, and
+    compares false: no strike)."""
+    for i in range(fol_p.shape[0]):
+        struck = False
+        ax0, ax1, ax2 = fol_r[i, 0, 2], fol_r[i, 1, 2], fol_r[i, 2, 2]
+        for j in range(offsets.shape[0]):
+            o0, o1, o2 = offsets[j, 0], offsets[j, 1], offsets[j, 2]
+            c0 = fol_p[i, 0] + fma(fol_r[i, 0, 2], o2, fma(fol_r[i, 0, 0], o0,
+                                                           fol_r[i, 0, 1] * o1))
+            c1 = fol_p[i, 1] + fma(fol_r[i, 1, 2], o2, fma(fol_r[i, 1, 0], o0,
+                                                           fol_r[i, 1, 1] * o1))
+            c2 = fol_p[i, 2] + fma(fol_r[i, 2, 2], o2, fma(fol_r[i, 2, 0], o0,
+                                                           fol_r[i, 2, 1] * o1))
+            for s in range(seg_a.shape[1]):
+                a0, a1, a2 = seg_a[i, s, 0], seg_a[i, s, 1], seg_a[i, s, 2]
+                ab0, ab1, ab2 = seg_b[i, s, 0] - a0, seg_b[i, s, 1] - a1, seg_b[i, s, 2] - a2
+                along = (c0 - a0) * ab0 + (c1 - a1) * ab1
+                along += (c2 - a2) * ab2
+                length2 = ab0 * ab0 + ab1 * ab1
+                length2 += ab2 * ab2
+                t = along / (length2 if (length2 >= 1e-12 or length2 != length2) else 1e-12)
+                if not (t > 0.0 or t != t):  # np.clip(t, 0, 1)
+                    t = 0.0
+                elif t >= 1.0:
+                    t = 1.0
+                r0 = (a0 + t * ab0) - c0
+                r1 = (a1 + t * ab1) - c1
+                r2 = (a2 + t * ab2) - c2
+                axial = r0 * ax0 + r1 * ax1
+                axial += r2 * ax2
+                rr = r0 * r0 + r1 * r1
+                rr += r2 * r2
+                rr -= axial * axial
+                radial = math.sqrt(rr if (rr >= 0.0 or rr != rr) else 0.0)
+                if abs(axial) < axial_reach_m and radial < radial_reach_m:
+                    struck = True
+        hit[i] = struck

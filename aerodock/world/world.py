@@ -283,6 +283,17 @@ class World:
     def follower(self, value: Any) -> None:
         self.state.follower = value
 
+    def poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The leaders' and followers' positions (n, 3), m, and attitudes (n, 3, 3): the numbers
+        of ``leader.p``, ``leader.R``, ``follower.p`` and ``follower.R``, read as the rows of
+        the 2n batch without splitting it into the two halves' states (the split builds two
+        records and their bodies', about 30 µs at a batch of 1, and the mission's metrics, the
+        first to read the vehicles after a control period's steps, need only these). The
+        batch is the one the next step reads (joined here if a half was replaced since)."""
+        both, n = self.state.both, self.n
+        p, rot = both.p, both.R
+        return p[:n], rot[:n], p[n:], rot[n:]
+
     @property
     def bar(self) -> BarState:
         """The hanging bars."""
