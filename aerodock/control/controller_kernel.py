@@ -1,0 +1,212 @@
+"""The position controller's step, compiled: one call per state message.
+
+:meth:`aerodock.control.controller.PositionController.step` hands this module's kernels every
+per-trial array it and its estimators hold, and the numbers the batch shares (Kalman gains,
+clocks, the ramp-in) that the estimators' Python side worked out for this message:
+
+- :func:`hold_tick`, a message between the controller's own ticks: the state filter and the
+  bias estimator, nothing else (the last command holds);
+- :func:`command_tick`, a tick of the controller: the same, then the accelerometer observer, the
+  command (:func:`aerodock.control.command_kernel.position_command`: the LQR, the inversion map,
+  the forward map, the limits), then what the estimators are told of it (Freyja's input, the bias
+  observer's applied acceleration, the accelerometer observer's motor model).
+
+Each part is the one implementation in :mod:`aerodock.control.estimator_kernels` or
+:mod:`aerodock.control.command_kernel`, called in the order the step always ran them, so the
+numbers are the ones the separate calls gave, to the bit. A part the controller does not fly is
+switched off by its flag and reads a placeholder (:data:`NO_STATE` and its kin: arrays of the
+real ones' types, so every configuration runs the same compiled code).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from aerodock.control.command_kernel import body_z_axis, position_command
+from aerodock.control.estimator_kernels import (
+    accel_commanded_rows,
+    accel_update_rows,
+    bias_observer_rows,
+    freyja_measure_rows,
+    state_filter_rows,
+)
+from aerodock.jit import njit
+
+NO_ESTIMATOR, BIAS_OBSERVER, FREYJA = 0, 1, 2
+"""The bias estimator a controller flies (``kind``)."""
+
+# Placeholders for what a controller does not have, of the types of the real arrays: per-trial
+# memory writable (the kernels never touch a placeholder: its flag is off), shared gains and
+# constants read-only (as the classes hold theirs).
+NO_STATE = np.zeros((0, 3, 3))
+NO_ROWS3 = np.zeros((0, 3))
+NO_ROWS = np.zeros(0)
+NO_MASK = np.zeros(0, dtype=np.bool_)
+NO_CONSTS = np.zeros(0)
+NO_GAIN_P = np.zeros(3)  # a state filter's gain (position only)
+NO_GAIN_PV = np.zeros((3, 2))  # an estimator's gain (position and velocity)
+for _placeholder in (NO_CONSTS, NO_GAIN_P, NO_GAIN_PV):
+    _placeholder.flags.writeable = False
+
+
+@njit
+def _check_rows(rows: np.ndarray, n: int) -> None:
+    """Raise unless ``rows`` holds ``n`` trials (the kernels read rows 0 to n - 1 unchecked)."""
+    if rows.shape[0] != n:
+        raise ValueError("an input of the controller's step does not hold one row per trial")
+
+
+@njit
+def _estimate(has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
+              filter_gain: np.ndarray, filter_state: np.ndarray, kind: int,
+              est_consts: np.ndarray, est_propagations: int, est_clear: bool,
+              est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray,
+              has_last: bool, last_input: np.ndarray, p_meas: np.ndarray,
+              v_meas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The state filter (when ``has_filter``) and the bias estimator (``kind``) on one message;
+    the position and velocity the controller flies, each (n, 3)."""
+    n = p_meas.shape[0]
+    _check_rows(v_meas, n)
+    p_used, v_used = np.empty((n, 3)), np.empty((n, 3))
+    if has_filter:
+        _check_rows(filter_state, n)
+        state_filter_rows(filter_state, filter_consts, filter_propagations, filter_gain, p_meas)
+        for i in range(n):
+            for c in range(3):
+                p_used[i, c] = filter_state[i, c, 0]
+                v_used[i, c] = filter_state[i, c, 1]
+    else:
+        p_used[:] = p_meas
+        v_used[:] = v_meas
+    if kind != NO_ESTIMATOR:
+        _check_rows(est_state, n)
+    if kind == FREYJA:
+        _check_rows(est_input, n)
+        freyja_measure_rows(est_state, est_input, est_consts, est_propagations, est_clear,
+                            est_gain, p_used, v_used)
+    elif kind == BIAS_OBSERVER and has_last:
+        _check_rows(last_input, n)
+        bias_observer_rows(est_state, est_consts, est_gain, p_used, v_used, last_input)
+    return p_used, v_used
+
+
+@njit
+def hold_tick(has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
+              filter_gain: np.ndarray, filter_state: np.ndarray, kind: int,
+              est_consts: np.ndarray, est_propagations: int, est_clear: bool,
+              est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray, ramp: float,
+              has_last: bool, last_input: np.ndarray, p_meas: np.ndarray,
+              v_meas: np.ndarray) -> None:
+    """A message between the controller's ticks: the state filter and the bias estimator only
+    (the arguments are :func:`command_tick`'s first)."""
+    _estimate(has_filter, filter_consts, filter_propagations, filter_gain, filter_state, kind,
+              est_consts, est_propagations, est_clear, est_gain, est_state, est_input, has_last,
+              last_input, p_meas, v_meas)
+
+
+@njit
+def command_tick(
+        # the state filter: on, its constants, this message's propagations and gain, its state
+        has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
+        filter_gain: np.ndarray, filter_state: np.ndarray,
+        # the bias estimator: its kind, as the filter's, Freyja's input and ramp-in
+        kind: int, est_consts: np.ndarray, est_propagations: int, est_clear: bool,
+        est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray, ramp: float,
+        # the acceleration applied over the last period (the bias observer's input), the
+        # measurements
+        has_last: bool, last_input: np.ndarray, p_meas: np.ndarray, v_meas: np.ndarray,
+        loops: np.ndarray, input_adds_ff: bool,
+        # the accelerometer observer: constants, whether live, its memory, the reading
+        has_accel: bool, accel_consts: np.ndarray, accel_live: bool, accel_has_start: bool,
+        residual_mps2: np.ndarray, thrust_state_n: np.ndarray, thrust_mean_n: np.ndarray,
+        accel_ff_mps2: np.ndarray, accel_mps2: np.ndarray, hold: np.ndarray, has_hold: bool,
+        # the attitude measured, the reference, the gains' schedule, the feed-forward
+        rpy_meas: np.ndarray, ref_pos: np.ndarray, ref_vel: np.ndarray, ref_accel: np.ndarray,
+        ref_yaw: np.ndarray, ref_yaw_rate: np.ndarray, ref_ff_factor: float,
+        terminal: np.ndarray, has_terminal: bool, ff: np.ndarray, has_ff: bool,
+        # the command's gains and limits
+        gains: np.ndarray, mass: np.ndarray, gravity: float, tan_tilt: float,
+        thrust_max: np.ndarray, yaw_rate_max: float,
+        # out: the command, the acceleration it applies, the bias subtracted
+        roll: np.ndarray, pitch: np.ndarray, thrust: np.ndarray, applied: np.ndarray,
+        yaw_rate: np.ndarray, saturated: np.ndarray, bias_out: np.ndarray) -> None:
+    """A tick of the controller (see the module docstring), every trial's numbers written into
+    the arrays ``roll`` to ``bias_out`` and the estimators' memory."""
+    n = p_meas.shape[0]
+    _check_rows(rpy_meas, n)
+    _check_rows(ref_pos, n)
+    _check_rows(ref_vel, n)
+    _check_rows(ref_accel, n)
+    _check_rows(ref_yaw, n)
+    _check_rows(ref_yaw_rate, n)
+    _check_rows(bias_out, n)
+    if has_terminal:
+        _check_rows(terminal, n)
+    if has_ff:
+        _check_rows(ff, n)
+    p_used, v_used = _estimate(has_filter, filter_consts, filter_propagations, filter_gain,
+                               filter_state, kind, est_consts, est_propagations, est_clear,
+                               est_gain, est_state, est_input, has_last, last_input, p_meas,
+                               v_meas)
+    _check_rows(last_input, n)
+    if has_accel:
+        _check_rows(residual_mps2, n)
+        _check_rows(accel_ff_mps2, n)
+        _check_rows(accel_mps2, n)
+        _check_rows(thrust_state_n, n)
+        _check_rows(thrust_mean_n, n)
+        if has_hold:
+            _check_rows(hold, n)
+        if accel_live:  # the period just flown ran under a known command
+            body_z = np.empty((n, 3))
+            for i in range(n):
+                r, p, y = rpy_meas[i, 0], rpy_meas[i, 1], rpy_meas[i, 2]
+                body_z[i, 0], body_z[i, 1], body_z[i, 2] = body_z_axis(
+                    math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y))
+            accel_update_rows(residual_mps2, accel_consts, thrust_mean_n, accel_ff_mps2,
+                              accel_mps2, body_z, hold, has_hold)
+    # What the command subtracts: the bias estimate as published, plus the accelerometer's.
+    for i in range(n):
+        for c in range(3):
+            b = 0.0
+            if kind == FREYJA:
+                b = ramp * est_state[i, c, 2]
+            elif kind == BIAS_OBSERVER:
+                b = est_state[i, c, 2]
+            if has_accel:
+                b = b + residual_mps2[i, c]
+            bias_out[i, c] = b
+    accel_ref = ref_accel
+    if ref_ff_factor != 1.0:
+        accel_ref = np.empty((n, 3))
+        for i in range(n):
+            for c in range(3):
+                accel_ref[i, c] = ref_ff_factor * ref_accel[i, c]
+    which = np.zeros(n, dtype=np.int64)
+    yaw = np.empty(n)
+    for i in range(n):
+        if has_terminal and terminal[i]:
+            which[i] = 1
+        yaw[i] = rpy_meas[i, 2]
+    desired = np.empty((n, 3))
+    position_command(loops, gains, which, p_used, v_used, yaw, ref_pos, ref_vel, accel_ref,
+                     ref_yaw, ref_yaw_rate, bias_out, ff, has_ff, mass, gravity, tan_tilt,
+                     thrust_max, yaw_rate_max, desired, roll, pitch, thrust, applied, yaw_rate,
+                     saturated)
+    # What the estimators are told: Freyja the command (the feed-forward added back when it
+    # counts as known), the bias observer the acceleration applied with the feed-forward (and
+    # the accelerometer's estimate: it then takes out what the accelerometer cannot see).
+    for i in range(n):
+        for c in range(3):
+            f = ff[i, c] if has_ff else 0.0
+            if kind == FREYJA:
+                est_input[i, c] = desired[i, c] + f if input_adds_ff else desired[i, c]
+            u = applied[i, c] + f
+            if has_accel:
+                u = u + residual_mps2[i, c]
+            last_input[i, c] = u
+    if has_accel:
+        accel_commanded_rows(thrust_state_n, thrust_mean_n, accel_ff_mps2, accel_consts,
+                             accel_has_start, thrust, ff, has_ff)
