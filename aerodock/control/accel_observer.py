@@ -146,7 +146,7 @@ class AccelObserver:
     def _tick_args(self, accel_mps2: np.ndarray, hold: np.ndarray | None) -> tuple:
         """The compiled step's arguments for this observer at a tick of the controller
         (``has_accel`` to ``has_hold`` of
-        :func:`aerodock.control.controller_kernel.command_tick`, which runs :meth:`update` with
+        :func:`aerodock.control.controller_kernel.control_tick`, which runs :meth:`update` with
         the attitude measured and then :meth:`commanded` with its command)."""
         n, live = self.n, self._live
         has_start = self._prepare_command()

@@ -26,6 +26,7 @@ from aerodock.control.controller_kernel import (
     NO_ESTIMATOR,
     NO_GAIN_P,
     NO_GAIN_PV,
+    NO_GAINS,
     NO_MASK,
     NO_ROWS,
     NO_ROWS3,
@@ -94,7 +95,8 @@ class PositionController:
         self._mass = per_trial(self.params.mass_kg, 1)
         self._thrust_max = per_trial(self.params.thrust_max_n, 1)
         self._tan_tilt = tilt_tangent(self.params.tilt_max_rad)
-        self.yaw_rate_max = c.yaw_rate_max_radps
+        self.yaw_rate_max = float(c.yaw_rate_max_radps)
+        self._gravity = float(self.params.gravity_mps2)
         self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
         if use_observer and c.bias_estimator == "freyja":
@@ -189,8 +191,9 @@ class PositionController:
         self._tick += 1
         if self._held is not None and (self._tick - 1) % self.hold_ticks:
             # between the controller's own ticks: the estimators only, the last command holds
-            controller_kernel.hold_tick(*filter_args, *est_args, has_last,
-                                        last if has_last else NO_ROWS3, p_meas, v_meas)
+            controller_kernel.control_tick(False, *filter_args, *est_args, has_last,
+                                           last if has_last else NO_ROWS3, p_meas, v_meas,
+                                           *_HOLDING)
             return self._held
         acc = self.accel_observer
         if acc is None:
@@ -203,18 +206,17 @@ class PositionController:
             last = self._last_input = np.empty((n, 3))
         has_ff = feedforward_mps2 is not None
         has_terminal = terminal is not None
-        p = self.params
         applied, bias = np.empty((n, 3)), np.empty((n, 3))
         roll, pitch, thrust, yaw_rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         saturated = np.empty(n, dtype=np.bool_)
-        controller_kernel.command_tick(
-            *filter_args, *est_args, has_last, last, p_meas, v_meas,
+        controller_kernel.control_tick(
+            True, *filter_args, *est_args, has_last, last, p_meas, v_meas,
             NUMPY_LOOPS, self.estimator_input_without_ff, *accel_args,
             rows3(rpy_meas, n), rows3(ref.p, n), rows3(ref.v, n), rows3(ref.a, n),
             rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), self.reference_ff_factor,
             mask_rows(terminal, n) if has_terminal else NO_MASK, has_terminal,
             rows3(feedforward_mps2, n) if has_ff else NO_ROWS3, has_ff,
-            self._gains, self._mass, p.gravity_mps2, self._tan_tilt, self._thrust_max,
+            self._gains, self._mass, self._gravity, self._tan_tilt, self._thrust_max,
             self.yaw_rate_max, roll, pitch, thrust, applied, yaw_rate, saturated, bias)
         out = frozen_record(
             ControlOutput,
@@ -233,3 +235,7 @@ _NO_FILTER = (False, NO_CONSTS, 0, NO_GAIN_P, NO_STATE)
 _NO_ESTIMATOR = (NO_ESTIMATOR, NO_CONSTS, 0, False, NO_GAIN_PV, NO_STATE, NO_ROWS3, 1.0)
 _NO_ACCEL = (False, NO_CONSTS, False, False, NO_ROWS3, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS3,
              NO_MASK, False)
+# ... and everything after the measurements on a message between the controller's ticks.
+_HOLDING = (NUMPY_LOOPS, False, *_NO_ACCEL, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS,
+            NO_ROWS, 1.0, NO_MASK, False, NO_ROWS3, False, NO_GAINS, NO_ROWS, 0.0, 0.0, NO_ROWS,
+            0.0, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS, NO_MASK, NO_ROWS3)

@@ -1,21 +1,21 @@
 """The position controller's step, compiled: one call per state message.
 
-:meth:`aerodock.control.controller.PositionController.step` hands this module's kernels every
+:meth:`aerodock.control.controller.PositionController.step` hands :func:`control_tick` every
 per-trial array it and its estimators hold, and the numbers the batch shares (Kalman gains,
-clocks, the ramp-in) that the estimators' Python side worked out for this message:
-
-- :func:`hold_tick`, a message between the controller's own ticks: the state filter and the
-  bias estimator, nothing else (the last command holds);
-- :func:`command_tick`, a tick of the controller: the same, then the accelerometer observer, the
-  command (:func:`aerodock.control.command_kernel.position_command`: the LQR, the inversion map,
-  the forward map, the limits), then what the estimators are told of it (Freyja's input, the bias
-  observer's applied acceleration, the accelerometer observer's motor model).
+clocks, the ramp-in) that the estimators' Python side worked out for this message. Without
+``commanding`` (a message between the controller's own ticks) it runs the state filter and the
+bias estimator, nothing else: the last command holds. With it (a tick of the controller), the
+same, then the accelerometer observer, the command
+(:func:`aerodock.control.command_kernel.position_command`: the LQR, the inversion map, the
+forward map, the limits), then what the estimators are told of it (Freyja's input, the bias
+observer's applied acceleration, the accelerometer observer's motor model).
 
 Each part is the one implementation in :mod:`aerodock.control.estimator_kernels` or
 :mod:`aerodock.control.command_kernel`, called in the order the step always ran them, so the
-numbers are the ones the separate calls gave, to the bit. A part the controller does not fly is
-switched off by its flag and reads a placeholder (:data:`NO_STATE` and its kin: arrays of the
-real ones' types, so every configuration runs the same compiled code).
+numbers are the ones the separate calls gave, to the bit. A part the controller does not fly (or
+does not run this message) is switched off by its flag and reads a placeholder (:data:`NO_STATE`
+and its kin: arrays of the real ones' types), so every configuration and both kinds of message
+run the one compiled variant.
 """
 
 from __future__ import annotations
@@ -47,6 +47,7 @@ NO_MASK = np.zeros(0, dtype=np.bool_)
 NO_CONSTS = np.zeros(0)
 NO_GAIN_P = np.zeros(3)  # a state filter's gain (position only)
 NO_GAIN_PV = np.zeros((3, 2))  # an estimator's gain (position and velocity)
+NO_GAINS = np.zeros((0, 4, 7))  # the LQR gains
 for _placeholder in (NO_CONSTS, NO_GAIN_P, NO_GAIN_PV):
     _placeholder.flags.writeable = False
 
@@ -93,21 +94,9 @@ def _estimate(has_filter: bool, filter_consts: np.ndarray, filter_propagations: 
 
 
 @njit
-def hold_tick(has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
-              filter_gain: np.ndarray, filter_state: np.ndarray, kind: int,
-              est_consts: np.ndarray, est_propagations: int, est_clear: bool,
-              est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray, ramp: float,
-              has_last: bool, last_input: np.ndarray, p_meas: np.ndarray,
-              v_meas: np.ndarray) -> None:
-    """A message between the controller's ticks: the state filter and the bias estimator only
-    (the arguments are :func:`command_tick`'s first)."""
-    _estimate(has_filter, filter_consts, filter_propagations, filter_gain, filter_state, kind,
-              est_consts, est_propagations, est_clear, est_gain, est_state, est_input, has_last,
-              last_input, p_meas, v_meas)
-
-
-@njit
-def command_tick(
+def control_tick(
+        # a tick of the controller's own (else a message in between: the estimators only)
+        commanding: bool,
         # the state filter: on, its constants, this message's propagations and gain, its state
         has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
         filter_gain: np.ndarray, filter_state: np.ndarray,
@@ -132,33 +121,38 @@ def command_tick(
         # out: the command, the acceleration it applies, the bias subtracted
         roll: np.ndarray, pitch: np.ndarray, thrust: np.ndarray, applied: np.ndarray,
         yaw_rate: np.ndarray, saturated: np.ndarray, bias_out: np.ndarray) -> None:
-    """A tick of the controller (see the module docstring), every trial's numbers written into
-    the arrays ``roll`` to ``bias_out`` and the estimators' memory."""
+    """One state message (see the module docstring): with ``commanding``, every trial's
+    numbers written into the arrays ``roll`` to ``bias_out`` and the estimators' memory; without,
+    the state filter and the bias estimator only (everything after ``v_meas`` is then unread)."""
     n = p_meas.shape[0]
-    _check_rows(rpy_meas, n)
-    _check_rows(ref_pos, n)
-    _check_rows(ref_vel, n)
-    _check_rows(ref_accel, n)
-    _check_rows(ref_yaw, n)
-    _check_rows(ref_yaw_rate, n)
-    _check_rows(bias_out, n)
-    if has_terminal:
-        _check_rows(terminal, n)
-    if has_ff:
-        _check_rows(ff, n)
+    if commanding:
+        _check_rows(rpy_meas, n)
+        _check_rows(ref_pos, n)
+        _check_rows(ref_vel, n)
+        _check_rows(ref_accel, n)
+        _check_rows(ref_yaw, n)
+        _check_rows(ref_yaw_rate, n)
+        _check_rows(bias_out, n)
+        _check_rows(last_input, n)
+        if has_terminal:
+            _check_rows(terminal, n)
+        if has_ff:
+            _check_rows(ff, n)
+        if has_accel:
+            _check_rows(residual_mps2, n)
+            _check_rows(accel_ff_mps2, n)
+            _check_rows(accel_mps2, n)
+            _check_rows(thrust_state_n, n)
+            _check_rows(thrust_mean_n, n)
+            if has_hold:
+                _check_rows(hold, n)
     p_used, v_used = _estimate(has_filter, filter_consts, filter_propagations, filter_gain,
                                filter_state, kind, est_consts, est_propagations, est_clear,
                                est_gain, est_state, est_input, has_last, last_input, p_meas,
                                v_meas)
-    _check_rows(last_input, n)
+    if not commanding:  # between the controller's ticks: the last command holds
+        return
     if has_accel:
-        _check_rows(residual_mps2, n)
-        _check_rows(accel_ff_mps2, n)
-        _check_rows(accel_mps2, n)
-        _check_rows(thrust_state_n, n)
-        _check_rows(thrust_mean_n, n)
-        if has_hold:
-            _check_rows(hold, n)
         if accel_live:  # the period just flown ran under a known command
             body_z = np.empty((n, 3))
             for i in range(n):

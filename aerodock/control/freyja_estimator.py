@@ -127,7 +127,7 @@ class FreyjaBiasEstimator:
 
     def _tick_args(self, updating: bool = True) -> tuple:
         """The compiled step's arguments for this estimator on a state message (``kind`` to
-        ``ramp`` of :func:`aerodock.control.controller_kernel.command_tick`): the clocks and
+        ``ramp`` of :func:`aerodock.control.controller_kernel.control_tick`): the clocks and
         covariance advanced (:meth:`_clock`), its constants, estimates, input and ramp-in (it
         takes every message; ``updating`` is the bias observer's)."""
         propagations, clear, gain = self._clock()

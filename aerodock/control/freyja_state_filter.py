@@ -98,7 +98,7 @@ class FreyjaStateFilter:
 
     def _tick_args(self) -> tuple:
         """The compiled step's arguments for this filter on a message (``has_filter`` to
-        ``filter_state`` of :func:`aerodock.control.controller_kernel.command_tick`): the clock
+        ``filter_state`` of :func:`aerodock.control.controller_kernel.control_tick`): the clock
         and covariance advanced (:meth:`_clock`), its constants and states."""
         propagations, gain = self._clock()
         return True, self._consts, propagations, gain, self.state
