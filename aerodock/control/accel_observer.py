@@ -147,12 +147,13 @@ class AccelObserver:
         """The compiled step's arguments for this observer at a tick of the controller
         (``has_accel`` to ``has_hold`` of
         :func:`aerodock.control.controller_kernel.control_tick`, which runs :meth:`update` with
-        the attitude measured and then :meth:`commanded` with its command)."""
+        the attitude measured and then :meth:`commanded` with its command; its constants are in
+        the controller's)."""
         n, live = self.n, self._live
         has_start = self._prepare_command()
         self._live = True  # the command the kernel hands the motor model
         has_hold = hold is not None
-        return (True, self._consts, live, has_start, self.residual_mps2, self._thrust_n,
+        return (True, live, has_start, self.residual_mps2, self._thrust_n,
                 self._thrust_mean_n, self._ff, rows3(accel_mps2, n),
                 mask_rows(hold, n) if has_hold else _NO_HOLD, has_hold)
 

@@ -22,15 +22,14 @@ from aerodock.control import controller_kernel
 from aerodock.control.accel_observer import AccelObserver
 from aerodock.control.command_kernel import mask_rows, per_trial, rows1, rows3, tilt_tangent
 from aerodock.control.controller_kernel import (
-    NO_CONSTS,
     NO_ESTIMATOR,
     NO_GAIN_P,
     NO_GAIN_PV,
-    NO_GAINS,
     NO_MASK,
     NO_ROWS,
     NO_ROWS3,
     NO_STATE,
+    controller_constants,
 )
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
@@ -90,13 +89,7 @@ class PositionController:
         self.n = n
         self.gain = lqr_gain(c.q_diag, c.r_diag)
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
-        # What the compiled command reads: the gains (nominal, terminal), the limits.
-        self._gains = np.ascontiguousarray(np.stack([self.gain, self.gain_terminal]))
-        self._mass = per_trial(self.params.mass_kg, 1)
-        self._thrust_max = per_trial(self.params.thrust_max_n, 1)
-        self._tan_tilt = tilt_tangent(self.params.tilt_max_rad)
         self.yaw_rate_max = float(c.yaw_rate_max_radps)
-        self._gravity = float(self.params.gravity_mps2)
         self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
         if use_observer and c.bias_estimator == "freyja":
@@ -127,6 +120,15 @@ class PositionController:
                                                 self.params.mass_kg, self.params.gravity_mps2,
                                                 c.accel_observer_axes)
         self._last_input = None  # what the observer should see as the applied acceleration
+        # What the compiled step reads: the gains (nominal, terminal), the limits, the
+        # estimators' constants (the vehicle's mass and thrust limit: one for every trial).
+        p = self.params
+        self._constants = controller_constants(
+            np.stack([self.gain, self.gain_terminal]), per_trial(p.mass_kg, 1)[0],
+            per_trial(p.thrust_max_n, 1)[0], p.gravity_mps2, tilt_tangent(p.tilt_max_rad),
+            self.yaw_rate_max, self.reference_ff_factor,
+            *(None if part is None else part._consts
+              for part in (self.state_filter, self.observer, self.accel_observer)))
 
     def take_rows(self, rows: np.ndarray) -> PositionController:
         """The controllers of the trials at ``rows``, each where it stands (its estimators, its
@@ -191,9 +193,9 @@ class PositionController:
         self._tick += 1
         if self._held is not None and (self._tick - 1) % self.hold_ticks:
             # between the controller's own ticks: the estimators only, the last command holds
-            controller_kernel.control_tick(False, *filter_args, *est_args, has_last,
-                                           last if has_last else NO_ROWS3, p_meas, v_meas,
-                                           *_HOLDING)
+            controller_kernel.control_tick(False, self._constants, NUMPY_LOOPS, *filter_args,
+                                           *est_args, has_last, last if has_last else NO_ROWS3,
+                                           p_meas, v_meas, *_HOLDING)
             return self._held
         acc = self.accel_observer
         if acc is None:
@@ -206,18 +208,16 @@ class PositionController:
             last = self._last_input = np.empty((n, 3))
         has_ff = feedforward_mps2 is not None
         has_terminal = terminal is not None
-        applied, bias = np.empty((n, 3)), np.empty((n, 3))
         roll, pitch, thrust, yaw_rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        applied, bias = np.empty((n, 3)), np.empty((n, 3))
         saturated = np.empty(n, dtype=np.bool_)
         controller_kernel.control_tick(
-            True, *filter_args, *est_args, has_last, last, p_meas, v_meas,
-            NUMPY_LOOPS, self.estimator_input_without_ff, *accel_args,
-            rows3(rpy_meas, n), rows3(ref.p, n), rows3(ref.v, n), rows3(ref.a, n),
-            rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), self.reference_ff_factor,
-            mask_rows(terminal, n) if has_terminal else NO_MASK, has_terminal,
-            rows3(feedforward_mps2, n) if has_ff else NO_ROWS3, has_ff,
-            self._gains, self._mass, self._gravity, self._tan_tilt, self._thrust_max,
-            self.yaw_rate_max, roll, pitch, thrust, applied, yaw_rate, saturated, bias)
+            True, self._constants, NUMPY_LOOPS, *filter_args, *est_args, has_last, last, p_meas,
+            v_meas, self.estimator_input_without_ff, *accel_args, rows3(rpy_meas, n),
+            rows3(ref.p, n), rows3(ref.v, n), rows3(ref.a, n), rows1(ref.yaw_rad, n),
+            rows1(ref.yaw_rate_radps, n), mask_rows(terminal, n) if has_terminal else NO_MASK,
+            has_terminal, rows3(feedforward_mps2, n) if has_ff else NO_ROWS3, has_ff, roll,
+            pitch, thrust, yaw_rate, applied, saturated, bias)
         out = frozen_record(
             ControlOutput,
             command=frozen_record(AttitudeCommand, roll_rad=roll, pitch_rad=pitch,
@@ -231,11 +231,9 @@ class PositionController:
 
 
 # What the compiled step reads for a part a controller does not fly (its flag off).
-_NO_FILTER = (False, NO_CONSTS, 0, NO_GAIN_P, NO_STATE)
-_NO_ESTIMATOR = (NO_ESTIMATOR, NO_CONSTS, 0, False, NO_GAIN_PV, NO_STATE, NO_ROWS3, 1.0)
-_NO_ACCEL = (False, NO_CONSTS, False, False, NO_ROWS3, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS3,
-             NO_MASK, False)
+_NO_FILTER = (False, 0, NO_GAIN_P, NO_STATE)
+_NO_ESTIMATOR = (NO_ESTIMATOR, 0, False, NO_GAIN_PV, NO_STATE, NO_ROWS3, 1.0)
+_NO_ACCEL = (False, False, False, NO_ROWS3, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS3, NO_MASK, False)
 # ... and everything after the measurements on a message between the controller's ticks.
-_HOLDING = (NUMPY_LOOPS, False, *_NO_ACCEL, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS,
-            NO_ROWS, 1.0, NO_MASK, False, NO_ROWS3, False, NO_GAINS, NO_ROWS, 0.0, 0.0, NO_ROWS,
-            0.0, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS, NO_MASK, NO_ROWS3)
+_HOLDING = (False, *_NO_ACCEL, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS, NO_ROWS, NO_MASK,
+            False, NO_ROWS3, False, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS3, NO_MASK, NO_ROWS3)

@@ -26,6 +26,10 @@ import numpy as np
 
 from aerodock.control.command_kernel import body_z_axis, position_command
 from aerodock.control.estimator_kernels import (
+    AO_CONSTS,
+    BIAS_CONSTS,
+    FY_CONSTS,
+    SF_CONSTS,
     accel_commanded_rows,
     accel_update_rows,
     bias_observer_rows,
@@ -37,19 +41,47 @@ from aerodock.jit import njit
 NO_ESTIMATOR, BIAS_OBSERVER, FREYJA = 0, 1, 2
 """The bias estimator a controller flies (``kind``)."""
 
+# A controller's constants, one read-only block (:func:`controller_constants`): the LQR gains
+# (nominal, terminal: (2, 4, 7)), the vehicle's mass and thrust limit, gravity, the tilt limit's
+# tangent, the yaw-rate limit, the reference acceleration's share, then the state filter's, the
+# bias estimator's and the accelerometer observer's constants (their ``*_CONSTS`` layouts).
+K_GAINS = 0
+K_MASS, K_THRUST_MAX, K_GRAVITY, K_TAN_TILT, K_YAW_RATE_MAX, K_REF_FF = 56, 57, 58, 59, 60, 61
+K_FILTER = 62
+K_ESTIMATOR = K_FILTER + SF_CONSTS
+K_ACCEL = K_ESTIMATOR + max(BIAS_CONSTS, FY_CONSTS)
+K_SIZE = K_ACCEL + AO_CONSTS
+
 # Placeholders for what a controller does not have, of the types of the real arrays: per-trial
-# memory writable (the kernels never touch a placeholder: its flag is off), shared gains and
-# constants read-only (as the classes hold theirs).
+# memory writable (the kernels never touch a placeholder: its flag is off), shared gains
+# read-only (as the classes hold theirs).
 NO_STATE = np.zeros((0, 3, 3))
 NO_ROWS3 = np.zeros((0, 3))
 NO_ROWS = np.zeros(0)
 NO_MASK = np.zeros(0, dtype=np.bool_)
-NO_CONSTS = np.zeros(0)
 NO_GAIN_P = np.zeros(3)  # a state filter's gain (position only)
 NO_GAIN_PV = np.zeros((3, 2))  # an estimator's gain (position and velocity)
-NO_GAINS = np.zeros((0, 4, 7))  # the LQR gains
-for _placeholder in (NO_CONSTS, NO_GAIN_P, NO_GAIN_PV):
+for _placeholder in (NO_GAIN_P, NO_GAIN_PV):
     _placeholder.flags.writeable = False
+
+
+def controller_constants(gains: np.ndarray, mass_kg: float, thrust_max_n: float,
+                         gravity_mps2: float, tan_tilt: float, yaw_rate_max_radps: float,
+                         reference_ff_factor: float, filter_consts: np.ndarray | None,
+                         estimator_consts: np.ndarray | None,
+                         accel_consts: np.ndarray | None) -> np.ndarray:
+    """A controller's constants as :func:`control_tick` reads them (the ``K_*`` layout; a part
+    the controller does not fly left zero), read-only."""
+    out = np.zeros(K_SIZE)
+    out[K_GAINS:K_MASS] = np.asarray(gains, dtype=float).reshape(-1)
+    out[K_MASS:K_FILTER] = (mass_kg, thrust_max_n, gravity_mps2, tan_tilt, yaw_rate_max_radps,
+                            reference_ff_factor)
+    for start, part in ((K_FILTER, filter_consts), (K_ESTIMATOR, estimator_consts),
+                        (K_ACCEL, accel_consts)):
+        if part is not None:
+            out[start:start + part.size] = part
+    out.flags.writeable = False
+    return out
 
 
 @njit
@@ -60,27 +92,27 @@ def _check_rows(rows: np.ndarray, n: int) -> None:
 
 
 @njit
-def _estimate(has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
+def _estimate(constants: np.ndarray, has_filter: bool, filter_propagations: int,
               filter_gain: np.ndarray, filter_state: np.ndarray, kind: int,
-              est_consts: np.ndarray, est_propagations: int, est_clear: bool,
-              est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray,
-              has_last: bool, last_input: np.ndarray, p_meas: np.ndarray,
+              est_propagations: int, est_clear: bool, est_gain: np.ndarray,
+              est_state: np.ndarray, est_input: np.ndarray, has_last: bool,
+              last_input: np.ndarray, p_meas: np.ndarray,
               v_meas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The state filter (when ``has_filter``) and the bias estimator (``kind``) on one message;
     the position and velocity the controller flies, each (n, 3)."""
+    filter_consts = constants[K_FILTER:K_ESTIMATOR]
+    est_consts = constants[K_ESTIMATOR:K_ACCEL]
     n = p_meas.shape[0]
     _check_rows(v_meas, n)
-    p_used, v_used = np.empty((n, 3)), np.empty((n, 3))
-    if has_filter:
+    p_used, v_used = p_meas, v_meas
+    if has_filter:  # what the state manager publishes
         _check_rows(filter_state, n)
         state_filter_rows(filter_state, filter_consts, filter_propagations, filter_gain, p_meas)
+        p_used, v_used = np.empty((n, 3)), np.empty((n, 3))
         for i in range(n):
             for c in range(3):
                 p_used[i, c] = filter_state[i, c, 0]
                 v_used[i, c] = filter_state[i, c, 1]
-    else:
-        p_used[:] = p_meas
-        v_used[:] = v_meas
     if kind != NO_ESTIMATOR:
         _check_rows(est_state, n)
     if kind == FREYJA:
@@ -97,33 +129,34 @@ def _estimate(has_filter: bool, filter_consts: np.ndarray, filter_propagations: 
 def control_tick(
         # a tick of the controller's own (else a message in between: the estimators only)
         commanding: bool,
-        # the state filter: on, its constants, this message's propagations and gain, its state
-        has_filter: bool, filter_consts: np.ndarray, filter_propagations: int,
-        filter_gain: np.ndarray, filter_state: np.ndarray,
+        # the controller's constants (the K_* layout), NumPy's loops (aerodock.jit)
+        constants: np.ndarray, loops: np.ndarray,
+        # the state filter: on, this message's propagations and gain, its state
+        has_filter: bool, filter_propagations: int, filter_gain: np.ndarray,
+        filter_state: np.ndarray,
         # the bias estimator: its kind, as the filter's, Freyja's input and ramp-in
-        kind: int, est_consts: np.ndarray, est_propagations: int, est_clear: bool,
-        est_gain: np.ndarray, est_state: np.ndarray, est_input: np.ndarray, ramp: float,
+        kind: int, est_propagations: int, est_clear: bool, est_gain: np.ndarray,
+        est_state: np.ndarray, est_input: np.ndarray, ramp: float,
         # the acceleration applied over the last period (the bias observer's input), the
         # measurements
         has_last: bool, last_input: np.ndarray, p_meas: np.ndarray, v_meas: np.ndarray,
-        loops: np.ndarray, input_adds_ff: bool,
-        # the accelerometer observer: constants, whether live, its memory, the reading
-        has_accel: bool, accel_consts: np.ndarray, accel_live: bool, accel_has_start: bool,
-        residual_mps2: np.ndarray, thrust_state_n: np.ndarray, thrust_mean_n: np.ndarray,
-        accel_ff_mps2: np.ndarray, accel_mps2: np.ndarray, hold: np.ndarray, has_hold: bool,
+        # Freyja is told the feed-forward as part of the command
+        input_adds_ff: bool,
+        # the accelerometer observer: whether live, its memory, the reading
+        has_accel: bool, accel_live: bool, accel_has_start: bool, residual_mps2: np.ndarray,
+        thrust_state_n: np.ndarray, thrust_mean_n: np.ndarray, accel_ff_mps2: np.ndarray,
+        accel_mps2: np.ndarray, hold: np.ndarray, has_hold: bool,
         # the attitude measured, the reference, the gains' schedule, the feed-forward
         rpy_meas: np.ndarray, ref_pos: np.ndarray, ref_vel: np.ndarray, ref_accel: np.ndarray,
-        ref_yaw: np.ndarray, ref_yaw_rate: np.ndarray, ref_ff_factor: float,
-        terminal: np.ndarray, has_terminal: bool, ff: np.ndarray, has_ff: bool,
-        # the command's gains and limits
-        gains: np.ndarray, mass: np.ndarray, gravity: float, tan_tilt: float,
-        thrust_max: np.ndarray, yaw_rate_max: float,
-        # out: the command, the acceleration it applies, the bias subtracted
-        roll: np.ndarray, pitch: np.ndarray, thrust: np.ndarray, applied: np.ndarray,
-        yaw_rate: np.ndarray, saturated: np.ndarray, bias_out: np.ndarray) -> None:
+        ref_yaw: np.ndarray, ref_yaw_rate: np.ndarray, terminal: np.ndarray,
+        has_terminal: bool, ff: np.ndarray, has_ff: bool,
+        # out: the command, the acceleration it applies, whether a limit cut it, the bias
+        # subtracted
+        roll: np.ndarray, pitch: np.ndarray, thrust: np.ndarray, yaw_rate: np.ndarray,
+        applied: np.ndarray, saturated: np.ndarray, bias_out: np.ndarray) -> None:
     """One state message (see the module docstring): with ``commanding``, every trial's
-    numbers written into the arrays ``roll`` to ``bias_out`` and the estimators' memory; without,
-    the state filter and the bias estimator only (everything after ``v_meas`` is then unread)."""
+    numbers written into ``roll`` to ``bias_out`` and the estimators' memory; without, the state
+    filter and the bias estimator only (everything after ``v_meas`` is then unread)."""
     n = p_meas.shape[0]
     if commanding:
         _check_rows(rpy_meas, n)
@@ -132,8 +165,12 @@ def control_tick(
         _check_rows(ref_accel, n)
         _check_rows(ref_yaw, n)
         _check_rows(ref_yaw_rate, n)
-        _check_rows(bias_out, n)
         _check_rows(last_input, n)
+        for out1 in (roll, pitch, thrust, yaw_rate):
+            _check_rows(out1, n)
+        _check_rows(applied, n)
+        _check_rows(saturated, n)
+        _check_rows(bias_out, n)
         if has_terminal:
             _check_rows(terminal, n)
         if has_ff:
@@ -146,12 +183,12 @@ def control_tick(
             _check_rows(thrust_mean_n, n)
             if has_hold:
                 _check_rows(hold, n)
-    p_used, v_used = _estimate(has_filter, filter_consts, filter_propagations, filter_gain,
-                               filter_state, kind, est_consts, est_propagations, est_clear,
-                               est_gain, est_state, est_input, has_last, last_input, p_meas,
-                               v_meas)
+    p_used, v_used = _estimate(constants, has_filter, filter_propagations, filter_gain,
+                               filter_state, kind, est_propagations, est_clear, est_gain,
+                               est_state, est_input, has_last, last_input, p_meas, v_meas)
     if not commanding:  # between the controller's ticks: the last command holds
         return
+    accel_consts = constants[K_ACCEL:K_SIZE]
     if has_accel:
         if accel_live:  # the period just flown ran under a known command
             body_z = np.empty((n, 3))
@@ -172,6 +209,7 @@ def control_tick(
             if has_accel:
                 b = b + residual_mps2[i, c]
             bias_out[i, c] = b
+    ref_ff_factor = constants[K_REF_FF]
     accel_ref = ref_accel
     if ref_ff_factor != 1.0:
         accel_ref = np.empty((n, 3))
@@ -185,10 +223,12 @@ def control_tick(
             which[i] = 1
         yaw[i] = rpy_meas[i, 2]
     desired = np.empty((n, 3))
+    gains = constants[K_GAINS:K_MASS].reshape((2, 4, 7))
     position_command(loops, gains, which, p_used, v_used, yaw, ref_pos, ref_vel, accel_ref,
-                     ref_yaw, ref_yaw_rate, bias_out, ff, has_ff, mass, gravity, tan_tilt,
-                     thrust_max, yaw_rate_max, desired, roll, pitch, thrust, applied, yaw_rate,
-                     saturated)
+                     ref_yaw, ref_yaw_rate, bias_out, ff, has_ff, constants[K_MASS:K_THRUST_MAX],
+                     constants[K_GRAVITY], constants[K_TAN_TILT],
+                     constants[K_THRUST_MAX:K_GRAVITY], constants[K_YAW_RATE_MAX], desired,
+                     roll, pitch, thrust, applied, yaw_rate, saturated)
     # What the estimators are told: Freyja the command (the feed-forward added back when it
     # counts as known), the bias observer the acceleration applied with the feed-forward (and
     # the accelerometer's estimate: it then takes out what the accelerometer cannot see).

@@ -128,11 +128,10 @@ class FreyjaBiasEstimator:
     def _tick_args(self, updating: bool = True) -> tuple:
         """The compiled step's arguments for this estimator on a state message (``kind`` to
         ``ramp`` of :func:`aerodock.control.controller_kernel.control_tick`): the clocks and
-        covariance advanced (:meth:`_clock`), its constants, estimates, input and ramp-in (it
-        takes every message; ``updating`` is the bias observer's)."""
+        covariance advanced (:meth:`_clock`), its estimates, input and ramp-in (it takes every
+        message; ``updating`` is the bias observer's; its constants are in the controller's)."""
         propagations, clear, gain = self._clock()
-        return (FREYJA, self._consts, propagations, clear, gain, self.state, self.input_mps2,
-                self.ramp())
+        return FREYJA, propagations, clear, gain, self.state, self.input_mps2, self.ramp()
 
     def _clock(self) -> tuple[int, bool, np.ndarray]:
         """One state message's share of the batch: the clocks and the covariance advanced; the

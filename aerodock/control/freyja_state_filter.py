@@ -99,9 +99,10 @@ class FreyjaStateFilter:
     def _tick_args(self) -> tuple:
         """The compiled step's arguments for this filter on a message (``has_filter`` to
         ``filter_state`` of :func:`aerodock.control.controller_kernel.control_tick`): the clock
-        and covariance advanced (:meth:`_clock`), its constants and states."""
+        and covariance advanced (:meth:`_clock`), its states (its constants are in the
+        controller's)."""
         propagations, gain = self._clock()
-        return True, self._consts, propagations, gain, self.state
+        return True, propagations, gain, self.state
 
     def _clock(self) -> tuple[int, np.ndarray]:
         """One message's share of the batch: the clock and the covariance advanced; the

@@ -161,10 +161,11 @@ class BiasObserver:
 
     def _tick_args(self, updating: bool) -> tuple:
         """The compiled step's arguments for this observer (``kind`` to ``ramp`` of
-        :func:`aerodock.control.controller_kernel.control_tick`): its constants, this update's
-        gain (the schedule advanced when ``updating``), its estimates."""
+        :func:`aerodock.control.controller_kernel.control_tick`; its constants are in the
+        controller's): this update's gain (the schedule advanced when ``updating``), its
+        estimates."""
         gain = self._next_gain() if updating else self.gain
-        return BIAS_OBSERVER, self._consts, 0, False, gain, self.state, NO_ROWS3, 1.0
+        return BIAS_OBSERVER, 0, False, gain, self.state, NO_ROWS3, 1.0
 
     def _next_gain(self) -> np.ndarray:
         """This update's Kalman gain (3, 2), read-only: time-varying from the reset prior, then
