@@ -4,8 +4,9 @@ pitch and thrust with its saturation, and the forward map back to the accelerati
 The one implementation of :func:`aerodock.control.lqr.lqr_command`,
 :func:`aerodock.control.inversion.accel_to_attitude_thrust` and
 :func:`~aerodock.control.inversion.attitude_thrust_to_accel` (which call these kernels), and of
-the middle of :meth:`aerodock.control.controller.PositionController.step`
-(:func:`position_command`, one call per control period). Each trial's numbers are computed
+the command of :meth:`aerodock.control.controller.PositionController.step`
+(:func:`position_command`, which the controller's compiled step,
+:func:`aerodock.control.controller_kernel.control_tick`, calls). Each trial's numbers are computed
 operation by operation in the order the NumPy code did (the same numbers, to the bit:
 ``tools/same_numbers.py``): the LQR sum over the seven states from ``0.0`` in order, the
 products and sums of the maps as written below, NumPy's own ``arctan2`` loop

@@ -99,6 +99,9 @@ class PositionController:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
                                          c.observer_pos_noise_m, c.observer_vel_noise_mps,
                                          c.observer_accel_noise_mps2)
+        # Freyja hands its estimator the command: by default the learnt feed-forward counted as
+        # known (the estimator sees what the model left); with freyja_estimator_input =
+        # "command", the whole command (see docs/control.md).
         self.estimator_input_without_ff = (
             c.freyja_estimator_input == "command-without-feedforward")
         # Freyja's state manager filters motion capture's position into position and velocity.
