@@ -33,6 +33,13 @@ import copy
 
 import numpy as np
 
+from aerodock.control.command_kernel import mask_rows, rows1, rows3
+from aerodock.control.estimator_kernels import (
+    accel_commanded_rows,
+    accel_update_rows,
+    packed,
+)
+
 
 def filtered_noise_sd(sample_sd_mps2: float, dt_s: float, tau_s: float) -> float:
     """Standard deviation of white noise (``sample_sd_mps2`` per period ``dt_s``) after the
@@ -79,7 +86,9 @@ class AccelObserver:
             decay, self._mean_start = 0.0, 0.0
         self._decay = decay
         self.mass_kg = float(mass_kg)
-        self._gravity = np.array([0.0, 0.0, float(gravity_mps2)])
+        # What the kernels read (AO_* layout).
+        self._consts = packed(self.beta, self.mass_kg, float(gravity_mps2), decay,
+                              self._mean_start, self.axes)
         self.residual_mps2 = np.zeros((self.n, 3))
         self._thrust_n: np.ndarray | None = None  # modelled thrust at the start of the period
         self._thrust_mean_n = np.zeros(self.n)  # modelled mean thrust over the period flown
@@ -104,33 +113,57 @@ class AccelObserver:
         out._ff = self._ff[rows]
         return out
 
-    def measured_force_mps2(self, accel_mps2: np.ndarray, R: np.ndarray) -> np.ndarray:  # noqa: N803
-        """(n, 3) the acceleration the commands do not explain over the period just flown."""
-        thrust_accel = R[:, :, 2] * (self._thrust_mean_n / self.mass_kg)[:, None]
-        return accel_mps2 - self._gravity + thrust_accel
-
     def update(self, accel_mps2: np.ndarray, R: np.ndarray,  # noqa: N803
                hold: np.ndarray | None = None) -> None:
         """Fold in the accelerometer's mean reading ``(n, 3)`` (world NED, gravity excluded as a
-        kinematic acceleration) over the period just flown and the measured attitude ``(n, 3, 3)``.
+        kinematic acceleration) over the period just flown and the measured attitude ``(n, 3, 3)``
+        (the estimates changed in place).
 
+        What the commands do not explain is ``a - g e3 + R e3 T_mean / m - ff`` (thrust along
+        the body's ``-z``, through the motor model; ``ff`` the feed-forward flown), low-passed.
         ``hold`` (n,) bool keeps those trials' estimates as they are: in contact (the gripper's
         strain gauge reads a load, or the gate is closing) the push of the bar is not a
         disturbance to cancel; chasing it would drive the arm up through the bar.
         """
         if not self._live:  # no period has been flown under a known command yet
             return
-        raw = self.measured_force_mps2(accel_mps2, R) - self._ff
-        new = self.residual_mps2 + self.beta * (raw - self.residual_mps2) * self.axes
-        if hold is not None and hold.any():
-            new = np.where(hold[:, None], self.residual_mps2, new)
-        self.residual_mps2 = new
+        n = self.n
+        body_z = rows3(np.asarray(R, dtype=float)[:, :, 2], n)
+        has_hold = hold is not None
+        accel_update_rows(self.residual_mps2, self._consts, self._thrust_mean_n, self._ff,
+                          rows3(accel_mps2, n), body_z,
+                          mask_rows(hold, n) if has_hold else _NO_HOLD, has_hold)
 
     def commanded(self, thrust_n: np.ndarray, feedforward_mps2: np.ndarray) -> None:
         """The collective thrust ``(n,)`` and the model's feed-forward ``(n, 3)`` that the next
         period flies with (advances the motor model)."""
-        start = self._thrust_n if self._thrust_n is not None else thrust_n
-        self._thrust_mean_n = thrust_n + (start - thrust_n) * self._mean_start
-        self._thrust_n = thrust_n + (start - thrust_n) * self._decay
-        self._ff = np.array(feedforward_mps2, dtype=float, copy=True)
+        has_start = self._prepare_command()
+        accel_commanded_rows(self._thrust_n, self._thrust_mean_n, self._ff, self._consts,
+                             has_start, rows1(thrust_n, self.n),
+                             rows3(feedforward_mps2, self.n), True)
         self._live = True
+
+    def _tick_args(self, accel_mps2: np.ndarray, hold: np.ndarray | None) -> tuple:
+        """The compiled step's arguments for this observer at a tick of the controller
+        (``has_accel`` to ``has_hold`` of
+        :func:`aerodock.control.controller_kernel.control_tick`, which runs :meth:`update` with
+        the attitude measured and then :meth:`commanded` with its command; its constants are in
+        the controller's)."""
+        n, live = self.n, self._live
+        has_start = self._prepare_command()
+        self._live = True  # the command the kernel hands the motor model
+        has_hold = hold is not None
+        return (True, live, has_start, self.residual_mps2, self._thrust_n,
+                self._thrust_mean_n, self._ff, rows3(accel_mps2, n),
+                mask_rows(hold, n) if has_hold else _NO_HOLD, has_hold)
+
+    def _prepare_command(self) -> bool:
+        """Whether the motor model has a start (a reset or a command before); its memory made
+        ready for the kernel to write in place."""
+        if self._thrust_n is not None:
+            return True
+        self._thrust_n = np.zeros(self.n)
+        return False
+
+
+_NO_HOLD = np.zeros(0, dtype=np.bool_)

@@ -4,8 +4,9 @@ pitch and thrust with its saturation, and the forward map back to the accelerati
 The one implementation of :func:`aerodock.control.lqr.lqr_command`,
 :func:`aerodock.control.inversion.accel_to_attitude_thrust` and
 :func:`~aerodock.control.inversion.attitude_thrust_to_accel` (which call these kernels), and of
-the middle of :meth:`aerodock.control.controller.PositionController.step`
-(:func:`position_command`, one call per control period). Each trial's numbers are computed
+the command of :meth:`aerodock.control.controller.PositionController.step`
+(:func:`position_command`, which the controller's compiled step,
+:func:`aerodock.control.controller_kernel.control_tick`, calls). Each trial's numbers are computed
 operation by operation in the order the NumPy code did (the same numbers, to the bit:
 ``tools/same_numbers.py``): the LQR sum over the seven states from ``0.0`` in order, the
 products and sums of the maps as written below, NumPy's own ``arctan2`` loop
@@ -28,25 +29,50 @@ TWO_PI = 2.0 * np.pi
 
 
 # -- the kernels' inputs, shaped in Python ---------------------------------------------------------
+_F64, _BOOL = np.dtype(np.float64), np.dtype(np.bool_)
+
+
 def rows3(value: np.ndarray | Sequence[float], n: int | None = None) -> np.ndarray:
-    """``value`` as contiguous float rows (n, 3) (broadcast to ``n`` rows when given; an array
-    that already is one is returned as it is, checked first: the hot loop's common case)."""
-    if (type(value) is np.ndarray and value.dtype == np.float64 and value.ndim == 2
+    """``value`` as contiguous, writable float rows (n, 3) (broadcast to ``n`` rows when given;
+    an array that already is one is returned as it is, checked first: the hot loop's common
+    case). Writable, so that every caller's rows are the same type to the compiled kernels (a
+    read-only array would be another compiled variant of each kernel it reaches): a read-only
+    input is copied."""
+    if (type(value) is np.ndarray and value.dtype is _F64 and value.ndim == 2
             and value.shape[1] == 3 and (n is None or value.shape[0] == n)
-            and value.flags.c_contiguous):
+            and value.flags.carray):
         return value
     arr = np.atleast_2d(np.asarray(value, dtype=float))
     if n is not None and arr.shape[0] != n:
         arr = np.broadcast_to(arr, (n, 3))
-    return np.ascontiguousarray(arr)
+    return _writable(arr)
 
 
 def rows1(value: np.ndarray | float, n: int) -> np.ndarray:
-    """``value`` as contiguous float rows (n,) (a scalar: every trial's)."""
+    """``value`` as contiguous, writable float rows (n,) (a scalar: every trial's)."""
+    if type(value) is np.ndarray and value.dtype is _F64 and value.shape == (n,) and (
+            value.flags.carray):
+        return value
     arr = np.asarray(value, dtype=float)
     if arr.shape != (n,):
         arr = np.broadcast_to(arr, (n,))
-    return np.ascontiguousarray(arr)
+    return _writable(arr)
+
+
+def mask_rows(value: np.ndarray, n: int) -> np.ndarray:
+    """``value`` as contiguous, writable bool rows (n,)."""
+    if type(value) is np.ndarray and value.dtype is _BOOL and value.shape == (n,) and (
+            value.flags.carray):
+        return value
+    arr = np.asarray(value, dtype=np.bool_)
+    if arr.shape != (n,):
+        arr = np.broadcast_to(arr, (n,))
+    return _writable(arr)
+
+
+def _writable(arr: np.ndarray) -> np.ndarray:
+    """``arr`` C-contiguous, aligned and writable (a copy unless it already is)."""
+    return arr if arr.flags.carray else np.array(arr, order="C", copy=True)
 
 
 def per_trial(value: np.ndarray | float, n: int) -> np.ndarray:
@@ -161,23 +187,24 @@ def inverse_rows(loops: np.ndarray, accel: np.ndarray, cos_yaw: np.ndarray,
 
 
 @njit
+def body_z_axis(cr: float, sr: float, cp: float, sp: float, cy: float,
+                sy: float) -> tuple[float, float, float]:
+    """The third column of ``Rz(yaw) Ry(pitch) Rx(roll)`` from the angles' cosines and sines,
+    each entry as :func:`aerodock.geometry.rpy_to_rotmat` computes it."""
+    return cy * sp * cr + sy * sr, sy * sp * cr - cy * sr, cp * cr
+
+
+@njit
 def forward_rows(roll: np.ndarray, pitch: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
                  k: np.ndarray, gravity: float, out: np.ndarray) -> None:
-    """``a = g e3 - R e3 k`` (``k = T / m``) per element of the flat rows into ``out`` (n, 3):
-    the third column of ``Rz(yaw) Ry(pitch) Rx(roll)``, written out."""
+    """``a = g e3 - R e3 k`` (``k = T / m``) per element of the flat rows into ``out`` (n, 3),
+    ``R e3`` the third column of ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     for i in range(roll.shape[0]):
-        cr, cp = math.cos(roll[i]), math.cos(pitch[i])
-        sr, sp = math.sin(roll[i]), math.sin(pitch[i])
-        cy, sy = cos_yaw[i], sin_yaw[i]
-        h0 = cy * sp
-        h1 = sy * sp
-        h0 *= cr
-        h1 *= cr
-        h0 = h0 + sy * sr
-        h1 = h1 - cy * sr
-        out[i, 0] = -h0 * k[i]
-        out[i, 1] = -h1 * k[i]
-        out[i, 2] = gravity - cp * cr * k[i]
+        zx, zy, zz = body_z_axis(math.cos(roll[i]), math.sin(roll[i]), math.cos(pitch[i]),
+                                 math.sin(pitch[i]), cos_yaw[i], sin_yaw[i])
+        out[i, 0] = -zx * k[i]
+        out[i, 1] = -zy * k[i]
+        out[i, 2] = gravity - zz * k[i]
 
 
 @njit

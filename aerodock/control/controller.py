@@ -18,14 +18,24 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.config.schema import VehicleSection
-from aerodock.control import command_kernel
+from aerodock.control import controller_kernel
 from aerodock.control.accel_observer import AccelObserver
-from aerodock.control.command_kernel import per_trial, rows1, rows3, tilt_tangent
+from aerodock.control.command_kernel import mask_rows, per_trial, rows1, rows3, tilt_tangent
+from aerodock.control.controller_kernel import (
+    NO_ESTIMATOR,
+    NO_GAIN_P,
+    NO_GAIN_PV,
+    NO_MASK,
+    NO_ROWS,
+    NO_ROWS3,
+    NO_STATE,
+    controller_constants,
+)
 from aerodock.control.freyja_estimator import FreyjaBiasEstimator, FreyjaEstimatorParams
 from aerodock.control.freyja_state_filter import FreyjaStateFilter, FreyjaStateFilterParams
 from aerodock.control.lqr import lqr_gain
 from aerodock.control.observer import BiasObserver
-from aerodock.geometry import rpy_to_rotmat
+from aerodock.downwash.base import frozen_record
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rows import take_rows
 from aerodock.world.vehicles.point_mass import AttitudeCommand, VehicleParams
@@ -79,12 +89,7 @@ class PositionController:
         self.n = n
         self.gain = lqr_gain(c.q_diag, c.r_diag)
         self.gain_terminal = lqr_gain(c.terminal_q_diag, c.terminal_r_diag)
-        # What the compiled command reads: the gains (nominal, terminal), the limits.
-        self._gains = np.ascontiguousarray(np.stack([self.gain, self.gain_terminal]))
-        self._mass = per_trial(self.params.mass_kg, 1)
-        self._thrust_max = per_trial(self.params.thrust_max_n, 1)
-        self._tan_tilt = tilt_tangent(self.params.tilt_max_rad)
-        self.yaw_rate_max = c.yaw_rate_max_radps
+        self.yaw_rate_max = float(c.yaw_rate_max_radps)
         self.dt_s = cfg.timing.control_dt_s
         self.observer: BiasObserver | FreyjaBiasEstimator | None = None
         if use_observer and c.bias_estimator == "freyja":
@@ -94,6 +99,9 @@ class PositionController:
             self.observer = BiasObserver(n, self.dt_s, c.observer_bias_tau_s,
                                          c.observer_pos_noise_m, c.observer_vel_noise_mps,
                                          c.observer_accel_noise_mps2)
+        # Freyja hands its estimator the command: by default the learnt feed-forward counted as
+        # known (the estimator sees what the model left); with freyja_estimator_input =
+        # "command", the whole command (see docs/control.md).
         self.estimator_input_without_ff = (
             c.freyja_estimator_input == "command-without-feedforward")
         # Freyja's state manager filters motion capture's position into position and velocity.
@@ -115,6 +123,15 @@ class PositionController:
                                                 self.params.mass_kg, self.params.gravity_mps2,
                                                 c.accel_observer_axes)
         self._last_input = None  # what the observer should see as the applied acceleration
+        # What the compiled step reads: the gains (nominal, terminal), the limits, the
+        # estimators' constants (the vehicle's mass and thrust limit: one for every trial).
+        p = self.params
+        self._constants = controller_constants(
+            np.stack([self.gain, self.gain_terminal]), per_trial(p.mass_kg, 1)[0],
+            per_trial(p.thrust_max_n, 1)[0], p.gravity_mps2, tilt_tangent(p.tilt_max_rad),
+            self.yaw_rate_max, self.reference_ff_factor,
+            *(None if part is None else part._consts
+              for part in (self.state_filter, self.observer, self.accel_observer)))
 
     def take_rows(self, rows: np.ndarray) -> PositionController:
         """The controllers of the trials at ``rows``, each where it stands (its estimators, its
@@ -153,6 +170,10 @@ class PositionController:
              hold_accel_observer: np.ndarray | None = None) -> ControlOutput:
         """Commands for N trials from measured state and reference.
 
+        One compiled call (:mod:`aerodock.control.controller_kernel`) runs the state filter, the
+        bias estimator and, at the controller's own ticks, the accelerometer observer and the
+        command; what the batch shares (gains, covariances, clocks) the estimators work out here.
+
         Args:
             p_meas, v_meas: (n, 3) measured position and velocity.
             rpy_meas: (n, 3) measured attitude (yaw used).
@@ -166,51 +187,56 @@ class PositionController:
                 contact with the bar).
         """
         n = self.n
-        if self.state_filter is not None:  # what the state manager publishes
-            p_meas, v_meas = self.state_filter.measure(p_meas)
-        freyja = isinstance(self.observer, FreyjaBiasEstimator)
-        if freyja:
-            self.observer.measure(p_meas, v_meas)  # every state message
-        elif self.observer is not None and self._last_input is not None:
-            self.observer.update(p_meas, v_meas, self._last_input)
+        p_meas, v_meas = rows3(p_meas, n), rows3(v_meas, n)
+        sf, est = self.state_filter, self.observer
+        filter_args = _NO_FILTER if sf is None else sf._tick_args()
+        last = self._last_input
+        has_last = last is not None
+        est_args = _NO_ESTIMATOR if est is None else est._tick_args(has_last)
         self._tick += 1
         if self._held is not None and (self._tick - 1) % self.hold_ticks:
-            return self._held  # between the controller's own ticks: the last command holds
-        residual = None
-        if self.accel_observer is not None:
-            if accel_mps2 is None:
-                raise ValueError("control.rejection = 'accelerometer' needs the accelerometer")
-            self.accel_observer.update(accel_mps2, rpy_to_rotmat(rpy_meas), hold_accel_observer)
-            residual = self.accel_observer.residual_mps2
-        ref_a = ref.a if self.reference_ff_factor == 1.0 else self.reference_ff_factor * ref.a
-        bias = self.observer.bias_mps2 if self.observer is not None else np.zeros((n, 3))
-        if residual is not None:
-            bias = bias + residual
-        ff = np.zeros((n, 3)) if feedforward_mps2 is None else feedforward_mps2
-        which = (np.zeros(n, dtype=np.int64) if terminal is None
-                 else np.asarray(terminal, dtype=np.int64))
-        p = self.params
-        desired, applied = np.empty((n, 3)), np.empty((n, 3))
+            # between the controller's own ticks: the estimators only, the last command holds
+            controller_kernel.control_tick(False, self._constants, NUMPY_LOOPS, *filter_args,
+                                           *est_args, has_last, last if has_last else NO_ROWS3,
+                                           p_meas, v_meas, *_HOLDING)
+            return self._held
+        acc = self.accel_observer
+        if acc is None:
+            accel_args = _NO_ACCEL
+        elif accel_mps2 is None:
+            raise ValueError("control.rejection = 'accelerometer' needs the accelerometer")
+        else:
+            accel_args = acc._tick_args(accel_mps2, hold_accel_observer)
+        if not has_last:
+            last = self._last_input = np.empty((n, 3))
+        has_ff = feedforward_mps2 is not None
+        has_terminal = terminal is not None
         roll, pitch, thrust, yaw_rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        applied, bias = np.empty((n, 3)), np.empty((n, 3))
         saturated = np.empty(n, dtype=np.bool_)
-        command_kernel.position_command(
-            NUMPY_LOOPS, self._gains, which, rows3(p_meas, n), rows3(v_meas, n),
-            rows1(rpy_meas[:, 2], n), rows3(ref.p, n), rows3(ref.v, n), rows3(ref_a, n),
-            rows1(ref.yaw_rad, n), rows1(ref.yaw_rate_radps, n), rows3(bias, n), rows3(ff, n),
-            feedforward_mps2 is not None, self._mass, p.gravity_mps2, self._tan_tilt,
-            self._thrust_max, self.yaw_rate_max, desired, roll, pitch, thrust, applied, yaw_rate,
-            saturated)
-        if freyja:  # Freyja hands its estimator the command: by default the learnt
-            # feed-forward is counted as known (the estimator sees what the model left); with
-            # freyja_estimator_input = "command", the whole command (see docs/control.md)
-            self.observer.set_input(desired + ff if self.estimator_input_without_ff else desired)
-        # The observer models v' = u + b with the feed-forward part known: b -> f_ext - f_ext_hat
-        # (and - r_hat: the bias observer then takes out what the accelerometer cannot see).
-        self._last_input = applied + ff if residual is None else applied + ff + residual
-        if self.accel_observer is not None:
-            self.accel_observer.commanded(thrust, ff)
-        out = ControlOutput(AttitudeCommand(roll, pitch, yaw_rate, thrust), applied, ff, bias,
-                            saturated)
+        controller_kernel.control_tick(
+            True, self._constants, NUMPY_LOOPS, *filter_args, *est_args, has_last, last, p_meas,
+            v_meas, self.estimator_input_without_ff, *accel_args, rows3(rpy_meas, n),
+            rows3(ref.p, n), rows3(ref.v, n), rows3(ref.a, n), rows1(ref.yaw_rad, n),
+            rows1(ref.yaw_rate_radps, n), mask_rows(terminal, n) if has_terminal else NO_MASK,
+            has_terminal, rows3(feedforward_mps2, n) if has_ff else NO_ROWS3, has_ff, roll,
+            pitch, thrust, yaw_rate, applied, saturated, bias)
+        out = frozen_record(
+            ControlOutput,
+            command=frozen_record(AttitudeCommand, roll_rad=roll, pitch_rad=pitch,
+                                  yaw_rate_radps=yaw_rate, thrust_n=thrust, torque_ff_nm=None),
+            applied_accel_mps2=applied,
+            feedforward_mps2=feedforward_mps2 if has_ff else np.zeros((n, 3)),
+            bias_mps2=bias, saturated=saturated)
         if self.hold_ticks > 1:
             self._held = out
         return out
+
+
+# What the compiled step reads for a part a controller does not fly (its flag off).
+_NO_FILTER = (False, 0, NO_GAIN_P, NO_STATE)
+_NO_ESTIMATOR = (NO_ESTIMATOR, 0, False, NO_GAIN_PV, NO_STATE, NO_ROWS3, 1.0)
+_NO_ACCEL = (False, False, False, NO_ROWS3, NO_ROWS, NO_ROWS, NO_ROWS3, NO_ROWS3, NO_MASK, False)
+# ... and everything after the measurements on a message between the controller's ticks.
+_HOLDING = (False, *_NO_ACCEL, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS3, NO_ROWS, NO_ROWS, NO_MASK,
+            False, NO_ROWS3, False, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS, NO_ROWS3, NO_MASK, NO_ROWS3)

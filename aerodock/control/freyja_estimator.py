@@ -33,7 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config.schema import ControlSection
+from aerodock.control.command_kernel import rows3
+from aerodock.control.controller_kernel import FREYJA
 from aerodock.control.covariance_memo import CovarianceMemo
+from aerodock.control.estimator_kernels import freyja_measure_rows, packed
 
 
 @dataclass(frozen=True)
@@ -84,6 +87,10 @@ class FreyjaBiasEstimator:
         self._r = np.diag(self.params.measurement_noise)
         self._limit = np.asarray(self.params.bias_limit_mps2, dtype=float)
         self._covs = CovarianceMemo("freyja-estimator", self._a, self._q, self._r)
+        # What the kernel reads (FY_* layout): A's entries off the diagonal, B, the shaping,
+        # the limits.
+        self._consts = packed(self._a[0, 1], self._a[0, 2], self._a[1, 2], self._b[:2],
+                              self.params.input_shaping, self._limit)
         self.reset(np.zeros((self.n, 3)), np.zeros((self.n, 3)))
 
     def reset(self, p: np.ndarray, v: np.ndarray) -> None:
@@ -108,42 +115,43 @@ class FreyjaBiasEstimator:
 
     def set_input(self, accel_cmd_mps2: np.ndarray) -> None:
         """The controller's latest command (n, 3): net acceleration, gravity excluded."""
-        self.input_mps2 = np.asarray(accel_cmd_mps2, dtype=float).copy()
+        self.input_mps2 = rows3(np.array(accel_cmd_mps2, dtype=float, copy=True), self.n)
 
     def measure(self, p_meas: np.ndarray, v_meas: np.ndarray) -> None:
-        """One state message: the propagations due since the last one, then the update."""
+        """One state message: the propagations due since the last one, then the update (the
+        estimates and a stale input changed in place)."""
+        propagations, clear, gain = self._clock()
+        n = self.n
+        freyja_measure_rows(self.state, self.input_mps2, self._consts, propagations, clear, gain,
+                            rows3(p_meas, n), rows3(v_meas, n))
+
+    def _tick_args(self, updating: bool = True) -> tuple:
+        """The compiled step's arguments for this estimator on a state message (``kind`` to
+        ``ramp`` of :func:`aerodock.control.controller_kernel.control_tick`): the clocks and
+        covariance advanced (:meth:`_clock`), its estimates, input and ramp-in (it takes every
+        message; ``updating`` is the bias observer's; its constants are in the controller's)."""
+        propagations, clear, gain = self._clock()
+        return FREYJA, propagations, clear, gain, self.state, self.input_mps2, self.ramp()
+
+    def _clock(self) -> tuple[int, bool, np.ndarray]:
+        """One state message's share of the batch: the clocks and the covariance advanced; the
+        propagations due (with the input), whether the input went stale, and the update's gain
+        (3, 2). The estimates are left to :func:`~aerodock.control.estimator_kernels.
+        freyja_measure_rows`."""
         self.t_since_enable_s += self.measure_dt_s
         self._t_to_propagation_s -= self.measure_dt_s
+        propagations, clear = 0, False
         while self._t_to_propagation_s <= 1e-9:
-            self._propagate()
+            self._propagations_since_measure += 1
+            if self._propagations_since_measure > self.params.stale_propagations:
+                clear = True  # stale input cleared, no propagation
+            else:
+                propagations += 1
+                (self.cov,) = self._covs.step("propagate", self.cov, self._propagated_cov)
             self._t_to_propagation_s += self.prop_dt_s
-        self._update(np.asarray(p_meas, dtype=float), np.asarray(v_meas, dtype=float))
-
-    def _propagate(self) -> None:
-        self._propagations_since_measure += 1
-        if self._propagations_since_measure > self.params.stale_propagations:
-            self.input_mps2 = np.zeros((self.n, 3))  # stale input cleared, no propagation
-            return
-        a, b = self._a, self._b
-        s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
-        u = self.params.input_shaping * self.input_mps2
-        state = np.empty_like(self.state)
-        state[..., 0] = s0 + a[0, 1] * s1 + a[0, 2] * s2 + b[0] * u
-        state[..., 1] = s1 + a[1, 2] * s2 + b[1] * u
-        state[..., 2] = np.clip(s2, -self._limit, self._limit)
-        self.state = state
-        (self.cov,) = self._covs.step("propagate", self.cov, self._propagated_cov)
-
-    def _update(self, p_meas: np.ndarray, v_meas: np.ndarray) -> None:
         self._propagations_since_measure = 0
-        gain, cov = self._covs.step("update", self.cov, self._updated_cov)  # gain (3, 2)
-        ip = p_meas - self.state[..., 0]
-        iv = v_meas - self.state[..., 1]
-        state = np.empty_like(self.state)
-        for i in range(3):
-            state[..., i] = self.state[..., i] + gain[i, 0] * ip + gain[i, 1] * iv
-        self.state = state
-        self.cov = cov
+        gain, self.cov = self._covs.step("update", self.cov, self._updated_cov)  # gain (3, 2)
+        return propagations, clear, gain
 
     def _propagated_cov(self, cov: np.ndarray) -> tuple[np.ndarray]:
         """(P after one propagation,) (shared by the batch; see :class:`CovarianceMemo`)."""
@@ -156,8 +164,11 @@ class FreyjaBiasEstimator:
         gain = cov @ c.T @ np.linalg.inv(c @ cov @ c.T + self._r)
         return gain, (np.eye(3) - gain @ c) @ cov
 
+    def ramp(self) -> float:
+        """The published estimate's share of the bias now: ``min(1, (t / ramp) ** 3)``."""
+        return min(1.0, (self.t_since_enable_s / self.params.output_ramp_s) ** 3)
+
     @property
     def bias_mps2(self) -> np.ndarray:
         """(n, 3) the published estimate: the bias times the ramp-in factor."""
-        ramp = min(1.0, (self.t_since_enable_s / self.params.output_ramp_s) ** 3)
-        return ramp * self.state[:, :, 2]
+        return self.ramp() * self.state[:, :, 2]

@@ -25,7 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerodock.config.schema import ControlSection
+from aerodock.control.command_kernel import rows3
 from aerodock.control.covariance_memo import CovarianceMemo
+from aerodock.control.estimator_kernels import packed, state_filter_rows
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,7 @@ class FreyjaStateFilter:
         self._q = np.diag(self.params.process_noise)
         self._covs = CovarianceMemo("freyja-state-filter", self._a, self._q,
                                     self.params.measurement_noise)
+        self._consts = packed(self._a[0, 1], self._a[0, 2], self._a[1, 2])  # SF_* layout
         self.state = np.zeros((self.n, 3, 3))
         self.cov = self.params.initial_cov * np.eye(3)
         self._t_to_propagation_s = self.prop_dt_s
@@ -87,26 +90,32 @@ class FreyjaStateFilter:
         return out
 
     def measure(self, p_meas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """One motion-capture position (n, 3): the propagations due, the update; returns the
-        published (position, velocity), each (n, 3)."""
+        """One motion-capture position (n, 3): the propagations due, the update (the states
+        changed in place); returns the published (position, velocity), each (n, 3)."""
+        propagations, gain = self._clock()
+        state_filter_rows(self.state, self._consts, propagations, gain, rows3(p_meas, self.n))
+        return self.state[..., 0].copy(), self.state[..., 1].copy()
+
+    def _tick_args(self) -> tuple:
+        """The compiled step's arguments for this filter on a message (``has_filter`` to
+        ``filter_state`` of :func:`aerodock.control.controller_kernel.control_tick`): the clock
+        and covariance advanced (:meth:`_clock`), its states (its constants are in the
+        controller's)."""
+        propagations, gain = self._clock()
+        return True, propagations, gain, self.state
+
+    def _clock(self) -> tuple[int, np.ndarray]:
+        """One message's share of the batch: the clock and the covariance advanced; the
+        propagations due and the update's gain (3,). The states are left to
+        :func:`~aerodock.control.estimator_kernels.state_filter_rows`."""
         self._t_to_propagation_s -= self.measure_dt_s
-        a = self._a
+        propagations = 0
         while self._t_to_propagation_s <= 1e-9:
-            s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
-            state = np.empty_like(self.state)
-            state[..., 0] = s0 + a[0, 1] * s1 + a[0, 2] * s2
-            state[..., 1] = s1 + a[1, 2] * s2
-            state[..., 2] = s2
-            self.state = state
             (self.cov,) = self._covs.step("propagate", self.cov, self._propagated_cov)
             self._t_to_propagation_s += self.prop_dt_s
+            propagations += 1
         gain, self.cov = self._covs.step("update", self.cov, self._updated_cov)  # gain (3,)
-        innov = np.asarray(p_meas, dtype=float) - self.state[..., 0]
-        state = np.empty_like(self.state)
-        for i in range(3):
-            state[..., i] = self.state[..., i] + gain[i] * innov
-        self.state = state
-        return self.state[..., 0].copy(), self.state[..., 1].copy()
+        return propagations, gain
 
     def _propagated_cov(self, cov: np.ndarray) -> tuple[np.ndarray]:
         """(P after one propagation,) (shared by the batch; see :class:`CovarianceMemo`)."""

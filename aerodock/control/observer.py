@@ -26,6 +26,10 @@ import sys
 
 import numpy as np
 
+from aerodock.control.command_kernel import rows3
+from aerodock.control.controller_kernel import BIAS_OBSERVER, NO_ROWS3
+from aerodock.control.estimator_kernels import bias_observer_rows, packed
+
 
 class BiasObserver:
     """Batch of steady-state Kalman filters estimating a constant-ish disturbance acceleration.
@@ -88,8 +92,9 @@ class BiasObserver:
         r = np.diag([pos_noise_m**2, vel_noise_mps**2])
         import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
         p_prior = scipy.linalg.solve_discrete_are(self._f.T, h.T, q, r)
-        self.gain = p_prior @ h.T @ np.linalg.inv(h @ p_prior @ h.T + r)
+        self.gain = _frozen(p_prior @ h.T @ np.linalg.inv(h @ p_prior @ h.T + r))
         self._error_dyn = (np.eye(3) - self.gain @ h) @ self._f
+        self._consts = packed(self._f, self._g)  # what the kernel reads (BIAS_* layout)
         self._q, self._r, self._h = q, r, h
         # The time-varying gains from a reset prior until they settle (None: the steady
         # state), and how many of them this filter has used.
@@ -145,28 +150,26 @@ class BiasObserver:
                 ``(n, 3)``. Pass what the vehicle was actually commanded to do *after*
                 saturation (e.g. the forward map of the saturated attitude and thrust), or
                 the saturation will be learnt as a disturbance.
+
+        The estimates are updated in place (:func:`~aerodock.control.estimator_kernels.
+        bias_observer_rows`: explicit sums per trial, so each trial's numbers do not depend on
+        the batch).
         """
-        # Explicit column sums instead of BLAS matmul: each trial's numbers then do not depend
-        # on the batch size (BLAS blocking changes rounding with the shape), and it is faster.
-        # The three rows of [p, v, b] at once, (3, n, 3): x_i = f_i0 s_0 + f_i1 s_1 + f_i2 s_2
-        # + g_i u, added in that order as the written-out sums were.
-        f, g, k = self._f, self._g, self._next_gain()
-        s0, s1, s2 = self.state[..., 0], self.state[..., 1], self.state[..., 2]
-        u = np.asarray(u_applied_mps2, dtype=float)
-        col = f[:, :, None, None]
-        x = col[:, 0] * s0
-        x += col[:, 1] * s1
-        x += col[:, 2] * s2
-        x += g[:, None, None] * u
-        ip, iv = p_meas - x[0], v_meas - x[1]
-        x += k[:, 0, None, None] * ip
-        x += k[:, 1, None, None] * iv
-        state = np.empty_like(self.state)
-        np.copyto(state.transpose(2, 0, 1), x)
-        self.state = state
+        n = self.n
+        bias_observer_rows(self.state, self._consts, self._next_gain(), rows3(p_meas, n),
+                           rows3(v_meas, n), rows3(u_applied_mps2, n))
+
+    def _tick_args(self, updating: bool) -> tuple:
+        """The compiled step's arguments for this observer (``kind`` to ``ramp`` of
+        :func:`aerodock.control.controller_kernel.control_tick`; its constants are in the
+        controller's): this update's gain (the schedule advanced when ``updating``), its
+        estimates."""
+        gain = self._next_gain() if updating else self.gain
+        return BIAS_OBSERVER, 0, False, gain, self.state, NO_ROWS3, 1.0
 
     def _next_gain(self) -> np.ndarray:
-        """This update's Kalman gain: time-varying from the reset prior, then steady-state."""
+        """This update's Kalman gain (3, 2), read-only: time-varying from the reset prior, then
+        steady-state (the schedule advances: call it once per update)."""
         if self._schedule is None:
             return self.gain
         gain = self._schedule.gain(self._step)
@@ -224,10 +227,17 @@ class _GainSchedule:
         while len(self._gains) <= k:
             f, h = self._f, self._h
             prior = f @ self._cov @ f.T + self._q
-            gain = prior @ h.T @ np.linalg.inv(h @ prior @ h.T + self._r)
+            gain = _frozen(prior @ h.T @ np.linalg.inv(h @ prior @ h.T + self._r))
             self._cov = (np.eye(3) - gain @ h) @ prior
             self._gains.append(gain)
             if np.max(np.abs(gain - self._steady)) < 1e-4 * np.max(np.abs(self._steady)):
                 self.settled_after = len(self._gains)
                 break
         return self._gains[k]
+
+
+def _frozen(gain: np.ndarray) -> np.ndarray:
+    """A gain as the kernels read it: contiguous and read-only (shared: nobody writes it)."""
+    out = np.ascontiguousarray(gain)
+    out.flags.writeable = False
+    return out
