@@ -58,10 +58,9 @@ def rotmat_to_euler(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 def rotmat_to_rpy(rot: np.ndarray) -> np.ndarray:
     """Rotation matrices ``S + (3, 3)`` to ZYX Euler angles ``S + (3,)`` (roll, pitch, yaw),
-    radians: :func:`rotmat_to_euler` stacked on the last axis. The roll and yaw (``arctan2``)
-    and the clipped ``R20`` in one compiled call
-    (:func:`aerodock.geometry_kernels.roll_yaw_sin_pitch`), then NumPy's ``arcsin``: NumPy's
-    numbers, from three calls instead of nine."""
+    radians: :func:`rotmat_to_euler` stacked on the last axis. One compiled call
+    (:func:`aerodock.geometry_kernels.roll_pitch_yaw`) with NumPy's own ``arctan2`` and
+    ``arcsin`` loops: NumPy's numbers to the bit."""
     kernel, loops, seal = _COMPILED or _load_compiled()
     rot = np.asarray(rot, dtype=float)
     shape = rot.shape[:-1]
@@ -69,8 +68,6 @@ def rotmat_to_rpy(rot: np.ndarray) -> np.ndarray:
     rpy = np.empty((rot.shape[0], 3))
     kernel(loops, rot, rpy)
     seal(kernel)
-    pitch = rpy[:, 1]
-    np.negative(np.arcsin(pitch, out=pitch), out=pitch)
     return rpy.reshape(shape)
 
 
@@ -82,10 +79,10 @@ def _load_compiled() -> tuple[Any, ...]:
     :func:`aerodock.jit.seal`, imported on first use: the log readers and the flight node read
     this module and load no compiled code (numba)."""
     global _COMPILED
-    from aerodock.geometry_kernels import roll_yaw_sin_pitch
+    from aerodock.geometry_kernels import roll_pitch_yaw
     from aerodock.jit import NUMPY_LOOPS, seal
 
-    _COMPILED = (roll_yaw_sin_pitch, NUMPY_LOOPS, seal)
+    _COMPILED = (roll_pitch_yaw, NUMPY_LOOPS, seal)
     return _COMPILED
 
 

@@ -153,16 +153,16 @@ else:  # the plain-Python run of the kernels: a * b + c, rounded twice
 
 
 # -- NumPy's own elementwise loops, called from compiled code ----------------------------------
-# NumPy computes exp, log, power and arctan2 with its own SIMD code (AVX-512 where the processor
-# has it), whose last bit differs from the C library's in a few per cent of arguments. So that a
-# kernel's numbers equal NumPy's, kernels call NumPy's inner loops themselves: the loop of each
-# ufunc for float64 is read from the ufunc object (``PyUFuncObject.functions``, NumPy's public C
-# struct) and called through its address, over a whole row of the batch at a time. The addresses
-# are checked against the ufuncs' own results when this module loads; should a NumPy release
-# lay the struct out otherwise, the kernels use the C library's functions instead (the same
-# numbers to the last bit or two; ``NUMPY_LOOPS_OK`` says which).
+# NumPy computes exp, log, power, arctan2, arcsin and arccos with its own SIMD code (AVX-512 where
+# the processor has it), whose last bit differs from the C library's in a few per cent of arguments.
+# So that a kernel's numbers equal NumPy's, kernels call NumPy's inner loops themselves: the loop of
+# each ufunc for float64 is read from the ufunc object (``PyUFuncObject.functions``, NumPy's public
+# C struct) and called through its address, over a whole row of the batch at a time. The addresses
+# are checked against the ufuncs' own results when this module loads; should a NumPy release lay the
+# struct out otherwise, the kernels use the C library's functions instead (the same numbers to the
+# last bit or two; ``NUMPY_LOOPS_OK`` says which).
 
-LOOP_EXP, LOOP_LOG, LOOP_POWER, LOOP_ARCTAN2 = 0, 1, 2, 3
+LOOP_EXP, LOOP_LOG, LOOP_POWER, LOOP_ARCTAN2, LOOP_ARCSIN, LOOP_ARCCOS = 0, 1, 2, 3, 4, 5
 
 
 def _ufunc_loop(ufunc: Any, types_: str) -> int:
@@ -214,7 +214,8 @@ def _numpy_loops() -> tuple[Any, bool]:
     import numpy as np
 
     loops = np.array([_ufunc_loop(np.exp, "dd"), _ufunc_loop(np.log, "dd"),
-                      _ufunc_loop(np.power, "ddd"), _ufunc_loop(np.arctan2, "ddd")],
+                      _ufunc_loop(np.power, "ddd"), _ufunc_loop(np.arctan2, "ddd"),
+                      _ufunc_loop(np.arcsin, "dd"), _ufunc_loop(np.arccos, "dd")],
                      dtype=np.int64)
     return loops, bool(loops.all())
 
@@ -229,9 +230,12 @@ def _check_loops(loops: Any) -> bool:
                              ctypes.c_void_p)
     x = np.linspace(-7.3, 9.1, 101)
     y = np.linspace(0.01, 5.3, 101)
+    u = np.linspace(-1.0, 1.0, 101)  # arcsin's and arccos's domain, both ends included
     for addr, ufunc, args in ((loops[LOOP_EXP], np.exp, (x,)), (loops[LOOP_LOG], np.log, (y,)),
                               (loops[LOOP_POWER], np.power, (y, x / 7.0)),
-                              (loops[LOOP_ARCTAN2], np.arctan2, (x, y - 2.0))):
+                              (loops[LOOP_ARCTAN2], np.arctan2, (x, y - 2.0)),
+                              (loops[LOOP_ARCSIN], np.arcsin, (u,)),
+                              (loops[LOOP_ARCCOS], np.arccos, (u,))):
         if not addr:
             return False
         out = np.empty_like(x)
@@ -251,7 +255,7 @@ if NUMPY_LOOPS_OK and not _check_loops(NUMPY_LOOPS):  # pragma: no cover - anoth
 if not NUMPY_LOOPS_OK or not JIT_ENABLED:  # pragma: no cover - plain Python calls no loop
     NUMPY_LOOPS[:] = 0
 NUMPY_LOOPS.flags.writeable = False
-"""The loops' addresses, (4,) int64 (``LOOP_*`` index them), passed to every kernel that calls
+"""The loops' addresses, (6,) int64 (``LOOP_*`` index them), passed to every kernel that calls
 them (an address is data, not code: the compiled kernels stay cacheable); zeros when NumPy's
 loops could not be read (the kernels then use the C library's functions)."""
 
@@ -318,3 +322,27 @@ def np_arctan2(loops: Any, y: Any, x: Any, out: Any) -> None:
             out[i] = math.atan2(y[i], x[i])
         return
     _binary(fn, y, x, out)
+
+
+@njit
+def np_arcsin(loops: Any, x: Any, out: Any) -> None:
+    """``np.arcsin(x, out=out)`` on 1-D float64 rows, from compiled code (NaN outside [-1, 1],
+    without NumPy's warning)."""
+    fn = loops[LOOP_ARCSIN]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = math.asin(x[i]) if -1.0 <= x[i] <= 1.0 else math.nan
+        return
+    _unary(fn, x, out)
+
+
+@njit
+def np_arccos(loops: Any, x: Any, out: Any) -> None:
+    """``np.arccos(x, out=out)`` on 1-D float64 rows, from compiled code (NaN outside [-1, 1],
+    without NumPy's warning)."""
+    fn = loops[LOOP_ARCCOS]
+    if fn == 0:
+        for i in range(x.shape[0]):
+            out[i] = math.acos(x[i]) if -1.0 <= x[i] <= 1.0 else math.nan
+        return
+    _unary(fn, x, out)

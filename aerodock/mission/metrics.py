@@ -4,13 +4,14 @@ contacts, non-finite states; the terminal window's statistics; optional traces f
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
-from aerodock.geometry import norm_rows
+from aerodock.jit import NUMPY_LOOPS, any_layout, njit, np_arccos, seal
 from aerodock.mission.phases.gate_sensing import GateCode
-from aerodock.mission.spec import PhaseCode, any_true
+from aerodock.mission.spec import PhaseCode
 from aerodock.world import World
 from aerodock.world.platform import platform_strike
 
@@ -46,27 +47,22 @@ class MissionMetrics:
                 clearance_m: float, rotor_radius_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Measure control period ``k`` (before it is flown); returns the true tracking error
         (n,) m and the trials whose clearance was first violated now (n,)."""
-        gp, hist = world.gripper_params, self.hist
+        gp = world.gripper_params
         lead_p, lead_r, fol_p, fol_r = world.poses()  # no split of the world's batch
-        true_err = fol_p - p_ref
-        hist[k, :, 0] = np.abs(true_err[:, 2])
-        hist[k, :, 1] = track_err_m = norm_rows(true_err)
-        hist[k, :, 2] = 0.0 if ff is None else ff[:, 2]
-        # np.clip's numbers, without its wrapper's cost (as geometry.rotmat_to_rpy)
-        hist[k, :, 3] = np.rad2deg(np.arccos(np.minimum(np.maximum(fol_r[:, 2, 2], -1.0), 1.0)))
-        hist[k, :, 4] = fout.saturated
-        ended = (~active | (world.gripper.gate != GateCode.OPEN)) & (self.approach_end > t_s)
-        if any_true(ended):
-            self.approach_end = np.where(ended, t_s, self.approach_end)
-        live = phase != PhaseCode.DONE  # this trial's mission is still on
-        self.ground_hit |= world.ground_contact & live
-        arm = fol_p - fol_r[:, :, 2] * gp.mount_height_m
-        was_clear = self.min_clear >= clearance_m
-        self.min_clear = np.where(live, np.minimum(
-            self.min_clear, norm_rows(arm - lead_p)), self.min_clear)
-        violated_now = was_clear & (self.min_clear < clearance_m)
-        self.nan_seen |= ~(np.isfinite(fol_p).all(axis=1) & np.isfinite(lead_p).all(axis=1)
-                           & np.isfinite(fout.command.thrust_n))
+        n = fol_p.shape[0]
+        track_err_m = np.empty(n)
+        violated_now = np.empty(n, dtype=bool)
+        live = np.empty(n, dtype=bool)
+        # new arrays each period, as np.where made them (a result may hold the last ones)
+        approach_end, min_clear = np.empty(n), np.empty(n)
+        measure_rows(NUMPY_LOOPS, t_s, fol_p, fol_r, lead_p, p_ref, ff is not None,
+                     fol_p if ff is None else ff, fout.saturated, active, world.gripper.gate,
+                     GateCode.OPEN, phase, PhaseCode.DONE, world.ground_contact,
+                     fout.command.thrust_n, float(gp.mount_height_m), float(clearance_m),
+                     self.hist[k], self.approach_end, self.min_clear, approach_end, min_clear,
+                     self.ground_hit, self.nan_seen, track_err_m, violated_now, live)
+        seal(measure_rows)
+        self.approach_end, self.min_clear = approach_end, min_clear
         if world.rigid:
             self.strikes |= live & platform_strike(
                 fol_p, fol_r, lead_p, lead_r, leader_yaw_rad, world.bar, world.platform,
@@ -109,3 +105,67 @@ def _over_steps(values: np.ndarray) -> np.ndarray:
     numbers for a trial whatever the batch (``sum(0)`` of one trial's contiguous column sums it
     pairwise, of several trials' strided columns in order)."""
     return np.cumsum(values, axis=0)[-1]
+
+
+_RAD2DEG = 180.0 / math.pi
+"""``np.rad2deg``'s factor: NumPy multiplies by ``180 / pi`` rounded to a double, as here."""
+
+
+@any_layout("hist_k", "approach_end_out", "min_clear_out", "ground_hit", "nan_seen", "track_err_m",
+            "violated_now", "live")
+@njit
+def measure_rows(loops: np.ndarray, t_s: float, fol_p: np.ndarray, fol_r: np.ndarray,
+                 lead_p: np.ndarray, p_ref: np.ndarray, has_ff: bool, ff: np.ndarray,
+                 saturated: np.ndarray, active: np.ndarray, gate: np.ndarray, gate_open: int,
+                 phase: np.ndarray, done: int, ground_contact: np.ndarray, thrust_n: np.ndarray,
+                 mount_height_m: float, clearance_m: float, hist_k: np.ndarray,
+                 approach_end: np.ndarray, min_clear: np.ndarray, approach_end_out: np.ndarray,
+                 min_clear_out: np.ndarray, ground_hit: np.ndarray,
+                 nan_seen: np.ndarray, track_err_m: np.ndarray, violated_now: np.ndarray,
+                 live: np.ndarray) -> None:
+    """One control period's measures of :meth:`MissionMetrics.measure`, per trial, with the
+    numbers of the NumPy code it replaced: the history row ``hist_k`` (n, 5) (|e_down|, the
+    tracking error's norm as :func:`aerodock.geometry.norm_rows` sums it, the predicted down
+    force, the tilt ``rad2deg(arccos(clip(R22, -1, 1)))`` with NumPy's own arccos loop, the
+    saturation); the terminal window's end and the clearance (``np.minimum``'s NaN rule) into
+    ``approach_end_out`` and ``min_clear_out``; ground contacts and non-finite states updated in
+    place; the tracking error, the first clearance
+    violations and whether the trial's mission is still on into ``track_err_m``,
+    ``violated_now`` and ``live``."""
+    n = fol_p.shape[0]
+    tilt = np.empty(n)  # contiguous, as the arccos's argument NumPy made
+    for i in range(n):
+        c = fol_r[i, 2, 2]
+        c = c if (c >= -1.0 or c != c) else -1.0
+        tilt[i] = c if (c <= 1.0 or c != c) else 1.0
+    np_arccos(loops, tilt, tilt)
+    for i in range(n):
+        e0 = fol_p[i, 0] - p_ref[i, 0]
+        e1 = fol_p[i, 1] - p_ref[i, 1]
+        e2 = fol_p[i, 2] - p_ref[i, 2]
+        err = math.sqrt((e0 * e0 + e1 * e1) + e2 * e2)
+        track_err_m[i] = err
+        hist_k[i, 0] = abs(e2)
+        hist_k[i, 1] = err
+        hist_k[i, 2] = ff[i, 2] if has_ff else 0.0
+        hist_k[i, 3] = tilt[i] * _RAD2DEG
+        hist_k[i, 4] = 1.0 if saturated[i] else 0.0
+        ended = (not active[i] or gate[i] != gate_open) and approach_end[i] > t_s
+        approach_end_out[i] = t_s if ended else approach_end[i]
+        on = phase[i] != done
+        live[i] = on
+        ground_hit[i] = ground_hit[i] or (ground_contact[i] and on)
+        d0 = (fol_p[i, 0] - fol_r[i, 0, 2] * mount_height_m) - lead_p[i, 0]
+        d1 = (fol_p[i, 1] - fol_r[i, 1, 2] * mount_height_m) - lead_p[i, 1]
+        d2 = (fol_p[i, 2] - fol_r[i, 2, 2] * mount_height_m) - lead_p[i, 2]
+        dist = math.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
+        m = min_clear[i]
+        if on:
+            m = m if (m < dist or m != m) else dist  # np.minimum: a NaN wins
+        min_clear_out[i] = m
+        violated_now[i] = min_clear[i] >= clearance_m and m < clearance_m
+        finite = True
+        for j in range(3):
+            finite = finite and math.isfinite(fol_p[i, j]) and math.isfinite(lead_p[i, j])
+        if not (finite and math.isfinite(thrust_n[i])):
+            nan_seen[i] = True

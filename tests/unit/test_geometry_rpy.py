@@ -1,6 +1,6 @@
-"""rotmat_to_rpy (a compiled call and NumPy's arcsine) gives the numbers of the NumPy code it
-replaced, to the bit, on rotations and on any matrix (entries past +-1, NaN, infinities, signed
-zeros), in any shape and layout."""
+"""rotmat_to_rpy (one compiled call with NumPy's arctan2 and arcsine loops) gives the numbers of the
+NumPy code it replaced, to the bit, on rotations and on any matrix (entries past +-1, NaN,
+infinities, signed zeros), in any shape and layout."""
 
 from __future__ import annotations
 
