@@ -27,6 +27,14 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.frozen import freeze
 from aerodock.jit import any_layout, njit, seal
+from aerodock.world.sensor_kernels import (
+    CHANGED_BY_CONTACT,
+    CHANGED_DONE,
+    CHANGED_READING,
+    CHANGED_SERVO,
+    CHANGED_START,
+    gripper_step_kernel,
+)
 
 
 def _armed_any(flag: bool | np.ndarray) -> bool:
@@ -263,49 +271,50 @@ def step_gripper(
         params: gripper constants.
         rng: noise source.
     """
-    reading = state.reading_n
-    open_ = state.gate == _OPEN
-    untriggered = open_ & np.isnan(state.servo_start_s)
-    fire = None
-    by_contact = state.triggered_by_contact
-    if sample_sensor:
-        raw = contact_force_n + state.bias_true_n + params.sensor_noise_n * rng.standard_normal(
-            contact_force_n.shape
-        )
-        reading = raw - state.bias_est_n
-        stuck = ~np.isnan(state.sensor_stuck_n)
-        if _any(stuck):  # injected fault: a dead (0) or stuck strain gauge
-            reading = np.where(stuck, state.sensor_stuck_n, reading)
-        if _armed_any(params.passive):
-            sensed = untriggered & (reading > params.contact_threshold_n) & params.passive
-            fire = sensed
-            by_contact = by_contact | sensed
-    if _armed_any(params.active):
-        by_command = untriggered & close_command & params.active
-        fire = by_command if fire is None else fire | by_command
-    # Unchanged arrays are passed on as they are (states are never modified in place).
-    servo_start = state.servo_start_s
-    if fire is not None and _any(fire):
-        servo_start = np.where(fire, t_s + params.latency_s, servo_start)
-    gate = state.gate
-    inside_at_start = state.inside_at_start
-    start_now = open_ & (servo_start <= t_s)
-    if _any(start_now):
-        gate = np.where(start_now, _CLOSING, gate).astype(np.int8)
-        inside_at_start = np.where(start_now, inside, inside_at_start)
-    slipped, resolved = state.slipped, state.resolved_s
-    closing = gate == _CLOSING
-    if _any(closing):
-        done = closing & (t_s >= servo_start + state.close_time_s)
-        if _any(done):
-            gate = np.where(done, np.where(inside, _CAPTURED, _MISSED), gate).astype(np.int8)
-            slipped = slipped | (done & ~inside & inside_at_start)
-            resolved = np.where(done, t_s, resolved)
-    if (gate is state.gate and reading is state.reading_n and servo_start is state.servo_start_s
-            and by_contact is state.triggered_by_contact
-            and inside_at_start is state.inside_at_start and slipped is state.slipped
-            and resolved is state.resolved_s):
+    n = state.gate.shape[0]
+    # The strain gauge's noise is drawn as always: (n,) at a sample, nothing otherwise.
+    noise = rng.standard_normal(contact_force_n.shape) if sample_sensor else _NO_NOISE
+    passive_any, active_any = _armed_any(params.passive), _armed_any(params.active)
+    reading, servo_start, resolved = np.empty(n), np.empty(n), np.empty(n)
+    by_contact, inside_at_start = np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+    slipped, gate = np.empty(n, dtype=bool), np.empty(n, dtype=np.int8)
+    changed = gripper_step_kernel(
+        state.gate, state.bias_true_n, state.bias_est_n, state.reading_n, state.servo_start_s,
+        state.triggered_by_contact, state.inside_at_start, state.slipped, state.resolved_s,
+        state.close_time_s, state.sensor_stuck_n, float(t_s), contact_force_n, _bools(inside),
+        bool(sample_sensor), noise, float(params.sensor_noise_n),
+        float(params.contact_threshold_n), passive_any, _trigger_rows(params.passive),
+        active_any, _trigger_rows(params.active), _bools(close_command),
+        float(params.latency_s), reading, by_contact, servo_start, gate, inside_at_start,
+        slipped, resolved)
+    seal(gripper_step_kernel)
+    if not changed:
         return state  # nothing changed (states are never modified in place)
-    return GripperState(gate, state.bias_true_n, state.bias_est_n, reading, servo_start,
-                        by_contact, inside_at_start, slipped, resolved, state.close_time_s,
-                        state.sensor_stuck_n)
+    # Unchanged arrays are passed on as they are (states are never modified in place).
+    done = changed & CHANGED_DONE
+    return GripperState(
+        gate if changed & (CHANGED_START | CHANGED_DONE) else state.gate,
+        state.bias_true_n, state.bias_est_n,
+        reading if changed & CHANGED_READING else state.reading_n,
+        servo_start if changed & CHANGED_SERVO else state.servo_start_s,
+        by_contact if changed & CHANGED_BY_CONTACT else state.triggered_by_contact,
+        inside_at_start if changed & CHANGED_START else state.inside_at_start,
+        slipped if done else state.slipped, resolved if done else state.resolved_s,
+        state.close_time_s, state.sensor_stuck_n)
+
+
+_NO_NOISE = np.zeros(0)  # gripper_step_kernel's noise between samples (not read)
+_ARMED, _UNARMED = np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
+freeze(_NO_NOISE, _ARMED, _UNARMED)
+
+
+def _trigger_rows(flag: bool | np.ndarray) -> np.ndarray:
+    """A trigger's arming as gripper_step_kernel reads it: (1,) for every trial, or (n,)."""
+    if isinstance(flag, np.ndarray) and flag.ndim:
+        return _bools(flag)
+    return _ARMED if flag else _UNARMED
+
+
+def _bools(a: np.ndarray) -> np.ndarray:
+    """``a`` as a bool array (itself when it is one)."""
+    return a if isinstance(a, np.ndarray) and a.dtype == np.bool_ else np.asarray(a, dtype=bool)

@@ -9,8 +9,10 @@ from functools import cached_property
 import numpy as np
 
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
+from aerodock.jit import seal
 from aerodock.rng import TrialRNG, standard_normal_t
 from aerodock.world.params import WorldParams
+from aerodock.world.sensor_kernels import mocap_noise_kernel
 from aerodock.world.state import WorldState
 from aerodock.world.torque_sensing import TorqueLog, TorqueReading
 
@@ -49,28 +51,26 @@ def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation,
     if state.imu is not None:  # the estimates' angles, the leaders' rows then the followers'
         both = rotmat_to_rpy(state.imu.attitude)
         lr, fr, att_sd = both[:n], both[n:], 0.0
-    per_trial = isinstance(rng, TrialRNG) and rng.n == n
+    lr = rotmat_to_rpy(lr) if lr.ndim == 3 else lr
+    fr = rotmat_to_rpy(fr) if fr.ndim == 3 else fr
+    k = 9 if att_sd > 0 else 6
+    out = np.empty((6, n, 3))
+    mocap_noise_kernel(lp, lv, lr, _draws(rng, n, k), fp, fv, fr, _draws(rng, n, k),
+                       pos_sd, vel_sd, att_sd, out)
+    seal(mocap_noise_kernel)
+    return Observation(p=out[0], v=out[1], rpy=out[2]), Observation(p=out[3], v=out[4], rpy=out[5])
 
-    def noisy(p: np.ndarray, v: np.ndarray, rot: np.ndarray) -> Observation:
-        rpy = rotmat_to_rpy(rot) if rot.ndim == 3 else rot.copy()
-        if per_trial:
-            draw = standard_normal_t(rng, n, 9 if att_sd > 0 else 6)
-            if att_sd > 0:
-                rpy += att_sd * draw[:3].T
-                draw = draw[3:]
-            noise_p, noise_v = draw[:3].T, draw[3:].T
-        else:
-            if att_sd > 0:
-                rpy += att_sd * rng.standard_normal((n, 3))
-            noise_p = rng.standard_normal((n, 3))
-            noise_v = rng.standard_normal((n, 3))
-        return Observation(
-            p=np.add(p, pos_sd * noise_p, out=np.empty((n, 3))),
-            v=np.add(v, vel_sd * noise_v, out=np.empty((n, 3))),
-            rpy=rpy,
-        )
 
-    return noisy(lp, lv, lr), noisy(fp, fv, fr)
+def _draws(rng: np.random.Generator | TrialRNG, n: int, k: int) -> np.ndarray:
+    """(k, n) one vehicle's motion-capture draws, component-major: with a trial's own stream,
+    its next ``k``; from a plain ``Generator``, ``k // 3`` draws of ``(n, 3)`` (the angles',
+    the position's, the velocity's; the numbers and order they were always drawn in)."""
+    if isinstance(rng, TrialRNG) and rng.n == n:
+        return standard_normal_t(rng, n, k)
+    draws = np.empty((k, n))
+    for row in range(0, k, 3):
+        draws[row:row + 3] = rng.standard_normal((n, 3)).T
+    return draws
 
 
 def accelerometer(state: WorldState, params: WorldParams) -> np.ndarray:
