@@ -61,13 +61,12 @@ def rotmat_to_rpy(rot: np.ndarray) -> np.ndarray:
     radians: :func:`rotmat_to_euler` stacked on the last axis. One compiled call
     (:func:`aerodock.geometry_kernels.roll_pitch_yaw`) with NumPy's own ``arctan2`` and
     ``arcsin`` loops: NumPy's numbers to the bit."""
-    kernel, loops, seal = _COMPILED or _load_compiled()
+    kernel, loops = _COMPILED or _load_compiled()
     rot = np.asarray(rot, dtype=float)
     shape = rot.shape[:-1]
     rot = rot.reshape(-1, 3, 3)  # a single rotation too (its angles' out= are rows, not scalars)
     rpy = np.empty((rot.shape[0], 3))
     kernel(loops, rot, rpy)
-    seal(kernel)
     return rpy.reshape(shape)
 
 
@@ -75,14 +74,14 @@ _COMPILED: tuple[Any, ...] = ()
 
 
 def _load_compiled() -> tuple[Any, ...]:
-    """The compiled kernel of :func:`rotmat_to_rpy`, NumPy's loops' addresses and
-    :func:`aerodock.jit.seal`, imported on first use: the log readers and the flight node read
-    this module and load no compiled code (numba)."""
+    """The compiled kernel of :func:`rotmat_to_rpy` and NumPy's loops' addresses, imported on
+    first use: the log readers and the flight node read this module and load no compiled code
+    (numba)."""
     global _COMPILED
     from aerodock.geometry_kernels import roll_pitch_yaw
-    from aerodock.jit import NUMPY_LOOPS, seal
+    from aerodock.jit import NUMPY_LOOPS
 
-    _COMPILED = (roll_pitch_yaw, NUMPY_LOOPS, seal)
+    _COMPILED = (roll_pitch_yaw, NUMPY_LOOPS)
     return _COMPILED
 
 

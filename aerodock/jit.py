@@ -70,22 +70,21 @@ def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
 # and writability it is called with: the world's vehicle kernel (49 arguments) met 27 of them in
 # one run of the test suite, each some seconds of compiling, and a user's new configuration (a
 # frozen array here, a transposed one there) pays the same. A kernel marked with ``any_layout``
-# is sealed by :func:`seal` (which its Python callers call after calling it) once its first
-# signature is in, compiled or loaded from the cache: one more signature is added that takes
-# every array in any layout, and every array the kernel does not write read-only (so writable
-# and read-only ones alike), and compiling stops. A later call with other layouts or flags runs
-# that signature (numba's dispatcher picks it in C, converting the arguments' types, at the cost
-# of an exact call) and gives the same numbers: the same source, compiled without fast-math,
-# reads the same elements and computes them in the same order.
-
-_UNSEALED: dict[Any, tuple[tuple[bool, bool], ...]] = {}
+# compiles (or loads from the cache) its first signature as before; when a call then meets a
+# second one, the kernel is sealed instead of compiling it: one more signature is added that
+# takes every array in any layout, and every array the kernel does not write read-only (so
+# writable and read-only ones alike), and compiling stops. That call and every later one of other
+# layouts or flags run the general signature (numba's dispatcher picks it in C, converting the
+# arguments' types, at the cost of an exact call), with the same numbers: the same source,
+# compiled without fast-math, reads the same elements and computes them in the same order. A
+# process that only ever meets one signature (a docking run) loads nothing more.
 
 
 def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any], Any]:
-    """Decorator (above :func:`njit`): the kernel takes any layout once :func:`seal` has sealed
-    it. ``writes`` names the array arguments it writes (they stay writable in the general
-    signature; the others become read-only); ``contiguous`` those that must stay C-contiguous
-    (the kernel reshapes them).
+    """Decorator (above :func:`njit`): the kernel is sealed to one general signature when a call
+    meets a signature other than its first (:func:`general_signature`). ``writes`` names the
+    array arguments it writes (they stay writable in the general signature; the others become
+    read-only); ``contiguous`` those that must stay C-contiguous (the kernel reshapes them).
 
     Raises:
         ValueError: a name is not one of the kernel's arguments.
@@ -99,7 +98,10 @@ def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any]
         unknown = sorted(set(writes + contiguous) - set(names))
         if unknown:
             raise ValueError(f"{kernel.py_func.__name__} has no argument(s) {unknown}")
-        _UNSEALED[kernel] = tuple((name in writes, name in contiguous) for name in names)
+        kinds = tuple((name in writes, name in contiguous) for name in names)
+        # numba's dispatcher calls this (from C) for a call no compiled signature takes
+        kernel._compile_for_args = _SealOnSecondSignature(kernel, kinds,
+                                                          kernel._compile_for_args)
         return kernel
 
     return mark
@@ -120,15 +122,27 @@ def general_signature(first: tuple[Any, ...],
     return tuple(out)
 
 
-def seal(kernel: Any) -> None:
-    """Seal an :func:`any_layout` kernel that has been called: add its general signature
-    (:func:`general_signature` of its first; compiled once, then loaded from numba's cache) and
-    stop it compiling others. A dictionary lookup once it is sealed (or for any other kernel):
-    its Python callers call this after each call."""
-    kinds = _UNSEALED.pop(kernel, None)
-    if kinds is not None and kernel.overloads:
-        kernel.compile(general_signature(kernel.signatures[0], kinds))
-        kernel.disable_compile()
+class _SealOnSecondSignature:
+    """A marked kernel's handler of a call that no compiled signature takes: the first
+    signature compiled (or loaded) as numba does; a later one seals the kernel (its general
+    signature, compiled once and then loaded from numba's cache, and no more compiling) when
+    the call's arguments convert to it, else compiled as numba does."""
+
+    def __init__(self, kernel: Any, kinds: tuple[tuple[bool, bool], ...],
+                 compile_for_args: Callable[..., Any]) -> None:
+        self.kernel, self.kinds, self.compile_for_args = kernel, kinds, compile_for_args
+
+    def __call__(self, *args: Any, **kws: Any) -> Any:
+        kernel = self.kernel
+        if kernel.overloads and not kws and len(args) == len(self.kinds):
+            general = general_signature(kernel.signatures[0], self.kinds)
+            can_convert = kernel.typingctx.can_convert
+            if all(can_convert(kernel.typeof_pyval(a), t) is not None
+                   for a, t in zip(args, general, strict=True)):
+                entry = kernel.compile(general)
+                kernel.disable_compile()
+                return entry  # numba calls it with these arguments
+        return self.compile_for_args(*args, **kws)
 
 
 @intrinsic

@@ -75,7 +75,7 @@ from aerodock.downwash.jet_inputs import (
 )
 from aerodock.downwash.wrench import quad_rotor_offsets_body_m
 from aerodock.frozen import freeze, is_frozen
-from aerodock.jit import NUMPY_LOOPS, seal
+from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
 
 _LN2 = float(np.log(2.0))
@@ -373,7 +373,6 @@ class RoundJetField:
             NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp, rows3(bar_p_m), rows3(bar_v_mps),
             NO_ROWS if bar_axis is None else rows3(bar_axis), bar_axis is not None, noise,
             draws, step, advance, self._bar_params(bar_area_m2), out)
-        seal(jet_kernel.bar_force)
         self._bar_noise = noise
         return out
 
@@ -414,7 +413,6 @@ class RoundJetField:
             rows3(bar_p_m), rows3(bar_v_mps),
             NO_ROWS if bar_axis is None else rows3(bar_axis), bar_axis is not None, bar_noise,
             bar_draws, bar_dt, bar_advance, self._bar_params(bar_area_m2), out)
-        seal(jet_kernel.wake_step)
         self._last_dt = dt
         self._bar_noise = bar_noise
         force, torque, body, bar = out
@@ -524,7 +522,6 @@ class RoundJetField:
             self._force_coeff(follower.mass_kg, k),
             self._processes if noisy else NO_PROCESSES, draws, float(dt), advance, noisy,
             split, want_torque, force, torque, body, axial, tau, share)
-        seal(jet_kernel.jet_forces)
         if advance:
             self._last_dt = dt
         return force, torque, body, (axial, tau, share)
@@ -538,7 +535,6 @@ class RoundJetField:
         lr, lt, lv, lp = self._leader_arrays(leader)
         jet_kernel.point_wake(NUMPY_LOOPS, self._jet_params(), lr, lt, lv, lp,
                               rows3(points_m), axis, speed, half_width, centre)
-        seal(jet_kernel.point_wake)
         return axis, speed, half_width, centre
 
     def _columns(self, k: int) -> np.ndarray:

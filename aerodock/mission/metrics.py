@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.jit import NUMPY_LOOPS, any_layout, njit, np_arccos, seal
+from aerodock.jit import NUMPY_LOOPS, any_layout, njit, np_arccos
 from aerodock.mission.phases.gate_sensing import GateCode
 from aerodock.mission.spec import PhaseCode
 from aerodock.world import World
@@ -61,7 +61,6 @@ class MissionMetrics:
                      fout.command.thrust_n, float(gp.mount_height_m), float(clearance_m),
                      self.hist[k], self.approach_end, self.min_clear, approach_end, min_clear,
                      self.ground_hit, self.nan_seen, track_err_m, violated_now, live)
-        seal(measure_rows)
         self.approach_end, self.min_clear = approach_end, min_clear
         if world.rigid:
             self.strikes |= live & platform_strike(

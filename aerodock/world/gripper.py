@@ -26,7 +26,7 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.frozen import freeze
-from aerodock.jit import any_layout, njit, seal
+from aerodock.jit import any_layout, njit
 from aerodock.world.sensor_kernels import (
     CHANGED_BY_CONTACT,
     CHANGED_DONE,
@@ -180,7 +180,6 @@ def contact_in_gripper(
                               params.bar_half_length_m, params.gate_height_m,
                               params.contact_stiffness_npm, params.contact_damping_nspm, force,
                               inside, up)
-    seal(contact_kernel)
     return (force if touching else None), inside, up
 
 
@@ -287,7 +286,6 @@ def step_gripper(
         active_any, _trigger_rows(params.active), _bools(close_command),
         float(params.latency_s), reading, by_contact, servo_start, gate, inside_at_start,
         slipped, resolved)
-    seal(gripper_step_kernel)
     if not changed:
         return state  # nothing changed (states are never modified in place)
     # Unchanged arrays are passed on as they are (states are never modified in place).

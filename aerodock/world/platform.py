@@ -19,7 +19,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze
-from aerodock.jit import NUMPY_LOOPS, any_layout, fma, njit, np_arctan2, seal
+from aerodock.jit import NUMPY_LOOPS, any_layout, fma, njit, np_arctan2
 
 
 @dataclass(frozen=True)
@@ -265,7 +265,6 @@ def step_hanging_bar(
                        params.anchor_below_leader_m, params.cable_length_m,
                        params.swing_damping, params.gravity_mps2, params.yaw_omega2,
                        params.yaw_damping, dt_s, p, v, yaw, yaw_rate, cable)
-    seal(hanging_bar_kernel)
     return frozen_record(BarState, p=p, v=v, yaw_rad=yaw, yaw_rate_radps=yaw_rate), cable
 
 
@@ -347,7 +346,6 @@ def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: Bar
     seg_a, seg_b = np.empty((n, 3, 3)), np.empty((n, 3, 3))
     segments_kernel(anchor_p, leader_yaw_rad, bar.p, bar.yaw_rad, 0.5 * params.bar_length_m,
                     0.5 * params.cable_spacing_m, seg_a, seg_b)
-    seal(segments_kernel)
     return seg_a, seg_b
 
 
@@ -414,7 +412,6 @@ def rotor_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N803
     strike_kernel(follower_p, follower_R, rotor_offsets_body_m, seg_a, seg_b,
                   disk_half_thickness(rotor_radius_m, disk_half_thickness_m) + bar_radius_m,
                   rotor_radius_m + bar_radius_m, hit)
-    seal(strike_kernel)
     return hit
 
 
@@ -442,7 +439,6 @@ def platform_strike(follower_p: np.ndarray, follower_R: np.ndarray,  # noqa: N80
                            0.5 * params.bar_length_m, 0.5 * params.cable_spacing_m,
                            disk_half_thickness(rotor_radius_m, None) + bar_radius_m,
                            rotor_radius_m + bar_radius_m, hit)
-    seal(platform_strike_kernel)
     return hit
 
 

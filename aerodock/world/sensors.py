@@ -9,7 +9,6 @@ from functools import cached_property
 import numpy as np
 
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
-from aerodock.jit import seal
 from aerodock.rng import TrialRNG, standard_normal_t
 from aerodock.world.params import WorldParams
 from aerodock.world.sensor_kernels import mocap_noise_kernel
@@ -57,7 +56,6 @@ def motion_capture(state: WorldState, params: WorldParams) -> tuple[Observation,
     out = np.empty((6, n, 3))
     mocap_noise_kernel(lp, lv, lr, _draws(rng, n, k), fp, fv, fr, _draws(rng, n, k),
                        pos_sd, vel_sd, att_sd, out)
-    seal(mocap_noise_kernel)
     return Observation(p=out[0], v=out[1], rpy=out[2]), Observation(p=out[3], v=out[4], rpy=out[5])
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from aerodock.jit import seal
 from aerodock.world.sensor_kernels import mocap_noise_kernel
 
 
@@ -35,7 +34,6 @@ def test_mocap_noise_kernel_bit_for_bit(n: int, att_sd: float) -> None:
     out = np.empty((6, n, 3))
     (lp, lv, lr, ld), (fp, fv, fr, fd) = vehicles
     mocap_noise_kernel(lp, lv, lr, ld, fp, fv, fr, fd, pos_sd, vel_sd, att_sd, out)
-    seal(mocap_noise_kernel)
     for o, (p, v, rpy, draw) in zip((0, 3), vehicles, strict=True):
         want = _numpy_noisy(p, v, rpy, draw, pos_sd, vel_sd, att_sd)
         for got, expect in zip(out[o:o + 3], want, strict=True):

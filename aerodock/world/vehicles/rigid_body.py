@@ -35,7 +35,7 @@ from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy, rpy_to_rotmat
-from aerodock.jit import any_layout, njit, seal
+from aerodock.jit import any_layout, njit
 from aerodock.world.vehicles import rigid_kernel
 from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
@@ -379,7 +379,6 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
                 state.autopilot_state, state.yaw_setpoint, np.asarray(ext_force_n, dtype=float),
                 _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
                 ext_torque_nm is not None, *out)
-            seal(_flown_step)
             return out
         (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer,
          thrust_max, thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic,
@@ -395,7 +394,6 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
             _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
             ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity,
             dt_s, *out)
-        seal(rigid_kernel.step_vehicles)
         return out
     (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
      thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = _step_constants(
@@ -411,7 +409,6 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
         _NO_ROWS if ext_torque_nm is None else np.asarray(ext_torque_nm, dtype=float),
         ext_torque_nm is not None, torque_map, drag_sums, drag, drag_z, parasitic, gravity, dt_s,
         *out)
-    seal(rigid_kernel.step_vehicles)
     return out
 
 
