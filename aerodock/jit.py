@@ -99,12 +99,29 @@ def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any]
         if unknown:
             raise ValueError(f"{kernel.py_func.__name__} has no argument(s) {unknown}")
         kinds = tuple((name in writes, name in contiguous) for name in names)
+        _MARKED.append((kernel, kinds))
         # numba's dispatcher calls this (from C) for a call no compiled signature takes
         kernel._compile_for_args = _SealOnSecondSignature(kernel, kinds,
                                                           kernel._compile_for_args)
         return kernel
 
     return mark
+
+
+_MARKED: list[tuple[Any, tuple[tuple[bool, bool], ...]]] = []
+
+
+def compile_general_signatures() -> int:
+    """Compile (into numba's cache) the general signature of every :func:`any_layout` kernel
+    this process has met, without sealing it: the install's warm-up calls it, so that a later
+    process sealing one of them loads it instead of compiling it. The number compiled."""
+    count = 0
+    for kernel, kinds in _MARKED:
+        general = general_signature(kernel.signatures[0], kinds) if kernel.overloads else None
+        if general is not None and general not in kernel.overloads:  # else sealed already
+            kernel.compile(general)
+            count += 1
+    return count
 
 
 def general_signature(first: tuple[Any, ...],
