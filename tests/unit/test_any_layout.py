@@ -1,6 +1,7 @@
-"""A kernel marked ``any_layout`` (:mod:`aerodock.jit`) compiles once more after its first call,
-then takes arrays of any layout and either writability without compiling again, and gives the
-numbers its exact signature gives."""
+"""A kernel marked ``any_layout`` (:mod:`aerodock.jit`) compiles its first signature; a call
+that meets a second one seals it to one general signature, after which it takes arrays of any
+layout and either writability without compiling again, and gives the numbers its exact signature
+gives."""
 
 from __future__ import annotations
 
