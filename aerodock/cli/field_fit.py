@@ -61,6 +61,12 @@ def field_fit(
              "free-air variance at the follower's speed at each sample; the noise grows with "
              "the vehicle's own manoeuvres; the correlation time is read above the pooled "
              "noise either way).")] = "pooled",
+    torque: Annotated[bool, typer.Option(
+        "--torque/--no-torque",
+        help="Where the logs carry the torque the follower's motors answer (Neural-Swarm's "
+             "do), fit the jet's disk torque beside the force, and the body's share of the "
+             "force with it (body_area_ratio). Without such logs the fit is the force's "
+             "alone either way.")] = True,
     folds: Annotated[int, typer.Option(
         help="Cross-validation over flights: every flight held out once, in this many folds, "
              "each scored by a fit on the others; the spread a new flight should expect "
@@ -96,13 +102,14 @@ def field_fit(
     logs = _read_flightlogs(data)
     fit, flights, fitted, held, cross = _fit_flights(
         logs, holdout or [], estimate_rotor or [], bootstrap=bootstrap, noise=noise,
-        folds=folds, seed=seed, quiet=as_json)
+        folds=folds, seed=seed, quiet=as_json, torque_of=cfg if torque else None)
     scores = ws.score_wake(fit.params, held, fit.rotor_radii_m)
     fit_scores = ws.score_wake(fit.params, fitted, fit.rotor_radii_m)
     checks = _fit_checks(cfg, fit, logs, flights, fitted, held)
     paper = {"config": cfg.source, "rows": _fitted_wake_table(fit, cfg)}
     command = _fit_command(data, holdout or [], estimate_rotor or [], bootstrap=bootstrap,
-                           seed=seed, noise=noise, folds=folds, config=config, sets=sets or [])
+                           seed=seed, noise=noise, folds=folds, config=config, sets=sets or [],
+                           torque=torque)
     held_names = sorted({f.flight for f in held})
     toml_text = config_fragment(fit, held_names, command)
     result = {
@@ -110,6 +117,7 @@ def field_fit(
         "bootstrap": fit.bootstrap, "bootstrap_runs": fit.bootstrap_runs,
         "fitted_flights": fit.flights, "held_out_flights": held_names,
         "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
+        "torque_flights": fit.torque_flights, "torque_rms_mps2": fit.torque_rms_mps2,
         "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
         "world": paper, "command": command, "noise": noise, **checks,
         "cross_validation": cross,
@@ -124,6 +132,7 @@ def field_fit(
 
 def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list[str], *,
                  bootstrap: int, noise: str, folds: int, seed: int, quiet: bool,
+                 torque_of: Config | None = None,
                  ) -> tuple[WakeFit, list[FlightSamples], list[FlightSamples],
                             list[FlightSamples], dict | None]:
     """``field fit``'s fit: the flights, their split, the jet fitted and the cross-validation.
@@ -140,6 +149,8 @@ def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list
         folds: cross-validation folds (0: none).
         seed: the bootstrap's seed.
         quiet: no progress or warnings on stderr (``--json``).
+        torque_of: fit the logged torque too (where the logs carry it), the followers'
+            inertias scaled from this config's vehicle (None: the force alone).
 
     Returns:
         ``(fit, flights, fitted, held, cross)``: the fit, every flight, the flights fitted and
@@ -162,8 +173,16 @@ def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list
             if not quiet:
                 err_console.print(f"[dim]bootstrap {done}/{total}[/dim]")
 
+        labels = None
+        if torque_of is not None:
+            from aerodock.identify.field_score import scaled_inertia
+            from aerodock.identify.torque_labels import torque_labels
+
+            vehicle = torque_of.vehicle
+            labels = torque_labels(fitted, logs, scaled_inertia(
+                fitted, vehicle.mass_kg, vehicle.diagonal_m, vehicle.inertia_kgm2))
         fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor, bootstrap=bootstrap,
-                          seed=seed, progress=say)
+                          seed=seed, progress=say, torque=labels)
         cross = None
         if folds:
             from aerodock.identify.wake_folds import cross_validate, flight_turbulence
@@ -222,7 +241,7 @@ def _fitted_wake_table(fit: WakeFit, cfg: Config) -> list[dict]:
 
 def _fit_command(data: list[Path], holdout: list[str], estimate_rotor: list[str], *,
                  bootstrap: int, seed: int, noise: str, folds: int, config: Path | None,
-                 sets: list[str]) -> str:
+                 sets: list[str], torque: bool = True) -> str:
     """The ``aerodock field fit`` command line that repeats this fit (for the report and TOML);
     options at their defaults are left out, except ``--bootstrap`` and ``--seed``."""
     import shlex
@@ -233,6 +252,7 @@ def _fit_command(data: list[Path], holdout: list[str], estimate_rotor: list[str]
     words += ["--bootstrap", str(bootstrap), "--seed", str(seed)]
     words += ["--noise", noise] if noise != "pooled" else []
     words += ["--folds", str(folds)] if folds else []
+    words += [] if torque else ["--no-torque"]
     words += ["--config", str(config)] if config is not None else []
     words += [w for text in sets for w in ("--set", text)]
     return "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
@@ -367,7 +387,7 @@ def _scored_wake(fit: Path, config: Path | None, sets: list[str] | None,
     config whose vehicle gives the inertia."""
     import json
 
-    from aerodock.identify.wake_fit import FITTED_PARAMS, WORLD_PARAMS
+    from aerodock.identify.wake_fit import FITTED_PARAMS, TORQUE_PARAMS, WORLD_PARAMS
 
     if fit.is_dir():
         path = fit / "fit.json"
@@ -378,10 +398,12 @@ def _scored_wake(fit: Path, config: Path | None, sets: list[str] | None,
                  f"{type(err).__name__})")
         params = raw.get("params") if isinstance(raw, dict) else None
         radii = raw.get("rotor_radii_m", {}) if isinstance(raw, dict) else None
-        if not isinstance(params, dict) or set(params) != set(FITTED_PARAMS) \
+        if not isinstance(params, dict) or not set(FITTED_PARAMS) <= set(params) \
+                or not set(params) <= set(FITTED_PARAMS + TORQUE_PARAMS) \
                 or not all(_finite(v) for v in params.values()):
             fail(f"{path}: 'params' must hold the fitted parameters "
-                 f"({', '.join(FITTED_PARAMS)}) as finite numbers")
+                 f"({', '.join(FITTED_PARAMS)}; with the torque, {', '.join(TORQUE_PARAMS)}) "
+                 f"as finite numbers")
         if not isinstance(radii, dict) or not all(isinstance(k, str) and _finite(v) and v > 0
                                                   for k, v in radii.items()):
             fail(f"{path}: 'rotor_radii_m' must map vehicle ids to positive radii in metres")

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from aerodock.identify.wake_fit import FITTED_PARAMS, WakeFit
+from aerodock.identify.wake_fit import WakeFit
 from aerodock.identify.wake_score import TARGETS
 
 FIELD_PATH = "aerodock.downwash.jet:RoundJetField"
@@ -27,6 +27,8 @@ PARAM_NOTES = {
     "turb_lateral": "the follower's gusts across the axis: sd / each part's axial force",
     "turb_length_ratio": "integral length scale / half-width (the disks' shared turbulence)",
     "turb_time_ratio": "correlation time / (half-width / centreline speed)",
+    "body_area_ratio": "the follower's body top area / its rotor disk area: its share of the "
+                       "force, fitted with the logged torque",
 }
 
 
@@ -44,7 +46,7 @@ def config_fragment(fit: WakeFit, held_out: list[str], command: str) -> str:
         "",
         "[downwash.params]",
     ]
-    for key in FITTED_PARAMS:
+    for key in fit.keys:
         value = fit.params[key]
         spread = fit.bootstrap.get(key)
         note = PARAM_NOTES[key]
@@ -172,7 +174,7 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
              "## Parameters", "",
              "| parameter | fitted | bootstrap sd | 95 % interval | meaning |",
              "| --- | --- | --- | --- | --- |"]
-    rows = [(k, fit.params[k], PARAM_NOTES[k]) for k in FITTED_PARAMS]
+    rows = [(k, fit.params[k], PARAM_NOTES[k]) for k in fit.keys]
     rows += [(f"rotor_radius_m[{k}]", v, "rotor radius the logs do not state, estimated")
              for k, v in fit.rotor_radii_m.items()]
     for key, value, note in rows:

@@ -9,6 +9,11 @@ other (the world's rotor sizes and the leader's thrust set the scales, by moment
   at every logged sample in the interaction region (the logged leader and follower states: the
   leader's thrust, both attitudes, both velocities). A vehicle whose rotor radius the logs do not
   know may have it estimated alongside (``estimate_rotor_for``).
+- **Torque** (``TORQUE_PARAMS``, with ``torque`` labels: :mod:`aerodock.identify.torque_labels`):
+  where the logs carry the torque the follower's motors answer, the jet's inward disk torque is
+  fitted beside the force, in the same least squares, and the share of the force on the body
+  (``body_area_ratio``, else the world's assumption) with it: the force alone hardly tells the
+  body's share from the disks', the torque does.
 - **Turbulence** (``TURBULENCE_PARAMS``): per-disk intensities (vertical, lateral), the share the
   disks have in common (through the jet's length scale) and the correlation time (through the
   eddy turnover time); from the spread of the residual about the fitted mean near the wake's
@@ -29,10 +34,10 @@ against flights by :mod:`aerodock.identify.wake_score`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,9 +52,14 @@ from aerodock.identify.flights import (
     autocovariance,
 )
 
+if TYPE_CHECKING:
+    from aerodock.identify.torque_labels import TorqueLabels
+
 MEAN_PARAMS = ("width0_ratio", "spread_rate", "ingest_coeff", "ingest_exponent", "planar_ratio")
 TURBULENCE_PARAMS = ("turb_vertical", "turb_lateral", "turb_length_ratio", "turb_time_ratio")
 FITTED_PARAMS = MEAN_PARAMS + TURBULENCE_PARAMS
+TORQUE_PARAMS = ("body_area_ratio",)
+"""Fitted too when the fit sees the torque (a world's assumption otherwise)."""
 WORLD_PARAMS = ("body_area_ratio", "body_drag_coeff", "disk_torque_gain")
 """The jet's parameters a world sets that the fit does not (a scored config's, where given)."""
 # Start and bounds of each parameter (the start is momentum theory's contracted wake with a
@@ -60,7 +70,8 @@ START = {"width0_ratio": CONTRACTED_WIDTH0_RATIO, "spread_rate": 0.1, "ingest_co
 BOUNDS = {"width0_ratio": (0.1, 5.0), "spread_rate": (0.0, 1.0), "ingest_coeff": (1e-3, 10.0),
           "ingest_exponent": (0.3, 3.0), "planar_ratio": (-1.0, 1.0),
           "turb_vertical": (0.0, 3.0), "turb_lateral": (0.0, 3.0),
-          "turb_length_ratio": (0.05, 20.0), "turb_time_ratio": (0.05, 100.0)}
+          "turb_length_ratio": (0.05, 20.0), "turb_time_ratio": (0.05, 100.0),
+          "body_area_ratio": (0.0, 2.0)}
 ROTOR_BOUNDS_M = (0.005, 0.2)
 CORE_RADII = 1.0  # "directly below": within one leader equivalent radius of its axis
 MIN_BIN_SAMPLES = 30
@@ -80,10 +91,21 @@ class WakeFit:
     mean_rms_mps2: float = float("nan")
     turbulence_bins: list[dict[str, Any]] = field(default_factory=list)
     autocorrelation: dict[str, dict[str, list[float]]] = field(default_factory=dict)
+    torque_flights: list[str] = field(default_factory=list)
+    """The fitted flights whose logged torque the fit saw (none: a fit of the force alone)."""
+    torque_rms_mps2: float = float("nan")
+    """The torque residual's RMS over those flights, as the fit weighs it (m/s²: a torque over
+    the follower's mass and half diagonal)."""
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The parameters this fit identified: :data:`FITTED_PARAMS`, and with the torque
+        :data:`TORQUE_PARAMS`."""
+        return FITTED_PARAMS + (TORQUE_PARAMS if self.torque_flights else ())
 
     def field_params(self) -> dict[str, float]:
         """The ``[downwash.params]`` values the fit identified."""
-        return {k: float(self.params[k]) for k in FITTED_PARAMS}
+        return {k: float(self.params[k]) for k in self.keys}
 
 
 
@@ -126,6 +148,32 @@ def model_mean(params: dict[str, float], flight: FlightSamples,
     return jet.mean_acceleration(flight.leader, flight.follower)
 
 
+def labels_for(torque: Mapping[str, TorqueLabels] | None, name: str) -> TorqueLabels | None:
+    """The torque labels of the flight ``name`` (a bootstrap's copy, ``NAME#j``, has its
+    original's)."""
+    if not torque:
+        return None
+    return torque.get(name.split("#", 1)[0])
+
+
+def model_torque(params: dict[str, float], flight: FlightSamples,
+                 rotor_radii_m: dict[str, float] | None = None) -> np.ndarray:
+    """(m, 3) the jet's mean torque on the follower's disks at the flight's samples, N·m, body
+    FRD."""
+    jet = build_jet(params, geometry_with(flight, rotor_radii_m or {}))
+    return jet.mean_disk_torque_nm(flight.leader, flight.follower)
+
+
+def torque_rms(params: dict[str, float], flights: Sequence[FlightSamples],
+               torque: Mapping[str, TorqueLabels] | None,
+               rotor_radii_m: dict[str, float] | None = None) -> float:
+    """The RMS of the torque residual (:meth:`TorqueLabels.residual_mps2`) over the flights
+    with labels, m/s² (nan: none has them)."""
+    parts = [lab.residual_mps2(model_torque(params, f, rotor_radii_m))
+             for f in flights if (lab := labels_for(torque, f.name)) is not None]
+    return float(np.sqrt(np.mean(np.concatenate(parts) ** 2))) if parts else float("nan")
+
+
 def model_turbulence(params: dict[str, float], flight: FlightSamples,
                      rotor_radii_m: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """The jet's turbulence at the flight's samples (:meth:`RoundJetField.turbulence`)."""
@@ -145,13 +193,16 @@ def _radial_unit(offset_m: np.ndarray) -> np.ndarray:
 def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = None,
              estimate_rotor_for: Sequence[str] = (),
              rotor_start_m: dict[str, float] | None = None,
+             torque: Mapping[str, TorqueLabels] | None = None,
              ) -> tuple[dict[str, float], dict[str, float], float]:
-    """Least squares of the de-biased residual (vertical and radial) against the jet's mean.
+    """Least squares of the de-biased residual (vertical and radial) against the jet's mean;
+    with ``torque`` (labels by flight name, :func:`~aerodock.identify.torque_labels.
+    torque_labels`), of the inward torque too, and :data:`TORQUE_PARAMS` are fitted alongside.
 
     Returns:
         ``(params, rotor_radii_m, rms)`` (the start: ``start``'s parameters, else
-        :data:`START`; ``rotor_start_m``'s radii, else the logs'): the mean parameters, the
-        estimated rotor radii of
+        :data:`START`; ``rotor_start_m``'s radii, else the logs'): the mean parameters (and
+        with ``torque`` the torque's), the estimated rotor radii of
         ``estimate_rotor_for`` (vehicle ids), and the vertical residual's RMS, m/s² (each
         vehicle pair weighs the same in the fit).
     """
@@ -162,10 +213,12 @@ def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = 
     for vid in rotors:
         if not any(vid in f.vehicles.values() for f in flights):
             raise WakeFitError(f"--estimate-rotor {vid}: no log has a vehicle {vid!r}")
-    x0 = [start[k] for k in MEAN_PARAMS] + [(rotor_start_m or {}).get(v)
-                                             or _logged_radius(flights, v) for v in rotors]
-    low = [BOUNDS[k][0] for k in MEAN_PARAMS] + [ROTOR_BOUNDS_M[0]] * len(rotors)
-    high = [BOUNDS[k][1] for k in MEAN_PARAMS] + [ROTOR_BOUNDS_M[1]] * len(rotors)
+    labels = [labels_for(torque, f.name) for f in flights]
+    names = MEAN_PARAMS + (TORQUE_PARAMS if any(x is not None for x in labels) else ())
+    x0 = [start[k] if k in start else _default_jet_kwargs()[k] for k in names]
+    x0 += [(rotor_start_m or {}).get(v) or _logged_radius(flights, v) for v in rotors]
+    low = [BOUNDS[k][0] for k in names] + [ROTOR_BOUNDS_M[0]] * len(rotors)
+    high = [BOUNDS[k][1] for k in names] + [ROTOR_BOUNDS_M[1]] * len(rotors)
     x0 = np.clip(x0, low, high)
     units = [_radial_unit(f.offset_m) for f in flights]
     # Each vehicle pair weighs the same, however many samples its flights hold.
@@ -174,19 +227,21 @@ def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = 
         counts[f.pair] = counts.get(f.pair, 0) + f.label_mps2.shape[0]
     total = sum(counts.values())
     weights = [np.sqrt(total / (len(counts) * counts[f.pair])) for f in flights]
-    fixed = {k: v for k, v in start.items() if k not in MEAN_PARAMS}
+    fixed = {k: v for k, v in start.items() if k not in names}
 
     def unpack(x: np.ndarray) -> tuple[dict[str, float], dict[str, float]]:
-        params = {**fixed, **dict(zip(MEAN_PARAMS, x[:len(MEAN_PARAMS)], strict=True))}
-        return params, dict(zip(rotors, x[len(MEAN_PARAMS):], strict=True))
+        params = {**fixed, **dict(zip(names, x[:len(names)], strict=True))}
+        return params, dict(zip(rotors, x[len(names):], strict=True))
 
     def residual(x: np.ndarray) -> np.ndarray:
         params, radii = unpack(x)
         parts = []
-        for f, unit, w in zip(flights, units, weights, strict=True):
+        for f, unit, w, lab in zip(flights, units, weights, labels, strict=True):
             err = f.label_mps2 - model_mean(params, f, radii)
             parts.append(w * err[:, 2])
             parts.append(w * (err[:, 0] * unit[:, 0] + err[:, 1] * unit[:, 1]))
+            if lab is not None:  # the torque, weighed as the force is
+                parts.append(w * lab.residual_mps2(model_torque(params, f, radii)))
         return np.concatenate(parts)
 
     result = least_squares(residual, x0, bounds=(low, high), x_scale="jac")
@@ -374,9 +429,11 @@ def fit_correlation_time(params: dict[str, float], flights: Sequence[FlightSampl
 
 def fit_wake(flights: Sequence[FlightSamples], *, estimate_rotor_for: Sequence[str] = (),
              bootstrap: int = 0, seed: int = 0,
-             progress: Callable[[int, int], None] | None = None) -> WakeFit:
-    """The whole fit: mean, then turbulence, then (``bootstrap`` > 0) the spread of every
-    parameter over refits on flights resampled with replacement.
+             progress: Callable[[int, int], None] | None = None,
+             torque: Mapping[str, TorqueLabels] | None = None) -> WakeFit:
+    """The whole fit: mean (with ``torque``'s labels, the torque too: :func:`fit_mean`), then
+    turbulence, then (``bootstrap`` > 0) the spread of every parameter over refits on flights
+    resampled with replacement.
 
     Raises:
         WakeFitError: no flights.
@@ -384,16 +441,19 @@ def fit_wake(flights: Sequence[FlightSamples], *, estimate_rotor_for: Sequence[s
     flights = list(flights)
     if not flights:
         raise WakeFitError("no flights to fit")
-    mean, radii, rms = fit_mean(flights, estimate_rotor_for=estimate_rotor_for)
+    mean, radii, rms = fit_mean(flights, estimate_rotor_for=estimate_rotor_for, torque=torque)
     turb = fit_turbulence(mean, flights, radii)
     params = {**mean, **turb}
+    seen = sorted({f.flight for f in flights if labels_for(torque, f.name) is not None})
     fit = WakeFit(params=params, rotor_radii_m=radii, flights=sorted({f.flight for f in flights}),
                   samples=int(sum(f.label_mps2.shape[0] for f in flights)), mean_rms_mps2=rms,
                   turbulence_bins=turbulence_bins(params, flights, radii),
-                  autocorrelation=autocorrelations(params, flights, radii))
+                  autocorrelation=autocorrelations(params, flights, radii),
+                  torque_flights=seen,
+                  torque_rms_mps2=torque_rms(params, flights, torque, radii))
     if bootstrap > 0:
         fit.bootstrap_draws = _bootstrap(flights, fit, estimate_rotor_for, bootstrap, seed,
-                                         progress)
+                                         progress, torque)
         fit.bootstrap_runs = len(fit.bootstrap_draws)
         fit.bootstrap = summarise_draws(fit.bootstrap_draws)
     return fit
@@ -412,7 +472,7 @@ def summarise_draws(draws: Sequence[dict[str, float]]) -> dict[str, dict[str, fl
 
 def _bootstrap(flights: list[FlightSamples], fit: WakeFit, estimate_rotor_for: Sequence[str],
                runs: int, seed: int, progress: Callable[[int, int], None] | None,
-               ) -> list[dict[str, float]]:
+               torque: Mapping[str, TorqueLabels] | None = None) -> list[dict[str, float]]:
     """Refits on the flights resampled with replacement (a flight drawn twice counts twice):
     one dict of parameters (and ``rotor_radius_m[ID]``) per refit that succeeded."""
     rng = np.random.default_rng(seed)
@@ -427,11 +487,11 @@ def _bootstrap(flights: list[FlightSamples], fit: WakeFit, estimate_rotor_for: S
         wanted = [v for v in estimate_rotor_for if any(v in f.vehicles.values() for f in sample)]
         try:
             mean, radii, _ = fit_mean(sample, start=fit.params, estimate_rotor_for=wanted,
-                                      rotor_start_m=fit.rotor_radii_m)
+                                      rotor_start_m=fit.rotor_radii_m, torque=torque)
             turb = fit_turbulence({**fit.params, **mean}, sample, radii)
         except (WakeFitError, ValueError):
             continue
-        draw = {k: v for k, v in {**mean, **turb}.items() if k in FITTED_PARAMS}
+        draw = {k: v for k, v in {**mean, **turb}.items() if k in fit.keys}
         draw.update({f"rotor_radius_m[{k}]": v for k, v in radii.items()})
         draws.append(draw)
         if progress:

@@ -21,6 +21,7 @@ from aerodock.identify.wake_fit import (
     CORE_RADII,
     FITTED_PARAMS,
     MIN_BIN_SAMPLES,
+    TORQUE_PARAMS,
     autocorrelations,
     centred,
     model_mean,
@@ -43,7 +44,8 @@ def wake_at_separations(params: dict[str, float], cfg: Any,
 
     cfg = cfg.with_overrides({"downwash": {"field": "aerodock.downwash.jet:RoundJetField",
                                            "params": {k: float(v) for k, v in params.items()
-                                                      if k in FITTED_PARAMS}}},
+                                                      if k in FITTED_PARAMS
+                                                      or k in TORQUE_PARAMS}}},
                              source=cfg.source)
     jet = build_field(cfg)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2

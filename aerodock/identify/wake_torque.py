@@ -170,7 +170,7 @@ def real_wake_torque_nm(log: FlightLog, inertia_kgm2: Sequence[float], *,
     return inertia * rate_dot + np.cross(rates, inertia * rates) - (motors - trim)
 
 
-def _inward(torque_world: np.ndarray, e_r: np.ndarray) -> np.ndarray:
+def inward_nm(torque_world: np.ndarray, e_r: np.ndarray) -> np.ndarray:
     """The torque's component that pushes the disks nearer the axis down: ``-(tau . (e_r x
     e_z))`` in NED, ``e_r x e_z = (e_ry, -e_rx, 0)``."""
     return -(torque_world[:, 0] * e_r[:, 1] - torque_world[:, 1] * e_r[:, 0])
@@ -220,8 +220,8 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
         dp = flight.follower.p - flight.leader.p
         horizontal = np.hypot(dp[:, 0], dp[:, 1])
         e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]
-        real = _inward(np.einsum("nij,nj->ni", rot, real_body[i]), e_r)
-        model = _inward(np.einsum("nij,nj->ni", rot, jet_body), e_r)
+        real = inward_nm(np.einsum("nij,nj->ni", rot, real_body[i]), e_r)
+        model = inward_nm(np.einsum("nij,nj->ni", rot, jet_body), e_r)
         # The lean towards the axis: the thrust axis (-body z) tipped towards -e_r.
         up = -rot[:, :, 2]
         lean = np.degrees(np.arcsin(np.clip(-(up[:, 0] * e_r[:, 0] + up[:, 1] * e_r[:, 1]),
