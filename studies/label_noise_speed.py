@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 FIT = ROOT / "examples" / "crazyflie_wake_fitted.toml"
 HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01]")
-ROTORS = {"cf101": 0.0239}  # the fit's estimate of cf101's rotor radius (docs/world.md)
+ROTORS = {"cf101": 0.0268}  # the fit's estimate of cf101's rotor radius (docs/world.md)
 
 
 def main() -> int:

@@ -171,6 +171,13 @@ def report_markdown(fit: WakeFit, scores: dict[str, Any], fit_scores: dict[str, 
              f"Fitted on {len(fit.flights)} flights ({fit.samples} samples in the wake; "
              f"vertical residual RMS {fit.mean_rms_mps2:.3f} m/s²); "
              f"bootstrap over flights: {fit.bootstrap_runs} refits.", "",
+             (f"The motors' logged torque of {len(fit.torque_flights)} of them (those with "
+              f"free air for the trim: {', '.join(fit.torque_flights)}) is fitted beside the "
+              f"force, with the body's share of it; the torque residual's RMS "
+              f"{fit.torque_rms_mps2:.3f} m/s² (a torque over the follower's mass and half "
+              f"diagonal)." if fit.torque_flights else
+              "The force alone is fitted (no log with the motors' torque, or `--no-torque`)."),
+             "",
              "## Parameters", "",
              "| parameter | fitted | bootstrap sd | 95 % interval | meaning |",
              "| --- | --- | --- | --- | --- |"]

@@ -92,8 +92,9 @@ def test_logs_without_motor_torque_are_refused(params):
 
 def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
     """On the real Crazyflie flights the lower vehicle's motors answer an inward torque 4-10 cm
-    off the other's axis, several times the fitted jet's disk torque (docs/crazyflie.md, "The
-    wake's torque in the logs"), with the motor nearest the axis commanded far above hover."""
+    off the other's axis, two to four times the disk torque of the jet fitted with it
+    (docs/crazyflie.md, "The wake's torque in the logs"; 5-8 times the force-only fit's), with the
+    motor nearest the axis commanded far above hover."""
     from aerodock.experiments.swap_flights import read_swap_flights
 
     logs = read_swap_flights(shared_data("neural-swarm"))
@@ -114,13 +115,41 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
         assert len(mid) == 3, profile[pair]
         for b in mid:
             assert b.real_nm > 5 * b.real_se_nm  # inward, far beyond its standard error
-            assert b.ratio > 3.0
+            assert b.ratio > 2.0  # measured 2.2-4.1
             # not a torque of the follower's own motion (blade flapping, rotor drag: it would
             # change sign with the direction): moving in or out, it is the wake's
             assert np.isfinite(b.real_moving_in_nm) and np.isfinite(b.real_moving_out_nm), b
-            assert min(b.real_moving_in_nm, b.real_moving_out_nm) > 3.0 * b.jet_nm, b
+            assert min(b.real_moving_in_nm, b.real_moving_out_nm) > 1.5 * b.jet_nm, b
             assert b.lean_in_deg > 0  # the real follower leans into the axis
             if b.offset_lo_m >= 0.06:  # more than a loss of thrust on the disks can make
                 assert b.lever_m > 1.3 * b.half_diagonal_m
             # the motor nearest the axis far above the vehicle's free-air median
             assert b.near_motor_pwm > commands[follower]["free_air_median"] + 0.15
+
+
+def test_joint_fit_identifies_the_bodys_share_the_force_leaves_open(params):
+    """Flights of a wake that puts a large share of its force on the follower's body
+    (``body_area_ratio`` 0.8, against the default jet's assumption), with motors answering its
+    disks' torque: the fit with the torque labels (:mod:`aerodock.identify.torque_labels`) finds
+    the share and the torque; the force-only fit, which keeps the world's share, leaves a torque
+    residual tens of times larger."""
+    from aerodock.identify.torque_labels import torque_labels
+
+    truth = {**params, "body_area_ratio": 0.8}
+    rng = np.random.default_rng(4)
+    logs = [answering_motors(log, truth, 1.0, np.zeros(3), rng)
+            for log in synthetic_flights(truth, flights_per_pair=2, seed=5)]
+    flights = fl.prepare_flights(logs)
+    labels = torque_labels(flights, logs, INERTIA)
+    assert set(labels) == {f.name for f in flights}
+    joint, _, _ = wf.fit_mean(flights, torque=labels)
+    force, _, _ = wf.fit_mean(flights)
+    assert "body_area_ratio" not in force  # the force alone keeps the world's assumption
+    assert joint["body_area_ratio"] == pytest.approx(0.8, abs=0.15)
+    assert joint["ingest_exponent"] == pytest.approx(truth["ingest_exponent"], rel=0.15)
+    joint_rms = wf.torque_rms(joint, flights, labels)
+    force_rms = wf.torque_rms(force, flights, labels)
+    assert joint_rms < 0.1 * force_rms, (joint_rms, force_rms)  # measured: 0.012 / 0.72
+    # a bootstrap copy of a flight (NAME#j) finds its original's labels; no labels: none
+    assert wf.labels_for(labels, flights[0].name + "#3") is labels[flights[0].name]
+    assert wf.labels_for(None, flights[0].name) is None

@@ -154,8 +154,10 @@ STUDY_CASES = (
           (r"^gain 1 paper oracle\s+\d/2 \(\d+%-\d+%\) slips\s+\d missed\s+\d aborts\s+\d err "
            r"\d\.\d{4} m tilt \d+\.\d deg$",)),
     Study("wake_paper_scale.py", (),
-          tuple(rf"^\| {sep} m \| {NUMBER} \| {NUMBER} \| {NUMBER} \| {NUMBER} \| {NUMBER} \|$"
-                for sep in (r"0\.36", r"0\.64", r"1\.35"))),
+          (*(rf"^\| {sep} m \| {NUMBER} \| {NUMBER} \| {NUMBER} \| {NUMBER} \| {NUMBER} \|$"
+             for sep in (r"0\.36", r"0\.64", r"1\.35")),
+           rf"^the disks' mean torque 0\.36 m below, N m: 5 cm off the axis {NUMBER}, "
+           rf"10 cm off the axis {NUMBER}, 15 cm off the axis {NUMBER}$")),
     Study("wake_torque.py", ("--data", "{data}"),
           (r"^cf51's motor commands: \d\.\d\d median in free air",
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
