@@ -70,7 +70,8 @@ def test_crazyflie_pid_gains_in_si():
 
 
 def test_generic_autopilot_has_no_stack():
-    p = RigidBodyParams.from_config(load_config())
+    p = RigidBodyParams.from_config(load_config().with_overrides(
+        {"autopilot": {"stack": "generic"}}))
     assert p.stack_constants is None and p.autopilot_state_columns == 3
 
 
