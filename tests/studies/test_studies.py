@@ -158,6 +158,11 @@ STUDY_CASES = (
              for sep in (r"0\.36", r"0\.64", r"1\.35")),
            rf"^the disks' mean torque 0\.36 m below, N m: 5 cm off the axis {NUMBER}, "
            rf"10 cm off the axis {NUMBER}, 15 cm off the axis {NUMBER}$")),
+    Study("headline_table.py", ("tests/data/headline_results_quick.json",),
+          (r"^\| hover docking, d_p 0\.36 m \| 5/24 \(9%-40%\) \| 13/24 \(35%-72%\) \| "
+           r"21/24 \(69%-96%\) \| 21/24 \(69%-96%\) \|$",
+           r"^\| cable study \(leader on a stand\), offsets docked \| 0/3 \| 0/3 \| 3/3 \| 3/3 \|$",
+           r"^\| ours \+ deep model \| 4/4 \(51%-100%\) met \|")),
     Study("wake_torque.py", ("--data", "{data}"),
           (r"^cf51's motor commands: \d\.\d\d median in free air",
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
