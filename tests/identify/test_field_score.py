@@ -73,9 +73,10 @@ def test_a_wrong_jet_scores_its_error(truth, answered):
 
 
 def test_the_default_world_on_the_real_flights(shared_data):
-    """On the shared Crazyflie flights the default world's torque is under a third of the
-    real one in every 4-10 cm bin of the pairings that have it (the issue's 4-10x), where the
-    flights' own halves agree within a factor of three."""
+    """On the shared Crazyflie flights the default world's torque (the jet fitted with the
+    logged torque) is a quarter to a half of the real one in every 4-10 cm bin (measured
+    0.25-0.47; under a third with the force-only fit, the issue's 4-10x), where the flights' own
+    halves agree within a factor of three."""
     from aerodock.config import load_config
     from aerodock.experiments.swap_flights import read_swap_flights
 
@@ -89,7 +90,7 @@ def test_the_default_world_on_the_real_flights(shared_data):
     assert set(scores) == PAIRS
     for s in scores.values():
         assert len(s.torque_ratio_bins) == 3, s
-        assert all(0 < r < 1 / 3 for r in s.torque_ratio_bins), s
+        assert all(0.2 < r < 0.5 for r in s.torque_ratio_bins), s
         assert all(not np.isfinite(r) or 1 / 3 < r < 3
                    for r in s.reference["torque_ratio_bins"]), s
 
