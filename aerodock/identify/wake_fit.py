@@ -60,6 +60,9 @@ TURBULENCE_PARAMS = ("turb_vertical", "turb_lateral", "turb_length_ratio", "turb
 FITTED_PARAMS = MEAN_PARAMS + TURBULENCE_PARAMS
 TORQUE_PARAMS = ("body_area_ratio",)
 """Fitted too when the fit sees the torque (a world's assumption otherwise)."""
+TORQUE_START = {"body_area_ratio": 0.2}
+"""Where the fit with the torque starts them (0.2: a Crazyflie's board over its disks), whatever
+the world's value: the fit of given flights does not depend on the defaults it replaces."""
 WORLD_PARAMS = ("body_area_ratio", "body_drag_coeff", "disk_torque_gain")
 """The jet's parameters a world sets that the fit does not (a scored config's, where given)."""
 # Start and bounds of each parameter (the start is momentum theory's contracted wake with a
@@ -215,7 +218,7 @@ def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = 
             raise WakeFitError(f"--estimate-rotor {vid}: no log has a vehicle {vid!r}")
     labels = [labels_for(torque, f.name) for f in flights]
     names = MEAN_PARAMS + (TORQUE_PARAMS if any(x is not None for x in labels) else ())
-    x0 = [start[k] if k in start else _default_jet_kwargs()[k] for k in names]
+    x0 = [start[k] if k in start else TORQUE_START[k] for k in names]
     x0 += [(rotor_start_m or {}).get(v) or _logged_radius(flights, v) for v in rotors]
     low = [BOUNDS[k][0] for k in names] + [ROTOR_BOUNDS_M[0]] * len(rotors)
     high = [BOUNDS[k][1] for k in names] + [ROTOR_BOUNDS_M[1]] * len(rotors)
