@@ -179,8 +179,8 @@ def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list
             from aerodock.identify.torque_labels import torque_labels
 
             vehicle = torque_of.vehicle
-            labels = torque_labels(fitted, logs, scaled_inertia(
-                fitted, vehicle.mass_kg, vehicle.diagonal_m, vehicle.inertia_kgm2))
+            labels = torque_labels(flights, logs, scaled_inertia(
+                flights, vehicle.mass_kg, vehicle.diagonal_m, vehicle.inertia_kgm2))
         fit = wf.fit_wake(fitted, estimate_rotor_for=estimate_rotor, bootstrap=bootstrap,
                           seed=seed, progress=say, torque=labels)
         cross = None
@@ -192,7 +192,7 @@ def _fit_flights(logs: list[FlightLog], holdout: list[str], estimate_rotor: list
                     err_console.print(f"[dim]cross-validation fold {done}/{total}[/dim]")
 
             cross = cross_validate(flights, folds, estimate_rotor_for=estimate_rotor,
-                                   progress=say_fold)
+                                   progress=say_fold, torque=labels)
             cross["per_flight"] = flight_turbulence(fit.params, flights, fit.rotor_radii_m)
     except wf.WakeFitError as err:
         fail(one_line(err))

@@ -14,14 +14,17 @@ single fitted intensity must cover.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from aerodock.identify.flights import FlightSamples, WakeFitError
 from aerodock.identify.wake_fit import fit_wake
 from aerodock.identify.wake_score import TARGETS, score_wake
+
+if TYPE_CHECKING:
+    from aerodock.identify.torque_labels import TorqueLabels
 
 TARGET_KEYS = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
 
@@ -56,8 +59,10 @@ def assign_folds(flights: Sequence[FlightSamples], folds: int) -> dict[str, int]
 
 def cross_validate(flights: Sequence[FlightSamples], folds: int = 3, *,
                    estimate_rotor_for: Sequence[str] = (),
-                   progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
-    """Every flight held out once, in ``folds`` folds (module docstring).
+                   progress: Callable[[int, int], None] | None = None,
+                   torque: Mapping[str, TorqueLabels] | None = None) -> dict[str, Any]:
+    """Every flight held out once, in ``folds`` folds (module docstring); each fold's fit takes
+    the logged torque of its training flights where ``torque`` has it (as ``field fit`` does).
 
     Returns:
         ``folds``: per fold the held-out flights, the fit's parameters and rotor radii, and its
@@ -79,7 +84,7 @@ def cross_validate(flights: Sequence[FlightSamples], folds: int = 3, *,
         train = [f for f in flights if fold_of[f.flight] != k]
         wanted = [v for v in estimate_rotor_for
                   if any(v in f.vehicles.values() for f in train)]
-        fit = fit_wake(train, estimate_rotor_for=wanted)
+        fit = fit_wake(train, estimate_rotor_for=wanted, torque=torque)
         scores = score_wake(fit.params, held, fit.rotor_radii_m)
         own = score_wake(fit.params, train, fit.rotor_radii_m)
         out_folds.append({"fold": k, "held_out": sorted({f.flight for f in held}),

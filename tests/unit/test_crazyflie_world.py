@@ -86,14 +86,17 @@ def test_the_large_follower_world_is_the_small_pair_turned_round():
 
 
 def test_the_jet_takes_the_leaders_rotors(cf, cf_sl):
-    """A larger leader's disk at the same thrust makes a slower wake (w0 = 2 v_h); with the
-    leader's rotors equal to the follower's nothing changes."""
+    """A larger leader's disk at the same thrust makes a slower, wider wake (momentum theory:
+    the same flux over a wider jet); with the leader's rotors equal to the follower's nothing
+    changes."""
     small_params = cf.with_overrides({"downwash": {"params": dict(
         cf_sl.data["downwash"]["params"])}})
     lead, fol = probe_bodies(0.3, 0.0, 0.0, 0.032, 9.81, leader_mass_kg=0.067)
-    same = build_field(small_params).mean_acceleration(lead, fol)[0, 2]
-    larger = build_field(cf_sl).mean_acceleration(lead, fol)[0, 2]
-    assert 0 < larger < same
+    axis = np.array([[0.0, 0.0, 0.3]])
+    same, larger = build_field(small_params), build_field(cf_sl)
+    assert 0 < larger.wind_mps(lead, axis)[0, 2] < same.wind_mps(lead, axis)[0, 2]
+    assert larger.half_width0_m > same.half_width0_m
+    assert larger.mean_acceleration(lead, fol)[0, 2] > 0
     field = build_field(load_config())  # one vehicle type: the leader's rotors are its own
     assert field.half_width0_m == pytest.approx(
         field.width0_ratio * field.follower_disk_radius_m * np.sqrt(field.follower_n_rotors))

@@ -70,16 +70,22 @@ def test_momentum_flux_through_any_plane_equals_the_thrust(depth_m, thrust_n, ra
     assert flux == pytest.approx(thrust_n, rel=2e-3)
 
 
-def test_mean_decays_and_widens_with_separation(field):
-    means, radii = [], []
+@pytest.mark.parametrize("spread", [0.0231, 0.094])
+def test_mean_decays_and_widens_with_separation(spread):
+    """A jet that spreads (the force-only fit's 0.0231, a far round jet's 0.094; the default's
+    fit with the torque barely does, docs/world.md) is slower on its axis and wider further
+    down. (The force on the paper's follower need not fall with it: its disks, 0.095 m off the
+    axis, sit near the narrow jet's half-width, and a wider jet reaches them.)"""
+    field = default_jet(spread_rate=spread)
+    speeds, radii = [], []
     for sep in SEPARATIONS:
         leader, follower = probe_bodies(sep, 0.0, 0.0, MASS, G)
         mean = field.mean_acceleration(leader, follower)[0]
         assert mean[2] > 0
         assert np.allclose(mean[:2], 0.0, atol=1e-9)  # no planar force on the axis
-        means.append(mean[2])
+        speeds.append(field.wind_mps(leader, np.array([[0.0, 0.0, sep]]))[0, 2])
         radii.append(half_magnitude_radius_m(field.mean_acceleration, sep, MASS, G))
-    assert means[0] > means[1] > means[2]
+    assert speeds[0] > speeds[1] > speeds[2] > 0
     assert radii[0] < radii[1] < radii[2]
 
 
@@ -287,7 +293,13 @@ def test_disks_and_body_make_the_acceleration(cfg, fol_rpy):
         body = b.body_force_n(leader, follower)
         assert np.allclose(force + body, acc * MASS, rtol=1e-12, atol=1e-12)
         assert torque.shape == (4, 3) and np.all(np.isfinite(torque))
-    # The body takes a part, the disks the rest (on the axis, both push down).
+    # The default's body takes no part (the fit with the torque put it at zero); one with an
+    # area takes a part, the disks the rest (on the axis, both push down).
+    assert np.all(np.abs(body) < 1e-9 * np.abs(force).max())
+    c = build_field(cfg.with_overrides({"downwash": {"params": {"body_area_ratio": 0.2}}}))
+    c.reset(4, np.random.default_rng(7))
+    force = c.wrench(leader, follower, ROTORS, 0.002)[0]
+    body = c.body_force_n(leader, follower)
     assert body[0, 2] > 0 and force[0, 2] > body[0, 2]
 
 
