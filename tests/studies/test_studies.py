@@ -159,9 +159,11 @@ STUDY_CASES = (
            rf"^the disks' mean torque 0\.36 m below, N m: 5 cm off the axis {NUMBER}, "
            rf"10 cm off the axis {NUMBER}, 15 cm off the axis {NUMBER}$")),
     Study("headline_table.py", ("tests/data/headline_results_quick.json",),
-          (r"^\| hover docking, d_p 0\.36 m \| 5/24 \(9%-40%\) \| 13/24 \(35%-72%\) \| "
+          (r"^\| hover docking, d_p 0\.36 m \| 8/10 with model \| 5/24 \(9%-40%\) \| "
+           r"13/24 \(35%-72%\) \| "
            r"21/24 \(69%-96%\) \| 21/24 \(69%-96%\) \|$",
-           r"^\| cable study \(leader on a stand\), offsets docked \| 0/3 \| 0/3 \| 3/3 \| 3/3 \|$",
+           r"^\| cable study \(leader on a stand\), offsets docked \| 6/6 with vs 0/6 without \| "
+           r"0/3 \| 0/3 \| 3/3 \| 3/3 \|$",
            r"^\| ours \+ deep model \| 4/4 \(51%-100%\) met \|")),
     Study("wake_torque.py", ("--data", "{data}"),
           (r"^cf51's motor commands: \d\.\d\d median in free air",
