@@ -20,6 +20,7 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 import numpy as np
 import pytest
 from short_mission import short_config
+from worlds import EARLIER_WORLD, merged
 
 from aerodock.config import load_config
 from aerodock.ingest.data_dir import find_data_dir
@@ -56,17 +57,25 @@ def cfg():
     return load_config()
 
 
-IDEAL_WORLD = {"imu": {"chain": "ideal"},
-               "vehicle": {"mass_sd": 0.0, "inertia_sd": 0.0, "torque_coeff_sd": 0.0,
-                           "motor_tau_sd": 0.0}}
+IDEAL_WORLD = merged(EARLIER_WORLD, {
+    "imu": {"chain": "ideal"},
+    "vehicle": {"mass_sd": 0.0, "inertia_sd": 0.0, "torque_coeff_sd": 0.0, "motor_tau_sd": 0.0}})
 """The idealised world of earlier releases: the autopilot and the controllers read the true
-attitude, and every vehicle is exactly nominal (for tests of a mechanism's precision)."""
+attitude, and every vehicle is exactly nominal (for tests of a mechanism's precision), on the
+world before issue 39 (``worlds.EARLIER_WORLD``)."""
 
 
 @pytest.fixture(scope="session")
 def ideal_cfg(cfg):
     """The default configuration on the idealised world (:data:`IDEAL_WORLD`)."""
     return cfg.with_overrides(IDEAL_WORLD)
+
+
+@pytest.fixture(scope="session")
+def docking_cfg(cfg):
+    """The world before issue 39 (``worlds.EARLIER_WORLD``), where every controller docks: for
+    tests of the mission's machinery."""
+    return cfg.with_overrides(EARLIER_WORLD)
 
 
 @pytest.fixture(scope="session")

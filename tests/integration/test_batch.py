@@ -48,13 +48,14 @@ def test_same_seed_same_numbers_different_seed_different(short_cfg):
     assert not np.array_equal(a.trace["follower_p"][:50], c.result().trace["follower_p"][:50])
 
 
-def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(cfg):
+def test_a_trials_outcome_is_its_own_however_long_the_batch_flies(docking_cfg):
     """A trial that ended (docked and hung for post_dock_s, or backed off) is still simulated
     while its batch flies the others; what happens to it then is not its outcome. Without a model
     the hanging pair sinks (the follower does not answer the wake on it) and hits the ground
     later: each trial's outcome when the batch ends is its outcome on the period its own flight
     ended (where a campaign of it alone ends: the period after it is done), and the trial that
     ends first, flown alone, has the same outcome."""
+    cfg = docking_cfg  # the mission's machinery, on a world where it docks (worlds.py)
     from aerodock.control.profiles import controller_config
 
     ours = controller_config(cfg, "ours")

@@ -37,7 +37,8 @@ def test_bad_fault_files_are_refused_with_the_entry_named(doc, match):
         parse_faults(doc, "f.toml")
 
 
-def test_fault_campaign_is_safe_and_counts_what_each_fault_does(cfg):
+def test_fault_campaign_is_safe_and_counts_what_each_fault_does(docking_cfg):
+    cfg = docking_cfg  # the mission's machinery, on a world where it docks (worlds.py)
     faults = [
         Fault("leader state lost", "leader_state_lost", 1.0, (2.0, 3.0)),
         Fault("servo jammed", "servo_jammed"),
