@@ -335,6 +335,29 @@ def any_above(p: np.ndarray, z: float) -> bool:
     return False
 
 
+@njit
+def ground_kernel(p: np.ndarray, v: np.ndarray, ground_contact: np.ndarray) -> None:
+    """The ground (z = 0, NED) on the 2n vehicles ``p``, ``v`` (in place), when some ``z`` is
+    above it: NumPy's ``below = z > 0``, ``z = np.minimum(z, 0)`` on every row (a -0 becomes
+    +0, a NaN stays), ``vz = np.where(below, np.minimum(vz, 0), vz)``, and
+    ``ground_contact (n,) |= below[n:] | below[:n]`` (the world's ``ground`` term)."""
+    if not any_above(p, 0.0):
+        return
+    m = p.shape[0]
+    n = m // 2
+    below = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        z = p[i, 2]
+        below[i] = z > 0.0
+        p[i, 2] = z if (z < 0.0 or z != z) else 0.0
+        if below[i]:
+            vz = v[i, 2]
+            v[i, 2] = vz if (vz < 0.0 or vz != vz) else 0.0
+    for i in range(n):
+        if below[n + i] or below[i]:
+            ground_contact[i] = True
+
+
 def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,
                       params: PlatformParams) -> tuple[np.ndarray, np.ndarray]:
     """End points (a, b), each (n, 3 segments, 3), of the bar and its two cables.

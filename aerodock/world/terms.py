@@ -22,9 +22,14 @@ from aerodock.downwash.wrench import (
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
 from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
-from aerodock.world.imu import ImuState, biquad_coeffs, imu_step
+from aerodock.world.imu import imu_coeffs, imu_step
 from aerodock.world.params import WorldParams
-from aerodock.world.platform import any_above, cable_wrench_kernel, step_hanging_bar
+from aerodock.world.platform import (
+    any_above,
+    cable_wrench_kernel,
+    ground_kernel,
+    step_hanging_bar,
+)
 from aerodock.world.state import StepFrame, WorldState
 
 
@@ -171,7 +176,7 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     att = state.history[(state.step_index - latency) % (latency + 1)]
     chain, estimator, vehicle = params.imu.chain, params.imu.estimator, params.vehicle
     gyro, accel = ims.gyro, ims.accel
-    gyro_c, accel_c = _imu_coeffs(ims)
+    gyro_c, accel_c = imu_coeffs(ims)
     gyro.head, accel.head, ims.ring_head = imu_step(
         NUMPY_LOOPS, n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, gyro.z1,
         gyro.z2, gyro.delay, gyro.head, state.leader_accel, state.follower_accel,
@@ -189,15 +194,6 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
 
 
 _NO_DRAWS = np.zeros((6, 0))
-
-
-def _imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
-    """The chain's two low-passes as the kernel reads them (kept on the state)."""
-    hit = ims.__dict__.get("_coeffs")
-    if hit is None:
-        hit = (biquad_coeffs(ims.gyro_filter), biquad_coeffs(ims.accel_filter))
-        ims.__dict__["_coeffs"] = hit
-    return hit
 
 
 def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -256,12 +252,9 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
 
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
-    new, n = frame.new, state.n
-    if any_above(new.p, 0.0):  # np.fmax.reduce(z) > 0: some z above 0, NaN aside
-        below = new.p[:, 2] > 0.0
-        new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
-        new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
-        state.ground_contact |= below[n:] | below[:n]
+    new = frame.new
+    if any_above(new.p, 0.0):  # some z above 0 (NaN aside): compiled, as the period's
+        ground_kernel(new.p, new.v, state.ground_contact)
 
 
 def commit(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

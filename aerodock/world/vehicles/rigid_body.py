@@ -361,7 +361,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
     yaw setpoint) from the compiled :func:`rigid_kernel.step_vehicles`: under the rotor speed
     commands ``rotor_speed_cmd``, or (None) flown by the autopilot to ``targets`` on ``gyro``
     (plus ``gyro_noise``) and ``attitude`` (None: the true attitude), the world's step, through
-    :func:`_flown_step` with the constants packed (:func:`_packed_constants`)."""
+    :func:`flown_step` with the constants packed (:func:`_packed_constants`)."""
     n = state.p.shape[0]
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
            np.empty((n, 4)), np.empty(n), np.empty((n, 3)),
@@ -370,7 +370,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
         arguments, packed = _packed_constants(state.body, params, dt_s, state.thrust_gain)
         ff = targets.torque_ff_nm
         if packed is not None:
-            _flown_step(
+            flown_step(
                 packed, state.p, state.v, state.R, state.w, state.rotor_speed,
                 _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
                 targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
@@ -440,9 +440,10 @@ def _step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
 
 
 def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
-                      thrust_gain: np.ndarray) -> tuple[tuple, np.ndarray | None]:
+                      thrust_gain: np.ndarray, eager: bool = False,
+                      ) -> tuple[tuple, np.ndarray | None]:
     """(:func:`_step_constants`' tuple, the same numbers and ``dt_s`` in one flat read-only
-    array as :func:`_flown_step` reads them, or None). The array is built the second time the
+    array as :func:`flown_step` reads them, or None). The array is built the second time the
     same tuple serves (a body and gains that stay, as in the world's step: one array to pass
     instead of eleven arrays and eight numbers, at a batch of 1 the compiled call's cost is
     mostly its arguments'); a tuple used once (a body split off for one step, a pair's half)
@@ -454,16 +455,17 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
     (row-major), the step factor, the autopilot's, the stack's, the mixer's, the torque map's
     and the drag sums' numbers (copied, not computed). Not packed unless the body's torque gains
     and mass rows and the flight stack's constants are read-only (the tuple reads them live; a
-    copy would not see a write)."""
+    copy would not see a write). ``eager``: packed at the first use (the world's compiled
+    control period, :mod:`aerodock.world.period`, serves many steps with one)."""
     arguments = _step_constants(body, params, dt_s, thrust_gain)
     if not (is_frozen(body.torque_gain) and is_frozen(body.mass_rows_kg)
             and (params.stack_constants is None or is_frozen(params.stack_constants))):
         return arguments, None  # the tuple refers to them live; a copy could go stale
     hit = body.__dict__.get("_packed_arguments")  # not a field: numbers derived from it
-    if hit is None or hit[0] is not arguments:
+    if (hit is None or hit[0] is not arguments) and not eager:
         body.__dict__["_packed_arguments"] = (arguments, None)  # packed if used again
         return arguments, None
-    if hit[1] is not None:
+    if hit is not None and hit[0] is arguments and hit[1] is not None:
         return hit
     (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
      thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = arguments
@@ -482,10 +484,18 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
 _PACK_HEADER = 14
 
 
+def packed_step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
+                          thrust_gain: np.ndarray) -> np.ndarray | None:
+    """The flat constants :func:`flown_step` reads for ``body``'s vehicles (packed now if they
+    were not yet; the same array the world's step passes once it has packed them), or None
+    when they cannot be packed (:func:`_packed_constants`)."""
+    return _packed_constants(body, params, dt_s, thrust_gain, eager=True)[1]
+
+
 @any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
             "integral_new", "yaw_sp_new", contiguous=("packed",))
 @njit
-def _flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
                 w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
                 r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
                 torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
