@@ -183,14 +183,13 @@ def contact_in_gripper(
     return (force if touching else None), inside, up
 
 
-@any_layout("force", "inside", "up")
 @njit
-def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
-                   bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
-                   mount_height: float, bar_radius: float, aperture: float,
-                   bar_half_length: float, gate_height: float, stiffness: float,
-                   damping: float, force: np.ndarray, inside: np.ndarray,
-                   up: np.ndarray) -> bool:
+def contact_kernel_body(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
+                        bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                        mount_height: float, bar_radius: float, aperture: float,
+                        bar_half_length: float, gate_height: float, stiffness: float,
+                        damping: float, force: np.ndarray, inside: np.ndarray,
+                        up: np.ndarray) -> bool:
     """The bar against each follower's contact arm: the force magnitude ``force`` (n,), the
     bar inside the gate ``inside`` (n,) and the follower's up axis ``up`` (n, 3); whether any
     bar touches an arm.
@@ -231,6 +230,22 @@ def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_
         else:
             force[i] = 0.0
     return any_touching
+
+
+@any_layout("force", "inside", "up")
+@njit
+def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
+                   bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                   mount_height: float, bar_radius: float, aperture: float,
+                   bar_half_length: float, gate_height: float, stiffness: float,
+                   damping: float, force: np.ndarray, inside: np.ndarray,
+                   up: np.ndarray) -> bool:
+    """:func:`contact_kernel_body` for a call from Python: any array layout (sealed to one general
+    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
+    seal stops from compiling for their types."""
+    return contact_kernel_body(fol_p, fol_r, fol_v, bar_p, bar_v, cos_yaw, sin_yaw, mount_height,
+                               bar_radius, aperture, bar_half_length, gate_height, stiffness,
+                               damping, force, inside, up)
 
 
 def gripper_idle(state: GripperState) -> bool:

@@ -31,12 +31,21 @@ import ctypes
 from typing import Any
 
 import numpy as np
+from numba.core.errors import NumbaError
 
 from aerodock.downwash.base import frozen_record
 from aerodock.downwash.jet import RoundJetField
 from aerodock.downwash.jet_inputs import offsets_array
 from aerodock.downwash.jet_kernel import wake_step
-from aerodock.jit import JIT_ENABLED, NUMPY_LOOPS, NUMPY_LOOPS_OK, _call_loop, _ufunc_loop, njit
+from aerodock.jit import (
+    JIT_ENABLED,
+    NUMPY_LOOPS,
+    NUMPY_LOOPS_OK,
+    _call_loop,
+    _ufunc_loop,
+    any_layout,
+    njit,
+)
 from aerodock.rng import TrialRNG
 from aerodock.world.gripper import (
     GripperState,
@@ -44,7 +53,7 @@ from aerodock.world.gripper import (
     _armed_any,
     _bools,
     _trigger_rows,
-    contact_kernel,
+    contact_kernel_body,
 )
 from aerodock.world.imu import imu_coeffs, imu_step
 from aerodock.world.params import WorldParams
@@ -52,7 +61,7 @@ from aerodock.world.platform import (
     BarState,
     cable_wrench_kernel,
     ground_kernel,
-    hanging_bar_kernel,
+    hanging_bar_kernel_body,
 )
 from aerodock.world.sensor_kernels import (
     CHANGED_BY_CONTACT,
@@ -60,14 +69,14 @@ from aerodock.world.sensor_kernels import (
     CHANGED_READING,
     CHANGED_SERVO,
     CHANGED_START,
-    gripper_step_kernel,
+    gripper_step_kernel_body,
 )
 from aerodock.world.state import WorldState
 from aerodock.world.vehicles.fleet import RigidBodyFleet
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyState,
     RigidTargets,
-    flown_step,
+    flown_step_body,
     packed_step_constants,
 )
 
@@ -161,6 +170,11 @@ def float_constants(params: WorldParams) -> np.ndarray:
     return values
 
 
+@any_layout("iv", "processes", "bar_noise", "gz1", "gz2", "gline", "az1", "az2", "aline",
+            "ring", "nav_accel", "att_ring", "contact_sensed", "ground_contact", "P", "V", "RM",
+            "W", "OM", "TH", "ACC", "INT", "YSP", "BP", "BV", "BY", "BR", "CAB", "GT", "AT",
+            "ATT", "downwash", "go_reading", "go_by_contact", "go_servo", "go_gate",
+            "go_inside_start", "go_slipped", "go_resolved", contiguous=("packed",))
 @njit
 def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarray,
                   iv: np.ndarray, substeps: int, latency: int, has_ff: bool, g_idle: bool,
@@ -251,7 +265,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
         _np_unary(trig[TRIG_SIN], bar_yaw, bar_axis[1])
         # (the gripper's contact, which draws nothing, is tested first: a step with a push is
         # left to the per-step path)
-        if contact_kernel(p[n:], rot[n:], v[n:], bar_p, bar_v, bar_axis[0], bar_axis[1],
+        if contact_kernel_body(p[n:], rot[n:], v[n:], bar_p, bar_v, bar_axis[0], bar_axis[1],
                           fc[F_MOUNT], fc[F_BAR_RADIUS], fc[F_APERTURE],
                           fc[F_BAR_HALF_LENGTH], fc[F_GATE_HEIGHT], fc[F_STIFFNESS],
                           fc[F_DAMPING], contact, inside, up):
@@ -304,12 +318,12 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
             att_ring[slot, :n], att_ring[slot, n:], rot_hat, fc[F_K_P], fc[F_K_YAW], dt, noise,
             GT[s], AT[s], ATT[s])
         # vehicles: the autopilots on the chain's rates and attitude estimates
-        flown_step(packed, p, v, rot, w, omega, ATT[s], True, r_des, yaw_rate, thrust_cmd,
+        flown_step_body(packed, p, v, rot, w, omega, ATT[s], True, r_des, yaw_rate, thrust_cmd,
                    torque_ff, has_ff, GT[s].T, no_rows, False, integral, yaw_sp, force,
                    torque_t.T, True, P[s], V[s], RM[s], W[s], OM[s], TH[s], ACC[s], INT[s],
                    YSP[s])
         # hanging pair: the bar on its cables (no follower captured)
-        hanging_bar_kernel(loops, bar_p, bar_v, bar_yaw, bar_rate, p, v, ACC[s], rot, P[s],
+        hanging_bar_kernel_body(loops, bar_p, bar_v, bar_yaw, bar_rate, p, v, ACC[s], rot, P[s],
                            no_yaw, True, bar_force, bar_mass, fc[F_ANCHOR_BELOW],
                            fc[F_CABLE_LENGTH], fc[F_SWING_DAMPING], fc[F_PLATFORM_GRAVITY],
                            fc[F_YAW_OMEGA2], fc[F_YAW_DAMPING], dt, BP[s], BV[s], BY[s], BR[s],
@@ -329,7 +343,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
             else:
                 g_noise = no_noise
             if g_ran:
-                changed = gripper_step_kernel(
+                changed = gripper_step_kernel_body(
                     go_gate, g_bias_true, g_bias_est, go_reading, go_servo, go_by_contact,
                     go_inside_start, go_slipped, go_resolved, g_close_time, g_stuck, t,
                     contact, inside, sample, g_noise, fc[F_SENSOR_NOISE], fc[F_THRESHOLD],
@@ -337,7 +351,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                     go_reading, go_by_contact, go_servo, go_gate, go_inside_start,
                     go_slipped, go_resolved)
             else:
-                changed = gripper_step_kernel(
+                changed = gripper_step_kernel_body(
                     g_gate, g_bias_true, g_bias_est, g_reading, g_servo, g_by_contact,
                     g_inside_start, g_slipped, g_resolved, g_close_time, g_stuck, t, contact,
                     inside, sample, g_noise, fc[F_SENSOR_NOISE], fc[F_THRESHOLD],
@@ -360,8 +374,13 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
 
 
 # -- the Python side ------------------------------------------------------------------------
-_NO_FF = np.zeros((1, 4))  # flown_step's placeholder for an absent torque feed-forward
-_NO_FF.flags.writeable = False
+# flown_step's placeholder for an absent torque feed-forward (writable, as a command's is: one
+# signature of the kernel for both)
+_NO_FF = np.zeros((1, 4))
+DISABLED: list[str] = []
+"""Why the compiled period was turned off in this process (empty: it was not): a kernel
+signature numba could not compile here (e.g. a callee sealed by :func:`aerodock.jit.any_layout`
+before this kernel's first compile). The per-step path then runs every step."""
 
 
 class PeriodCache:
@@ -459,7 +478,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     gyro_c, accel_c = imu_coeffs(ims)
     ff = targets.torque_ff_nm
     go = cache.spare
-    done, why, changed = period_kernel(
+    try:
+        result = period_kernel(
         NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
         params.latency_steps, ff is not None, state.gripper_flags()[2], _armed_any(gp.passive),
         _trigger_rows(gp.passive), _armed_any(gp.active), _trigger_rows(gp.active),
@@ -479,6 +499,12 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         gripper.sensor_stuck_n, state.contact_sensed, state.ground_contact, slab_p, slab_v,
         slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
         slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, downwash, *go)
+    except NumbaError as err:  # raised while compiling, before any step: nothing has moved
+        global PERIOD_OK
+        PERIOD_OK = False
+        DISABLED.append(f"{type(err).__name__}: {err}")
+        return 0, STOP_CONTACT
+    done, why, changed = result
     if done == 0:
         return 0, why
     # the state the steps left, as the per-step path leaves it

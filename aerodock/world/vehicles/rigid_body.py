@@ -327,14 +327,9 @@ def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray, np.ndar
     return alpha, rows
 
 
-def step_rigid_body(
-    state: RigidBodyState,
-    rotor_speed_cmd: np.ndarray,
-    ext_force_n: np.ndarray,
-    ext_torque_nm: np.ndarray | None,
-    params: RigidBodyParams,
-    dt_s: float,
-) -> tuple[RigidBodyState, np.ndarray]:
+def step_rigid_body(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
+                    ext_torque_nm: np.ndarray | None, params: RigidBodyParams,
+                    dt_s: float) -> tuple[RigidBodyState, np.ndarray]:
     """Advance N vehicles by ``dt_s`` under rotor-speed commands; returns (state, accel (n, 3)).
 
     Args:
@@ -492,18 +487,16 @@ def packed_step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: floa
     return _packed_constants(body, params, dt_s, thrust_gain, eager=True)[1]
 
 
-@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
-            "integral_new", "yaw_sp_new", contiguous=("packed",))
 @njit
-def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
-                w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
-                r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
-                torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
-                noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
-                ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
-                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
-                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
-                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+def flown_step_body(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+                    w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
+                    r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                    torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                    noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+                    ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+                    v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                    omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                    integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
     """:func:`rigid_kernel.step_vehicles` flown by the autopilots, its constants read from
     :func:`_packed_constants`' array (views of it, the same numbers)."""
     n = p.shape[0]
@@ -529,13 +522,34 @@ def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray
     torque_map = packed[o:o + n_map]
     o += n_map
     drag_sums = packed[o:o + n_drag]
-    rigid_kernel.step_vehicles(
+    rigid_kernel.step_vehicles_body(
         p, v, rot, w, omega, kc, torque_gain, mass_rows, inertia, alpha, True, omega[:0], att,
         use_att, r_des, yaw_rate, thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy,
         integral, yaw_sp, consts, packed[6] != 0.0, stack, mixer, packed[7], packed[8],
         ext_force, ext_torque, has_ext_torque, torque_map, drag_sums, packed[9], packed[10],
         packed[11], packed[12], packed[13], p_new, v_new, rot_new, w_new, omega_new,
         thrust_new, accel, integral_new, yaw_sp_new)
+
+
+@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
+            "integral_new", "yaw_sp_new", contiguous=("packed",))
+@njit
+def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+                w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
+                r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+                ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+    """:func:`flown_step_body` for a call from Python: any array layout (sealed to one general
+    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
+    seal stops from compiling for their types."""
+    flown_step_body(packed, p, v, rot, w, omega, att, use_att, r_des, yaw_rate, thrust_cmd,
+                    torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp, ext_force,
+                    ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
+                    thrust_new, accel, integral_new, yaw_sp_new)
 
 
 _NO_ATTITUDE = np.zeros((0, 3, 3))
