@@ -248,6 +248,27 @@ def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_
                                damping, force, inside, up)
 
 
+@njit
+def contact_push(contact: np.ndarray, up: np.ndarray, captured: np.ndarray, any_captured: bool,
+                 contact_seen: np.ndarray, force: np.ndarray, bar_force: np.ndarray) -> None:
+    """The contact's push (the world's ``gripper contact`` term, once some bar touches an arm):
+    no push on a captured follower (``contact`` set to 0 there, in place: NumPy's
+    ``np.where(captured, 0.0, contact)``), ``push = up * contact``, ``contact_seen |= contact >
+    0``, the followers' rows ``force[n:] -= push`` and ``bar_force += push``, element by
+    element as NumPy computes them."""
+    n = contact.shape[0]
+    for i in range(n):
+        if any_captured and captured[i]:
+            contact[i] = 0.0
+        c = contact[i]
+        if c > 0:
+            contact_seen[i] = True
+        for k in range(3):
+            push = up[i, k] * c
+            force[n + i, k] -= push
+            bar_force[i, k] += push
+
+
 def gripper_idle(state: GripperState) -> bool:
     """Every gate open and no servo waiting to start (start times NaN or never): a step in which
     no trigger fires changes nothing (see :func:`step_is_idle`)."""

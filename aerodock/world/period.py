@@ -4,17 +4,16 @@
 after step, inside one numba kernel (:func:`period_kernel`), for the world it covers: rigid-body
 vehicles of one fleet with the filtered IMU chain, the built-in round jet
 (:class:`~aerodock.downwash.jet.RoundJetField`, its parts its own), per-trial random streams
-(:class:`~aerodock.rng.TrialRNG`), no follower captured, no injected rotor fault, no torque log,
-a flying leader. Each term calls the njit function its per-step form calls
-(:mod:`aerodock.world.terms`), with the same arguments, so the numbers are the per-step path's
-to the bit (``tests/unit/test_period_kernel.py``).
+(:class:`~aerodock.rng.TrialRNG`), bars touching grippers and followers hanging from their bars,
+no injected rotor fault, no torque log, a flying leader. Each term calls the njit function its
+per-step form calls (:mod:`aerodock.world.terms`), with the same arguments, so the numbers are
+the per-step path's to the bit (``tests/unit/test_period_kernel.py``).
 
-The kernel stops before a step it does not cover and returns how many it did; the caller
+The kernel stops and returns how many steps it did; the caller
 (:meth:`aerodock.world.World.advance`) runs the rest of the period with the per-step path:
 
 - before a step whose random draws the trial streams' buffer does not hold (the Python path
   then refills it at the draw that needs it, as always: never earlier);
-- before a step in which a bar touches a gripper's arm (the contact term's push);
 - after a step in which a gripper's servo or gate changed (a trigger fired, the gate began or
   finished closing: what later steps read of the gripper changes).
 
@@ -22,7 +21,8 @@ The state the steps leave is the per-step path's, as new arrays: each step's veh
 motion capture's history keeps each step's positions, velocities and attitudes), the bar, the
 cables, the IMU chain's outputs and the gripper are written into arrays made for this period and
 handed on as the state's records; the IMU chain's memory, the jet's turbulence, the trial
-streams' cursor, ``contact_sensed`` and ``ground_contact`` advance in place, as each step does.
+streams' cursor, ``contact_seen``, ``contact_sensed`` and ``ground_contact`` advance in place,
+as each step does.
 """
 
 from __future__ import annotations
@@ -54,13 +54,16 @@ from aerodock.world.gripper import (
     _bools,
     _trigger_rows,
     contact_kernel_body,
+    contact_push,
 )
 from aerodock.world.imu import imu_coeffs, imu_step
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import (
     BarState,
     cable_wrench_kernel,
+    carry_captured,
     ground_kernel,
+    hang_captured,
     hanging_bar_kernel_body,
 )
 from aerodock.world.sensor_kernels import (
@@ -128,12 +131,12 @@ def _np_unary(fn: int, x: np.ndarray, out: np.ndarray) -> None:
  F_YAW_DAMPING, F_GYRO_SD, F_GYRO_RANGE, F_GRAVITY, F_ACCEL_NOISE_SQ, F_VIBRATION,
  F_ACCEL_RANGE, F_K_P, F_K_YAW, F_SENSOR_RATE, F_SENSOR_NOISE, F_THRESHOLD, F_LATENCY,
  F_MOUNT, F_BAR_RADIUS, F_APERTURE, F_BAR_HALF_LENGTH, F_GATE_HEIGHT, F_STIFFNESS,
- F_DAMPING) = range(26)
-F_SIZE = 26
+ F_DAMPING, F_BAR_MASS, F_HANG_OFFSET) = range(28)
+F_SIZE = 28
 # the kernel's integers in and out: the clock, the draws' cursor, the IMU chain's heads
 I_STEP, I_DRAW, I_GYRO_HEAD, I_ACCEL_HEAD, I_RING_HEAD = range(5)
 # why the kernel stopped (its second result)
-STOP_DONE, STOP_DRAWS, STOP_CONTACT, STOP_GRIPPER = range(4)
+STOP_DONE, STOP_DRAWS, STOP_GRIPPER, STOP_UNCOVERED = range(4)
 
 
 def float_constants(params: WorldParams) -> np.ndarray:
@@ -166,6 +169,8 @@ def float_constants(params: WorldParams) -> np.ndarray:
     values[F_GATE_HEIGHT] = gp.gate_height_m
     values[F_STIFFNESS] = gp.contact_stiffness_npm
     values[F_DAMPING] = gp.contact_damping_nspm
+    values[F_BAR_MASS] = pf.bar_mass_kg
+    values[F_HANG_OFFSET] = gp.mount_height_m + gp.bar_radius_m
     values.flags.writeable = False
     return values
 
@@ -184,7 +189,9 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                   rot0: np.ndarray, w0: np.ndarray, omega0: np.ndarray,
                   integral0: np.ndarray, yaw_sp0: np.ndarray, thrust0: np.ndarray,
                   r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
-                  torque_ff: np.ndarray, fol_mass_rows: np.ndarray, hover: np.ndarray,
+                  torque_ff: np.ndarray, fol_mass: np.ndarray, fol_mass_rows: np.ndarray,
+                  gravity: np.ndarray, hover: np.ndarray, captured: np.ndarray,
+                  any_captured: bool,
                   jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray, coeff: np.ndarray,
                   processes: np.ndarray, bar_noise: np.ndarray, bar_consts: np.ndarray,
                   bar_p0: np.ndarray, bar_v0: np.ndarray, bar_yaw0: np.ndarray,
@@ -197,7 +204,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                   g_bias_est: np.ndarray, g_reading: np.ndarray, g_servo: np.ndarray,
                   g_by_contact: np.ndarray, g_inside_start: np.ndarray,
                   g_slipped: np.ndarray, g_resolved: np.ndarray, g_close_time: np.ndarray,
-                  g_stuck: np.ndarray, contact_sensed: np.ndarray,
+                  g_stuck: np.ndarray, contact_seen: np.ndarray, contact_sensed: np.ndarray,
                   ground_contact: np.ndarray, P: np.ndarray, V: np.ndarray,  # noqa: N803
                   RM: np.ndarray, W: np.ndarray, OM: np.ndarray, TH: np.ndarray,  # noqa: N803
                   ACC: np.ndarray, INT: np.ndarray, YSP: np.ndarray,  # noqa: N803
@@ -233,6 +240,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
     force = np.empty((m, 3))
     torque_t = np.empty((3, m))
     bar_force = np.empty((n, 3))
+    hang_mass = np.empty(n)
     wake = np.empty((4, n, 3))
     noise = np.empty((3, m)) if gyro_sd != 0.0 else np.zeros((3, 0))
     no_rows = np.zeros((0, 3))
@@ -263,13 +271,6 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
         # the step's frame: the bars' axes (NumPy's cos and sin), zeroed accumulators
         _np_unary(trig[TRIG_COS], bar_yaw, bar_axis[0])
         _np_unary(trig[TRIG_SIN], bar_yaw, bar_axis[1])
-        # (the gripper's contact, which draws nothing, is tested first: a step with a push is
-        # left to the per-step path)
-        if contact_kernel_body(p[n:], rot[n:], v[n:], bar_p, bar_v, bar_axis[0], bar_axis[1],
-                          fc[F_MOUNT], fc[F_BAR_RADIUS], fc[F_APERTURE],
-                          fc[F_BAR_HALF_LENGTH], fc[F_GATE_HEIGHT], fc[F_STIFFNESS],
-                          fc[F_DAMPING], contact, inside, up):
-            return s, STOP_CONTACT, changed_all
         force[:] = 0.0
         torque_t[:] = 0.0
         bar_force[:] = 0.0
@@ -295,7 +296,12 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
         for i in range(n):  # wake on the bar
             for c in range(3):
                 bar_force[i, c] += wake[3, i, c]
-        # gripper contact: none (tested above)
+        # gripper contact
+        if contact_kernel_body(p[n:], rot[n:], v[n:], bar_p, bar_v, bar_axis[0], bar_axis[1],
+                               fc[F_MOUNT], fc[F_BAR_RADIUS], fc[F_APERTURE],
+                               fc[F_BAR_HALF_LENGTH], fc[F_GATE_HEIGHT], fc[F_STIFFNESS],
+                               fc[F_DAMPING], contact, inside, up):
+            contact_push(contact, up, captured, any_captured, contact_seen, force, bar_force)
         # cable on the leader
         cable_wrench_kernel(cable, rot, fc[F_ANCHOR_BELOW], force, torque_t, True)
         # rotor faults: none (run_period's condition)
@@ -322,12 +328,20 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                    torque_ff, has_ff, GT[s].T, no_rows, False, integral, yaw_sp, force,
                    torque_t.T, True, P[s], V[s], RM[s], W[s], OM[s], TH[s], ACC[s], INT[s],
                    YSP[s])
-        # hanging pair: the bar on its cables (no follower captured)
-        hanging_bar_kernel_body(loops, bar_p, bar_v, bar_yaw, bar_rate, p, v, ACC[s], rot, P[s],
-                           no_yaw, True, bar_force, bar_mass, fc[F_ANCHOR_BELOW],
-                           fc[F_CABLE_LENGTH], fc[F_SWING_DAMPING], fc[F_PLATFORM_GRAVITY],
-                           fc[F_YAW_OMEGA2], fc[F_YAW_DAMPING], dt, BP[s], BV[s], BY[s], BR[s],
-                           CAB[s])
+        # hanging pair: the bar on its cables, a captured follower hanging from it
+        accel = ACC[s]
+        if any_captured:
+            hang_captured(captured, fc[F_BAR_MASS], fol_mass, accel[n:], gravity,
+                          fol_mass_rows, bar_force, hang_mass)
+        hanging_bar_kernel_body(loops, bar_p, bar_v, bar_yaw, bar_rate, p, v, accel, rot,
+                                P[s], no_yaw, True, bar_force,
+                                hang_mass if any_captured else bar_mass,
+                                fc[F_ANCHOR_BELOW], fc[F_CABLE_LENGTH], fc[F_SWING_DAMPING],
+                                fc[F_PLATFORM_GRAVITY], fc[F_YAW_OMEGA2], fc[F_YAW_DAMPING],
+                                dt, BP[s], BV[s], BY[s], BR[s], CAB[s])
+        if any_captured:
+            carry_captured(captured, BP[s], BV[s], RM[s][n:], P[s][n:], V[s][n:], v[n:],
+                           accel[n:], fc[F_HANG_OFFSET], dt)
         # ground
         ground_kernel(P[s], V[s], ground_contact)
         # commit
@@ -432,7 +446,7 @@ def covered(state: WorldState, params: WorldParams) -> bool:
     if (processes.shape != (3 + k, n) or not processes.flags.c_contiguous
             or field._bar_noise.shape != (3, n)):
         return False
-    return not state.gripper_flags()[1]  # no follower hangs from its bar
+    return True
 
 
 def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
@@ -447,7 +461,7 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     packed = packed_step_constants(both.body, params.fleet.params, params.dt_s,
                                    both.thrust_gain)
     if packed is None or type(targets) is not RigidTargets:
-        return 0, STOP_CONTACT  # (not covered: the rest per step)
+        return 0, STOP_UNCOVERED  # (the rest per step)
     draws, cursor = rng.normal_buffer()
     ims, bar, gripper = state.imu, state.bar, state.gripper
     gp = params.gripper
@@ -478,15 +492,17 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     gyro_c, accel_c = imu_coeffs(ims)
     ff = targets.torque_ff_nm
     go = cache.spare
+    captured, any_captured, idle = state.gripper_flags()
     try:
         result = period_kernel(
         NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
-        params.latency_steps, ff is not None, state.gripper_flags()[2], _armed_any(gp.passive),
+        params.latency_steps, ff is not None, idle, _armed_any(gp.passive),
         _trigger_rows(gp.passive), _armed_any(gp.active), _trigger_rows(gp.active),
         _bools(close), _armed_any(gp.active) and _any(close), draws, packed, both.p, both.v,
         both.R, both.w, both.rotor_speed, both.autopilot_state, both.yaw_setpoint,
         both.thrust_n, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
-        _NO_FF if ff is None else ff, fol_mass_rows, state.constants.hover_thrust_n,
+        _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,
+        state.constants.hover_thrust_n, captured, any_captured,
         field._jet_params(), field._columns(k), offsets, field._force_coeff(fol_mass, k),
         field._processes, bar_noise, field._bar_params(params.platform.bar_area_m2), bar.p,
         bar.v, bar.yaw_rad, bar.yaw_rate_radps, state.constants.bar_mass_kg,
@@ -496,14 +512,15 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         cache.ring(state.history), gripper.gate, gripper.bias_true_n, gripper.bias_est_n,
         gripper.reading_n, gripper.servo_start_s, gripper.triggered_by_contact,
         gripper.inside_at_start, gripper.slipped, gripper.resolved_s, gripper.close_time_s,
-        gripper.sensor_stuck_n, state.contact_sensed, state.ground_contact, slab_p, slab_v,
+        gripper.sensor_stuck_n, state.contact_seen, state.contact_sensed, state.ground_contact,
+        slab_p, slab_v,
         slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
         slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, downwash, *go)
     except NumbaError as err:  # raised while compiling, before any step: nothing has moved
         global PERIOD_OK
         PERIOD_OK = False
         DISABLED.append(f"{type(err).__name__}: {err}")
-        return 0, STOP_CONTACT
+        return 0, STOP_UNCOVERED
     done, why, changed = result
     if done == 0:
         return 0, why

@@ -377,6 +377,43 @@ def ground_kernel(p: np.ndarray, v: np.ndarray, ground_contact: np.ndarray) -> N
             ground_contact[i] = True
 
 
+@njit
+def hang_captured(captured: np.ndarray, bar_mass: float, fol_mass: np.ndarray,
+                  fol_accel: np.ndarray, gravity: np.ndarray, fol_mass_rows: np.ndarray,
+                  bar_force: np.ndarray, hang_mass: np.ndarray) -> None:
+    """A captured follower's forces on the hanging mass, before the bar's step (the world's
+    ``hanging pair`` term): ``hang_mass = np.where(captured, bar_mass + fol_mass, bar_mass)``
+    and ``bar_force += np.where(captured, (fol_accel - gravity) * fol_mass_rows, 0.0)`` (the
+    free followers' rows add +0), element by element as NumPy computes them."""
+    for i in range(captured.shape[0]):
+        cap = captured[i]
+        hang_mass[i] = bar_mass + fol_mass[i] if cap else bar_mass
+        for k in range(3):
+            own = (fol_accel[i, k] - gravity[k]) * fol_mass_rows[i, k]
+            bar_force[i, k] += own if cap else 0.0
+
+
+@njit
+def carry_captured(captured: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
+                   fol_r_new: np.ndarray, fol_p_new: np.ndarray, fol_v_new: np.ndarray,
+                   fol_v: np.ndarray, fol_accel: np.ndarray, hang_offset: float,
+                   dt: float) -> None:
+    """A captured follower carried with its bar, after the bar's step (the world's ``hanging
+    pair`` term): at ``bar_p - (-R e3) hang_offset`` (its new attitude's up axis; the offset the
+    arm's height plus the bar's radius), with the bar's velocity, its acceleration ``(v_new -
+    v) / dt``; NumPy's ``np.copyto(..., where=captured)``, element by element."""
+    for i in range(captured.shape[0]):
+        if not captured[i]:
+            continue
+        for k in range(3):
+            up = -fol_r_new[i, k, 2]
+            fol_p_new[i, k] = bar_p[i, k] - up * hang_offset
+        for k in range(3):
+            fol_v_new[i, k] = bar_v[i, k]
+        for k in range(3):
+            fol_accel[i, k] = (fol_v_new[i, k] - fol_v[i, k]) / dt
+
+
 def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,
                       params: PlatformParams) -> tuple[np.ndarray, np.ndarray]:
     """End points (a, b), each (n, 3 segments, 3), of the bar and its two cables.

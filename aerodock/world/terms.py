@@ -21,13 +21,15 @@ from aerodock.downwash.wrench import (
 )
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
-from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
+from aerodock.world.gripper import contact_in_gripper, contact_push, step_gripper, step_is_idle
 from aerodock.world.imu import imu_coeffs, imu_step
 from aerodock.world.params import WorldParams
 from aerodock.world.platform import (
     any_above,
     cable_wrench_kernel,
+    carry_captured,
     ground_kernel,
+    hang_captured,
     step_hanging_bar,
 )
 from aerodock.world.state import StepFrame, WorldState
@@ -111,12 +113,10 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
         # accumulators, sums onto +0, hold no -0 for it to turn into +0)
         frame.contact_n, frame.inside = np.zeros(n), inside
         return
-    if frame.any_captured:
-        contact = np.where(frame.captured, 0.0, contact)
-    push = up * contact[:, None]
-    state.contact_seen |= contact > 0  # the recorder flags the labels of a period with contact
-    frame.force_n[n:] -= push
-    frame.bar_force_n += push
+    # compiled: no push on a captured follower, the push on the follower and on the bar, and
+    # contact_seen (the recorder flags the labels of a period with contact)
+    contact_push(contact, up, frame.captured, frame.any_captured, state.contact_seen,
+                 frame.force_n, frame.bar_force_n)
     frame.contact_n, frame.inside = contact, inside
 
 
@@ -226,12 +226,11 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     n, dt = state.n, params.dt_s
     new, platform, consts = frame.new, params.platform, state.constants
     accel = frame.accel
-    if frame.any_captured:
-        captured = frame.captured
-        hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
-                             platform.bar_mass_kg)
-        fol_own = (accel[n:] - consts.gravity_mps2) * frame.fol_mass_rows_kg
-        frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
+    if frame.any_captured:  # the captured followers' own forces go to the hanging mass
+        hang_mass = np.empty(n)
+        hang_captured(frame.captured, platform.bar_mass_kg, frame.mass_kg[n:], accel[n:],
+                      consts.gravity_mps2, frame.fol_mass_rows_kg, frame.bar_force_n,
+                      hang_mass)
     else:
         hang_mass = consts.bar_mass_kg
     state.bar, state.cable_force_n = step_hanging_bar(
@@ -239,15 +238,11 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
         None if params.rigid else frame.both.rpy[:n, 2], frame.bar_force_n, hang_mass,
         platform, dt,
     )
-    if frame.any_captured:
+    if frame.any_captured:  # carried with the bar
         gp = params.gripper
-        fol_accel = accel[n:]
-        up_new = -new.R[n:, :, 2]
-        p_hang = state.bar.p - up_new * (gp.mount_height_m + gp.bar_radius_m)
-        cap = frame.captured[:, None]
-        np.copyto(new.p[n:], p_hang, where=cap)
-        np.copyto(new.v[n:], state.bar.v, where=cap)
-        np.copyto(fol_accel, (new.v[n:] - frame.vel[n:]) / dt, where=cap)
+        carry_captured(frame.captured, state.bar.p, state.bar.v, new.R[n:], new.p[n:],
+                       new.v[n:], frame.vel[n:], accel[n:], gp.mount_height_m + gp.bar_radius_m,
+                       dt)
 
 
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

@@ -36,7 +36,7 @@ from aerodock.world.gripper import (
 )
 from aerodock.world.imu import start_imu
 from aerodock.world.params import WorldParams
-from aerodock.world.period import STOP_CONTACT, covered, run_period
+from aerodock.world.period import STOP_UNCOVERED, covered, run_period
 from aerodock.world.platform import BarState, PlatformParams, anchor_point, hanging_bar
 from aerodock.world.sensors import Observation
 from aerodock.world.state import AccelWindow, BatchConstants, WorldState
@@ -406,7 +406,7 @@ class World:
             while left and covered(state, params):
                 done, why = run_period(state, params, targets, close_command, left)
                 left -= done
-                if not left or why == STOP_CONTACT:
+                if not left or why == STOP_UNCOVERED:
                     break
                 if not done:  # the per-step path draws (or refills) and goes on
                     step_world(state, params, terms, targets, close_command)

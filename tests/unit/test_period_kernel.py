@@ -160,3 +160,43 @@ def test_the_ground_kernel_is_numpys_ground():
     for a, b in ((p, ref_p), (v, ref_v), (contact, ref_contact)):
         assert np.array_equal(a, b, equal_nan=True)
         assert np.array_equal(np.signbit(a), np.signbit(b))
+
+
+def _dock(compiled: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[list, dict, World]:
+    """Three followers under their bars, two of them pressing on it (the third 0.3 m off),
+    the active trigger from the third period on: contact, the gate closing, two captures and
+    a miss, then the captured followers hanging from their bars."""
+    stops: dict = {}
+
+    def counted(*args):
+        done, why = _RUN_PERIOD(*args)
+        stops[why] = stops.get(why, 0) + 1
+        stops["steps"] = stops.get("steps", 0) + done
+        return done, why
+
+    monkeypatch.setattr(world_module, "run_period", counted)
+    monkeypatch.setattr(period, "PERIOD_OK", compiled)
+    n = 3
+    world = World(load_config(), n, TrialRNG(5, n))
+    lead = np.tile([0.0, 0.0, -2.0], (n, 1))
+    world.reset(lead, lead + [0.0, 0.0, 1.0])
+    gp = world.gripper_params
+    fol = world.state.bar.p + [0.0, 0.0, gp.mount_height_m + gp.bar_radius_m - 0.004]
+    fol[1, 0] += 0.3
+    world.reset(lead, fol)
+    cmd = hover_command(world.vehicle, n)
+    out = []
+    for k in range(40):
+        world.advance(cmd, cmd, np.full(n, k >= 2))
+        out.append(_state_arrays(world))
+    return out, stops, world
+
+
+def test_contact_and_a_captured_follower_run_compiled(monkeypatch):
+    ref, _, _ = _dock(False, monkeypatch)
+    got, stops, world = _dock(True, monkeypatch)
+    assert list(world.state.gripper.gate) == [2, 3, 2]  # captured, missed, captured
+    assert list(world.state.contact_seen) == [True, False, True]
+    assert stops.get(period.STOP_GRIPPER, 0) >= 2  # the servo's start, the gate's end
+    assert stops["steps"] >= 40 * 5 - 10  # the contacts and the hanging pairs compiled
+    _assert_same(ref, got)
