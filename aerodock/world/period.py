@@ -5,7 +5,7 @@ after step, inside one numba kernel (:func:`period_kernel`), for the world it co
 vehicles of one fleet with the filtered IMU chain, the built-in round jet
 (:class:`~aerodock.downwash.jet.RoundJetField`, its parts its own), per-trial random streams
 (:class:`~aerodock.rng.TrialRNG`), bars touching grippers and followers hanging from their bars,
-no injected rotor fault, no torque log, a flying leader. Each term calls the njit function its
+rotor faults, no torque log, a flying leader. Each term calls the njit function its
 per-step form calls (:mod:`aerodock.world.terms`), with the same arguments, so the numbers are
 the per-step path's to the bit (``tests/unit/test_period_kernel.py``).
 
@@ -65,6 +65,7 @@ from aerodock.world.platform import (
     ground_kernel,
     hang_captured,
     hanging_bar_kernel_body,
+    rotor_fault_wrench,
 )
 from aerodock.world.sensor_kernels import (
     CHANGED_BY_CONTACT,
@@ -131,8 +132,8 @@ def _np_unary(fn: int, x: np.ndarray, out: np.ndarray) -> None:
  F_YAW_DAMPING, F_GYRO_SD, F_GYRO_RANGE, F_GRAVITY, F_ACCEL_NOISE_SQ, F_VIBRATION,
  F_ACCEL_RANGE, F_K_P, F_K_YAW, F_SENSOR_RATE, F_SENSOR_NOISE, F_THRESHOLD, F_LATENCY,
  F_MOUNT, F_BAR_RADIUS, F_APERTURE, F_BAR_HALF_LENGTH, F_GATE_HEIGHT, F_STIFFNESS,
- F_DAMPING, F_BAR_MASS, F_HANG_OFFSET) = range(28)
-F_SIZE = 28
+ F_DAMPING, F_BAR_MASS, F_HANG_OFFSET, F_THRUST_COEFF) = range(29)
+F_SIZE = 29
 # the kernel's integers in and out: the clock, the draws' cursor, the IMU chain's heads
 I_STEP, I_DRAW, I_GYRO_HEAD, I_ACCEL_HEAD, I_RING_HEAD = range(5)
 # why the kernel stopped (its second result)
@@ -171,6 +172,8 @@ def float_constants(params: WorldParams) -> np.ndarray:
     values[F_DAMPING] = gp.contact_damping_nspm
     values[F_BAR_MASS] = pf.bar_mass_kg
     values[F_HANG_OFFSET] = gp.mount_height_m + gp.bar_radius_m
+    fleet = params.follower_fleet.params
+    values[F_THRUST_COEFF] = fleet.thrust_coeff if params.rigid else 0.0
     values.flags.writeable = False
     return values
 
@@ -191,7 +194,8 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                   r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
                   torque_ff: np.ndarray, fol_mass: np.ndarray, fol_mass_rows: np.ndarray,
                   gravity: np.ndarray, hover: np.ndarray, captured: np.ndarray,
-                  any_captured: bool,
+                  any_captured: bool, thrust_gain: np.ndarray, rotor_loss: np.ndarray,
+                  torque_map: np.ndarray,
                   jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray, coeff: np.ndarray,
                   processes: np.ndarray, bar_noise: np.ndarray, bar_consts: np.ndarray,
                   bar_p0: np.ndarray, bar_v0: np.ndarray, bar_yaw0: np.ndarray,
@@ -304,7 +308,10 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
             contact_push(contact, up, captured, any_captured, contact_seen, force, bar_force)
         # cable on the leader
         cable_wrench_kernel(cable, rot, fc[F_ANCHOR_BELOW], force, torque_t, True)
-        # rotor faults: none (run_period's condition)
+        # rotor faults
+        if rotor_loss.shape[0]:
+            rotor_fault_wrench(omega, fc[F_THRUST_COEFF], thrust_gain, rotor_loss, rot,
+                               torque_map, force, torque_t)
         # imu
         if gyro_sd != 0.0:
             gyro_draws = draws[pos:pos + 6]
@@ -391,6 +398,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
 # flown_step's placeholder for an absent torque feed-forward (writable, as a command's is: one
 # signature of the kernel for both)
 _NO_FF = np.zeros((1, 4))
+_NO_LOSS = np.zeros((0, 4))  # no rotor fault
 DISABLED: list[str] = []
 """Why the compiled period was turned off in this process (empty: it was not): a kernel
 signature numba could not compile here (e.g. a callee sealed by :func:`aerodock.jit.any_layout`
@@ -436,11 +444,14 @@ def covered(state: WorldState, params: WorldParams) -> bool:
     that hold for a whole period (the kernel itself stops at the ones that change within it)."""
     field, rng, n = state.field, state.rng, state.n
     if not (PERIOD_OK and type(params.fleet) is RigidBodyFleet and state.imu is not None
-            and state.torque_log is None and state.rotor_loss is None and not state.leader_fixed
+            and state.torque_log is None and not state.leader_fixed
             and isinstance(rng, TrialRNG) and rng.n == n and isinstance(field, RoundJetField)):
         return False
     if getattr(field, "_rng", None) is not rng or not field._parts_are_the_jets():
         return False
+    loss = state.rotor_loss
+    if loss is not None and (loss.dtype != np.float64 or loss.shape != (n, 4)):
+        return False  # (the term's own checks and conversions)
     k = state.constants.rotor_offsets_m.shape[0]
     processes = field._processes
     if (processes.shape != (3 + k, n) or not processes.flags.c_contiguous
@@ -493,6 +504,7 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     ff = targets.torque_ff_nm
     go = cache.spare
     captured, any_captured, idle = state.gripper_flags()
+    loss = state.rotor_loss
     try:
         result = period_kernel(
         NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
@@ -502,7 +514,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         both.R, both.w, both.rotor_speed, both.autopilot_state, both.yaw_setpoint,
         both.thrust_n, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
         _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,
-        state.constants.hover_thrust_n, captured, any_captured,
+        state.constants.hover_thrust_n, captured, any_captured, both.thrust_gain,
+        _NO_LOSS if loss is None else loss, params.follower_fleet.params.rotor_torque_map,
         field._jet_params(), field._columns(k), offsets, field._force_coeff(fol_mass, k),
         field._processes, bar_noise, field._bar_params(params.platform.bar_area_m2), bar.p,
         bar.v, bar.yaw_rad, bar.yaw_rate_radps, state.constants.bar_mass_kg,

@@ -414,6 +414,36 @@ def carry_captured(captured: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
             fol_accel[i, k] = (fol_v_new[i, k] - fol_v[i, k]) / dt
 
 
+@njit
+def rotor_fault_wrench(omega: np.ndarray, thrust_coeff: float, gain: np.ndarray,
+                       loss: np.ndarray, rot: np.ndarray, torque_map: np.ndarray,
+                       force: np.ndarray, torque_t: np.ndarray) -> None:
+    """The thrust the followers' faulty rotors do not give (the world's ``rotor faults`` term):
+    ``lost = omega^2 (k_T gain) loss`` per rotor (the followers' rows of the 2n batch's
+    ``omega`` (m, k), ``gain`` (m,) and ``rot`` (m, 3, 3), ``loss`` (n, k)), added to the
+    followers' force along their body z, ``force[n:] += R e3 sum(lost)``, and taken from their
+    torque, ``torque_t[:, n:] -= lost_i map_i`` rotor by rotor; each element as NumPy computes
+    it (its sum of a row of fewer than eight numbers is the running one)."""
+    n, k = loss.shape
+    lost = np.empty(k)
+    for r in range(n):
+        j = n + r
+        kc = thrust_coeff * gain[j]
+        for i in range(k):
+            x = omega[j, i] * omega[j, i]
+            x *= kc
+            x *= loss[r, i]
+            lost[i] = x
+        total = lost[0]
+        for i in range(1, k):
+            total += lost[i]
+        for c in range(3):
+            force[j, c] += rot[j, c, 2] * total
+        for i in range(k):
+            for c in range(3):
+                torque_t[c, j] -= lost[i] * torque_map[i, c]
+
+
 def platform_segments(anchor_p: np.ndarray, leader_yaw_rad: np.ndarray, bar: BarState,
                       params: PlatformParams) -> tuple[np.ndarray, np.ndarray]:
     """End points (a, b), each (n, 3 segments, 3), of the bar and its two cables.

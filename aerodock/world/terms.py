@@ -30,6 +30,7 @@ from aerodock.world.platform import (
     carry_captured,
     ground_kernel,
     hang_captured,
+    rotor_fault_wrench,
     step_hanging_bar,
 )
 from aerodock.world.state import StepFrame, WorldState
@@ -136,15 +137,12 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     rotors do not give, as a force and a torque; the autopilot is not told."""
     if state.rotor_loss is None:
         return
-    n, fleet = state.n, params.follower_fleet.params
-    both = frame.both
-    lost = both.rotor_speed[n:] * both.rotor_speed[n:]
-    lost *= (fleet.thrust_coeff * both.thrust_gain[n:])[:, None]
-    lost *= state.rotor_loss
-    frame.force_n[n:] += frame.rot[n:, :, 2] * lost.sum(axis=1)[:, None]  # less thrust, -z_b
-    torque = frame.torque_t.T[n:]
-    for i in range(lost.shape[1]):
-        torque -= lost[:, i:i + 1] * fleet.rotor_torque_map[i]
+    fleet, both = params.follower_fleet.params, frame.both
+    if state.rotor_loss.shape[1] >= 8:  # NumPy sums eight or more numbers pairwise
+        raise ValueError("rotor faults: at most seven rotors")
+    rotor_fault_wrench(both.rotor_speed, fleet.thrust_coeff, both.thrust_gain,
+                       np.asarray(state.rotor_loss, dtype=float), frame.rot,
+                       fleet.rotor_torque_map, frame.force_n, frame.torque_t)
 
 
 # -- motion ----------------------------------------------------------------------------------

@@ -13,7 +13,7 @@ from aerodock.bench.simulator import SimLoop
 from aerodock.config import load_config
 from aerodock.rng import TrialRNG
 from aerodock.world import World, hover_command, period
-from aerodock.world.platform import ground_kernel
+from aerodock.world.platform import ground_kernel, rotor_fault_wrench
 from aerodock.world.step import WORLD_STEP, Term, with_term
 
 pytestmark = pytest.mark.skipif(not period.PERIOD_OK, reason="no compiled period here")
@@ -42,7 +42,8 @@ def _state_arrays(world: World) -> list[np.ndarray]:
 
 
 def _fly(n: int, periods: int, compiled: bool, monkeypatch: pytest.MonkeyPatch,
-         close_at: int | None = None) -> tuple[list[list[np.ndarray]], dict]:
+         close_at: int | None = None, fault_at: int | None = None,
+         ) -> tuple[list[list[np.ndarray]], dict]:
     """A SimLoop (both position controllers) flown ``periods`` control periods; every
     period's arrays, and the compiled period's stops by reason (with its steps)."""
     stops: dict = {}
@@ -59,6 +60,8 @@ def _fly(n: int, periods: int, compiled: bool, monkeypatch: pytest.MonkeyPatch,
     loop = SimLoop(load_config(), n, seed=11)
     out = []
     for k in range(periods):
+        if k == fault_at:  # the follower's rotors lose some of their thrust from here on
+            loop.world.set_rotor_loss(np.tile([0.3, 0.0, 0.1, 0.0], (n, 1)))
         if close_at is not None and k >= close_at:  # the active trigger: the servo starts
             world = loop.world
             obs_l, obs_f = world.observe()
@@ -110,6 +113,35 @@ def test_a_gripper_trigger_stops_the_kernel_after_its_step(monkeypatch):
     got, stops = _fly(3, 10, True, monkeypatch, close_at=4)
     assert stops.get(period.STOP_GRIPPER, 0) >= 1
     _assert_same(ref, got)
+
+
+def test_rotor_faults_run_compiled(monkeypatch):
+    ref, _ = _fly(3, 10, False, monkeypatch, fault_at=3)
+    got, stops = _fly(3, 10, True, monkeypatch, fault_at=3)
+    assert stops["steps"] >= 45
+    _assert_same(ref, got)
+
+
+def test_the_rotor_fault_wrench_is_numpys():
+    """The rotor faults term's compiled form against its NumPy original."""
+    rng = np.random.default_rng(3)
+    n, thrust_coeff = 5, 1.3e-6
+    omega = 2000.0 * rng.random((2 * n, 4))
+    gain = 1.0 + 0.1 * rng.standard_normal(2 * n)
+    loss = rng.random((n, 4)) * (rng.random((n, 4)) > 0.3)
+    rot = rng.standard_normal((2 * n, 3, 3))
+    torque_map = rng.standard_normal((4, 3)) * 0.05
+    force, torque_t = rng.standard_normal((2 * n, 3)), rng.standard_normal((3, 2 * n))
+    ref_force, ref_torque = force.copy(), torque_t.copy()
+    lost = omega[n:] * omega[n:]
+    lost *= (thrust_coeff * gain[n:])[:, None]
+    lost *= loss
+    ref_force[n:] += rot[n:, :, 2] * lost.sum(axis=1)[:, None]
+    torque = ref_torque.T[n:]
+    for i in range(4):
+        torque -= lost[:, i:i + 1] * torque_map[i]
+    rotor_fault_wrench(omega, thrust_coeff, gain, loss, rot, torque_map, force, torque_t)
+    assert np.array_equal(force, ref_force) and np.array_equal(torque_t, ref_torque)
 
 
 def test_a_step_of_ones_own_keeps_the_per_step_path(monkeypatch):
