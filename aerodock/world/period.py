@@ -5,7 +5,7 @@ after step, inside one numba kernel (:func:`period_kernel`), for the world it co
 vehicles of one fleet with the filtered IMU chain, the built-in round jet
 (:class:`~aerodock.downwash.jet.RoundJetField`, its parts its own), per-trial random streams
 (:class:`~aerodock.rng.TrialRNG`), bars touching grippers and followers hanging from their bars,
-rotor faults, no torque log, a flying leader. Each term calls the njit function its
+rotor faults, the flight log's torques, a flying leader. Each term calls the njit function its
 per-step form calls (:mod:`aerodock.world.terms`), with the same arguments, so the numbers are
 the per-step path's to the bit (``tests/unit/test_period_kernel.py``).
 
@@ -181,7 +181,7 @@ def float_constants(params: WorldParams) -> np.ndarray:
 @any_layout("iv", "processes", "bar_noise", "gz1", "gz2", "gline", "az1", "az2", "aline",
             "ring", "nav_accel", "att_ring", "contact_sensed", "ground_contact", "P", "V", "RM",
             "W", "OM", "TH", "ACC", "INT", "YSP", "BP", "BV", "BY", "BR", "CAB", "GT", "AT",
-            "ATT", "downwash", "go_reading", "go_by_contact", "go_servo", "go_gate",
+            "ATT", "WT", "downwash", "go_reading", "go_by_contact", "go_servo", "go_gate",
             "go_inside_start", "go_slipped", "go_resolved", contiguous=("packed",))
 @njit
 def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarray,
@@ -214,7 +214,8 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                   ACC: np.ndarray, INT: np.ndarray, YSP: np.ndarray,  # noqa: N803
                   BP: np.ndarray, BV: np.ndarray, BY: np.ndarray, BR: np.ndarray,  # noqa: N803
                   CAB: np.ndarray, GT: np.ndarray, AT: np.ndarray,  # noqa: N803
-                  ATT: np.ndarray, downwash: np.ndarray, go_reading: np.ndarray,  # noqa: N803
+                  ATT: np.ndarray, WT: np.ndarray, downwash: np.ndarray,  # noqa: N803
+                  go_reading: np.ndarray,
                   go_by_contact: np.ndarray, go_servo: np.ndarray, go_gate: np.ndarray,
                   go_inside_start: np.ndarray, go_slipped: np.ndarray,
                   go_resolved: np.ndarray) -> tuple[int, int, int]:
@@ -289,6 +290,8 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
         for i in range(n):
             for c in range(3):
                 torque_t[c, n + i] += wake[1, i, c]
+        if WT.shape[0]:  # (for the flight log's torques)
+            WT[s] = wake[1]
         for i in range(n):
             for c in range(3):
                 force[n + i, c] += wake[0, i, c]
@@ -399,6 +402,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
 # signature of the kernel for both)
 _NO_FF = np.zeros((1, 4))
 _NO_LOSS = np.zeros((0, 4))  # no rotor fault
+_NO_TORQUES = np.zeros((0, 0, 3))  # no torque log
 DISABLED: list[str] = []
 """Why the compiled period was turned off in this process (empty: it was not): a kernel
 signature numba could not compile here (e.g. a callee sealed by :func:`aerodock.jit.any_layout`
@@ -444,7 +448,7 @@ def covered(state: WorldState, params: WorldParams) -> bool:
     that hold for a whole period (the kernel itself stops at the ones that change within it)."""
     field, rng, n = state.field, state.rng, state.n
     if not (PERIOD_OK and type(params.fleet) is RigidBodyFleet and state.imu is not None
-            and state.torque_log is None and not state.leader_fixed
+            and not state.leader_fixed
             and isinstance(rng, TrialRNG) and rng.n == n and isinstance(field, RoundJetField)):
         return False
     if getattr(field, "_rng", None) is not rng or not field._parts_are_the_jets():
@@ -499,6 +503,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     slab_gt, slab_at, slab_att = np.empty((steps, 3, m)), np.empty((steps, 3, m)), \
         np.empty((steps, m, 3, 3))
     downwash = np.empty((n, 3))
+    log = state.torque_log  # the flight log's torques: the wake's torque of every step kept
+    slab_wt = np.empty((steps, n, 3)) if log is not None else _NO_TORQUES
     bar_noise = np.array(field._bar_noise, order="C")
     gyro_c, accel_c = imu_coeffs(ims)
     ff = targets.torque_ff_nm
@@ -528,7 +534,7 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         gripper.sensor_stuck_n, state.contact_seen, state.contact_sensed, state.ground_contact,
         slab_p, slab_v,
         slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
-        slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, downwash, *go)
+        slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, slab_wt, downwash, *go)
     except NumbaError as err:  # raised while compiling, before any step: nothing has moved
         global PERIOD_OK
         PERIOD_OK = False
@@ -553,6 +559,11 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         entry = (p[:n], v[:n], r[:n], p[n:], v[n:], r[n:])
         slot = (step0 + s + 1) % slots
         history[slot] = seen[slot] = entry
+    if log is not None:  # what the vehicles term hands the log, step by step
+        for s in range(done):  # each step's followers at its start, the chain's gyro
+            w, speed, v, r = ((both.w, both.rotor_speed, both.v, both.R) if s == 0 else
+                              (slab_w[s - 1], slab_om[s - 1], slab_v[s - 1], slab_r[s - 1]))
+            log.add_step(w[n:], slab_gt[s].T[n:] - w[n:], speed[n:], v[n:], r[n:], slab_wt[s])
     state.both = frozen_record(
         RigidBodyState, p=slab_p[last], v=slab_v[last], R=slab_r[last], w=slab_w[last],
         rotor_speed=slab_om[last], autopilot_state=slab_int[last], yaw_setpoint=slab_ysp[last],

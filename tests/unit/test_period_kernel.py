@@ -42,7 +42,7 @@ def _state_arrays(world: World) -> list[np.ndarray]:
 
 
 def _fly(n: int, periods: int, compiled: bool, monkeypatch: pytest.MonkeyPatch,
-         close_at: int | None = None, fault_at: int | None = None,
+         close_at: int | None = None, fault_at: int | None = None, torque: bool = False,
          ) -> tuple[list[list[np.ndarray]], dict]:
     """A SimLoop (both position controllers) flown ``periods`` control periods; every
     period's arrays, and the compiled period's stops by reason (with its steps)."""
@@ -71,6 +71,10 @@ def _fly(n: int, periods: int, compiled: bool, monkeypatch: pytest.MonkeyPatch,
         else:
             loop.run(1)
         out.append(_state_arrays(loop.world))
+        if torque:  # the flight log's torques (the first read starts the log)
+            reading = loop.world.observed_torque()
+            out[-1].extend([reading.kinematic_nm, reading.rotor_nm, reading.body_rates_radps,
+                            reading.true_wake_nm])
     return out, stops
 
 
@@ -112,6 +116,13 @@ def test_a_gripper_trigger_stops_the_kernel_after_its_step(monkeypatch):
     ref, _ = _fly(3, 10, False, monkeypatch, close_at=4)
     got, stops = _fly(3, 10, True, monkeypatch, close_at=4)
     assert stops.get(period.STOP_GRIPPER, 0) >= 1
+    _assert_same(ref, got)
+
+
+def test_the_flight_logs_torques_run_compiled(monkeypatch):
+    ref, _ = _fly(7, 8, False, monkeypatch, torque=True)
+    got, stops = _fly(7, 8, True, monkeypatch, torque=True)
+    assert stops["steps"] == 8 * 5
     _assert_same(ref, got)
 
 
