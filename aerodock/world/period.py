@@ -61,11 +61,7 @@ from aerodock.world.params import WorldParams
 from aerodock.world.platform import (
     BarState,
     cable_wrench_kernel,
-    carry_captured,
-    ground_kernel,
-    hang_captured,
     hanging_bar_kernel_body,
-    rotor_fault_wrench,
 )
 from aerodock.world.sensor_kernels import (
     CHANGED_BY_CONTACT,
@@ -76,6 +72,12 @@ from aerodock.world.sensor_kernels import (
     gripper_step_kernel_body,
 )
 from aerodock.world.state import WorldState
+from aerodock.world.term_kernels import (
+    carry_captured,
+    ground_kernel,
+    hang_captured,
+    rotor_fault_wrench,
+)
 from aerodock.world.vehicles.fleet import RigidBodyFleet
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyState,

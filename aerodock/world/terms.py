@@ -27,13 +27,15 @@ from aerodock.world.params import WorldParams
 from aerodock.world.platform import (
     any_above,
     cable_wrench_kernel,
+    step_hanging_bar,
+)
+from aerodock.world.state import StepFrame, WorldState
+from aerodock.world.term_kernels import (
     carry_captured,
     ground_kernel,
     hang_captured,
     rotor_fault_wrench,
-    step_hanging_bar,
 )
-from aerodock.world.state import StepFrame, WorldState
 
 
 # -- forces ----------------------------------------------------------------------------------

@@ -13,8 +13,8 @@ from aerodock.bench.simulator import SimLoop
 from aerodock.config import load_config
 from aerodock.rng import TrialRNG
 from aerodock.world import World, hover_command, period
-from aerodock.world.platform import ground_kernel, rotor_fault_wrench
 from aerodock.world.step import WORLD_STEP, Term, with_term
+from aerodock.world.term_kernels import ground_kernel, rotor_fault_wrench
 
 pytestmark = pytest.mark.skipif(not period.PERIOD_OK, reason="no compiled period here")
 _RUN_PERIOD = world_module.run_period  # the real one (the tests wrap it)

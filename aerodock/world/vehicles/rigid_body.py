@@ -450,8 +450,7 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
     (row-major), the step factor, the autopilot's, the stack's, the mixer's, the torque map's
     and the drag sums' numbers (copied, not computed). Not packed unless the body's torque gains
     and mass rows and the flight stack's constants are read-only (the tuple reads them live; a
-    copy would not see a write). ``eager``: packed at the first use (the world's compiled
-    control period, :mod:`aerodock.world.period`, serves many steps with one)."""
+    copy would not see a write). ``eager``: packed at the first use."""
     arguments = _step_constants(body, params, dt_s, thrust_gain)
     if not (is_frozen(body.torque_gain) and is_frozen(body.mass_rows_kg)
             and (params.stack_constants is None or is_frozen(params.stack_constants))):
@@ -481,9 +480,8 @@ _PACK_HEADER = 14
 
 def packed_step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
                           thrust_gain: np.ndarray) -> np.ndarray | None:
-    """The flat constants :func:`flown_step` reads for ``body``'s vehicles (packed now if they
-    were not yet; the same array the world's step passes once it has packed them), or None
-    when they cannot be packed (:func:`_packed_constants`)."""
+    """The flat constants :func:`flown_step` reads for ``body``'s vehicles, packed now if they
+    were not yet (:func:`_packed_constants`; None: they cannot be)."""
     return _packed_constants(body, params, dt_s, thrust_gain, eager=True)[1]
 
 
