@@ -5,9 +5,9 @@ after step, inside one numba kernel (:func:`period_kernel`), for the world it co
 vehicles of one fleet with the filtered IMU chain, the built-in round jet
 (:class:`~aerodock.downwash.jet.RoundJetField`, its parts its own), per-trial random streams
 (:class:`~aerodock.rng.TrialRNG`), bars touching grippers and followers hanging from their bars,
-rotor faults, the flight log's torques, a flying leader. Each term calls the njit function its
-per-step form calls (:mod:`aerodock.world.terms`), with the same arguments, so the numbers are
-the per-step path's to the bit (``tests/unit/test_period_kernel.py``).
+rotor faults, the flight log's torques, a leader flying or on its stand. Each term calls the
+njit function its per-step form calls (:mod:`aerodock.world.terms`), with the same arguments, so
+the numbers are the per-step path's to the bit (``tests/unit/test_period_kernel.py``).
 
 The kernel stops and returns how many steps it did; the caller
 (:meth:`aerodock.world.World.advance`) runs the rest of the period with the per-step path:
@@ -85,6 +85,7 @@ from aerodock.world.vehicles.rigid_body import (
     flown_step_body,
     packed_step_constants,
 )
+from aerodock.world.vehicles.rigid_kernel import hold_rows
 
 # -- NumPy's cos and sin, from compiled code (the bar's axis: np.cos(yaw), np.sin(yaw)) -------
 
@@ -197,7 +198,7 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                   torque_ff: np.ndarray, fol_mass: np.ndarray, fol_mass_rows: np.ndarray,
                   gravity: np.ndarray, hover: np.ndarray, captured: np.ndarray,
                   any_captured: bool, thrust_gain: np.ndarray, rotor_loss: np.ndarray,
-                  torque_map: np.ndarray,
+                  torque_map: np.ndarray, leader_fixed: bool,
                   jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray, coeff: np.ndarray,
                   processes: np.ndarray, bar_noise: np.ndarray, bar_consts: np.ndarray,
                   bar_p0: np.ndarray, bar_v0: np.ndarray, bar_yaw0: np.ndarray,
@@ -340,6 +341,12 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                    torque_ff, has_ff, GT[s].T, no_rows, False, integral, yaw_sp, force,
                    torque_t.T, True, P[s], V[s], RM[s], W[s], OM[s], TH[s], ACC[s], INT[s],
                    YSP[s])
+        if leader_fixed:  # on its stand: no motion, hover thrust
+            hold_rows(0, n, p, v, rot, w, omega, integral, thrust, P[s], V[s], RM[s], W[s],
+                      OM[s], INT[s], TH[s])
+            for i in range(n):
+                for c in range(3):
+                    ACC[s][i, c] = 0.0
         # hanging pair: the bar on its cables, a captured follower hanging from it
         accel = ACC[s]
         if any_captured:
@@ -450,7 +457,6 @@ def covered(state: WorldState, params: WorldParams) -> bool:
     that hold for a whole period (the kernel itself stops at the ones that change within it)."""
     field, rng, n = state.field, state.rng, state.n
     if not (PERIOD_OK and type(params.fleet) is RigidBodyFleet and state.imu is not None
-            and not state.leader_fixed
             and isinstance(rng, TrialRNG) and rng.n == n and isinstance(field, RoundJetField)):
         return False
     if getattr(field, "_rng", None) is not rng or not field._parts_are_the_jets():
@@ -524,6 +530,7 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,
         state.constants.hover_thrust_n, captured, any_captured, both.thrust_gain,
         _NO_LOSS if loss is None else loss, params.follower_fleet.params.rotor_torque_map,
+        state.leader_fixed,
         field._jet_params(), field._columns(k), offsets, field._force_coeff(fol_mass, k),
         field._processes, bar_noise, field._bar_params(params.platform.bar_area_m2), bar.p,
         bar.v, bar.yaw_rad, bar.yaw_rate_radps, state.constants.bar_mass_kg,

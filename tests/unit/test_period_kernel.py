@@ -4,6 +4,8 @@ mid-period and the per-step path finishes them; a step of one's own keeps the pe
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -243,3 +245,53 @@ def test_contact_and_a_captured_follower_run_compiled(monkeypatch):
     assert stops.get(period.STOP_GRIPPER, 0) >= 2  # the servo's start, the gate's end
     assert stops["steps"] >= 40 * 5 - 10  # the contacts and the hanging pairs compiled
     _assert_same(ref, got)
+
+
+def _stand(compiled: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[list, dict]:
+    """A leader on its stand (the cable-length study's world), the follower climbing under it."""
+    stops: dict = {}
+
+    def counted(*args):
+        done, why = _RUN_PERIOD(*args)
+        stops["steps"] = stops.get("steps", 0) + done
+        return done, why
+
+    monkeypatch.setattr(world_module, "run_period", counted)
+    monkeypatch.setattr(period, "PERIOD_OK", compiled)
+    n = 3
+    world = World(load_config(), n, TrialRNG(2, n), leader_fixed=True)
+    lead = np.tile([0.0, 0.0, -2.0], (n, 1))
+    world.reset(lead, lead + [0.1, 0.0, 1.2])
+    cmd = hover_command(world.vehicle, n)
+    climb = replace(cmd, thrust_n=cmd.thrust_n * 1.05, roll_rad=np.full(n, 0.02))
+    out = []
+    for _ in range(10):
+        world.advance(cmd, climb)
+        out.append(_state_arrays(world))
+    return out, stops
+
+
+def test_a_leader_on_its_stand_runs_compiled(monkeypatch):
+    ref, _ = _stand(False, monkeypatch)
+    got, stops = _stand(True, monkeypatch)
+    assert stops["steps"] == 10 * 5
+    _assert_same(ref, got)
+
+
+def test_a_kernel_numba_cannot_compile_turns_the_compiled_period_off(monkeypatch):
+    """A NumbaError from the kernel (raised while compiling, before any step) leaves the state
+    as it was, turns the compiled period off for the process and the per-step path flies."""
+    from numba.core.errors import TypingError
+
+    def cannot(*args):
+        raise TypingError("a sealed callee")
+
+    monkeypatch.setattr(period, "PERIOD_OK", True)
+    monkeypatch.setattr(period, "DISABLED", [])
+    monkeypatch.setattr(period, "period_kernel", cannot)
+    world = World(load_config(), 2, TrialRNG(0, 2))
+    world.reset(np.tile([0.0, 0.0, -2.0], (2, 1)), np.tile([0.05, 0.0, -1.4], (2, 1)))
+    cmd = hover_command(world.vehicle, 2)
+    world.advance(cmd, cmd)
+    assert not period.PERIOD_OK and period.DISABLED
+    assert world.step_index == world.substeps

@@ -24,6 +24,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.frozen import freeze
+from aerodock.world.vehicles import rigid_kernel
 from aerodock.world.vehicles.body import VehicleBody, body_rows, concat_bodies, nominal_body
 from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
@@ -188,9 +189,16 @@ class RigidBodyFleet:
 
     def hovering(self, state: RigidBodyState, old: RigidBodyState,
                  rows: slice) -> RigidBodyState:
-        """``state`` with ``rows`` held as in ``old`` (a leader on a rigid stand)."""
-        for name in ("p", "v", "R", "w", "rotor_speed", "autopilot_state", "thrust_n"):
-            getattr(state, name)[rows] = getattr(old, name)[rows]
+        """``state`` with ``rows`` (a slice of step 1) held as in ``old`` (a leader on a rigid
+        stand; compiled: :func:`rigid_kernel.hold_rows`, which the world's compiled control
+        period calls too)."""
+        start, stop, step = rows.indices(state.p.shape[0])
+        if step != 1:
+            raise ValueError(f"hovering holds a slice of step 1, got {rows}")
+        rigid_kernel.hold_rows(start, stop, old.p, old.v, old.R, old.w, old.rotor_speed,
+                               old.autopilot_state, old.thrust_n, state.p, state.v, state.R,
+                               state.w, state.rotor_speed, state.autopilot_state,
+                               state.thrust_n)
         return state
 
 

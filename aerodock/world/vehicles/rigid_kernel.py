@@ -562,3 +562,25 @@ def rotate_batch(rot: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
     """``out[i] = rot[i] exp([phi[:, i]]x)`` for component-major rotation vectors (3, n)."""
     for i in range(rot.shape[0]):
         store3x3(out, i, mat3_mul(load3x3(rot, i), exp_so3(phi[0, i], phi[1, i], phi[2, i])))
+
+
+@njit
+def hold_rows(start: int, stop: int, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+              w: np.ndarray, omega: np.ndarray, integral: np.ndarray, thrust: np.ndarray,
+              p_new: np.ndarray, v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+              omega_new: np.ndarray, integral_new: np.ndarray, thrust_new: np.ndarray) -> None:
+    """Rows ``start..stop-1`` of the new state (``*_new``) held as in the old one (a leader on
+    a rigid stand): position, velocity, attitude, rates, rotor speeds, the autopilot's state and
+    the thrust, copied."""
+    for i in range(start, stop):
+        for c in range(3):
+            p_new[i, c] = p[i, c]
+            v_new[i, c] = v[i, c]
+            w_new[i, c] = w[i, c]
+            for d in range(3):
+                rot_new[i, c, d] = rot[i, c, d]
+        for j in range(omega.shape[1]):
+            omega_new[i, j] = omega[i, j]
+        for j in range(integral.shape[1]):
+            integral_new[i, j] = integral[i, j]
+        thrust_new[i] = thrust[i]
