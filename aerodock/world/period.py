@@ -28,6 +28,7 @@ as each step does.
 from __future__ import annotations
 
 import ctypes
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,7 @@ from aerodock.jit import (
     njit,
 )
 from aerodock.rng import TrialRNG
+from aerodock.world import terms
 from aerodock.world.gripper import (
     GripperState,
     _any,
@@ -182,7 +184,8 @@ def float_constants(params: WorldParams) -> np.ndarray:
 
 
 @any_layout("iv", "processes", "bar_noise", "gz1", "gz2", "gline", "az1", "az2", "aline",
-            "ring", "nav_accel", "att_ring", "contact_sensed", "ground_contact", "P", "V", "RM",
+            "ring", "nav_accel", "att_ring", "contact_seen", "contact_sensed", "ground_contact",
+            "P", "V", "RM",
             "W", "OM", "TH", "ACC", "INT", "YSP", "BP", "BV", "BY", "BR", "CAB", "GT", "AT",
             "ATT", "WT", "downwash", "go_reading", "go_by_contact", "go_servo", "go_gate",
             "go_inside_start", "go_slipped", "go_resolved", contiguous=("packed",))
@@ -450,6 +453,40 @@ def _gripper_arrays(n: int) -> tuple[np.ndarray, ...]:
     """The grippers' arrays a step may change, in ``go_*`` order."""
     return (np.empty(n), np.empty(n, dtype=bool), np.empty(n), np.empty(n, dtype=np.int8),
             np.empty(n, dtype=bool), np.empty(n, dtype=bool), np.empty(n))
+
+
+# The terms the kernel runs, in its order: the step it stands for. A step whose terms are not
+# these (one added to, taken out of or moved in WORLD_STEP without the kernel following) runs
+# per step.
+_KERNEL_STEP = (
+    ("wake on the rotor disks", terms.wake_on_rotor_disks),
+    ("wake on the body", terms.wake_on_body),
+    ("wake on the bar", terms.wake_on_bar),
+    ("gripper contact", terms.gripper_contact),
+    ("cable on the leader", terms.cable_on_leader),
+    ("rotor faults", terms.rotor_faults),
+    ("imu", terms.imu),
+    ("vehicles", terms.vehicles),
+    ("hanging pair", terms.hanging_pair),
+    ("ground", terms.ground),
+    ("commit", terms.commit),
+    ("gripper", terms.gripper),
+    ("motion capture", terms.motion_capture),
+)
+
+
+def runs_step(step: tuple[Any, ...]) -> bool:
+    """Whether the kernel runs ``step``: its terms are the kernel's (the names and functions of
+    :data:`aerodock.world.step.WORLD_STEP` as the kernel was written for them), in order."""
+    try:
+        return _runs_step(step)
+    except TypeError:  # a term of one's own that cannot be hashed: not the kernel's
+        return False
+
+
+@lru_cache(maxsize=16)
+def _runs_step(step: tuple[Any, ...]) -> bool:
+    return tuple((term.name, term.apply) for term in step) == _KERNEL_STEP
 
 
 def covered(state: WorldState, params: WorldParams) -> bool:

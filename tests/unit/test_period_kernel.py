@@ -176,6 +176,14 @@ def test_a_step_of_ones_own_keeps_the_per_step_path(monkeypatch):
     assert len(seen) == world.substeps and not calls
 
 
+def test_the_kernel_is_written_for_the_default_step():
+    """WORLD_STEP changed (a term added, taken out or moved) without the kernel following it
+    would run per step: this test says so, pointing at aerodock/world/period.py."""
+    assert period.runs_step(WORLD_STEP)
+    assert not period.runs_step(WORLD_STEP[:-1])
+    assert not period.runs_step((WORLD_STEP[1], WORLD_STEP[0], *WORLD_STEP[2:]))
+
+
 def test_the_default_step_runs_compiled(monkeypatch):
     done = []
     real = _RUN_PERIOD
