@@ -436,6 +436,9 @@ class PeriodCache:
         self.seen: list[Any] = [None] * slots
         self.spare = _gripper_arrays(n)
         self.iv = np.zeros(5, dtype=np.int64)
+        gp = params.gripper  # the armed triggers, as the gripper's step reads them
+        self.triggers = (_armed_any(gp.passive), _trigger_rows(gp.passive),
+                         _armed_any(gp.active), _trigger_rows(gp.active))
 
     def ring(self, history: list[tuple[np.ndarray, ...]]) -> np.ndarray:
         """The attitude ring, up to date with ``history``."""
@@ -524,7 +527,6 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         return 0, STOP_UNCOVERED  # (the rest per step)
     draws, cursor = rng.normal_buffer()
     ims, bar, gripper = state.imu, state.bar, state.gripper
-    gp = params.gripper
     close = state.constants.no_close if close_command is None else close_command
     k = state.constants.rotor_offsets_m.shape[0]
     offsets = offsets_array(state.constants.rotor_offsets_m)
@@ -555,13 +557,13 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     ff = targets.torque_ff_nm
     go = cache.spare
     captured, any_captured, idle = state.gripper_flags()
+    passive_any, passive, active_any, active = cache.triggers
     loss = state.rotor_loss
     try:
         result = period_kernel(
         NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
-        params.latency_steps, ff is not None, idle, _armed_any(gp.passive),
-        _trigger_rows(gp.passive), _armed_any(gp.active), _trigger_rows(gp.active),
-        _bools(close), _armed_any(gp.active) and _any(close), draws, packed, both.p, both.v,
+        params.latency_steps, ff is not None, idle, passive_any, passive, active_any, active,
+        _bools(close), active_any and _any(close), draws, packed, both.p, both.v,
         both.R, both.w, both.rotor_speed, both.autopilot_state, both.yaw_setpoint,
         both.thrust_n, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
         _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,

@@ -71,7 +71,11 @@ def _frozen(state: Any) -> Any:
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:
     def both(name: str) -> np.ndarray:  # np.concatenate of the two, each broadcast to (n,)
-        a, b = np.asarray(getattr(lead, name)), np.asarray(getattr(fol, name))
+        a, b = getattr(lead, name), getattr(fol, name)
+        if (type(a) is np.ndarray and type(b) is np.ndarray and a.shape == b.shape == (n,)
+                and a.dtype == b.dtype == np.float64):  # the controllers' commands: one call
+            return np.concatenate((a, b))
+        a, b = np.asarray(a), np.asarray(b)
         out = np.empty(2 * n, dtype=np.result_type(a, b))
         out[:n] = a
         out[n:] = b
