@@ -499,17 +499,22 @@ def covered(state: WorldState, params: WorldParams) -> bool:
     if not (PERIOD_OK and type(params.fleet) is RigidBodyFleet and state.imu is not None
             and isinstance(rng, TrialRNG) and rng.n == n and isinstance(field, RoundJetField)):
         return False
-    if getattr(field, "_rng", None) is not rng or not field._parts_are_the_jets():
-        return False
     loss = state.rotor_loss
     if loss is not None and (loss.dtype != np.float64 or loss.shape != (n, 4)):
         return False  # (the term's own checks and conversions)
     k = state.constants.rotor_offsets_m.shape[0]
-    processes = field._processes
-    if (processes.shape != (3 + k, n) or not processes.flags.c_contiguous
-            or field._bar_noise.shape != (3, n)):
+    try:  # the jet's state as its wake_step reads it (a jet whose internals moved on: per step)
+        processes = field._processes
+        return (field._rng is rng and field._parts_are_the_jets()
+                and processes.shape == (3 + k, n) and processes.flags.c_contiguous
+                and field._bar_noise.shape == (3, n) and all(
+                    callable(getattr(field, name, None)) for name in _JET_METHODS))
+    except AttributeError:
         return False
-    return True
+
+
+# What run_period asks the jet for (its wake_step's own preparations)
+_JET_METHODS = ("_pair_distance", "_jet_params", "_columns", "_force_coeff", "_bar_params")
 
 
 def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
