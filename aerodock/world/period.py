@@ -42,8 +42,8 @@ from aerodock.jit import (
     JIT_ENABLED,
     NUMPY_LOOPS,
     NUMPY_LOOPS_OK,
-    _call_loop,
     _ufunc_loop,
+    _unary,
     any_layout,
     njit,
 )
@@ -120,16 +120,6 @@ TRIG_LOOPS = _trig_loops()
 TRIG_LOOPS.flags.writeable = False
 PERIOD_OK = bool(TRIG_LOOPS.all())
 """Whether the compiled period can run here (numba on, NumPy's loops readable)."""
-
-
-@njit
-def _np_unary(fn: int, x: np.ndarray, out: np.ndarray) -> None:
-    """NumPy's one-input float64 loop at ``fn`` over the contiguous rows ``x`` into ``out``."""
-    buf = np.empty(5, np.intp)
-    buf[0], buf[1], buf[2] = x.ctypes.data, out.ctypes.data, x.shape[0]
-    buf[3], buf[4] = x.strides[0], out.strides[0]
-    a = buf.ctypes.data
-    _call_loop(fn, a, a + 16, a + 24)
 
 
 # -- the kernel's float constants (one array, built once per world) -------------------------
@@ -280,8 +270,8 @@ def period_kernel(loops: np.ndarray, trig: np.ndarray, steps: int, fc: np.ndarra
                                                       BR[s - 1], CAB[s - 1])
             lead_accel, fol_accel, rot_hat = ACC[s - 1][:n], ACC[s - 1][n:], ATT[s - 1]
         # the step's frame: the bars' axes (NumPy's cos and sin), zeroed accumulators
-        _np_unary(trig[TRIG_COS], bar_yaw, bar_axis[0])
-        _np_unary(trig[TRIG_SIN], bar_yaw, bar_axis[1])
+        _unary(trig[TRIG_COS], bar_yaw, bar_axis[0])
+        _unary(trig[TRIG_SIN], bar_yaw, bar_axis[1])
         force[:] = 0.0
         torque_t[:] = 0.0
         bar_force[:] = 0.0
@@ -566,28 +556,28 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     loss = state.rotor_loss
     try:
         result = period_kernel(
-        NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
-        params.latency_steps, ff is not None, idle, passive_any, passive, active_any, active,
-        _bools(close), active_any and _any(close), draws, packed, both.p, both.v,
-        both.R, both.w, both.rotor_speed, both.autopilot_state, both.yaw_setpoint,
-        both.thrust_n, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
-        _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,
-        state.constants.hover_thrust_n, captured, any_captured, both.thrust_gain,
-        _NO_LOSS if loss is None else loss, params.follower_fleet.params.rotor_torque_map,
-        state.leader_fixed,
-        field._jet_params(), field._columns(k), offsets, field._force_coeff(fol_mass, k),
-        field._processes, bar_noise, field._bar_params(params.platform.bar_area_m2), bar.p,
-        bar.v, bar.yaw_rad, bar.yaw_rate_radps, state.constants.bar_mass_kg,
-        state.cable_force_n, gyro_c, ims.gyro.z1, ims.gyro.z2, ims.gyro.delay, accel_c,
-        ims.accel.z1, ims.accel.z2, ims.accel.delay, ims.bias_body_mps2, ims.accel_ring,
-        ims.nav_accel_mps2, state.leader_accel, state.follower_accel, ims.attitude,
-        cache.ring(state.history), gripper.gate, gripper.bias_true_n, gripper.bias_est_n,
-        gripper.reading_n, gripper.servo_start_s, gripper.triggered_by_contact,
-        gripper.inside_at_start, gripper.slipped, gripper.resolved_s, gripper.close_time_s,
-        gripper.sensor_stuck_n, state.contact_seen, state.contact_sensed, state.ground_contact,
-        slab_p, slab_v,
-        slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
-        slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, slab_wt, downwash, *go)
+            NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
+            params.latency_steps, ff is not None, idle, passive_any, passive, active_any, active,
+            _bools(close), active_any and _any(close), draws, packed, both.p, both.v,
+            both.R, both.w, both.rotor_speed, both.autopilot_state, both.yaw_setpoint,
+            both.thrust_n, targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
+            _NO_FF if ff is None else ff, fol_mass, fol_mass_rows, state.constants.gravity_mps2,
+            state.constants.hover_thrust_n, captured, any_captured, both.thrust_gain,
+            _NO_LOSS if loss is None else loss, params.follower_fleet.params.rotor_torque_map,
+            state.leader_fixed,
+            field._jet_params(), field._columns(k), offsets, field._force_coeff(fol_mass, k),
+            field._processes, bar_noise, field._bar_params(params.platform.bar_area_m2), bar.p,
+            bar.v, bar.yaw_rad, bar.yaw_rate_radps, state.constants.bar_mass_kg,
+            state.cable_force_n, gyro_c, ims.gyro.z1, ims.gyro.z2, ims.gyro.delay, accel_c,
+            ims.accel.z1, ims.accel.z2, ims.accel.delay, ims.bias_body_mps2, ims.accel_ring,
+            ims.nav_accel_mps2, state.leader_accel, state.follower_accel, ims.attitude,
+            cache.ring(state.history), gripper.gate, gripper.bias_true_n, gripper.bias_est_n,
+            gripper.reading_n, gripper.servo_start_s, gripper.triggered_by_contact,
+            gripper.inside_at_start, gripper.slipped, gripper.resolved_s, gripper.close_time_s,
+            gripper.sensor_stuck_n, state.contact_seen, state.contact_sensed, state.ground_contact,
+            slab_p, slab_v,
+            slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
+            slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, slab_wt, downwash, *go)
     except NumbaError as err:  # raised while compiling, before any step: nothing has moved
         global PERIOD_OK
         PERIOD_OK = False
