@@ -112,6 +112,25 @@ class TrialRNG:
             return block[0].reshape(shape)
         return np.ascontiguousarray(block.T).reshape(shape)
 
+    def normal_buffer(self) -> tuple[np.ndarray, int]:
+        """The pre-drawn standard normal numbers, draw-major (draws, n), and the cursor: the
+        row of every trial's next draw. A compiled caller reads rows ``cursor..`` in the order
+        :meth:`standard_normal_t` would hand them out, never past the buffer's end (the next
+        draw there refills it, as the Python path does), then moves the cursor
+        (:meth:`set_normal_cursor`)."""
+        return self._buf["normal"], self._pos["normal"]
+
+    def set_normal_cursor(self, cursor: int) -> None:
+        """Mark the normal draws before row ``cursor`` of :meth:`normal_buffer` as used.
+
+        Raises:
+            ValueError: ``cursor`` is outside the buffer, or before the current cursor.
+        """
+        if not self._pos["normal"] <= cursor <= self._buf["normal"].shape[0]:
+            raise ValueError(f"normal cursor {cursor} outside {self._pos['normal']}.."
+                             f"{self._buf['normal'].shape[0]}")
+        self._pos["normal"] = int(cursor)
+
     def standard_normal(self, size: Any = None) -> np.ndarray:
         """Standard normal draws; ``size[0] == n`` gives one row per trial."""
         return self._batch("normal", size)

@@ -183,14 +183,13 @@ def contact_in_gripper(
     return (force if touching else None), inside, up
 
 
-@any_layout("force", "inside", "up")
 @njit
-def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
-                   bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
-                   mount_height: float, bar_radius: float, aperture: float,
-                   bar_half_length: float, gate_height: float, stiffness: float,
-                   damping: float, force: np.ndarray, inside: np.ndarray,
-                   up: np.ndarray) -> bool:
+def contact_kernel_body(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
+                        bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                        mount_height: float, bar_radius: float, aperture: float,
+                        bar_half_length: float, gate_height: float, stiffness: float,
+                        damping: float, force: np.ndarray, inside: np.ndarray,
+                        up: np.ndarray) -> bool:
     """The bar against each follower's contact arm: the force magnitude ``force`` (n,), the
     bar inside the gate ``inside`` (n,) and the follower's up axis ``up`` (n, 3); whether any
     bar touches an arm.
@@ -231,6 +230,43 @@ def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_
         else:
             force[i] = 0.0
     return any_touching
+
+
+@any_layout("force", "inside", "up")
+@njit
+def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_p: np.ndarray,
+                   bar_v: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                   mount_height: float, bar_radius: float, aperture: float,
+                   bar_half_length: float, gate_height: float, stiffness: float,
+                   damping: float, force: np.ndarray, inside: np.ndarray,
+                   up: np.ndarray) -> bool:
+    """:func:`contact_kernel_body` for a call from Python: any array layout (sealed to one general
+    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
+    seal stops from compiling for their types."""
+    return contact_kernel_body(fol_p, fol_r, fol_v, bar_p, bar_v, cos_yaw, sin_yaw, mount_height,
+                               bar_radius, aperture, bar_half_length, gate_height, stiffness,
+                               damping, force, inside, up)
+
+
+@njit
+def contact_push(contact: np.ndarray, up: np.ndarray, captured: np.ndarray, any_captured: bool,
+                 contact_seen: np.ndarray, force: np.ndarray, bar_force: np.ndarray) -> None:
+    """The contact's push (the world's ``gripper contact`` term, once some bar touches an arm):
+    no push on a captured follower (``contact`` set to 0 there, in place: NumPy's
+    ``np.where(captured, 0.0, contact)``), ``push = up * contact``, ``contact_seen |= contact >
+    0``, the followers' rows ``force[n:] -= push`` and ``bar_force += push``, element by
+    element as NumPy computes them."""
+    n = contact.shape[0]
+    for i in range(n):
+        if any_captured and captured[i]:
+            contact[i] = 0.0
+        c = contact[i]
+        if c > 0:
+            contact_seen[i] = True
+        for k in range(3):
+            push = up[i, k] * c
+            force[n + i, k] -= push
+            bar_force[i, k] += push
 
 
 def gripper_idle(state: GripperState) -> bool:

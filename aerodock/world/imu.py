@@ -184,6 +184,16 @@ def start_imu(attitude: np.ndarray, bias_body_mps2: np.ndarray, gravity_mps2: fl
     )
 
 
+def imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
+    """The chain's two low-passes as the kernels read them (:func:`biquad_coeffs`, kept on
+    the state)."""
+    hit = ims.__dict__.get("_coeffs")
+    if hit is None:
+        hit = (biquad_coeffs(ims.gyro_filter), biquad_coeffs(ims.accel_filter))
+        ims.__dict__["_coeffs"] = hit
+    return hit
+
+
 # -- the compiled chain -------------------------------------------------------------------------
 def biquad_coeffs(biquad: Biquad | None) -> np.ndarray:
     """(6,) ``(on, b0, b1, b2, a1, a2)`` for the kernels (``on`` 0: samples pass through)."""

@@ -272,17 +272,16 @@ _NO_YAW = np.zeros(0)
 freeze(_NO_YAW)
 
 
-@any_layout("p_new", "v_new", "yaw_new", "yaw_rate_new", "cable")
 @njit
-def hanging_bar_kernel(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
-                       bar_yaw: np.ndarray, bar_yaw_rate: np.ndarray, lead_p: np.ndarray,
-                       lead_v: np.ndarray, lead_a: np.ndarray, lead_r: np.ndarray,
-                       lead_p_next: np.ndarray, lead_yaw: np.ndarray, yaw_from_rot: bool,
-                       force: np.ndarray, mass: np.ndarray, anchor_below: float,
-                       length: float, swing_damping: float, gravity: float,
-                       yaw_omega2: float, yaw_damping: float, dt: float, p_new: np.ndarray,
-                       v_new: np.ndarray, yaw_new: np.ndarray, yaw_rate_new: np.ndarray,
-                       cable: np.ndarray) -> None:
+def hanging_bar_kernel_body(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
+                            bar_yaw: np.ndarray, bar_yaw_rate: np.ndarray, lead_p: np.ndarray,
+                            lead_v: np.ndarray, lead_a: np.ndarray, lead_r: np.ndarray,
+                            lead_p_next: np.ndarray, lead_yaw: np.ndarray, yaw_from_rot: bool,
+                            force: np.ndarray, mass: np.ndarray, anchor_below: float, length: float,
+                            swing_damping: float, gravity: float, yaw_omega2: float,
+                            yaw_damping: float, dt: float, p_new: np.ndarray, v_new: np.ndarray,
+                            yaw_new: np.ndarray, yaw_rate_new: np.ndarray,
+                            cable: np.ndarray) -> None:
     """:func:`step_hanging_bar`'s kernel: the anchors (``R[:, :, 2] * d`` added to the start
     and end positions, NumPy's elementwise operations), the yaw by NumPy's arctan2 loop when
     ``yaw_from_rot``, then :func:`step_bar_kernel` on the first ``n`` rows."""
@@ -303,6 +302,26 @@ def hanging_bar_kernel(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
         step_bar_kernel(bar_p, bar_v, bar_yaw, bar_yaw_rate, anchor_p, lead_v[:n], lead_a[:n],
                         anchor_p_next, lead_yaw, force, mass, length, swing_damping, gravity,
                         yaw_omega2, yaw_damping, dt, p_new, v_new, yaw_new, yaw_rate_new, cable)
+
+
+@any_layout("p_new", "v_new", "yaw_new", "yaw_rate_new", "cable")
+@njit
+def hanging_bar_kernel(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndarray,
+                       bar_yaw: np.ndarray, bar_yaw_rate: np.ndarray, lead_p: np.ndarray,
+                       lead_v: np.ndarray, lead_a: np.ndarray, lead_r: np.ndarray,
+                       lead_p_next: np.ndarray, lead_yaw: np.ndarray, yaw_from_rot: bool,
+                       force: np.ndarray, mass: np.ndarray, anchor_below: float,
+                       length: float, swing_damping: float, gravity: float,
+                       yaw_omega2: float, yaw_damping: float, dt: float, p_new: np.ndarray,
+                       v_new: np.ndarray, yaw_new: np.ndarray, yaw_rate_new: np.ndarray,
+                       cable: np.ndarray) -> None:
+    """:func:`hanging_bar_kernel_body` for a call from Python: any array layout (sealed to one
+    general signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself,
+    which no seal stops from compiling for their types."""
+    hanging_bar_kernel_body(loops, bar_p, bar_v, bar_yaw, bar_yaw_rate, lead_p, lead_v, lead_a,
+                            lead_r, lead_p_next, lead_yaw, yaw_from_rot, force, mass, anchor_below,
+                            length, swing_damping, gravity, yaw_omega2, yaw_damping, dt, p_new,
+                            v_new, yaw_new, yaw_rate_new, cable)
 
 
 @njit

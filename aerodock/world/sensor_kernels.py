@@ -48,20 +48,18 @@ CHANGED_READING, CHANGED_BY_CONTACT, CHANGED_SERVO, CHANGED_START, CHANGED_DONE 
 _OPEN, _CLOSING, _CAPTURED, _MISSED = 0, 1, 2, 3  # aerodock.world.gripper.GateState
 
 
-@any_layout("reading", "by_contact", "servo_start", "gate", "inside_at_start", "slipped",
-            "resolved")
 @njit
-def gripper_step_kernel(gate0: np.ndarray, bias_true: np.ndarray, bias_est: np.ndarray,
-                        reading0: np.ndarray, servo_start0: np.ndarray,
-                        by_contact0: np.ndarray, inside_at_start0: np.ndarray,
-                        slipped0: np.ndarray, resolved0: np.ndarray, close_time: np.ndarray,
-                        stuck: np.ndarray, t_s: float, contact: np.ndarray, inside: np.ndarray,
-                        sample: bool, noise: np.ndarray, noise_sd: float, threshold: float,
-                        passive_any: bool, passive: np.ndarray, active_any: bool,
-                        active: np.ndarray, close_command: np.ndarray, latency: float,
-                        reading: np.ndarray, by_contact: np.ndarray, servo_start: np.ndarray,
-                        gate: np.ndarray, inside_at_start: np.ndarray, slipped: np.ndarray,
-                        resolved: np.ndarray) -> int:
+def gripper_step_kernel_body(gate0: np.ndarray, bias_true: np.ndarray, bias_est: np.ndarray,
+                             reading0: np.ndarray, servo_start0: np.ndarray,
+                             by_contact0: np.ndarray, inside_at_start0: np.ndarray,
+                             slipped0: np.ndarray, resolved0: np.ndarray, close_time: np.ndarray,
+                             stuck: np.ndarray, t_s: float, contact: np.ndarray, inside: np.ndarray,
+                             sample: bool, noise: np.ndarray, noise_sd: float, threshold: float,
+                             passive_any: bool, passive: np.ndarray, active_any: bool,
+                             active: np.ndarray, close_command: np.ndarray, latency: float,
+                             reading: np.ndarray, by_contact: np.ndarray, servo_start: np.ndarray,
+                             gate: np.ndarray, inside_at_start: np.ndarray, slipped: np.ndarray,
+                             resolved: np.ndarray) -> int:
     """One step of the grippers (:func:`aerodock.world.gripper.step_gripper`): the state's
     arrays (``*0``, ``bias_*``, ``close_time``, ``stuck``) in, the next state's out (``reading``
     ... ``resolved``: every element written). Returns the ``CHANGED_*`` bits: which outputs the
@@ -127,3 +125,28 @@ def gripper_step_kernel(gate0: np.ndarray, bias_true: np.ndarray, bias_est: np.n
     if finished:
         changed |= CHANGED_DONE
     return changed
+
+
+@any_layout("reading", "by_contact", "servo_start", "gate", "inside_at_start", "slipped",
+            "resolved")
+@njit
+def gripper_step_kernel(gate0: np.ndarray, bias_true: np.ndarray, bias_est: np.ndarray,
+                        reading0: np.ndarray, servo_start0: np.ndarray,
+                        by_contact0: np.ndarray, inside_at_start0: np.ndarray,
+                        slipped0: np.ndarray, resolved0: np.ndarray, close_time: np.ndarray,
+                        stuck: np.ndarray, t_s: float, contact: np.ndarray, inside: np.ndarray,
+                        sample: bool, noise: np.ndarray, noise_sd: float, threshold: float,
+                        passive_any: bool, passive: np.ndarray, active_any: bool,
+                        active: np.ndarray, close_command: np.ndarray, latency: float,
+                        reading: np.ndarray, by_contact: np.ndarray, servo_start: np.ndarray,
+                        gate: np.ndarray, inside_at_start: np.ndarray, slipped: np.ndarray,
+                        resolved: np.ndarray) -> int:
+    """:func:`gripper_step_kernel_body` for a call from Python: any array layout (sealed to one
+    general signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself,
+    which no seal stops from compiling for their types."""
+    return gripper_step_kernel_body(gate0, bias_true, bias_est, reading0, servo_start0,
+                                    by_contact0, inside_at_start0, slipped0, resolved0, close_time,
+                                    stuck, t_s, contact, inside, sample, noise, noise_sd,
+                                    threshold, passive_any, passive, active_any, active,
+                                    close_command, latency, reading, by_contact, servo_start, gate,
+                                    inside_at_start, slipped, resolved)

@@ -4,7 +4,9 @@ Both vehicles are one batch of 2n rows, leaders first: every vehicle operation i
 numbers are those of two separate calls at half the per-call overhead. ``leader`` and ``follower``
 are views of that batch's halves, split off when first asked for; replacing either rebuilds the
 batch from the two halves. States are never modified in place by the step: it makes new arrays,
-so a reference kept by a log or the motion-capture buffer keeps its values. The one exception is
+so a reference kept by a log or the motion-capture buffer keeps its values (the compiled control
+period, :mod:`aerodock.world.period`, writes each step's outputs into that step's own rows of
+arrays it makes for the period, and hands the last rows on as the state). The one exception is
 the IMU chain's own memory (its filters' states, delay lines and the navigation's ring,
 :class:`~aerodock.world.imu.ImuState`), which the step advances in place: nothing outside the
 chain holds it, copies of a state (``take_rows``) copy it, and what the chain hands out (rates,

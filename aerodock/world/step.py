@@ -9,6 +9,11 @@ turbulence (follower, then bar), the gyros (and, with the filtered IMU chain, th
 accelerometers), the strain gauge. A new effect is one function in :mod:`aerodock.world.terms`
 and one ``Term`` here, or, outside the package, a step of one's own (:func:`with_term`) passed to
 :class:`aerodock.world.World`; :mod:`aerodock.world.term_template` is a documented one to copy.
+
+:data:`WORLD_STEP` also runs as one compiled call per control period
+(:mod:`aerodock.world.period`, the same terms in the same order and the same numbers); a term
+added to it here runs there only once the period's kernel has it too (until then the world
+steps per step: ``period.runs_step``).
 """
 
 from __future__ import annotations

@@ -21,11 +21,21 @@ from aerodock.downwash.wrench import (
 )
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import standard_normal_t
-from aerodock.world.gripper import contact_in_gripper, step_gripper, step_is_idle
-from aerodock.world.imu import ImuState, biquad_coeffs, imu_step
+from aerodock.world.gripper import contact_in_gripper, contact_push, step_gripper, step_is_idle
+from aerodock.world.imu import imu_coeffs, imu_step
 from aerodock.world.params import WorldParams
-from aerodock.world.platform import any_above, cable_wrench_kernel, step_hanging_bar
+from aerodock.world.platform import (
+    any_above,
+    cable_wrench_kernel,
+    step_hanging_bar,
+)
 from aerodock.world.state import StepFrame, WorldState
+from aerodock.world.term_kernels import (
+    carry_captured,
+    ground_kernel,
+    hang_captured,
+    rotor_fault_wrench,
+)
 
 
 # -- forces ----------------------------------------------------------------------------------
@@ -106,12 +116,10 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
         # accumulators, sums onto +0, hold no -0 for it to turn into +0)
         frame.contact_n, frame.inside = np.zeros(n), inside
         return
-    if frame.any_captured:
-        contact = np.where(frame.captured, 0.0, contact)
-    push = up * contact[:, None]
-    state.contact_seen |= contact > 0  # the recorder flags the labels of a period with contact
-    frame.force_n[n:] -= push
-    frame.bar_force_n += push
+    # compiled: no push on a captured follower, the push on the follower and on the bar, and
+    # contact_seen (the recorder flags the labels of a period with contact)
+    contact_push(contact, up, frame.captured, frame.any_captured, state.contact_seen,
+                 frame.force_n, frame.bar_force_n)
     frame.contact_n, frame.inside = contact, inside
 
 
@@ -131,15 +139,12 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     rotors do not give, as a force and a torque; the autopilot is not told."""
     if state.rotor_loss is None:
         return
-    n, fleet = state.n, params.follower_fleet.params
-    both = frame.both
-    lost = both.rotor_speed[n:] * both.rotor_speed[n:]
-    lost *= (fleet.thrust_coeff * both.thrust_gain[n:])[:, None]
-    lost *= state.rotor_loss
-    frame.force_n[n:] += frame.rot[n:, :, 2] * lost.sum(axis=1)[:, None]  # less thrust, -z_b
-    torque = frame.torque_t.T[n:]
-    for i in range(lost.shape[1]):
-        torque -= lost[:, i:i + 1] * fleet.rotor_torque_map[i]
+    fleet, both = params.follower_fleet.params, frame.both
+    if state.rotor_loss.shape[1] >= 8:  # NumPy sums eight or more numbers pairwise
+        raise ValueError("rotor faults: at most seven rotors")
+    rotor_fault_wrench(both.rotor_speed, fleet.thrust_coeff, both.thrust_gain,
+                       np.asarray(state.rotor_loss, dtype=float), frame.rot,
+                       fleet.rotor_torque_map, frame.force_n, frame.torque_t)
 
 
 # -- motion ----------------------------------------------------------------------------------
@@ -171,7 +176,7 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     att = state.history[(state.step_index - latency) % (latency + 1)]
     chain, estimator, vehicle = params.imu.chain, params.imu.estimator, params.vehicle
     gyro, accel = ims.gyro, ims.accel
-    gyro_c, accel_c = _imu_coeffs(ims)
+    gyro_c, accel_c = imu_coeffs(ims)
     gyro.head, accel.head, ims.ring_head = imu_step(
         NUMPY_LOOPS, n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, gyro.z1,
         gyro.z2, gyro.delay, gyro.head, state.leader_accel, state.follower_accel,
@@ -189,15 +194,6 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
 
 
 _NO_DRAWS = np.zeros((6, 0))
-
-
-def _imu_coeffs(ims: ImuState) -> tuple[np.ndarray, np.ndarray]:
-    """The chain's two low-passes as the kernel reads them (kept on the state)."""
-    hit = ims.__dict__.get("_coeffs")
-    if hit is None:
-        hit = (biquad_coeffs(ims.gyro_filter), biquad_coeffs(ims.accel_filter))
-        ims.__dict__["_coeffs"] = hit
-    return hit
 
 
 def vehicles(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
@@ -230,12 +226,11 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     n, dt = state.n, params.dt_s
     new, platform, consts = frame.new, params.platform, state.constants
     accel = frame.accel
-    if frame.any_captured:
-        captured = frame.captured
-        hang_mass = np.where(captured, platform.bar_mass_kg + frame.mass_kg[n:],
-                             platform.bar_mass_kg)
-        fol_own = (accel[n:] - consts.gravity_mps2) * frame.fol_mass_rows_kg
-        frame.bar_force_n += np.where(captured[:, None], fol_own, 0.0)
+    if frame.any_captured:  # the captured followers' own forces go to the hanging mass
+        hang_mass = np.empty(n)
+        hang_captured(frame.captured, platform.bar_mass_kg, frame.mass_kg[n:], accel[n:],
+                      consts.gravity_mps2, frame.fol_mass_rows_kg, frame.bar_force_n,
+                      hang_mass)
     else:
         hang_mass = consts.bar_mass_kg
     state.bar, state.cable_force_n = step_hanging_bar(
@@ -243,25 +238,18 @@ def hanging_pair(state: WorldState, frame: StepFrame, params: WorldParams) -> No
         None if params.rigid else frame.both.rpy[:n, 2], frame.bar_force_n, hang_mass,
         platform, dt,
     )
-    if frame.any_captured:
+    if frame.any_captured:  # carried with the bar
         gp = params.gripper
-        fol_accel = accel[n:]
-        up_new = -new.R[n:, :, 2]
-        p_hang = state.bar.p - up_new * (gp.mount_height_m + gp.bar_radius_m)
-        cap = frame.captured[:, None]
-        np.copyto(new.p[n:], p_hang, where=cap)
-        np.copyto(new.v[n:], state.bar.v, where=cap)
-        np.copyto(fol_accel, (new.v[n:] - frame.vel[n:]) / dt, where=cap)
+        carry_captured(frame.captured, state.bar.p, state.bar.v, new.R[n:], new.p[n:],
+                       new.v[n:], frame.vel[n:], accel[n:], gp.mount_height_m + gp.bar_radius_m,
+                       dt)
 
 
 def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
-    new, n = frame.new, state.n
-    if any_above(new.p, 0.0):  # np.fmax.reduce(z) > 0: some z above 0, NaN aside
-        below = new.p[:, 2] > 0.0
-        new.p[:, 2] = np.minimum(new.p[:, 2], 0.0)
-        new.v[:, 2] = np.where(below, np.minimum(new.v[:, 2], 0.0), new.v[:, 2])
-        state.ground_contact |= below[n:] | below[:n]
+    new = frame.new
+    if any_above(new.p, 0.0):  # some z above 0 (NaN aside): compiled, as the period's
+        ground_kernel(new.p, new.v, state.ground_contact)
 
 
 def commit(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

@@ -36,6 +36,7 @@ from aerodock.world.gripper import (
 )
 from aerodock.world.imu import start_imu
 from aerodock.world.params import WorldParams
+from aerodock.world.period import STOP_UNCOVERED, covered, run_period, runs_step
 from aerodock.world.platform import BarState, PlatformParams, anchor_point, hanging_bar
 from aerodock.world.sensors import Observation
 from aerodock.world.state import AccelWindow, BatchConstants, WorldState
@@ -397,10 +398,23 @@ class World:
 
     def advance(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand,
                 close_command: np.ndarray | None = None) -> None:
-        """One control period: ``substeps`` physics steps with zero-order-hold commands."""
+        """One control period: ``substeps`` physics steps with zero-order-hold commands. With
+        the default step (:data:`~aerodock.world.step.WORLD_STEP`) in a world the compiled
+        period covers, one compiled call runs them (:mod:`aerodock.world.period`: the same
+        numbers), the per-step path the steps it leaves."""
         targets = self._targets(leader_cmd, follower_cmd)  # prepared once per period
         state, params, terms = self.state, self.params, self.terms
-        for _ in range(params.substeps):
+        left = params.substeps
+        if runs_step(terms):  # the default step: one compiled call where it covers the world
+            while left and covered(state, params):
+                done, why = run_period(state, params, targets, close_command, left)
+                left -= done
+                if not left or why == STOP_UNCOVERED:
+                    break
+                if not done:  # the per-step path draws (or refills) and goes on
+                    step_world(state, params, terms, targets, close_command)
+                    left -= 1
+        for _ in range(left):
             step_world(state, params, terms, targets, close_command)
 
     def _targets(self, leader_cmd: AttitudeCommand, follower_cmd: AttitudeCommand) -> Any:

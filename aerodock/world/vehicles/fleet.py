@@ -24,6 +24,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.config.schema import AutopilotSection, VehicleSection
 from aerodock.frozen import freeze
+from aerodock.world.vehicles import rigid_kernel
 from aerodock.world.vehicles.body import VehicleBody, body_rows, concat_bodies, nominal_body
 from aerodock.world.vehicles.point_mass import (
     AttitudeCommand,
@@ -70,7 +71,11 @@ def _frozen(state: Any) -> Any:
 
 def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> AttitudeCommand:
     def both(name: str) -> np.ndarray:  # np.concatenate of the two, each broadcast to (n,)
-        a, b = np.asarray(getattr(lead, name)), np.asarray(getattr(fol, name))
+        a, b = getattr(lead, name), getattr(fol, name)
+        if (type(a) is np.ndarray and type(b) is np.ndarray and a.shape == b.shape == (n,)
+                and a.dtype == b.dtype == np.float64):  # the controllers' commands: one call
+            return np.concatenate((a, b))
+        a, b = np.asarray(a), np.asarray(b)
         out = np.empty(2 * n, dtype=np.result_type(a, b))
         out[:n] = a
         out[n:] = b
@@ -188,9 +193,16 @@ class RigidBodyFleet:
 
     def hovering(self, state: RigidBodyState, old: RigidBodyState,
                  rows: slice) -> RigidBodyState:
-        """``state`` with ``rows`` held as in ``old`` (a leader on a rigid stand)."""
-        for name in ("p", "v", "R", "w", "rotor_speed", "autopilot_state", "thrust_n"):
-            getattr(state, name)[rows] = getattr(old, name)[rows]
+        """``state`` with ``rows`` (a slice of step 1) held as in ``old`` (a leader on a rigid
+        stand; compiled: :func:`rigid_kernel.hold_rows`, which the world's compiled control
+        period calls too)."""
+        start, stop, step = rows.indices(state.p.shape[0])
+        if step != 1:
+            raise ValueError(f"hovering holds a slice of step 1, got {rows}")
+        rigid_kernel.hold_rows(start, stop, old.p, old.v, old.R, old.w, old.rotor_speed,
+                               old.autopilot_state, old.thrust_n, state.p, state.v, state.R,
+                               state.w, state.rotor_speed, state.autopilot_state,
+                               state.thrust_n)
         return state
 
 

@@ -327,14 +327,9 @@ def _body_constants(body: VehicleBody, dt_s: float) -> tuple[np.ndarray, np.ndar
     return alpha, rows
 
 
-def step_rigid_body(
-    state: RigidBodyState,
-    rotor_speed_cmd: np.ndarray,
-    ext_force_n: np.ndarray,
-    ext_torque_nm: np.ndarray | None,
-    params: RigidBodyParams,
-    dt_s: float,
-) -> tuple[RigidBodyState, np.ndarray]:
+def step_rigid_body(state: RigidBodyState, rotor_speed_cmd: np.ndarray, ext_force_n: np.ndarray,
+                    ext_torque_nm: np.ndarray | None, params: RigidBodyParams,
+                    dt_s: float) -> tuple[RigidBodyState, np.ndarray]:
     """Advance N vehicles by ``dt_s`` under rotor-speed commands; returns (state, accel (n, 3)).
 
     Args:
@@ -361,7 +356,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
     yaw setpoint) from the compiled :func:`rigid_kernel.step_vehicles`: under the rotor speed
     commands ``rotor_speed_cmd``, or (None) flown by the autopilot to ``targets`` on ``gyro``
     (plus ``gyro_noise``) and ``attitude`` (None: the true attitude), the world's step, through
-    :func:`_flown_step` with the constants packed (:func:`_packed_constants`)."""
+    :func:`flown_step` with the constants packed (:func:`_packed_constants`)."""
     n = state.p.shape[0]
     out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3)),
            np.empty((n, 4)), np.empty(n), np.empty((n, 3)),
@@ -370,7 +365,7 @@ def _step_arrays(state: RigidBodyState, rotor_speed_cmd: np.ndarray | None,
         arguments, packed = _packed_constants(state.body, params, dt_s, state.thrust_gain)
         ff = targets.torque_ff_nm
         if packed is not None:
-            _flown_step(
+            flown_step(
                 packed, state.p, state.v, state.R, state.w, state.rotor_speed,
                 _NO_ATTITUDE if attitude is None else attitude, attitude is not None,
                 targets.R_des, targets.yaw_rate_radps, targets.thrust_n,
@@ -440,9 +435,10 @@ def _step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
 
 
 def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
-                      thrust_gain: np.ndarray) -> tuple[tuple, np.ndarray | None]:
+                      thrust_gain: np.ndarray, eager: bool = False,
+                      ) -> tuple[tuple, np.ndarray | None]:
     """(:func:`_step_constants`' tuple, the same numbers and ``dt_s`` in one flat read-only
-    array as :func:`_flown_step` reads them, or None). The array is built the second time the
+    array as :func:`flown_step` reads them, or None). The array is built the second time the
     same tuple serves (a body and gains that stay, as in the world's step: one array to pass
     instead of eleven arrays and eight numbers, at a batch of 1 the compiled call's cost is
     mostly its arguments'); a tuple used once (a body split off for one step, a pair's half)
@@ -454,16 +450,16 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
     (row-major), the step factor, the autopilot's, the stack's, the mixer's, the torque map's
     and the drag sums' numbers (copied, not computed). Not packed unless the body's torque gains
     and mass rows and the flight stack's constants are read-only (the tuple reads them live; a
-    copy would not see a write)."""
+    copy would not see a write). ``eager``: packed at the first use."""
     arguments = _step_constants(body, params, dt_s, thrust_gain)
     if not (is_frozen(body.torque_gain) and is_frozen(body.mass_rows_kg)
             and (params.stack_constants is None or is_frozen(params.stack_constants))):
         return arguments, None  # the tuple refers to them live; a copy could go stale
     hit = body.__dict__.get("_packed_arguments")  # not a field: numbers derived from it
-    if hit is None or hit[0] is not arguments:
+    if (hit is None or hit[0] is not arguments) and not eager:
         body.__dict__["_packed_arguments"] = (arguments, None)  # packed if used again
         return arguments, None
-    if hit[1] is not None:
+    if hit is not None and hit[0] is arguments and hit[1] is not None:
         return hit
     (kc, torque_gain, mass_rows, inertia, alpha, consts, has_stack, stack, mixer, thrust_max,
      thrust_coeff, torque_map, drag_sums, drag, drag_z, parasitic, gravity) = arguments
@@ -482,18 +478,23 @@ def _packed_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
 _PACK_HEADER = 14
 
 
-@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
-            "integral_new", "yaw_sp_new", contiguous=("packed",))
+def packed_step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: float,
+                          thrust_gain: np.ndarray) -> np.ndarray | None:
+    """The flat constants :func:`flown_step` reads for ``body``'s vehicles, packed now if they
+    were not yet (:func:`_packed_constants`; None: they cannot be)."""
+    return _packed_constants(body, params, dt_s, thrust_gain, eager=True)[1]
+
+
 @njit
-def _flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
-                w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
-                r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
-                torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
-                noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
-                ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
-                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
-                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
-                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+def flown_step_body(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+                    w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
+                    r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                    torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                    noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+                    ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+                    v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                    omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                    integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
     """:func:`rigid_kernel.step_vehicles` flown by the autopilots, its constants read from
     :func:`_packed_constants`' array (views of it, the same numbers)."""
     n = p.shape[0]
@@ -519,13 +520,34 @@ def _flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarra
     torque_map = packed[o:o + n_map]
     o += n_map
     drag_sums = packed[o:o + n_drag]
-    rigid_kernel.step_vehicles(
+    rigid_kernel.step_vehicles_body(
         p, v, rot, w, omega, kc, torque_gain, mass_rows, inertia, alpha, True, omega[:0], att,
         use_att, r_des, yaw_rate, thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy,
         integral, yaw_sp, consts, packed[6] != 0.0, stack, mixer, packed[7], packed[8],
         ext_force, ext_torque, has_ext_torque, torque_map, drag_sums, packed[9], packed[10],
         packed[11], packed[12], packed[13], p_new, v_new, rot_new, w_new, omega_new,
         thrust_new, accel, integral_new, yaw_sp_new)
+
+
+@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
+            "integral_new", "yaw_sp_new", contiguous=("packed",))
+@njit
+def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+                w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
+                r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+                ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+    """:func:`flown_step_body` for a call from Python: any array layout (sealed to one general
+    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
+    seal stops from compiling for their types."""
+    flown_step_body(packed, p, v, rot, w, omega, att, use_att, r_des, yaw_rate, thrust_cmd,
+                    torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp, ext_force,
+                    ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
+                    thrust_new, accel, integral_new, yaw_sp_new)
 
 
 _NO_ATTITUDE = np.zeros((0, 3, 3))

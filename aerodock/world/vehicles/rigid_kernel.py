@@ -329,25 +329,22 @@ def _drag_sum(o0: float, o1: float, o2: float, o3: float, ds: tuple, c: int) -> 
     return dot4(ds[c], ds[7 + c], ds[14 + c], ds[21 + c], o0, o1, o2, o3)
 
 
-@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
-            "integral_new", "yaw_sp_new")
 @njit
-def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
-                  omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
-                  mass_rows: np.ndarray, inertia: np.ndarray, alpha: np.ndarray,
-                  autopilot_on: bool, omega_cmd: np.ndarray, att: np.ndarray, use_att: bool,
-                  r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
-                  torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
-                  noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts_a: np.ndarray,
-                  stack_on: bool, stack_c: np.ndarray,
-                  mixer_a: np.ndarray, rotor_thrust_max: float, thrust_coeff: float,
-                  ext_force: np.ndarray, ext_torque: np.ndarray, has_ext_torque: bool,
-                  torque_map_a: np.ndarray, drag_sums_a: np.ndarray, kd: float, kz: float,
-                  c_drag: float,
-                  gravity: float, dt: float, p_new: np.ndarray, v_new: np.ndarray,
-                  rot_new: np.ndarray, w_new: np.ndarray, omega_new: np.ndarray,
-                  thrust_new: np.ndarray, accel: np.ndarray, integral_new: np.ndarray,
-                  yaw_sp_new: np.ndarray) -> None:
+def step_vehicles_body(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
+                       omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
+                       mass_rows: np.ndarray, inertia: np.ndarray, alpha: np.ndarray,
+                       autopilot_on: bool, omega_cmd: np.ndarray, att: np.ndarray, use_att: bool,
+                       r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                       torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray,
+                       gyro_noise: np.ndarray, noisy: bool, integral: np.ndarray,
+                       yaw_sp: np.ndarray, consts_a: np.ndarray, stack_on: bool,
+                       stack_c: np.ndarray, mixer_a: np.ndarray, rotor_thrust_max: float,
+                       thrust_coeff: float, ext_force: np.ndarray, ext_torque: np.ndarray,
+                       has_ext_torque: bool, torque_map_a: np.ndarray, drag_sums_a: np.ndarray,
+                       kd: float, kz: float, c_drag: float, gravity: float, dt: float,
+                       p_new: np.ndarray, v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+                       omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+                       integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
     """One physics step of ``n`` rigid bodies, written into the ``*_new`` arrays and ``accel``
     (the step's acceleration, NED).
 
@@ -467,6 +464,37 @@ def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
         thrust_new[i] = tn
 
 
+@any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
+            "integral_new", "yaw_sp_new")
+@njit
+def step_vehicles(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndarray,
+                  omega: np.ndarray, thrust_coeffs: np.ndarray, torque_gain: np.ndarray,
+                  mass_rows: np.ndarray, inertia: np.ndarray, alpha: np.ndarray,
+                  autopilot_on: bool, omega_cmd: np.ndarray, att: np.ndarray, use_att: bool,
+                  r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+                  torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+                  noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, consts_a: np.ndarray,
+                  stack_on: bool, stack_c: np.ndarray,
+                  mixer_a: np.ndarray, rotor_thrust_max: float, thrust_coeff: float,
+                  ext_force: np.ndarray, ext_torque: np.ndarray, has_ext_torque: bool,
+                  torque_map_a: np.ndarray, drag_sums_a: np.ndarray, kd: float, kz: float,
+                  c_drag: float,
+                  gravity: float, dt: float, p_new: np.ndarray, v_new: np.ndarray,
+                  rot_new: np.ndarray, w_new: np.ndarray, omega_new: np.ndarray,
+                  thrust_new: np.ndarray, accel: np.ndarray, integral_new: np.ndarray,
+                  yaw_sp_new: np.ndarray) -> None:
+    """:func:`step_vehicles_body` for a call from Python: any array layout (sealed to one general
+    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
+    seal stops from compiling for their types."""
+    step_vehicles_body(p, v, rot, w, omega, thrust_coeffs, torque_gain, mass_rows, inertia, alpha,
+                       autopilot_on, omega_cmd, att, use_att, r_des, yaw_rate, thrust_cmd,
+                       torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp, consts_a,
+                       stack_on, stack_c, mixer_a, rotor_thrust_max, thrust_coeff, ext_force,
+                       ext_torque, has_ext_torque, torque_map_a, drag_sums_a, kd, kz, c_drag,
+                       gravity, dt, p_new, v_new, rot_new, w_new, omega_new, thrust_new, accel,
+                       integral_new, yaw_sp_new)
+
+
 @njit
 def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
                     thrust_cmd: np.ndarray, torque_ff: np.ndarray, has_ff: bool,
@@ -534,3 +562,25 @@ def rotate_batch(rot: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
     """``out[i] = rot[i] exp([phi[:, i]]x)`` for component-major rotation vectors (3, n)."""
     for i in range(rot.shape[0]):
         store3x3(out, i, mat3_mul(load3x3(rot, i), exp_so3(phi[0, i], phi[1, i], phi[2, i])))
+
+
+@njit
+def hold_rows(start: int, stop: int, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
+              w: np.ndarray, omega: np.ndarray, integral: np.ndarray, thrust: np.ndarray,
+              p_new: np.ndarray, v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+              omega_new: np.ndarray, integral_new: np.ndarray, thrust_new: np.ndarray) -> None:
+    """Rows ``start..stop-1`` of the new state (``*_new``) held as in the old one (a leader on
+    a rigid stand): position, velocity, attitude, rates, rotor speeds, the autopilot's state and
+    the thrust, copied."""
+    for i in range(start, stop):
+        for c in range(3):
+            p_new[i, c] = p[i, c]
+            v_new[i, c] = v[i, c]
+            w_new[i, c] = w[i, c]
+            for d in range(3):
+                rot_new[i, c, d] = rot[i, c, d]
+        for j in range(omega.shape[1]):
+            omega_new[i, j] = omega[i, j]
+        for j in range(integral.shape[1]):
+            integral_new[i, j] = integral[i, j]
+        thrust_new[i] = thrust[i]
