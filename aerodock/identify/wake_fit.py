@@ -37,7 +37,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cache
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -52,8 +52,16 @@ from aerodock.identify.flights import (
     autocovariance,
 )
 
-if TYPE_CHECKING:
-    from aerodock.identify.torque_labels import TorqueLabels
+
+class TorqueResidual(Protocol):
+    """What the fit needs of one flight's torque labels
+    (:class:`aerodock.identify.torque_labels.TorqueLabels` are such)."""
+
+    def residual_mps2(self, model_body_nm: np.ndarray) -> np.ndarray:
+        """(m,) the real torque less the model's (``model_body_nm``: (m, 3) N·m, body FRD), as
+        an acceleration (m/s²)."""
+        ...
+
 
 MEAN_PARAMS = ("width0_ratio", "spread_rate", "ingest_coeff", "ingest_exponent", "planar_ratio")
 TURBULENCE_PARAMS = ("turb_vertical", "turb_lateral", "turb_length_ratio", "turb_time_ratio")
@@ -151,7 +159,7 @@ def model_mean(params: dict[str, float], flight: FlightSamples,
     return jet.mean_acceleration(flight.leader, flight.follower)
 
 
-def labels_for(torque: Mapping[str, TorqueLabels] | None, name: str) -> TorqueLabels | None:
+def labels_for(torque: Mapping[str, TorqueResidual] | None, name: str) -> TorqueResidual | None:
     """The torque labels of the flight ``name`` (a bootstrap's copy, ``NAME#j``, has its
     original's)."""
     if not torque:
@@ -168,9 +176,9 @@ def model_torque(params: dict[str, float], flight: FlightSamples,
 
 
 def torque_rms(params: dict[str, float], flights: Sequence[FlightSamples],
-               torque: Mapping[str, TorqueLabels] | None,
+               torque: Mapping[str, TorqueResidual] | None,
                rotor_radii_m: dict[str, float] | None = None) -> float:
-    """The RMS of the torque residual (:meth:`TorqueLabels.residual_mps2`) over the flights
+    """The RMS of the torque residual (:meth:`TorqueResidual.residual_mps2`) over the flights
     with labels, m/s² (nan: none has them)."""
     parts = [lab.residual_mps2(model_torque(params, f, rotor_radii_m))
              for f in flights if (lab := labels_for(torque, f.name)) is not None]
@@ -196,7 +204,7 @@ def _radial_unit(offset_m: np.ndarray) -> np.ndarray:
 def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = None,
              estimate_rotor_for: Sequence[str] = (),
              rotor_start_m: dict[str, float] | None = None,
-             torque: Mapping[str, TorqueLabels] | None = None,
+             torque: Mapping[str, TorqueResidual] | None = None,
              ) -> tuple[dict[str, float], dict[str, float], float]:
     """Least squares of the de-biased residual (vertical and radial) against the jet's mean;
     with ``torque`` (labels by flight name, :func:`~aerodock.identify.torque_labels.
@@ -433,7 +441,7 @@ def fit_correlation_time(params: dict[str, float], flights: Sequence[FlightSampl
 def fit_wake(flights: Sequence[FlightSamples], *, estimate_rotor_for: Sequence[str] = (),
              bootstrap: int = 0, seed: int = 0,
              progress: Callable[[int, int], None] | None = None,
-             torque: Mapping[str, TorqueLabels] | None = None) -> WakeFit:
+             torque: Mapping[str, TorqueResidual] | None = None) -> WakeFit:
     """The whole fit: mean (with ``torque``'s labels, the torque too: :func:`fit_mean`), then
     turbulence, then (``bootstrap`` > 0) the spread of every parameter over refits on flights
     resampled with replacement.
@@ -475,7 +483,7 @@ def summarise_draws(draws: Sequence[dict[str, float]]) -> dict[str, dict[str, fl
 
 def _bootstrap(flights: list[FlightSamples], fit: WakeFit, estimate_rotor_for: Sequence[str],
                runs: int, seed: int, progress: Callable[[int, int], None] | None,
-               torque: Mapping[str, TorqueLabels] | None = None) -> list[dict[str, float]]:
+               torque: Mapping[str, TorqueResidual] | None = None) -> list[dict[str, float]]:
     """Refits on the flights resampled with replacement (a flight drawn twice counts twice):
     one dict of parameters (and ``rotor_radius_m[ID]``) per refit that succeeded."""
     rng = np.random.default_rng(seed)

@@ -15,16 +15,13 @@ single fitted intensity must cover.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from aerodock.identify.flights import FlightSamples, WakeFitError
-from aerodock.identify.wake_fit import fit_wake
+from aerodock.identify.wake_fit import TorqueResidual, fit_wake
 from aerodock.identify.wake_score import TARGETS, score_wake
-
-if TYPE_CHECKING:
-    from aerodock.identify.torque_labels import TorqueLabels
 
 TARGET_KEYS = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
 
@@ -60,7 +57,7 @@ def assign_folds(flights: Sequence[FlightSamples], folds: int) -> dict[str, int]
 def cross_validate(flights: Sequence[FlightSamples], folds: int = 3, *,
                    estimate_rotor_for: Sequence[str] = (),
                    progress: Callable[[int, int], None] | None = None,
-                   torque: Mapping[str, TorqueLabels] | None = None) -> dict[str, Any]:
+                   torque: Mapping[str, TorqueResidual] | None = None) -> dict[str, Any]:
     """Every flight held out once, in ``folds`` folds (module docstring); each fold's fit takes
     the logged torque of its training flights where ``torque`` has it (as ``field fit`` does).
 
