@@ -248,11 +248,13 @@ def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = 
         params, radii = unpack(x)
         parts = []
         for f, unit, w, lab in zip(flights, units, weights, labels, strict=True):
-            err = f.label_mps2 - model_mean(params, f, radii)
+            jet = build_jet(params, geometry_with(f, radii))  # the force's and the torque's
+            err = f.label_mps2 - jet.mean_acceleration(f.leader, f.follower)
             parts.append(w * err[:, 2])
             parts.append(w * (err[:, 0] * unit[:, 0] + err[:, 1] * unit[:, 1]))
             if lab is not None:  # the torque, weighed as the force is
-                parts.append(w * lab.residual_mps2(model_torque(params, f, radii)))
+                parts.append(w * lab.residual_mps2(
+                    jet.mean_disk_torque_nm(f.leader, f.follower)))
         return np.concatenate(parts)
 
     result = least_squares(residual, x0, bounds=(low, high), x_scale="jac")

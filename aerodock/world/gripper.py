@@ -324,7 +324,17 @@ def step_gripper(
         slipped, resolved)
     if not changed:
         return state  # nothing changed (states are never modified in place)
-    # Unchanged arrays are passed on as they are (states are never modified in place).
+    return gripper_after(state, changed, reading, by_contact, servo_start, gate, inside_at_start,
+                         slipped, resolved)
+
+
+def gripper_after(state: GripperState, changed: int, reading: np.ndarray,
+                  by_contact: np.ndarray, servo_start: np.ndarray, gate: np.ndarray,
+                  inside_at_start: np.ndarray, slipped: np.ndarray,
+                  resolved: np.ndarray) -> GripperState:
+    """The grippers' state after :func:`gripper_step_kernel` wrote the new arrays and said which
+    it ``changed`` (its ``CHANGED_*`` bits): those arrays where they changed, the state's own
+    where not (passed on as they are: states are never modified in place)."""
     done = changed & CHANGED_DONE
     return GripperState(
         gate if changed & (CHANGED_START | CHANGED_DONE) else state.gate,

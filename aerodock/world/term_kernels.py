@@ -1,7 +1,7 @@
 """The compiled arithmetic of the world step's terms that were NumPy: the ground, a captured
 follower's rows of the hanging pair, injected rotor faults. Each is the one implementation its
 term (:mod:`aerodock.world.terms`) and the compiled control period
-(:mod:`aerodock.world.period`) both call, element by element as NumPy computed it
+(:mod:`aerodock.world.period_kernel`) both call, element by element as NumPy computed it
 (``tests/unit/test_period_kernel.py``)."""
 
 from __future__ import annotations

@@ -15,6 +15,7 @@ from aerodock.bench.simulator import SimLoop
 from aerodock.config import load_config
 from aerodock.rng import TrialRNG
 from aerodock.world import World, hover_command, period
+from aerodock.world import period_kernel as period_stops
 from aerodock.world.step import WORLD_STEP, Term, with_term
 from aerodock.world.term_kernels import ground_kernel, rotor_fault_wrench
 
@@ -107,7 +108,7 @@ def test_a_small_random_buffer_stops_the_kernel_mid_period(n, monkeypatch):
     monkeypatch.setattr(aerodock.rng, "_CHUNK", 40)
     ref, _ = _fly(n, 10, False, monkeypatch)
     got, stops = _fly(n, 10, True, monkeypatch)
-    assert stops.get(period.STOP_DRAWS, 0) >= 5  # mid-period stops, the per-step path went on
+    assert stops.get(period_stops.STOP_DRAWS, 0) >= 5  # mid-period stops, the per-step path went on
     assert 0 < stops["steps"] < 10 * 5
     _assert_same(ref, got)
 
@@ -117,7 +118,7 @@ def test_a_gripper_trigger_stops_the_kernel_after_its_step(monkeypatch):
     the kernel stops after that step (then its gate closes under the per-step path's eyes)."""
     ref, _ = _fly(3, 10, False, monkeypatch, close_at=4)
     got, stops = _fly(3, 10, True, monkeypatch, close_at=4)
-    assert stops.get(period.STOP_GRIPPER, 0) >= 1
+    assert stops.get(period_stops.STOP_GRIPPER, 0) >= 1
     _assert_same(ref, got)
 
 
@@ -250,7 +251,7 @@ def test_contact_and_a_captured_follower_run_compiled(monkeypatch):
     got, stops, world = _dock(True, monkeypatch)
     assert list(world.state.gripper.gate) == [2, 3, 2]  # captured, missed, captured
     assert list(world.state.contact_seen) == [True, False, True]
-    assert stops.get(period.STOP_GRIPPER, 0) >= 2  # the servo's start, the gate's end
+    assert stops.get(period_stops.STOP_GRIPPER, 0) >= 2  # the servo's start, the gate's end
     assert stops["steps"] >= 40 * 5 - 10  # the contacts and the hanging pairs compiled
     _assert_same(ref, got)
 
