@@ -28,7 +28,6 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 FIT = ROOT / "examples" / "crazyflie_wake_fitted.toml"
 HOLDOUT = ("swap_ss_0[56]", "swap_sl_2020-06-19_0[89]", "swap_sl_2020-06-19_1[01]")
-ROTORS = {"cf101": 0.0268}  # the fit's estimate of cf101's rotor radius (docs/world.md)
 
 
 def main() -> int:
@@ -51,8 +50,8 @@ def main() -> int:
                                           for v in t.var_mps4],
                            "vertical_sd": [float(v[2] ** 0.5) for v in t.var_mps4]}
                      for vid, t in noise.items()},
-           "held_out": speed_matched_turbulence(params, held, noise, rotor_radii_m=ROTORS),
-           "fitted_on": speed_matched_turbulence(params, train, noise, rotor_radii_m=ROTORS)}
+           "held_out": speed_matched_turbulence(params, held, noise),
+           "fitted_on": speed_matched_turbulence(params, train, noise)}
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return 0

@@ -63,10 +63,14 @@ SOURCE = "neural-swarm"
 # Crazyflie 2.1 masses of the Neural-Swarm dataset, kg.
 VEHICLE_MASSES_KG: dict[str, float] = {"small": 0.032, "large": 0.067}
 # Rotor radius (m) and count of each vehicle type: the stock Crazyflie 2.x propeller is about
-# 45 mm across (0.0225 m); the dataset does not state the large vehicle's propellers, and
-# 0.0325 m (65 mm propellers, about sqrt(0.067 / 0.032) = 1.45x the small one's, i.e. the same
-# disc loading) is our assumption, not a measurement. Both are quadrotors.
-VEHICLE_ROTORS: dict[str, tuple[float, int]] = {"small": (0.0225, 4), "large": (0.0325, 4)}
+# 45 mm across (0.0225 m). The large one is a Crazyflie 2.1 "on parrot frame" (the dataset's
+# readme.txt): Parrot's Rolling Spider airframe, whose published parameters give its rotor
+# radius, 33 mm (Parrot-Developers/RollingSpiderEdu, MIT_MatlabToolbox/trunk/matlab/libs/
+# RoboticsToolbox/mdl_quadrotor.m, "quad.r = 33/1000"), its mass, 68 g (the logs' 67 g), and its
+# motors at (+-0.043, +-0.043) m (ExperimentAnalyzer/Hardware/ParameterIdentification.m: 0.061 m
+# centre to motor, the Neural-Swarm crazyflieTypes.yaml's "arm_length: 0.06"). Both are
+# quadrotors.
+VEHICLE_ROTORS: dict[str, tuple[float, int]] = {"small": (0.0225, 4), "large": (0.033, 4)}
 # Motor-to-motor diagonal (m) of each type: the small one's 92 mm is Bitcraze's specification of
 # the Crazyflie 2.x; the large one's 0.120 m is read from the logs' own torque mixer (``torquex =
 # (l / sqrt 2) (-u1 - u2 + u3 + u4)``: l / sqrt 2 = 0.04243 m for cf101, 0.03253 m for the small

@@ -124,8 +124,7 @@ def test_real_lateral_turbulence_under_the_small_leader_is_within_the_noise(shar
         slow, fast = table.at(np.array([0.05, 0.45]))
         assert 0.5 * (fast[0] + fast[1]) > 1.3 * 0.5 * (slow[0] + slow[1])
     _, held = fl.select_flights(fl.prepare_flights(logs), ["swap_ss_0[56]"])
-    (row,) = speed_matched_turbulence(params, held, noise, rotor_radii_m={"cf101": 0.0239},
-                                      bootstrap=50).values()
+    (row,) = speed_matched_turbulence(params, held, noise, bootstrap=50).values()
     assert row["lateral_speed"] < row["lateral_pooled"]
     assert row["lateral_speed_p95"] < 0.6 * row["lateral_model"]
     assert row["vertical_speed"] == pytest.approx(row["vertical_pooled"], rel=0.2)
