@@ -25,8 +25,8 @@ import numpy as np
 
 from aerodock.flightlog import FlightLog
 from aerodock.identify.flights import FlightSamples, WakeFitError
-from aerodock.identify.wake_folds import _reference_error, _signed_worst
-from aerodock.identify.wake_score import score_wake
+from aerodock.identify.wake_folds import _reference_error
+from aerodock.identify.wake_score import score_wake, signed_worst
 from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
 TORQUE_BINS_M = ((0.04, 0.06), (0.06, 0.08), (0.08, 0.10))
@@ -119,7 +119,7 @@ def score_field(params: dict[str, float], flights: Sequence[FlightSamples],
         out.append(PairScore(
             pair=pair, leader=_ids(group, "leader"), follower=_ids(group, "follower"),
             flights=len({f.flight for f in group}), samples=int(entry["samples"]),
-            mean_worst_bin_rel=_signed_worst([b["rel_error"]
+            mean_worst_bin_rel=signed_worst([b["rel_error"]
                                               for b in entry["separation_bins"]]),
             half_width_rel=float(entry["half_width"]["rel_error"]),
             turb_vertical_rel=float(entry["vertical_sd"]["rel_error"]),

@@ -21,7 +21,7 @@ import numpy as np
 
 from aerodock.identify.flights import FlightSamples, WakeFitError
 from aerodock.identify.wake_fit import TorqueResidual, fit_wake
-from aerodock.identify.wake_score import TARGETS, score_wake
+from aerodock.identify.wake_score import TARGETS, score_wake, signed_worst
 
 TARGET_KEYS = ("mean_vertical", "half_width", "vertical_sd", "lateral_sd")
 
@@ -103,7 +103,7 @@ def _summary(folds: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                 entry = f["pairs"].get(pair)
                 if entry is None:
                     continue
-                err = (_signed_worst([b["rel_error"] for b in entry["separation_bins"]])
+                err = (signed_worst([b["rel_error"] for b in entry["separation_bins"]])
                        if key == "mean_vertical" else entry[key]["rel_error"])
                 if not np.isfinite(err):
                     continue
@@ -119,18 +119,12 @@ def _summary(folds: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _signed_worst(errs: list[float]) -> float:
-    """The largest relative error in magnitude (the worst separation bin), with its sign."""
-    errs = [e for e in errs if np.isfinite(e)]
-    return float(max(errs, key=abs)) if errs else float("nan")
-
-
 def _reference_error(key: str, held: dict[str, Any], train: dict[str, Any]) -> float:
     """The training flights' real figure as the prediction of the held-out flights' (the mean
     per separation bin: the worst of the bins both have)."""
     if key == "mean_vertical":
         own = {tuple(b["separation_m"]): b["real_mps2"] for b in train["separation_bins"]}
-        return _signed_worst([(own[tuple(b["separation_m"])] - b["real_mps2"])
+        return signed_worst([(own[tuple(b["separation_m"])] - b["real_mps2"])
                               / abs(b["real_mps2"]) for b in held["separation_bins"]
                               if tuple(b["separation_m"]) in own and b["real_mps2"]])
     unit = "real_m" if key == "half_width" else "real_mps2"
