@@ -57,6 +57,28 @@ def test_attitude_targets_are_numpys(n: int) -> None:
             assert numba.typeof(g) == numba.typeof(w)  # the step kernels' signature
 
 
+@pytest.mark.parametrize("n", [1, 2, 5, 256])
+def test_a_fleets_two_halves_joined(n: int) -> None:
+    """The leaders' and followers' commands joined in the call: the targets of their
+    concatenation (the torque feed-forward's half without one zero)."""
+    params = build_fleet(load_config()).params
+    rng = np.random.default_rng(100 + n)
+    lead = AttitudeCommand(rng.normal(0, 0.8, n), rng.normal(0, 0.8, n), rng.normal(0, 1, n),
+                           8.0 * rng.normal(0, 1, n))
+    fol = AttitudeCommand(-0.0, rng.normal(0, 0.8, n), 0.25, 7.0, np.ones((n, 3)))
+    yaw = rng.normal(0.0, 2.0, 2 * n)
+    got = rigid_targets(lead, _State(yaw), params, 2 * n, follower_cmd=fol)
+    joined = AttitudeCommand(*(np.concatenate([np.broadcast_to(getattr(c, name), (n,))
+                                               for c in (lead, fol)])
+                               for name in ("roll_rad", "pitch_rad", "yaw_rate_radps",
+                                            "thrust_n")))
+    want = numpy_targets(joined, yaw, params.tilt_max_rad, params.thrust_max_n, 2 * n)
+    for g, w in zip((got.R_des, got.yaw_rate_radps, got.thrust_n), want):
+        assert same_bits(g, w)
+        assert numba.typeof(g) == numba.typeof(w)
+    assert np.array_equal(got.torque_ff_nm, np.concatenate([np.zeros((n, 3)), np.ones((n, 3))]))
+
+
 def test_scalar_command() -> None:
     params = build_fleet(load_config()).params
     cmd = AttitudeCommand(-0.0, 0.2, 0.1, 7.5)

@@ -601,12 +601,23 @@ def _np_minimum(a: float, b: float) -> float:
 
 
 @njit
-def attitude_targets(trig: np.ndarray, roll: np.ndarray, pitch: np.ndarray,
-                     yaw_setpoint: np.ndarray, tilt_max: float, thrust: np.ndarray,
-                     thrust_max: float) -> tuple[np.ndarray, np.ndarray]:
-    """The autopilots' attitude targets of m vehicles: (``R_des`` transposed in memory
-    (m, 3, 3): element ``[i, b, a]`` is row ``a``, column ``b`` of vehicle ``i``'s target, as
-    the autopilot reads it; the collective thrust clipped to [0, ``thrust_max``] (m,)).
+def _row(a: np.ndarray, b: np.ndarray, i: int) -> float:
+    """Row ``i`` of ``a`` then ``b`` joined (``np.concatenate((a, b))[i]``)."""
+    na = a.shape[0]
+    return a[i] if i < na else b[i - na]
+
+
+@njit
+def attitude_targets(trig: np.ndarray, roll_a: np.ndarray, roll_b: np.ndarray,
+                     pitch_a: np.ndarray, pitch_b: np.ndarray, yaw_rate_a: np.ndarray,
+                     yaw_rate_b: np.ndarray, thrust_a: np.ndarray, thrust_b: np.ndarray,
+                     yaw_setpoint: np.ndarray, tilt_max: float,
+                     thrust_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The autopilots' attitude targets of m vehicles, the commands of two batches ``_a`` and
+    ``_b`` joined (the leaders' then the followers'; ``_b`` empty for one batch): (``R_des``
+    transposed in memory (m, 3, 3): element ``[i, b, a]`` is row ``a``, column ``b`` of vehicle
+    ``i``'s target, as the autopilot reads it; the yaw rates (m,); the collective thrust clipped
+    to [0, ``thrust_max``] (m,)).
 
     The roll and pitch commands clipped to +-``tilt_max`` (``np.minimum(np.maximum(x, -tilt),
     tilt)``), the yaw at the setpoint, the rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` from the
@@ -618,11 +629,12 @@ def attitude_targets(trig: np.ndarray, roll: np.ndarray, pitch: np.ndarray,
     signs (a command holding NaNs), the NaN it gives may carry the other sign than NumPy's (LLVM
     may swap a product's operands, and x86 keeps the first one's NaN); nothing reads a NaN's
     sign."""
-    m = roll.shape[0]
+    m = roll_a.shape[0] + roll_b.shape[0]
     rpy = np.empty(3 * m)  # the (m, 3) angles, row-major
     for i in range(m):
-        rpy[3 * i] = _np_minimum(_np_maximum(roll[i], -tilt_max), tilt_max)
-        rpy[3 * i + 1] = _np_minimum(_np_maximum(pitch[i], -tilt_max), tilt_max)
+        rpy[3 * i] = _np_minimum(_np_maximum(_row(roll_a, roll_b, i), -tilt_max), tilt_max)
+        rpy[3 * i + 1] = _np_minimum(_np_maximum(_row(pitch_a, pitch_b, i), -tilt_max),
+                                     tilt_max)
         rpy[3 * i + 2] = yaw_setpoint[i]
     cos, sin = np.empty(3 * m), np.empty(3 * m)
     if trig[0] != 0 and trig[1] != 0:
@@ -646,9 +658,10 @@ def attitude_targets(trig: np.ndarray, roll: np.ndarray, pitch: np.ndarray,
         r_t[i, 0, 2] = -sp
         r_t[i, 1, 2] = cp * sr
         r_t[i, 2, 2] = cp * cr
-    clipped = np.empty(m)
+    yaw_rate, clipped = np.empty(m), np.empty(m)
     for i in range(m):  # np.clip: a NaN and a -0.0 pass as they are
-        t = thrust[i]
+        yaw_rate[i] = _row(yaw_rate_a, yaw_rate_b, i)
+        t = _row(thrust_a, thrust_b, i)
         t = 0.0 if t < 0.0 else t
         clipped[i] = thrust_max if t > thrust_max else t
-    return r_t, clipped
+    return r_t, yaw_rate, clipped
