@@ -9,6 +9,7 @@ Riccati equation. The command adds reference-acceleration (and yaw-rate) feed-fo
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -67,13 +68,25 @@ def lqr_gain(q_diag: Sequence[float], r_diag: Sequence[float]) -> np.ndarray:
         raise ValueError(
             f"position and yaw weights in q_diag must be positive (detectability), got {q.tolist()}"
         )
+    # the same weights give the same gain: solved once per process (a solve costs about 16 ms,
+    # and every controller, and every trial's batch, asks for its two)
+    return _care_gain(q.tobytes(), r.tobytes()).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _care_gain(q_bytes: bytes, r_bytes: bytes) -> np.ndarray:
+    """:func:`lqr_gain` for the checked weights (their float64 bytes: a key that tells -0.0
+    from 0.0), read-only."""
+    q, r = np.frombuffer(q_bytes), np.frombuffer(r_bytes)
     a_mat, b_mat = lin_model()
     try:
         import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
         p_mat = scipy.linalg.solve_continuous_are(a_mat, b_mat, np.diag(q), np.diag(r))
     except (np.linalg.LinAlgError, ValueError) as exc:  # pragma: no cover - guarded above
         raise ValueError(f"no stabilising Riccati solution for Q={q}, R={r}: {exc}") from exc
-    return (b_mat.T @ p_mat) / r[:, None]
+    gain = (b_mat.T @ p_mat) / r[:, None]
+    gain.flags.writeable = False
+    return gain
 
 
 def lqr_command(

@@ -90,8 +90,7 @@ class BiasObserver:
         q[:2, :2] = accel_noise_mps2**2 * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
         q[2, 2] = bias_walk**2 * dt
         r = np.diag([pos_noise_m**2, vel_noise_mps**2])
-        import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
-        p_prior = scipy.linalg.solve_discrete_are(self._f.T, h.T, q, r)
+        p_prior = _steady_prior(self._f, h, q, r)
         self.gain = _frozen(p_prior @ h.T @ np.linalg.inv(h @ p_prior @ h.T + r))
         self._error_dyn = (np.eye(3) - self.gain @ h) @ self._f
         self._consts = packed(self._f, self._g)  # what the kernel reads (BIAS_* layout)
@@ -234,6 +233,24 @@ class _GainSchedule:
                 self.settled_after = len(self._gains)
                 break
         return self._gains[k]
+
+
+_PRIORS: dict[bytes, np.ndarray] = {}
+
+
+def _steady_prior(f: np.ndarray, h: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The steady-state prior covariance ``solve_discrete_are(f.T, h.T, q, r)`` (3 x 3),
+    read-only, solved once per process for the same model (a solve costs about 20 ms, and every
+    controller's observer asks: the same inputs give the same numbers)."""
+    key = b"".join(np.ascontiguousarray(a).tobytes() for a in (f, h, q, r))  # fixed shapes
+    hit = _PRIORS.get(key)
+    if hit is None:
+        import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
+        if len(_PRIORS) >= 64:
+            _PRIORS.clear()
+        hit = _PRIORS[key] = scipy.linalg.solve_discrete_are(f.T, h.T, q, r)
+        hit.flags.writeable = False
+    return hit
 
 
 def _frozen(gain: np.ndarray) -> np.ndarray:

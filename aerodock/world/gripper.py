@@ -335,16 +335,31 @@ def gripper_after(state: GripperState, changed: int, reading: np.ndarray,
     """The grippers' state after :func:`gripper_step_kernel` wrote the new arrays and said which
     it ``changed`` (its ``CHANGED_*`` bits): those arrays where they changed, the state's own
     where not (passed on as they are: states are never modified in place)."""
-    done = changed & CHANGED_DONE
-    return GripperState(
-        gate if changed & (CHANGED_START | CHANGED_DONE) else state.gate,
-        state.bias_true_n, state.bias_est_n,
-        reading if changed & CHANGED_READING else state.reading_n,
-        servo_start if changed & CHANGED_SERVO else state.servo_start_s,
-        by_contact if changed & CHANGED_BY_CONTACT else state.triggered_by_contact,
-        inside_at_start if changed & CHANGED_START else state.inside_at_start,
-        slipped if done else state.slipped, resolved if done else state.resolved_s,
-        state.close_time_s, state.sensor_stuck_n)
+    started, done = changed & (CHANGED_START | CHANGED_DONE), changed & CHANGED_DONE
+    record = object.__new__(GripperState)
+    # GripperState's __init__ sets its fields and freezes its arrays; ``state``'s are frozen
+    # already (every GripperState's are), so only the new ones are frozen here: the same record
+    # for half the cost (this runs in most control periods: the strain gauge's reading
+    # changes at every sample)
+    record.__dict__.update(
+        gate=_frozen(gate) if started else state.gate,
+        bias_true_n=state.bias_true_n, bias_est_n=state.bias_est_n,
+        reading_n=_frozen(reading) if changed & CHANGED_READING else state.reading_n,
+        servo_start_s=_frozen(servo_start) if changed & CHANGED_SERVO else state.servo_start_s,
+        triggered_by_contact=_frozen(by_contact) if changed & CHANGED_BY_CONTACT
+        else state.triggered_by_contact,
+        inside_at_start=_frozen(inside_at_start) if changed & CHANGED_START
+        else state.inside_at_start,
+        slipped=_frozen(slipped) if done else state.slipped,
+        resolved_s=_frozen(resolved) if done else state.resolved_s,
+        close_time_s=state.close_time_s, sensor_stuck_n=state.sensor_stuck_n)
+    return record
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a``, made read-only."""
+    a.flags.writeable = False
+    return a
 
 
 _NO_NOISE = np.zeros(0)  # gripper_step_kernel's noise between samples (not read)

@@ -55,7 +55,6 @@ from aerodock.world.period_kernel import (
     I_RING_HEAD,
     I_STEP,
     STOP_UNCOVERED,
-    TRIG_LOOPS,
     float_constants,
     period_kernel,
 )
@@ -63,6 +62,7 @@ from aerodock.world.platform import (
     BarState,
 )
 from aerodock.world.state import WorldState
+from aerodock.world.trig_loops import TRIG_LOOPS
 from aerodock.world.vehicles.fleet import RigidBodyFleet
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyState,

@@ -6,19 +6,10 @@ decides when it runs, hands it the world's arrays and puts back the state it lea
 
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 
 from aerodock.downwash.jet_kernel import wake_step
-from aerodock.jit import (
-    JIT_ENABLED,
-    NUMPY_LOOPS_OK,
-    _ufunc_loop,
-    _unary,
-    any_layout,
-    njit,
-)
+from aerodock.jit import _unary, any_layout, njit
 from aerodock.world.gripper import contact_kernel_body, contact_push
 from aerodock.world.imu import imu_step
 from aerodock.world.params import WorldParams
@@ -35,41 +26,11 @@ from aerodock.world.term_kernels import (
     hang_captured,
     rotor_fault_wrench,
 )
+from aerodock.world.trig_loops import TRIG_COS, TRIG_SIN
 from aerodock.world.vehicles.rigid_body import (
     flown_step_body,
 )
 from aerodock.world.vehicles.rigid_kernel import hold_rows
-
-# -- NumPy's cos and sin, from compiled code (the bar's axis: np.cos(yaw), np.sin(yaw)) -------
-
-TRIG_COS, TRIG_SIN = 0, 1
-
-
-def _trig_loops() -> np.ndarray:
-    """The addresses of NumPy's float64 cos and sin loops (as :data:`aerodock.jit.NUMPY_LOOPS`
-    reads exp's), checked against the ufuncs themselves; zeros when they cannot be read or do
-    not give NumPy's numbers (the compiled period is then not used)."""
-    loops = np.array([_ufunc_loop(np.cos, "dd"), _ufunc_loop(np.sin, "dd")], dtype=np.int64)
-    if not loops.all() or not JIT_ENABLED or not NUMPY_LOOPS_OK:
-        return np.zeros(2, dtype=np.int64)
-    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
-                             ctypes.c_void_p)
-    for size in (1, 3, 7, 64, 257):  # the tails of the SIMD loop too
-        x = np.linspace(-40.0, 40.0, size) + 0.1234
-        for addr, ufunc in ((loops[TRIG_COS], np.cos), (loops[TRIG_SIN], np.sin)):
-            out = np.empty_like(x)
-            ptrs = np.array([x.ctypes.data, out.ctypes.data], dtype=np.intp)
-            dims = np.array([size], dtype=np.intp)
-            steps = np.array([8, 8], dtype=np.intp)
-            proto(int(addr))(ptrs.ctypes.data, dims.ctypes.data, steps.ctypes.data, None)
-            if not np.array_equal(out, ufunc(x)):
-                return np.zeros(2, dtype=np.int64)
-    return loops
-
-
-TRIG_LOOPS = _trig_loops()
-TRIG_LOOPS.flags.writeable = False
-
 
 # -- the kernel's float constants (one array, built once per world) -------------------------
 (F_DT, F_ANCHOR_BELOW, F_CABLE_LENGTH, F_SWING_DAMPING, F_PLATFORM_GRAVITY, F_YAW_OMEGA2,

@@ -172,17 +172,19 @@ class WorldState:
         :func:`~aerodock.world.gripper.gripper_idle`), computed once per gripper state and read
         by every physics step. Kept while the state's gate and servo start times (what they are
         computed from) are the same read-only arrays (a :class:`GripperState` makes its arrays
-        read-only; a changed gripper is a new state)."""
+        read-only; a changed gripper is a new state, and one whose strain gauge alone changed,
+        as in most control periods, keeps its gate and start times: the flags stay)."""
         gripper = self.gripper
+        gate, start = gripper.gate, gripper.servo_start_s
         cached = self.__dict__.get("_gripper_flags")  # not a field: not state, a view of it
-        if (cached is not None and cached[0] is gripper and is_frozen(gripper.gate)
-                and is_frozen(gripper.servo_start_s)):
-            return cached[1:]
-        captured = gripper.gate == _CAPTURED
+        if (cached is not None and cached[0] is gate and cached[1] is start and is_frozen(gate)
+                and is_frozen(start)):
+            return cached[2:]
+        captured = gate == _CAPTURED
         freeze(captured)
         cached = self.__dict__["_gripper_flags"] = (
-            gripper, captured, bool(np.count_nonzero(captured)), gripper_idle(gripper))
-        return cached[1:]
+            gate, start, captured, bool(np.count_nonzero(captured)), gripper_idle(gripper))
+        return cached[2:]
 
     def _split(self) -> None:
         if self._both is not None:

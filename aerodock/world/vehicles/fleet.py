@@ -39,6 +39,7 @@ from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     RigidBodyState,
     hover_rigid_state,
+    joined_torque,
     rigid_targets,
     step_with_autopilot,
 )
@@ -81,14 +82,8 @@ def _join_commands(lead: AttitudeCommand, fol: AttitudeCommand, n: int) -> Attit
         out[n:] = b
         return out
 
-    torque = None
-    if lead.torque_ff_nm is not None or fol.torque_ff_nm is not None:
-        torque = np.zeros((2 * n, 3))
-        for rows, cmd in ((slice(None, n), lead), (slice(n, None), fol)):
-            if cmd.torque_ff_nm is not None:
-                torque[rows] = cmd.torque_ff_nm
     return AttitudeCommand(both("roll_rad"), both("pitch_rad"), both("yaw_rate_radps"),
-                           both("thrust_n"), torque)
+                           both("thrust_n"), joined_torque(lead, fol, n))
 
 
 def _broadcast_command(cmd: AttitudeCommand, n: int) -> AttitudeCommand:
@@ -169,8 +164,9 @@ class RigidBodyFleet:
 
     def targets(self, lead: AttitudeCommand, fol: AttitudeCommand, state: RigidBodyState,
                 n: int, dt_s: float) -> Any:
-        """The autopilots' attitude targets for both halves, held over a control period."""
-        return rigid_targets(_join_commands(lead, fol, n), state, self.params, 2 * n)
+        """The autopilots' attitude targets for both halves, held over a control period (the
+        two commands joined in the same compiled call)."""
+        return rigid_targets(lead, state, self.params, 2 * n, follower_cmd=fol)
 
     def nominal_body(self, n: int) -> VehicleBody:
         """``n`` vehicles exactly as nominal."""
