@@ -14,10 +14,10 @@ Hover: 16 followers of the Crazyflie world (each vehicle drawn from the world's 
 filtered IMU chain) holding station in free air for 3 s under the tuned controller, with each
 Crazyflie stack: how many end more than 0.2 m from where they were held.
 
-Under the wake (``--data`` given or found): per pairing of the shared flights the Crazyflie world
-has (small under small: examples/crazyflie.toml; small under large:
-examples/crazyflie_small_under_large.toml), the follower's inward wake torque, its lean into the
-leader's axis and their ratio (N m per radian of lean: an apparent stiffness, the lean being the
+Under the wake (``--data`` given or found): per pairing of the shared flights (small under small:
+examples/crazyflie.toml; small under large: examples/crazyflie_small_under_large.toml; large under
+small: examples/crazyflie_large_under_small.toml), the follower's inward wake torque, its lean into
+the leader's axis and their ratio (N m per radian of lean: an apparent stiffness, the lean being the
 position loop's too) per 2 cm bin of horizontal offset, 4-10 cm, read by the same code
 (:func:`aerodock.identify.wake_torque.torque_profile`) from the real flights and from the world's
 wake-excitation flights (the sim-to-real study's, :func:`aerodock.experiments.sim_to_real.
@@ -51,6 +51,8 @@ DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 CRAZYFLIE = ROOT / "examples" / "crazyflie.toml"
 WORLDS = {"32 g under 32 g": (CRAZYFLIE, "swap_ss", None),
           "32 g under 67 g": (ROOT / "examples" / "crazyflie_small_under_large.toml",
+                              "swap_sl_2020-06-19", "cf51=small,cf101=large"),
+          "67 g under 32 g": (ROOT / "examples" / "crazyflie_large_under_small.toml",
                               "swap_sl_2020-06-19", "cf51=small,cf101=large")}
 # The generic autopilot as the Crazyflie world flew it before the flight stacks: gains fitted to
 # drone-models' identified step response (studies/crazyflie_autopilot_fit.py).

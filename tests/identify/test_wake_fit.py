@@ -101,12 +101,12 @@ def _torque_labels(fitted, logs):
 
 def test_real_fit_on_the_shared_flights(shared_data):
     """Fitted on swap_ss 00-04 and swap_sl 00-07 with their logged torque (the large vehicle's
-    rotor radius its airframe's, 33 mm): the fit is examples/crazyflie_wake_fitted.toml (the command's
-    output; bootstrap aside, the fit is deterministic); on the held-out flights (swap_ss 05-06,
-    swap_sl 08-11) the mean is within 15 % in every separation bin, the half-width within 20 %
-    under both leaders for the small follower, and the vertical turbulence within 20 % for
-    every pair. (Not met, docs/world.md: the lateral turbulence of the equal pair and of the
-    large follower, and the large follower's half-width, +30 %.)"""
+    rotor radius its airframe's, 33 mm): the fit is examples/crazyflie_wake_fitted.toml (the
+    command's output; bootstrap aside, the fit is deterministic); on the held-out flights
+    (swap_ss 05-06, swap_sl 08-11) the mean is within 15 % in every separation bin, the
+    half-width within 20 % under both leaders for the small follower, and the vertical
+    turbulence within 20 % for every pair. (Not met, docs/world.md: the lateral turbulence of
+    the equal pair and of the large follower, and the large follower's half-width, +30 %.)"""
     import warnings
 
     from aerodock.ingest import read_logs
