@@ -1,6 +1,6 @@
 """NumPy's float64 cos and sin loops, called from compiled code: the bar's axis in the compiled
 period (``np.cos(yaw)``, ``np.sin(yaw)``) and the autopilots' attitude targets
-(:func:`aerodock.world.vehicles.rigid_kernel.attitude_targets`), with NumPy's numbers to the
+(:func:`aerodock.world.vehicles.targets_kernel.attitude_targets`), with NumPy's numbers to the
 bit (the loops of :data:`aerodock.jit.NUMPY_LOOPS` are exp's and its kin; these two live here,
 beside the world that reads them)."""
 

@@ -37,7 +37,7 @@ from aerodock.frozen import freeze, is_frozen
 from aerodock.geometry import rotmat_to_rpy
 from aerodock.jit import any_layout, njit
 from aerodock.world.trig_loops import TRIG_LOOPS
-from aerodock.world.vehicles import rigid_kernel
+from aerodock.world.vehicles import rigid_kernel, targets_kernel
 from aerodock.world.vehicles.autopilot import AutopilotGains, autopilot_constants
 from aerodock.world.vehicles.body import VehicleBody, nominal_body
 from aerodock.world.vehicles.point_mass import AttitudeCommand
@@ -210,7 +210,7 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState, params: RigidBody
     setpoint (the yaw rate is flown as feed-forward and integrated by :func:`step_rigid_body`).
     ``follower_cmd``: a second batch's commands, joined after ``cmd``'s (a fleet's leaders and
     followers: ``n`` rows in all, half each). One compiled call
-    (:func:`rigid_kernel.attitude_targets`: NumPy's numbers, about 3 µs where the NumPy calls
+    (:func:`targets_kernel.attitude_targets`: NumPy's numbers, about 3 µs where the NumPy calls
     and the join took 50 at a batch of 1).
 
     Raises:
@@ -220,7 +220,7 @@ def rigid_targets(cmd: AttitudeCommand, state: RigidBodyState, params: RigidBody
     lead, fol = cmd, follower_cmd
     if state.yaw_setpoint.shape != (n,):
         raise ValueError(f"{state.yaw_setpoint.shape} yaw setpoints for {n} vehicles")
-    r_des_t, yaw_rate, thrust = rigid_kernel.attitude_targets(
+    r_des_t, yaw_rate, thrust = targets_kernel.attitude_targets(
         TRIG_LOOPS, _command_rows(lead.roll_rad, half), _second_rows(fol, "roll_rad", half),
         _command_rows(lead.pitch_rad, half), _second_rows(fol, "pitch_rad", half),
         _command_rows(lead.yaw_rate_radps, half), _second_rows(fol, "yaw_rate_radps", half),
@@ -257,7 +257,7 @@ def _second_rows(cmd: AttitudeCommand | None, name: str, n: int) -> np.ndarray:
 
 def _command_rows(values: np.ndarray | float, n: int) -> np.ndarray:
     """A command's field (a number or (n,) values) as the (n,) float64 C-ordered array
-    :func:`rigid_kernel.attitude_targets` reads: the array itself when it is one."""
+    :func:`targets_kernel.attitude_targets` reads: the array itself when it is one."""
     if (type(values) is np.ndarray and values.shape == (n,) and values.dtype == np.float64
             and values.flags.c_contiguous):
         return values

@@ -1,4 +1,4 @@
-"""The autopilots' attitude targets, compiled (:func:`rigid_kernel.attitude_targets`), give the
+"""The autopilots' attitude targets, compiled (:func:`targets_kernel.attitude_targets`), give the
 NumPy formula's numbers to the bit, signed zeros and NaNs included, at every batch size, and
 the arrays the step kernels read keep their numba types (layout, writability)."""
 
