@@ -117,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
                           "se_minutes": size.se_minutes, "se_seeds": size.se_seeds,
                           "se_pool_flights": size.se_pool_flights,
                           "test_flights_per_stage": size.test_flights_per_stage,
-                          "se_max_time_s": size.se_max_time_s}
+                          "se_max_epochs": size.se_max_epochs}
         _say("curriculum, held-out flights and the pool (reproduce step 1)")
         learning = learning_data(load_config(), size, args.out / "data", args.seed, say=_say)
         record["curriculum_s"] = time.perf_counter() - started
@@ -125,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         se = sample_efficiency(
             build_dataset(learning.train_logs), learning.test_ds, kinds=KINDS,
             minutes=size.se_minutes, seeds=size.se_seeds, out_dir=fig_dir,
-            train_kwargs={**({"max_time_s": size.se_max_time_s} if size.se_max_time_s else {}),
+            train_kwargs={**({"max_epochs": size.se_max_epochs} if size.se_max_epochs else {}),
                           **(train_kwargs or {})} or None,
             progress=_progress)
     else:

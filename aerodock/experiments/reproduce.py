@@ -278,7 +278,7 @@ def _sample_efficiency_step(run: _Run, learned: LearningData) -> dict[str, Any]:
     se = sample_efficiency(
         build_dataset(learned.train_logs), learned.test_ds, kinds=("so2", "so2-ext", "mlp"),
         minutes=size.se_minutes, seeds=size.se_seeds, out_dir=run.fig_dir,
-        train_kwargs={"max_time_s": size.se_max_time_s} if size.se_max_time_s else None,
+        train_kwargs={"max_epochs": size.se_max_epochs} if size.se_max_epochs else None,
         progress=run.bar,
     )
     run.timed("sample_efficiency_s", t0)

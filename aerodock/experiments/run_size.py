@@ -29,7 +29,9 @@ class RunSize:
     se_seeds: tuple[int, ...]
     se_pool_flights: int
     test_flights_per_stage: int
-    se_max_time_s: float | None
+    # the sample-efficiency trainings' epoch limit (None: train's own stopping rule): an epoch
+    # count, not a wall-clock budget, so that a run's numbers do not depend on the machine
+    se_max_epochs: int | None
     costs: CostSize  # the sweeps of the levers the paper leaves unstated
     target_trials: int
     target_all_rows: bool  # every controller + model row (quick: the paper's and ours only)
@@ -56,7 +58,7 @@ timing."""
 
 QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=24,
                 moving_trials=8, se_minutes=(0.5, 2),
-                se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=2, se_max_time_s=5.0,
+                se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=2, se_max_epochs=20,
                 costs=CostSize(trials=8, taus_s=(4.0,), mixes=(0.0, 1.0),
                                cable_offsets_m=(0.36,), cable_reps=2, gate_heights_m=(0.10,)),
                 target_trials=4,
@@ -66,7 +68,7 @@ QUICK = RunSize(cable_reps=2, cable_offsets_m=(0.36, 0.87, 1.35), hover_trials=2
 # whole pipeline, not for any figure.
 SMOKE = RunSize(cable_reps=1, cable_offsets_m=(0.36,), hover_trials=4, moving_trials=2,
                 se_minutes=(0.5,), se_seeds=(0,), se_pool_flights=0, test_flights_per_stage=1,
-                se_max_time_s=3.0,
+                se_max_epochs=8,
                 costs=CostSize(trials=2, taus_s=(), mixes=(0.0,), cable_offsets_m=(0.36,),
                                cable_reps=1, gate_heights_m=()),
                 target_trials=2, target_all_rows=False,
@@ -77,7 +79,7 @@ SMOKE = RunSize(cable_reps=1, cable_offsets_m=(0.36,), hover_trials=4, moving_tr
                 train_max_epochs=5, tuned_row=False, overrides=SHORT_MISSION)
 FULL = RunSize(cable_reps=10, cable_offsets_m=CABLE_OFFSETS_M, hover_trials=200, moving_trials=100,
                se_minutes=(0.5, 1, 2, 5, 10), se_seeds=(0, 1, 2), se_pool_flights=25,
-               test_flights_per_stage=4, se_max_time_s=None,
+               test_flights_per_stage=4, se_max_epochs=None,
                costs=CostSize(trials=60, taus_s=OBSERVER_TAUS_S, mixes=TERMINAL_MIX,
                               cable_offsets_m=CABLE_OFFSETS_M, cable_reps=10,
                               gate_heights_m=GATE_HEIGHTS_M),
