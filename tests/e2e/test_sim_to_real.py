@@ -1,30 +1,50 @@
-"""The sim-to-real check on the shared real flights (small under small): in the suite at its
-smallest (one simulated flight in each of three depth bands, 8 epochs); ``AERODOCK_E2E=quick``
+"""The sim-to-real check on the shared real flights (small under small), run as a user runs it:
+``studies/sim_to_real.py`` (a separate process). In the suite at its smallest (``--smoke``: one
+simulated flight in each of three depth bands, 8 epochs); ``AERODOCK_E2E=quick``
 (``make test-e2e``) at its quick size, checking that a model of real flights halves the zero
-model's error."""
+model's error.
+
+This is also the smoke run of ``studies/sim_to_real.py`` (``tests/studies/test_studies.py``
+leaves it to this test): the script's summary line is checked here, and the study's numbers
+(written with ``--out``) are the ones ``aerodock.experiments.sim_to_real.sim_to_real_study``
+returns, so the study is computed once in the suite, not twice.
+"""
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from aerodock.config import load_config
-from aerodock.experiments.sim_to_real import PAIRS, sim_to_real_study
+from aerodock.experiments.sim_to_real import PAIRS
 
-WORLD = Path(__file__).resolve().parents[2] / "examples" / "crazyflie.toml"
-
+ROOT = Path(__file__).resolve().parents[2]
+STUDY = ROOT / "studies" / "sim_to_real.py"
+NUMBER = r"[+-]?\d+(?:\.\d+)?"
 
 QUICK = os.environ.get("AERODOCK_E2E", "smoke") == "quick"
 
 
 @pytest.mark.slow
-def test_sim_to_real(shared_data):
+def test_sim_to_real(shared_data, tmp_path):
     data = shared_data("neural-swarm")
-    out = sim_to_real_study({"small_under_small": load_config(WORLD)}, data, quick=QUICK,
-                            smoke=not QUICK)
+    # --smoke judges small under small unless --pair names another; --quick judges every pair
+    size = ["--quick", "--pair", "small_under_small"] if QUICK else ["--smoke"]
+    proc = subprocess.run([sys.executable, str(STUDY), "--data", str(data), "--out",
+                           str(tmp_path / "sim_to_real.json"), *size],
+                          capture_output=True, text=True, cwd=ROOT, timeout=1800)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    line = (rf"^small under small: interaction vertical RMSE zero {NUMBER}, simulation-trained "
+            rf"{NUMBER} \({NUMBER}%\), real-trained {NUMBER} \({NUMBER}%\)")
+    assert re.search(line, proc.stdout, re.MULTILINE), proc.stdout
+    out = json.loads((tmp_path / "sim_to_real.json").read_text())
+    assert set(out["pairs"]) == {"small_under_small"}
     r = out["pairs"]["small_under_small"]
     pair = PAIRS["small_under_small"]
     # judged on the held-out real flights only, both vehicles following

@@ -132,10 +132,29 @@ def test_fly_campaign_with_the_trained_model_applies_its_feed_forward(trained, t
     assert with_model["ff_down_int_0p5s_mps"] > 0.0  # the model's push, fed forward downward
 
 
-def test_ppo_smoke_run_ends_episodes_and_reports_their_returns(tmp_path):
+def _have_tensorboard() -> bool:
+    try:
+        import tensorboard  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.fixture(scope="module")
+def ppo_smoke(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
+    """One ``ppo_sb3.py --smoke`` run for both PPO tests (the run is the example's longest):
+    ``--json``, and ``--tensorboard`` when tensorboard is installed (logging to TensorBoard
+    does not change the training: same seed, same steps, same numbers)."""
     pytest.importorskip("stable_baselines3")
     pytest.importorskip("torch")
-    proc = run_example("ppo_sb3.py", "--smoke", "--json", tmp_path / "ppo.json", cwd=tmp_path)
+    tmp = tmp_path_factory.mktemp("ppo")
+    tb = ("--tensorboard", tmp / "tb") if _have_tensorboard() else ()
+    proc = run_example("ppo_sb3.py", "--smoke", "--json", tmp / "ppo.json", *tb, cwd=tmp)
+    return proc, tmp
+
+
+def test_ppo_smoke_run_ends_episodes_and_reports_their_returns(ppo_smoke):
+    proc, tmp_path = ppo_smoke
     assert proc.returncode == 0, proc.stderr
     result = json.loads((tmp_path / "ppo.json").read_text())
     assert result["env_steps"] == 1792
@@ -146,18 +165,16 @@ def test_ppo_smoke_run_ends_episodes_and_reports_their_returns(tmp_path):
     assert "mean return" in proc.stdout and "no episode ended" not in proc.stdout
 
 
-def test_ppo_tensorboard_logs_or_says_what_is_missing(tmp_path):
+def test_ppo_tensorboard_logs_or_says_what_is_missing(tmp_path, request):
     pytest.importorskip("stable_baselines3")
     pytest.importorskip("torch")
-    try:
-        import tensorboard  # noqa: F401
-    except ImportError:
+    if not _have_tensorboard():
         proc = run_example("ppo_sb3.py", "--smoke", "--tensorboard", tmp_path / "tb",
                            cwd=tmp_path)
         assert proc.returncode == 2
         assert proc.stderr.strip() == ("error: --tensorboard needs tensorboard: pip install "
                                        "'aerodock[gym]'")
         return
-    proc = run_example("ppo_sb3.py", "--smoke", "--tensorboard", tmp_path / "tb", cwd=tmp_path)
+    proc, run_dir = request.getfixturevalue("ppo_smoke")  # the run with --tensorboard
     assert proc.returncode == 0, proc.stderr
-    assert list((tmp_path / "tb").rglob("events.out.tfevents.*"))
+    assert list((run_dir / "tb").rglob("events.out.tfevents.*"))

@@ -9,7 +9,9 @@ mission studies that need a model fly ``tests/learning/data/kind_pins/so2`` (a s
 model of random weights: the smoke run checks that the study runs, not a docking rate). The
 studies that fly a curriculum or time two simulators are ``slow``. ``sample_efficiency.py`` runs
 its real-flight part only: its simulated part is ``reproduce``'s first step, which
-``tests/e2e/test_reproduce.py`` crosses at the same smoke size.
+``tests/e2e/test_reproduce.py`` crosses at the same smoke size. ``sim_to_real.py``'s smoke run is
+``tests/e2e/test_sim_to_real.py`` (:data:`RUN_ELSEWHERE`): it checks the printed line as here,
+and the numbers of the same run.
 """
 
 from __future__ import annotations
@@ -142,10 +144,6 @@ STUDY_CASES = (
           tuple(rf"^{k}\s+0\.5\s+{NUMBER} \({NUMBER}\)\s+{NUMBER} \({NUMBER}\)$"
                 for k in ("so2", "so2-ext", "mlp")) + (rf"^zero\s+{NUMBER}\s+{NUMBER}$",),
           frozenset({"data"}), check=_sample_efficiency_json),
-    Study("sim_to_real.py", ("--data", "{data}"),
-          (rf"^small under small: interaction vertical RMSE zero {NUMBER}, simulation-trained "
-           rf"{NUMBER} \({NUMBER}%\), real-trained {NUMBER} \({NUMBER}%\)",),
-          frozenset({"data"}), slow=True),
     Study("torque_pairing.py", ("{model}",),
           (r"^torque feed-forward on : docked \d/2, aborts \d, terminal tilt \d+\.\d\d deg$",
            rf"^  last second: off axis {NUMBER} m; outward: model {NUMBER}, true wake {NUMBER}, "
@@ -170,6 +168,11 @@ STUDY_CASES = (
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
           frozenset({"data"})),
 )
+RUN_ELSEWHERE = {"sim_to_real.py": "tests/e2e/test_sim_to_real.py"}
+"""Scripts whose ``--smoke`` run (exit code, printed line) is checked by another test, which
+also checks the numbers the run computes: run there once, not once in each file."""
+
+
 def _have_rotorpy() -> bool:
     try:
         import rotorpy  # noqa: F401
@@ -237,5 +240,8 @@ def test_study_on_ingested_flights_runs_at_its_smoke_size(study: Study, tmp_path
 
 def test_every_study_is_run_by_a_test() -> None:
     scripts = {p.name for p in STUDIES.glob("*.py") if not p.name.startswith("_")}
-    assert scripts == {s.script for s in STUDY_CASES}
+    assert scripts == {s.script for s in STUDY_CASES} | set(RUN_ELSEWHERE)
+    assert not {s.script for s in STUDY_CASES} & set(RUN_ELSEWHERE)
+    for script, where in RUN_ELSEWHERE.items():
+        assert f"studies/{script}" in (ROOT / where).read_text()
 
