@@ -6,7 +6,10 @@ need a kernel pays for compiling it (about a minute for the whole world on a 2-c
 ``make`` runs this module right after installing, so neither a user's first command nor a test
 process pays that. It flies a few short campaigns that between them take every compiled path of
 the default worlds (the rigid-body and point-mass vehicles, a hovering and a moving leader,
-injected faults, the oracle's mean field), at two trials each; nothing is written.
+injected faults, the oracle's mean field), then one short trial on each other autopilot stack
+(the generic loop and the Crazyflie firmware's two, as the Crazyflie worlds fly them) and under
+each other controller profile (ours, with its accelerometer observer and the torque
+feed-forward; the paper's, as Freyja publishes it); nothing is written.
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ import sys
 import time
 
 from aerodock.config import load_config
+from aerodock.config.schema import STACKS
+from aerodock.control.profiles import controller_config
 from aerodock.jit import compile_general_signatures
 from aerodock.mission.batch import run_campaign
 from aerodock.mission.faults import Fault
@@ -41,6 +46,13 @@ def warm(out=sys.stderr) -> float:
             (point_mass, MissionSpec(trials=2, compensation=Compensation.OBSERVER,
                                      leader_fixed=True))):
         run_campaign(config, spec)
+    one = MissionSpec(trials=1, compensation=Compensation.OBSERVER)
+    for stack in STACKS:  # the default stack was flown above; a repeat loads from the cache
+        run_campaign(cfg.with_overrides({"autopilot": {"stack": stack}}, source="warm-up"), one)
+    ours = controller_config(cfg, "ours")
+    for config in (ours, ours.with_overrides({"control": {"torque_feedforward": True}},
+                                             source="warm-up"), controller_config(cfg, "paper")):
+        run_campaign(config, one)
     compile_general_signatures()  # what a kernel runs for arrays of other layouts (aerodock.jit)
     return time.perf_counter() - start
 
