@@ -22,6 +22,7 @@ default settings.
 from __future__ import annotations
 
 import copy
+import functools
 import sys
 
 import numpy as np
@@ -235,22 +236,25 @@ class _GainSchedule:
         return self._gains[k]
 
 
-_PRIORS: dict[bytes, np.ndarray] = {}
-
-
 def _steady_prior(f: np.ndarray, h: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
     """The steady-state prior covariance ``solve_discrete_are(f.T, h.T, q, r)`` (3 x 3),
     read-only, solved once per process for the same model (a solve costs about 20 ms, and every
-    controller's observer asks: the same inputs give the same numbers)."""
-    key = b"".join(np.ascontiguousarray(a).tobytes() for a in (f, h, q, r))  # fixed shapes
-    hit = _PRIORS.get(key)
-    if hit is None:
-        import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
-        if len(_PRIORS) >= 64:
-            _PRIORS.clear()
-        hit = _PRIORS[key] = scipy.linalg.solve_discrete_are(f.T, h.T, q, r)
-        hit.flags.writeable = False
-    return hit
+    controller's observer asks: the same inputs give the same numbers), as
+    :func:`aerodock.control.lqr.lqr_gain` keeps its gains."""
+    return _dare_prior(*(np.ascontiguousarray(a, dtype=float).tobytes() for a in (f, h, q, r)))
+
+
+@functools.lru_cache(maxsize=64)
+def _dare_prior(f_bytes: bytes, h_bytes: bytes, q_bytes: bytes, r_bytes: bytes) -> np.ndarray:
+    """:func:`_steady_prior` keyed by its inputs' float64 bytes (shapes 3 x 3, 2 x 3, 3 x 3,
+    2 x 2)."""
+    import scipy.linalg  # here, not at the top: the CLI starts 0.2 s sooner
+
+    f, h = np.frombuffer(f_bytes).reshape(3, 3), np.frombuffer(h_bytes).reshape(2, 3)
+    q, r = np.frombuffer(q_bytes).reshape(3, 3), np.frombuffer(r_bytes).reshape(2, 2)
+    prior = scipy.linalg.solve_discrete_are(f.T, h.T, q, r)
+    prior.flags.writeable = False
+    return prior
 
 
 def _frozen(gain: np.ndarray) -> np.ndarray:

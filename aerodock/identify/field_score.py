@@ -120,7 +120,7 @@ def score_field(params: dict[str, float], flights: Sequence[FlightSamples],
             pair=pair, leader=_ids(group, "leader"), follower=_ids(group, "follower"),
             flights=len({f.flight for f in group}), samples=int(entry["samples"]),
             mean_worst_bin_rel=signed_worst([b["rel_error"]
-                                              for b in entry["separation_bins"]]),
+                                             for b in entry["separation_bins"]]),
             half_width_rel=float(entry["half_width"]["rel_error"]),
             turb_vertical_rel=float(entry["vertical_sd"]["rel_error"]),
             turb_lateral_rel=float(entry["lateral_sd"]["rel_error"]),

@@ -125,8 +125,8 @@ def _reference_error(key: str, held: dict[str, Any], train: dict[str, Any]) -> f
     if key == "mean_vertical":
         own = {tuple(b["separation_m"]): b["real_mps2"] for b in train["separation_bins"]}
         return signed_worst([(own[tuple(b["separation_m"])] - b["real_mps2"])
-                              / abs(b["real_mps2"]) for b in held["separation_bins"]
-                              if tuple(b["separation_m"]) in own and b["real_mps2"]])
+                             / abs(b["real_mps2"]) for b in held["separation_bins"]
+                             if tuple(b["separation_m"]) in own and b["real_mps2"]])
     unit = "real_m" if key == "half_width" else "real_mps2"
     real, pred = held[key][unit], train[key][unit]
     if not (np.isfinite(real) and np.isfinite(pred)) or real == 0:

@@ -62,7 +62,6 @@ def wake_at_separations(params: dict[str, float], cfg: Any,
     return rows
 
 
-
 def signed_worst(errs: list[float]) -> float:
     """The largest relative error in magnitude (the worst separation bin), with its sign."""
     finite = [e for e in errs if np.isfinite(e)]
