@@ -64,9 +64,9 @@ def peer_aerodock(cfg: Any, n: int, steps: int, ref: dict[str, np.ndarray]) -> t
     from aerodock.world.vehicles.rigid_body import (
         RigidBodyParams,
         hover_rigid_state,
-        rigid_targets,
         step_with_autopilot,
     )
+    from aerodock.world.vehicles.targets import rigid_targets
 
     params = RigidBodyParams.from_config(cfg)
     dt = 1.0 / PEER_PHYSICS_HZ

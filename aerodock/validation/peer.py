@@ -38,10 +38,10 @@ from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     RigidBodyState,
     hover_rigid_state,
-    rigid_targets,
     rotor_speed_command,
     step_rigid_body,
 )
+from aerodock.world.vehicles.targets import rigid_targets
 
 PEER_DURATION_S = 5.0
 PEER_PHYSICS_HZ = 500.0

@@ -66,9 +66,9 @@ from aerodock.world.trig_loops import TRIG_LOOPS
 from aerodock.world.vehicles.fleet import RigidBodyFleet
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyState,
-    RigidTargets,
     packed_step_constants,
 )
+from aerodock.world.vehicles.targets import RigidTargets
 
 PERIOD_OK = bool(TRIG_LOOPS.all())
 """Whether the compiled period can run here (numba on, NumPy's loops readable)."""

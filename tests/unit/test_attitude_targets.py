@@ -12,7 +12,7 @@ from aerodock.config import load_config
 from aerodock.geometry import rpy_to_rotmat
 from aerodock.world.vehicles.fleet import build_fleet
 from aerodock.world.vehicles.point_mass import AttitudeCommand
-from aerodock.world.vehicles.rigid_body import rigid_targets
+from aerodock.world.vehicles.targets import rigid_targets
 
 SPECIAL = np.array([-0.0, 0.0, np.nan, -np.nan, 0.3, -0.3, 1.0, -1.0, 20.0, np.inf, -np.inf,
                     1e-300, -1e-300])

@@ -150,6 +150,7 @@ def test_the_vehicles_step_with_kept_arguments_is_the_old_one(cfg, n):
     from aerodock.world.vehicles import rigid_body as rb
     from aerodock.world.vehicles.fleet import build_fleet
     from aerodock.world.vehicles.point_mass import AttitudeCommand
+    from aerodock.world.vehicles.targets import rigid_targets
 
     rng = np.random.default_rng(n)
     for stack in ("generic", "arducopter"):
@@ -167,7 +168,7 @@ def test_the_vehicles_step_with_kept_arguments_is_the_old_one(cfg, n):
             dt = 0.002 if step < 5 else 0.001
             if step == 6:
                 state = replace(state, thrust_gain=np.array(state.thrust_gain))  # writable
-            targets = rb.rigid_targets(cmd, state, params, n)
+            targets = rigid_targets(cmd, state, params, n)
             if step % 2:
                 targets = replace(targets, torque_ff_nm=None)
             force = rng.normal(size=(n, 3))

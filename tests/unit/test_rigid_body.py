@@ -10,10 +10,10 @@ from aerodock.world.vehicles.point_mass import AttitudeCommand
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     hover_rigid_state,
-    rigid_targets,
     step_rigid_body,
     step_with_autopilot,
 )
+from aerodock.world.vehicles.targets import rigid_targets
 
 DT = 0.002
 

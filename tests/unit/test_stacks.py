@@ -16,9 +16,9 @@ from aerodock.world.vehicles.point_mass import AttitudeCommand
 from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     hover_rigid_state,
-    rigid_targets,
     step_with_autopilot,
 )
+from aerodock.world.vehicles.targets import rigid_targets
 
 DT = 0.002
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

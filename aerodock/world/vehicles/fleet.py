@@ -39,10 +39,9 @@ from aerodock.world.vehicles.rigid_body import (
     RigidBodyParams,
     RigidBodyState,
     hover_rigid_state,
-    joined_torque,
-    rigid_targets,
     step_with_autopilot,
 )
+from aerodock.world.vehicles.targets import joined_torque, rigid_targets
 
 
 @functools.cache
