@@ -65,6 +65,14 @@ def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
     return numba.njit(cache=True, fastmath=False, nogil=True)(fn)
 
 
+def njit_parallel(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """:func:`njit` with numba's ``parallel``: its ``numba.prange`` loops run across numba's
+    threads (``NUMBA_NUM_THREADS``, default the CPU count; :func:`numba.set_num_threads`).
+    Only the loops written as ``prange`` are split, and only over iterations that write apart,
+    so the numbers do not depend on the number of threads."""
+    return numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)(fn)
+
+
 # -- one signature for every layout ------------------------------------------------------------
 # numba compiles a kernel anew for every combination of its arrays' layouts (C, Fortran, strided)
 # and writability it is called with: the world's vehicle kernel (49 arguments) met 27 of them in
@@ -80,11 +88,14 @@ def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
 # process that only ever meets one signature (a docking run) loads nothing more.
 
 
-def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any], Any]:
+def any_layout(*writes: str, contiguous: tuple[str, ...] = (),
+               general_only: bool = False) -> Callable[[Any], Any]:
     """Decorator (above :func:`njit`): the kernel is sealed to one general signature when a call
     meets a signature other than its first (:func:`general_signature`). ``writes`` names the
     array arguments it writes (they stay writable in the general signature; the others become
     read-only); ``contiguous`` those that must stay C-contiguous (the kernel reshapes them).
+    ``general_only``: sealed at the first call (a kernel that takes half a minute to compile
+    is compiled once, in its general form, rather than first for the first call's layouts).
 
     Raises:
         ValueError: a name is not one of the kernel's arguments.
@@ -102,7 +113,8 @@ def any_layout(*writes: str, contiguous: tuple[str, ...] = ()) -> Callable[[Any]
         _MARKED.append((kernel, kinds))
         # numba's dispatcher calls this (from C) for a call no compiled signature takes
         kernel._compile_for_args = _SealOnSecondSignature(kernel, kinds,
-                                                          kernel._compile_for_args)
+                                                          kernel._compile_for_args,
+                                                          general_only)
         return kernel
 
     return mark
@@ -146,13 +158,16 @@ class _SealOnSecondSignature:
     the call's arguments convert to it, else compiled as numba does."""
 
     def __init__(self, kernel: Any, kinds: tuple[tuple[bool, bool], ...],
-                 compile_for_args: Callable[..., Any]) -> None:
+                 compile_for_args: Callable[..., Any], general_only: bool = False) -> None:
         self.kernel, self.kinds, self.compile_for_args = kernel, kinds, compile_for_args
+        self.general_only = general_only
 
     def __call__(self, *args: Any, **kws: Any) -> Any:
         kernel = self.kernel
-        if kernel.overloads and not kws and len(args) == len(self.kinds):
-            general = general_signature(kernel.signatures[0], self.kinds)
+        if not kws and len(args) == len(self.kinds) and (kernel.overloads or self.general_only):
+            first = (kernel.signatures[0] if kernel.overloads
+                     else tuple(kernel.typeof_pyval(a) for a in args))
+            general = general_signature(first, self.kinds)
             can_convert = kernel.typingctx.can_convert
             if all(can_convert(kernel.typeof_pyval(a), t) is not None
                    for a, t in zip(args, general, strict=True)):

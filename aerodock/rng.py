@@ -10,6 +10,8 @@ pre-drawn in chunks (one short Python loop over trials per chunk, not per step).
 from __future__ import annotations
 
 import copy
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -77,19 +79,7 @@ class TrialRNG:
             size = max(_CHUNK, per_trial)
             new = np.empty((left + size, self.n))
             new[:left] = buf[pos:]
-            # Each trial's stream is drawn straight into a row of a small scratch block, then
-            # the block is transposed into place (blocks of 16 trials stay in cache).
-            scratch = np.empty((min(_BLOCK, self.n), size))
-            for i in range(0, self.n, _BLOCK):
-                gens = self._gens[i:i + _BLOCK]
-                rows = scratch[:len(gens)]
-                if kind == "normal":
-                    for g, row in zip(gens, rows):
-                        g.standard_normal(size, out=row)
-                else:
-                    for g, row in zip(gens, rows):
-                        g.random(size, out=row)
-                new[left:, i:i + len(gens)] = rows.T
+            _refill(self._gens, kind, size, new[left:])
             self._buf[kind] = buf = new
             pos, end = 0, per_trial
         self._pos[kind] = end
@@ -151,6 +141,58 @@ class TrialRNG:
     def uniform(self, low: Any = 0.0, high: Any = 1.0, size: Any = None) -> np.ndarray:
         """Uniform draws in [low, high) (per-trial when ``size[0] == n``)."""
         return low + (high - low) * self._batch("uniform", size)
+
+
+def _refill(gens: list[np.random.Generator], kind: str, size: int, out: np.ndarray) -> None:
+    """Each trial's next ``size`` draws of ``kind`` into its column of ``out`` (size, n): drawn
+    straight into a row of a small scratch block, then the block transposed into place (blocks
+    of 16 trials stay in cache). From :data:`_THREADED_MIN` trials on, the trials are split
+    between threads (NumPy draws and copies without the GIL): every stream is still drawn by
+    one thread, in its own order, so the numbers are the same."""
+    n = len(gens)
+    threads = min(_threads(), n // _THREADED_MIN)
+    if threads <= 1:
+        _refill_columns(gens, kind, size, out, 0, n)
+        return
+    cuts = [(n * t // threads) // _BLOCK * _BLOCK for t in range(threads)] + [n]
+    pool = _pool(threads)
+    list(pool.map(lambda t: _refill_columns(gens, kind, size, out, cuts[t], cuts[t + 1]),
+                  range(threads)))
+
+
+def _refill_columns(gens: list[np.random.Generator], kind: str, size: int, out: np.ndarray,
+                    start: int, stop: int) -> None:
+    """:func:`_refill` for the trials ``start..stop``."""
+    scratch = np.empty((min(_BLOCK, stop - start), size))
+    for i in range(start, stop, _BLOCK):
+        block = gens[i:min(i + _BLOCK, stop)]
+        rows = scratch[:len(block)]
+        if kind == "normal":
+            for g, row in zip(block, rows):
+                g.standard_normal(size, out=row)
+        else:
+            for g, row in zip(block, rows):
+                g.random(size, out=row)
+        out[:, i:i + len(block)] = rows.T
+
+
+_THREADED_MIN = 64  # trials per thread below which a refill stays in one thread
+_POOL: list[ThreadPoolExecutor] = []
+
+
+def _threads() -> int:
+    """The threads a refill may use: the CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # (not on every platform)
+        return os.cpu_count() or 1
+
+
+def _pool(threads: int) -> ThreadPoolExecutor:
+    """The process's refill threads (made at the first threaded refill)."""
+    if not _POOL or _POOL[0]._max_workers < threads:
+        _POOL[:] = [ThreadPoolExecutor(max_workers=threads, thread_name_prefix="aerodock-rng")]
+    return _POOL[0]
 
 
 def standard_normal_t(rng: np.random.Generator | TrialRNG, n: int, k: int) -> np.ndarray:

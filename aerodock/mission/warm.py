@@ -5,7 +5,8 @@ The compiled step (:mod:`aerodock.jit`) keeps its machine code on disk beside th
 need a kernel pays for compiling it (about a minute for the whole world on a 2-core machine).
 ``make`` runs this module right after installing, so neither a user's first command nor a test
 process pays that. It flies a few short campaigns that between them take every compiled path of
-the default worlds (the rigid-body and point-mass vehicles, a hovering and a moving leader,
+the default worlds (a batch large enough for the control period's blocks across the cores, the
+rigid-body and point-mass vehicles, a hovering and a moving leader,
 injected faults, the oracle's mean field), then one short trial on each other autopilot stack
 (the generic loop and the Crazyflie firmware's two, as the Crazyflie worlds fly them) and under
 each other controller profile (ours, with its accelerometer observer and the torque
@@ -24,6 +25,7 @@ from aerodock.jit import compile_general_signatures
 from aerodock.mission.batch import run_campaign
 from aerodock.mission.faults import Fault
 from aerodock.mission.spec import Compensation, MissionSpec
+from aerodock.world.period import PARALLEL_MIN_TRIALS
 
 _SHORT = {"mission": {"settle_s": 0.2, "post_dock_s": 0.1, "dock_window_s": 0.2,
                       "backoff_s": 0.2, "leader_ramp_s": 0.2},
@@ -38,7 +40,8 @@ def warm(out=sys.stderr) -> float:
     cfg = load_config().with_overrides(_SHORT, source="warm-up")
     point_mass = cfg.with_overrides({"vehicle": {"model": "point-mass"}}, source="warm-up")
     for config, spec in (
-            (cfg, MissionSpec(trials=2, compensation=Compensation.OBSERVER)),
+            # enough trials for the period's blocks across the threads (world/period.py)
+            (cfg, MissionSpec(trials=PARALLEL_MIN_TRIALS, compensation=Compensation.OBSERVER)),
             (cfg, MissionSpec(trials=2, compensation=Compensation.ORACLE,
                               leader_speed_mps=0.25)),
             (cfg, MissionSpec(trials=1, compensation=Compensation.NONE,

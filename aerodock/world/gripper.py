@@ -250,22 +250,28 @@ def contact_kernel(fol_p: np.ndarray, fol_r: np.ndarray, fol_v: np.ndarray, bar_
 
 @njit
 def contact_push(contact: np.ndarray, up: np.ndarray, captured: np.ndarray, any_captured: bool,
-                 contact_seen: np.ndarray, force: np.ndarray, bar_force: np.ndarray) -> None:
+                 contact_seen: np.ndarray, fol_force: np.ndarray, bar_force: np.ndarray) -> None:
     """The contact's push (the world's ``gripper contact`` term, once some bar touches an arm):
     no push on a captured follower (``contact`` set to 0 there, in place: NumPy's
     ``np.where(captured, 0.0, contact)``), ``push = up * contact``, ``contact_seen |= contact >
-    0``, the followers' rows ``force[n:] -= push`` and ``bar_force += push``, element by
-    element as NumPy computes them."""
-    n = contact.shape[0]
-    for i in range(n):
+    0``, the followers' rows ``fol_force -= push`` (n, 3: the followers' rows of the step's
+    accumulator) and ``bar_force += push``, element by element as NumPy computes them.
+
+    Row by row: a trial whose bar touches nothing (its contact 0) takes no push, whatever the
+    other trials do, so a block of trials computes what the whole batch does for its rows (the
+    compiled period's blocks, :mod:`aerodock.world.period_kernel`). NumPy's batch pushed a zero
+    there, which changes a number only where the accumulator holds a -0 (the sign of a zero)."""
+    for i in range(contact.shape[0]):
         if any_captured and captured[i]:
             contact[i] = 0.0
         c = contact[i]
+        if c == 0.0:
+            continue
         if c > 0:
             contact_seen[i] = True
         for k in range(3):
             push = up[i, k] * c
-            force[n + i, k] -= push
+            fol_force[i, k] -= push
             bar_force[i, k] += push
 
 

@@ -218,7 +218,8 @@ def _biquad(x: float, on: bool, b0: float, b1: float, b2: float, a1: float, a2: 
 
 
 @njit
-def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
+def imu_samples(n: int, lo: int, hi: int, w: np.ndarray, gyro_draws: np.ndarray,
+                gyro_sd: float,
                 gyro_range: float, gyro_c: np.ndarray, gz1: np.ndarray, gz2: np.ndarray,
                 lead_accel: np.ndarray, fol_accel: np.ndarray, gravity: float,
                 rot: np.ndarray, bias: np.ndarray, thrust: np.ndarray, hover: np.ndarray,
@@ -234,8 +235,11 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
     white noise and vibration (its sd growing with the thrust), clipped and low-passed
     (``accel_out``); the true acceleration for the navigation's ring (``ring``, 2n x 3). The
     filters' new states go to ``gz1_new`` ... ``az2_new``, which may be ``gz1`` ... ``az2``
-    themselves (each element is read before it is written)."""
-    for j in range(2 * n):
+    themselves (each element is read before it is written). Only trials ``lo..hi`` (their
+    leader's row and their follower's): a block of trials, each row its own."""
+    nb = hi - lo
+    for jj in range(2 * nb):
+        j = lo + jj if jj < nb else n + lo + (jj - nb)
         h, i = (0, j) if j < n else (1, j - n)
         if h == 0:
             a0, a1, a2 = lead_accel[i, 0], lead_accel[i, 1], lead_accel[i, 2] - gravity
@@ -270,14 +274,20 @@ def imu_samples(n: int, w: np.ndarray, gyro_draws: np.ndarray, gyro_sd: float,
 
 
 @njit
-def _delay_slot(line: np.ndarray, head: int, out: np.ndarray) -> np.ndarray:
-    """Where a sample entering the delay ``line`` (d, 3, m) is written: with a line, its oldest
-    sample (slot ``head``) is copied to ``out`` (3, m: what leaves the line now) and that slot
-    is returned; without one (d = 0), ``out`` itself (the sample leaves at once)."""
+def _delay_slot(line: np.ndarray, head: int, out: np.ndarray, n: int, lo: int,
+                hi: int) -> np.ndarray:
+    """Where a sample entering the delay ``line`` (d, 3, 2n) is written: with a line, its
+    oldest sample (slot ``head``) is copied to ``out`` (3, 2n: what leaves the line now) and
+    that slot is returned; without one (d = 0), ``out`` itself (the sample leaves at once).
+    Only the columns of trials ``lo..hi`` are copied (their leader's and their follower's)."""
     if line.shape[0] == 0:
         return out
     slot = line[head]
-    out[:] = slot
+    for c in range(3):
+        for j in range(lo, hi):
+            out[c, j] = slot[c, j]
+        for j in range(n + lo, n + hi):
+            out[c, j] = slot[c, j]
     return slot
 
 
@@ -294,7 +304,7 @@ def _filter_sample_into(sample: np.ndarray, c: np.ndarray, z1: np.ndarray, z2: n
     """:func:`filter_sample`: :func:`_biquad` over a (3, m) sample, the states ``z1``, ``z2``
     updated in place, through the delay ``line`` (slot ``head`` the oldest) into ``out``; the
     line's new head."""
-    into = _delay_slot(line, head, out)
+    into = _delay_slot(line, head, out, 0, 0, sample.shape[1])
     for row in range(sample.shape[0]):
         for col in range(sample.shape[1]):
             into[row, col], z1[row, col], z2[row, col] = _biquad(
@@ -327,7 +337,8 @@ def _ring_mean_into(ring: np.ndarray, oldest: int, count: int, out: np.ndarray) 
 
 
 @njit
-def imu_step(loops: np.ndarray, n: int, w: np.ndarray, gyro_draws: np.ndarray,
+def imu_step(loops: np.ndarray, n: int, lo: int, hi: int, w: np.ndarray,
+             gyro_draws: np.ndarray,
              gyro_sd: float, gyro_range: float, gyro_c: np.ndarray, gz1: np.ndarray,
              gz2: np.ndarray, gyro_line: np.ndarray, gyro_head: int, lead_accel: np.ndarray,
              fol_accel: np.ndarray, gravity: float, rot: np.ndarray, bias: np.ndarray,
@@ -351,19 +362,25 @@ def imu_step(loops: np.ndarray, n: int, w: np.ndarray, gyro_draws: np.ndarray,
     its own loop in ``loops``); and the attitude estimate's step from ``rot_hat`` into
     ``rot_hat_out`` (:func:`~aerodock.world.attitude_estimator.estimate_into`, gains ``k_p``,
     ``k_yaw``, 1/s, over ``dt`` s). Returns the new heads of the gyro's and the
-    accelerometer's delay lines and of the ring."""
-    gyro_into = _delay_slot(gyro_line, gyro_head, gyro_out)
-    accel_into = _delay_slot(accel_line, accel_head, accel_out)
-    imu_samples(n, w, gyro_draws, gyro_sd, gyro_range, gyro_c, gz1, gz2, lead_accel, fol_accel,
-                gravity, rot, bias, thrust, hover, accel_noise_sq, vibration, accel_draws,
+    accelerometer's delay lines and of the ring. Only trials ``lo..hi`` (their leader's row and
+    their follower's; ``0, n`` for all): each row is its own, so blocks of trials compute the
+    batch's numbers (the compiled period's blocks)."""
+    gyro_into = _delay_slot(gyro_line, gyro_head, gyro_out, n, lo, hi)
+    accel_into = _delay_slot(accel_line, accel_head, accel_out, n, lo, hi)
+    imu_samples(n, lo, hi, w, gyro_draws, gyro_sd, gyro_range, gyro_c, gz1, gz2, lead_accel,
+                fol_accel, gravity, rot, bias, thrust, hover, accel_noise_sq, vibration,
+                accel_draws,
                 accel_range, accel_c, az1, az2, noise, gyro_into, gz1, gz2, accel_into, az1,
                 az2, ring[ring_head])
     ring_head = _next_slot(ring, ring_head)
-    if step_index % substeps == 0:
-        _ring_mean_into(ring, ring_head, min(substeps, ring.shape[0]), nav_accel)
+    count = min(substeps, ring.shape[0])
     yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
-    np_arctan2(loops, lead_att_ext[:, 1, 0], lead_att_ext[:, 0, 0], yaw_ext[:n])
-    np_arctan2(loops, fol_att_ext[:, 1, 0], fol_att_ext[:, 0, 0], yaw_ext[n:])
-    estimate_into(loops, rot_hat, gyro_out, accel_out, nav_accel, yaw_ext, k_p, k_yaw, dt,
-                  rot_hat_out)
+    for a, b in ((lo, hi), (n + lo, n + hi)):  # the block's leaders, then its followers
+        if step_index % substeps == 0:
+            _ring_mean_into(ring[:, a:b], ring_head, count, nav_accel[a:b])
+    np_arctan2(loops, lead_att_ext[lo:hi, 1, 0], lead_att_ext[lo:hi, 0, 0], yaw_ext[lo:hi])
+    np_arctan2(loops, fol_att_ext[lo:hi, 1, 0], fol_att_ext[lo:hi, 0, 0], yaw_ext[n + lo:n + hi])
+    for a, b in ((lo, hi), (n + lo, n + hi)):
+        estimate_into(loops, rot_hat[a:b], gyro_out[:, a:b], accel_out[:, a:b], nav_accel[a:b],
+                      yaw_ext[a:b], k_p, k_yaw, dt, rot_hat_out[a:b])
     return _next_slot(gyro_line, gyro_head), _next_slot(accel_line, accel_head), ring_head

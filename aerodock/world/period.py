@@ -30,6 +30,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any
 
+import numba
 import numpy as np
 from numba.core.errors import NumbaError
 
@@ -57,6 +58,7 @@ from aerodock.world.period_kernel import (
     STOP_UNCOVERED,
     float_constants,
     period_kernel,
+    period_kernel_parallel,
 )
 from aerodock.world.platform import (
     BarState,
@@ -78,6 +80,11 @@ PERIOD_OK = bool(TRIG_LOOPS.all())
 _NO_FF = np.zeros((1, 4))
 _NO_LOSS = np.zeros((0, 4))  # no rotor fault
 _NO_TORQUES = np.zeros((0, 0, 3))  # no torque log
+PARALLEL_MIN_TRIALS = 16
+"""From this many trials on, a period's blocks of trials run across numba's threads
+(:func:`~aerodock.world.period_kernel.period_kernel_parallel`, one block a thread); below it, in
+one (a thread's start and join cost about what a small batch's step does). The numbers are the
+same either way."""
 DISABLED: list[str] = []
 """Why the compiled period was turned off in this process (empty: it was not): a kernel
 signature numba could not compile here (e.g. a callee sealed by :func:`aerodock.jit.any_layout`
@@ -180,6 +187,14 @@ def covered(state: WorldState, params: WorldParams) -> bool:
 _JET_METHODS = ("_pair_distance", "_jet_params", "_columns", "_force_coeff", "_bar_params")
 
 
+def kernel_blocks(n: int) -> int:
+    """How many blocks of trials a period of ``n`` trials is stepped in: one a thread of
+    numba's (:func:`numba.get_num_threads`) from :data:`PARALLEL_MIN_TRIALS` trials on, else 1
+    (the serial kernel)."""
+    threads = numba.get_num_threads()
+    return threads if threads > 1 and n >= PARALLEL_MIN_TRIALS else 1
+
+
 def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
                close_command: np.ndarray | None, steps: int) -> tuple[int, int]:
     """Up to ``steps`` physics steps of the default world in one compiled call: (the number
@@ -227,8 +242,10 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     captured, any_captured, idle = state.gripper_flags()
     passive_any, passive, active_any, active = cache.triggers
     loss = state.rotor_loss
+    blocks = kernel_blocks(n)
+    kernel = period_kernel_parallel if blocks > 1 else period_kernel
     try:
-        result = period_kernel(
+        result = kernel(
             NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
             params.latency_steps, ff is not None, idle, passive_any, passive, active_any, active,
             _bools(close), active_any and _any(close), draws, packed, both.p, both.v,
@@ -250,7 +267,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
             gripper.sensor_stuck_n, state.contact_seen, state.contact_sensed, state.ground_contact,
             slab_p, slab_v,
             slab_r, slab_w, slab_om, slab_th, slab_acc, slab_int, slab_ysp, slab_bp, slab_bv,
-            slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, slab_wt, downwash, *go)
+            slab_by, slab_br, slab_cab, slab_gt, slab_at, slab_att, slab_wt, downwash, *go,
+            blocks)
     except NumbaError as err:  # raised while compiling, before any step: nothing has moved
         global PERIOD_OK
         PERIOD_OK = False

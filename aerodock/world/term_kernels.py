@@ -9,29 +9,27 @@ from __future__ import annotations
 import numpy as np
 
 from aerodock.jit import njit
-from aerodock.world.platform import any_above
 
 
 @njit
-def ground_kernel(p: np.ndarray, v: np.ndarray, ground_contact: np.ndarray) -> None:
-    """The ground (z = 0, NED) on the 2n vehicles ``p``, ``v`` (in place), when some ``z`` is
-    above it: NumPy's ``below = z > 0``, ``z = np.minimum(z, 0)`` on every row (a -0 becomes
-    +0, a NaN stays), ``vz = np.where(below, np.minimum(vz, 0), vz)``, and
-    ``ground_contact (n,) |= below[n:] | below[:n]`` (the world's ``ground`` term)."""
-    if not any_above(p, 0.0):
-        return
-    m = p.shape[0]
-    n = m // 2
-    below = np.empty(m, dtype=np.bool_)
-    for i in range(m):
-        z = p[i, 2]
-        below[i] = z > 0.0
-        p[i, 2] = z if (z < 0.0 or z != z) else 0.0
-        if below[i]:
-            vz = v[i, 2]
-            v[i, 2] = vz if (vz < 0.0 or vz != vz) else 0.0
-    for i in range(n):
-        if below[n + i] or below[i]:
+def ground_kernel(p: np.ndarray, v: np.ndarray, ground_contact: np.ndarray, lo: int,
+                  hi: int) -> None:
+    """The ground (z = 0, NED) on trials ``lo..hi`` of the 2n vehicles ``p``, ``v`` (in place,
+    leaders first): a vehicle whose ``z`` is above it stops there (``z = 0``, its ``vz``
+    clipped to ``min(vz, 0)``, a NaN kept), and ``ground_contact`` (n,) of its trial is set
+    (the world's ``ground`` term). Row by row, so a block of trials computes what the whole
+    batch does for its rows; NumPy's batch form, ``np.minimum(z, 0)`` on every row once one is
+    above, differs only in turning another row's ``z = -0`` into +0."""
+    n = p.shape[0] // 2
+    for i in range(lo, hi):
+        hit = False
+        for j in (i, n + i):
+            if p[j, 2] > 0.0:
+                p[j, 2] = 0.0
+                vz = v[j, 2]
+                v[j, 2] = vz if (vz < 0.0 or vz != vz) else 0.0
+                hit = True
+        if hit:
             ground_contact[i] = True
 
 
@@ -77,20 +75,19 @@ def rotor_fault_wrench(omega: np.ndarray, thrust_coeff: float, gain: np.ndarray,
                        loss: np.ndarray, rot: np.ndarray, torque_map: np.ndarray,
                        force: np.ndarray, torque_t: np.ndarray) -> None:
     """The thrust the followers' faulty rotors do not give (the world's ``rotor faults`` term):
-    ``lost = omega^2 (k_T gain) loss`` per rotor (the followers' rows of the 2n batch's
-    ``omega`` (m, k), ``gain`` (m,) and ``rot`` (m, 3, 3), ``loss`` (n, k)), added to the
-    followers' force along their body z, ``force[n:] += R e3 sum(lost)``, and taken from their
-    torque, ``torque_t[:, n:] -= lost_i map_i`` rotor by rotor; each element as NumPy computes
-    it (its sum of a row of fewer than eight numbers is the running one)."""
+    ``lost = omega^2 (k_T gain) loss`` per rotor (the followers' rows: ``omega`` (n, k),
+    ``gain`` (n,), ``rot`` (n, 3, 3), ``loss`` (n, k)), added to their force along their body
+    z, ``force += R e3 sum(lost)`` (n, 3), and taken from their torque, ``torque_t -= lost_i
+    map_i`` (3, n) rotor by rotor; each element as NumPy computes it (its sum of a row of fewer
+    than eight numbers is the running one)."""
     n, k = loss.shape
     lost = np.empty(k)
-    for r in range(n):
-        j = n + r
+    for j in range(n):
         kc = thrust_coeff * gain[j]
         for i in range(k):
             x = omega[j, i] * omega[j, i]
             x *= kc
-            x *= loss[r, i]
+            x *= loss[j, i]
             lost[i] = x
         total = lost[0]
         for i in range(1, k):

@@ -119,7 +119,7 @@ def gripper_contact(state: WorldState, frame: StepFrame, params: WorldParams) ->
     # compiled: no push on a captured follower, the push on the follower and on the bar, and
     # contact_seen (the recorder flags the labels of a period with contact)
     contact_push(contact, up, frame.captured, frame.any_captured, state.contact_seen,
-                 frame.force_n, frame.bar_force_n)
+                 frame.force_n[n:], frame.bar_force_n)
     frame.contact_n, frame.inside = contact, inside
 
 
@@ -142,9 +142,10 @@ def rotor_faults(state: WorldState, frame: StepFrame, params: WorldParams) -> No
     fleet, both = params.follower_fleet.params, frame.both
     if state.rotor_loss.shape[1] >= 8:  # NumPy sums eight or more numbers pairwise
         raise ValueError("rotor faults: at most seven rotors")
-    rotor_fault_wrench(both.rotor_speed, fleet.thrust_coeff, both.thrust_gain,
-                       np.asarray(state.rotor_loss, dtype=float), frame.rot,
-                       fleet.rotor_torque_map, frame.force_n, frame.torque_t)
+    n = state.n
+    rotor_fault_wrench(both.rotor_speed[n:], fleet.thrust_coeff, both.thrust_gain[n:],
+                       np.asarray(state.rotor_loss, dtype=float), frame.rot[n:],
+                       fleet.rotor_torque_map, frame.force_n[n:], frame.torque_t[:, n:])
 
 
 # -- motion ----------------------------------------------------------------------------------
@@ -178,7 +179,7 @@ def imu(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     gyro, accel = ims.gyro, ims.accel
     gyro_c, accel_c = imu_coeffs(ims)
     gyro.head, accel.head, ims.ring_head = imu_step(
-        NUMPY_LOOPS, n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, gyro.z1,
+        NUMPY_LOOPS, n, 0, n, both.w, gyro_draws, gyro_sd, chain.gyro_range_radps, gyro_c, gyro.z1,
         gyro.z2, gyro.delay, gyro.head, state.leader_accel, state.follower_accel,
         vehicle.gravity_mps2, frame.rot, ims.bias_body_mps2, both.thrust_n,
         state.constants.hover_thrust_n, vehicle.accel_noise_mps2 ** 2,
@@ -249,7 +250,7 @@ def ground(state: WorldState, frame: StepFrame, params: WorldParams) -> None:
     """The ground (z = 0, NED): a vehicle that reaches it stops there, and the trial is flagged."""
     new = frame.new
     if any_above(new.p, 0.0):  # some z above 0 (NaN aside): compiled, as the period's
-        ground_kernel(new.p, new.v, state.ground_contact)
+        ground_kernel(new.p, new.v, state.ground_contact, 0, state.n)
 
 
 def commit(state: WorldState, frame: StepFrame, params: WorldParams) -> None:

@@ -68,7 +68,7 @@ def list_step(ref: ListChain, ims: ImuState, inputs: dict, rng, params) -> dict:
     gyro_t, accel_t = np.empty((3, m)), np.empty((3, m))
     gz1, gz2, az1, az2 = (np.empty((3, m)) for _ in range(4))
     ring = np.empty((m, 3))
-    imu_samples(n, inputs["w"], gyro_draws, gyro_sd, chain.gyro_range_radps,
+    imu_samples(n, 0, n, inputs["w"], gyro_draws, gyro_sd, chain.gyro_range_radps,
                 biquad_coeffs(ims.gyro_filter), ref.z[0], ref.z[1], inputs["lead_accel"],
                 inputs["fol_accel"], params.vehicle.gravity_mps2, inputs["rot"],
                 ims.bias_body_mps2, inputs["thrust"], inputs["hover"],

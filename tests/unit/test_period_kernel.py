@@ -154,7 +154,8 @@ def test_the_rotor_fault_wrench_is_numpys():
     torque = ref_torque.T[n:]
     for i in range(4):
         torque -= lost[:, i:i + 1] * torque_map[i]
-    rotor_fault_wrench(omega, thrust_coeff, gain, loss, rot, torque_map, force, torque_t)
+    rotor_fault_wrench(omega[n:], thrust_coeff, gain[n:], loss, rot[n:], torque_map, force[n:],
+                       torque_t[:, n:])
     assert np.array_equal(force, ref_force) and np.array_equal(torque_t, ref_torque)
 
 
@@ -198,8 +199,10 @@ def test_the_default_step_runs_compiled(monkeypatch):
     assert done and done[0][0] == world.substeps
 
 
-def test_the_ground_kernel_is_numpys_ground():
-    """The ground term's compiled form (shared with the period) against its NumPy original."""
+def test_the_ground_kernel_is_numpys_ground_row_by_row():
+    """The ground term's compiled form (shared with the period) against NumPy's, row by row:
+    a row above the ground stops on it, the others keep every bit (a -0 stays -0), and a block
+    of trials gives the whole batch's numbers for its rows."""
     p = np.array([[0.0, 0.0, 0.5], [1.0, 2.0, -0.0], [0.0, 0.0, np.nan], [0.0, 0.0, -1.0],
                   [0.0, 0.0, 0.0], [0.0, 0.0, 2.0]])
     v = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -0.0], [0.0, 0.0, 3.0], [0.0, 0.0, 2.0],
@@ -207,11 +210,18 @@ def test_the_ground_kernel_is_numpys_ground():
     contact = np.zeros(3, dtype=bool)
     ref_p, ref_v, ref_contact = p.copy(), v.copy(), contact.copy()
     below = ref_p[:, 2] > 0.0
-    ref_p[:, 2] = np.minimum(ref_p[:, 2], 0.0)
+    ref_p[:, 2] = np.where(below, 0.0, ref_p[:, 2])
     ref_v[:, 2] = np.where(below, np.minimum(ref_v[:, 2], 0.0), ref_v[:, 2])
     ref_contact |= below[3:] | below[:3]
-    ground_kernel(p, v, contact)
+    blocks = [(p.copy(), v.copy(), contact.copy()) for _ in range(2)]
+    ground_kernel(p, v, contact, 0, 3)
     for a, b in ((p, ref_p), (v, ref_v), (contact, ref_contact)):
+        assert np.array_equal(a, b, equal_nan=True)
+        assert np.array_equal(np.signbit(a), np.signbit(b))
+    bp, bv, bc = blocks[0]
+    for lo, hi in ((0, 1), (1, 3)):
+        ground_kernel(bp, bv, bc, lo, hi)
+    for a, b in ((bp, ref_p), (bv, ref_v), (bc, ref_contact)):
         assert np.array_equal(a, b, equal_nan=True)
         assert np.array_equal(np.signbit(a), np.signbit(b))
 

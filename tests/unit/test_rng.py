@@ -33,3 +33,19 @@ def test_a_batch_of_several_seeds_refuses_shared_draws():
     assert TrialRNG(0, 3).standard_normal(7).shape == (7,)  # one campaign may
     with pytest.raises(ValueError, match="must hold 3 seeds"):
         TrialRNG(0, 3, seeds=[0, 1])
+
+
+def test_a_refill_split_between_threads_draws_the_same_numbers(monkeypatch):
+    """Large batches refill their streams in several threads: each trial's numbers are those
+    its stream draws alone, whatever the split."""
+    import aerodock.rng as rng_module
+
+    monkeypatch.setattr(rng_module, "_threads", lambda: 3)
+    monkeypatch.setattr(rng_module, "_THREADED_MIN", 20)
+    batch = TrialRNG(3, 100)
+    normals = batch.standard_normal_t(5000).copy()  # past a chunk: two refills
+    uniforms = batch.random((100, 3)).copy()
+    for trial in (0, 15, 16, 33, 34, 66, 99):  # either side of each thread's cut
+        alone = TrialRNG(3, 1, trial)
+        assert np.array_equal(alone.standard_normal_t(5000)[:, 0], normals[:, trial])
+        assert np.array_equal(alone.random((1, 3))[0], uniforms[trial])

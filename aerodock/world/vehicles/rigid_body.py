@@ -466,7 +466,26 @@ def flown_step_body(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.nd
                     omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
                     integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
     """:func:`rigid_kernel.step_vehicles` flown by the autopilots, its constants read from
-    :func:`_packed_constants`' array (views of it, the same numbers)."""
+    :func:`_packed_constants`' array (views of it, the same numbers): every row."""
+    flown_rows(packed, 0, p.shape[0], p, v, rot, w, omega, att, use_att, r_des, yaw_rate,
+               thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp,
+               ext_force, ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
+               thrust_new, accel, integral_new, yaw_sp_new)
+
+
+@njit
+def flown_rows(packed: np.ndarray, lo: int, hi: int, p: np.ndarray, v: np.ndarray,
+               rot: np.ndarray, w: np.ndarray, omega: np.ndarray, att: np.ndarray,
+               use_att: bool, r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
+               torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
+               noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
+               ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
+               v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
+               omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
+               integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
+    """:func:`flown_step_body` on the rows ``lo..hi`` of the batch (every array whole, as the
+    step holds it; each vehicle's step is its own, so rows stepped apart give the numbers of
+    the batch stepped at once: the compiled period's blocks of trials)."""
     n = p.shape[0]
     n_alpha, n_consts, n_stack = int(packed[0]), int(packed[1]), int(packed[2])
     n_mixer, n_map, n_drag = int(packed[3]), int(packed[4]), int(packed[5])
@@ -490,13 +509,20 @@ def flown_step_body(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.nd
     torque_map = packed[o:o + n_map]
     o += n_map
     drag_sums = packed[o:o + n_drag]
+    if n_alpha > 1:  # the motors' step factor per vehicle (else one for all)
+        alpha = alpha[lo:hi]
+    # the placeholders of absent inputs (an empty gyro noise, a (1, 4) feed-forward) are not
+    # read: their slices are as good as they
     rigid_kernel.step_vehicles_body(
-        p, v, rot, w, omega, kc, torque_gain, mass_rows, inertia, alpha, True, omega[:0], att,
-        use_att, r_des, yaw_rate, thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy,
-        integral, yaw_sp, consts, packed[6] != 0.0, stack, mixer, packed[7], packed[8],
-        ext_force, ext_torque, has_ext_torque, torque_map, drag_sums, packed[9], packed[10],
-        packed[11], packed[12], packed[13], p_new, v_new, rot_new, w_new, omega_new,
-        thrust_new, accel, integral_new, yaw_sp_new)
+        p[lo:hi], v[lo:hi], rot[lo:hi], w[lo:hi], omega[lo:hi], kc[lo:hi], torque_gain[lo:hi],
+        mass_rows[lo:hi], inertia[lo:hi], alpha, True, omega[:0], att[lo:hi], use_att,
+        r_des[lo:hi], yaw_rate[lo:hi], thrust_cmd[lo:hi], torque_ff[lo:hi], has_ff, gyro[lo:hi],
+        gyro_noise[lo:hi], noisy, integral[lo:hi], yaw_sp[lo:hi], consts, packed[6] != 0.0,
+        stack, mixer, packed[7], packed[8], ext_force[lo:hi], ext_torque[lo:hi],
+        has_ext_torque, torque_map, drag_sums, packed[9], packed[10], packed[11], packed[12],
+        packed[13], p_new[lo:hi], v_new[lo:hi], rot_new[lo:hi], w_new[lo:hi],
+        omega_new[lo:hi], thrust_new[lo:hi], accel[lo:hi], integral_new[lo:hi],
+        yaw_sp_new[lo:hi])
 
 
 @any_layout("p_new", "v_new", "rot_new", "w_new", "omega_new", "thrust_new", "accel",
