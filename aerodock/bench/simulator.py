@@ -74,6 +74,8 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
 
     ``model`` (``"rigid-body"`` or ``"point-mass"``) overrides ``cfg``'s ``[vehicle] model``.
     """
+    from aerodock.world.period import kernel_blocks
+
     if model is not None:
         cfg = cfg.with_overrides({"vehicle": {"model": model}}, source="bench")
     out: dict[str, Any] = {}
@@ -97,6 +99,9 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
             f"{cfg.vehicle.model}, {n} trials x 2 vehicles, 500 Hz physics, LQR + observer at "
             "100 Hz")
         row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
+        # the control period's blocks of trials across numba's threads (world/period.py): the
+        # CPU time then counts every thread's, so per_cpu_s is below the wall figure
+        row["threads"] = kernel_blocks(n)
         out[str(n)] = row
     return out
 

@@ -2,7 +2,7 @@
 
 The compiled step (:mod:`aerodock.jit`) keeps its machine code on disk beside the sources
 (numba's cache), so a process loads it in a fraction of a second; only the first process to
-need a kernel pays for compiling it (about a minute for the whole world on a 2-core machine).
+need a kernel pays for compiling it (two to three minutes for the whole world on a 2-core machine).
 ``make`` runs this module right after installing, so neither a user's first command nor a test
 process pays that. It flies a few short campaigns that between them take every compiled path of
 the default worlds (a batch large enough for the control period's blocks across the cores, the
@@ -35,8 +35,8 @@ _SHORT = {"mission": {"settle_s": 0.2, "post_dock_s": 0.1, "dock_window_s": 0.2,
 def warm(out=sys.stderr) -> float:
     """Fly the warm-up campaigns (compiling what is not cached yet); the seconds it took."""
     start = time.perf_counter()
-    print("aerodock: compiling the world's kernels once (cached for later runs; about a "
-          "minute the first time)", file=out, flush=True)
+    print("aerodock: compiling the world's kernels once (cached for later runs; two to three "
+          "minutes the first time)", file=out, flush=True)
     cfg = load_config().with_overrides(_SHORT, source="warm-up")
     point_mass = cfg.with_overrides({"vehicle": {"model": "point-mass"}}, source="warm-up")
     for config, spec in (
