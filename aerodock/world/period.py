@@ -27,6 +27,7 @@ as each step does.
 
 from __future__ import annotations
 
+import os
 from functools import lru_cache
 from typing import Any
 
@@ -80,7 +81,15 @@ PERIOD_OK = bool(TRIG_LOOPS.all())
 _NO_FF = np.zeros((1, 4))
 _NO_LOSS = np.zeros((0, 4))  # no rotor fault
 _NO_TORQUES = np.zeros((0, 0, 3))  # no torque log
-PARALLEL_MIN_TRIALS = 16
+# numba's OpenMP threads sleep between parallel regions instead of spinning (the user's own
+# setting stands; read when numba starts its threads, at the first period in blocks). Spinning,
+# a thread that waits for the next physics step takes a core from the Python between control
+# periods (a learnt model's prediction, the mission, the trial streams' refills): on a 2-core
+# machine `targets --trials 250` with the learnt wrench's model took 180 s of wall spinning and
+# 41 s sleeping (43 s on one thread).
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
+PARALLEL_MIN_TRIALS = 64
 """From this many trials on, a period's blocks of trials run across numba's threads
 (:func:`~aerodock.world.period_kernel.period_kernel_parallel`, one block a thread); below it, in
 one (a thread's start and join cost about what a small batch's step does). The numbers are the
@@ -195,6 +204,25 @@ def kernel_blocks(n: int) -> int:
     return threads if threads > 1 and n >= PARALLEL_MIN_TRIALS else 1
 
 
+_BLAS_LIMIT: list[Any] = []
+
+
+def one_blas_thread() -> None:
+    """Keep BLAS (NumPy's OpenBLAS, through ``threadpoolctl``) to one thread in this process
+    from now on: done once, before the first period stepped in blocks. OpenBLAS's idle threads
+    spin for a while after each call (a learnt model's prediction, every control period), and
+    numba's threads wait for each other at every physics step: on a 2-core machine the spinning
+    threads took the cores numba's needed (``targets --trials 250`` with the learnt wrench's
+    model: 180 s of wall, against 34 s with one BLAS thread and 43 s with one numba thread). The
+    numbers do not change (a matrix product's elements are summed in the same order on any
+    number of threads; the targets' JSON is the same). ``restore_original_limits()`` on
+    ``_BLAS_LIMIT[0]`` gives BLAS its threads back."""
+    if not _BLAS_LIMIT:
+        from threadpoolctl import threadpool_limits
+
+        _BLAS_LIMIT.append(threadpool_limits(limits=1, user_api="blas"))
+
+
 def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
                close_command: np.ndarray | None, steps: int) -> tuple[int, int]:
     """Up to ``steps`` physics steps of the default world in one compiled call: (the number
@@ -243,6 +271,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     passive_any, passive, active_any, active = cache.triggers
     loss = state.rotor_loss
     blocks = kernel_blocks(n)
+    if blocks > 1:
+        one_blas_thread()
     kernel = period_kernel_parallel if blocks > 1 else period_kernel
     try:
         result = kernel(

@@ -153,3 +153,17 @@ def test_large_batches_use_every_thread(monkeypatch):
     assert period.kernel_blocks(period.PARALLEL_MIN_TRIALS - 1) == 1
     monkeypatch.setattr(period.numba, "get_num_threads", lambda: 1)
     assert period.kernel_blocks(1000) == 1
+
+
+def test_a_process_that_steps_in_blocks_keeps_blas_to_one_thread():
+    """BLAS's idle threads spin after a call, and a step's blocks wait for each other: once a
+    period runs in blocks, BLAS has one thread (numba's own threads sleep between steps unless
+    the environment said otherwise)."""
+    import os
+
+    from threadpoolctl import threadpool_info
+
+    period.one_blas_thread()
+    blas = [info for info in threadpool_info() if info["user_api"] == "blas"]
+    assert blas and all(info["num_threads"] == 1 for info in blas)
+    assert os.environ.get("OMP_WAIT_POLICY")  # set before numba starts its threads
