@@ -82,11 +82,10 @@ _NO_FF = np.zeros((1, 4))
 _NO_LOSS = np.zeros((0, 4))  # no rotor fault
 _NO_TORQUES = np.zeros((0, 0, 3))  # no torque log
 # numba's OpenMP threads sleep between parallel regions instead of spinning (the user's own
-# setting stands; read when numba starts its threads, at the first period in blocks). Spinning,
-# a thread that waits for the next physics step takes a core from the Python between control
-# periods (a learnt model's prediction, the mission, the trial streams' refills): on a 2-core
-# machine `targets --trials 250` with the learnt wrench's model took 180 s of wall spinning and
-# 41 s sleeping (43 s on one thread).
+# setting stands; read when numba starts its threads, at the first period in blocks): a spinning
+# thread would take a core from the Python between control periods (a learnt model's
+# prediction, the mission, the trial streams' refills) and from another process on the machine
+# (the test suite's second worker); a sleeping one costs a wake-up, a few microseconds a step.
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 PARALLEL_MIN_TRIALS = 64
@@ -209,13 +208,11 @@ _BLAS_LIMIT: list[Any] = []
 
 def one_blas_thread() -> None:
     """Keep BLAS (NumPy's OpenBLAS, through ``threadpoolctl``) to one thread in this process
-    from now on: done once, before the first period stepped in blocks. OpenBLAS's idle threads
-    spin for a while after each call (a learnt model's prediction, every control period), and
-    numba's threads wait for each other at every physics step: on a 2-core machine the spinning
-    threads took the cores numba's needed (``targets --trials 250`` with the learnt wrench's
-    model: 180 s of wall, against 34 s with one BLAS thread and 43 s with one numba thread). The
-    numbers do not change (a matrix product's elements are summed in the same order on any
-    number of threads; the targets' JSON is the same). ``restore_original_limits()`` on
+    from now on: done once, before the first period stepped in blocks. BLAS's threads would
+    compete with numba's for the cores (a learnt model's prediction comes every control period,
+    and a step's blocks wait for each other), and its products here are small. The numbers do
+    not change (a matrix product's elements are summed in the same order on any number of
+    threads; ``targets --trials 250``'s JSON is the same). ``restore_original_limits()`` on
     ``_BLAS_LIMIT[0]`` gives BLAS its threads back."""
     if not _BLAS_LIMIT:
         from threadpoolctl import threadpool_limits

@@ -456,24 +456,6 @@ def packed_step_constants(body: VehicleBody, params: RigidBodyParams, dt_s: floa
 
 
 @njit
-def flown_step_body(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray,
-                    w: np.ndarray, omega: np.ndarray, att: np.ndarray, use_att: bool,
-                    r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
-                    torque_ff: np.ndarray, has_ff: bool, gyro: np.ndarray, gyro_noise: np.ndarray,
-                    noisy: bool, integral: np.ndarray, yaw_sp: np.ndarray, ext_force: np.ndarray,
-                    ext_torque: np.ndarray, has_ext_torque: bool, p_new: np.ndarray,
-                    v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
-                    omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
-                    integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
-    """:func:`rigid_kernel.step_vehicles` flown by the autopilots, its constants read from
-    :func:`_packed_constants`' array (views of it, the same numbers): every row."""
-    flown_rows(packed, 0, p.shape[0], p, v, rot, w, omega, att, use_att, r_des, yaw_rate,
-               thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp,
-               ext_force, ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
-               thrust_new, accel, integral_new, yaw_sp_new)
-
-
-@njit
 def flown_rows(packed: np.ndarray, lo: int, hi: int, p: np.ndarray, v: np.ndarray,
                rot: np.ndarray, w: np.ndarray, omega: np.ndarray, att: np.ndarray,
                use_att: bool, r_des: np.ndarray, yaw_rate: np.ndarray, thrust_cmd: np.ndarray,
@@ -483,9 +465,11 @@ def flown_rows(packed: np.ndarray, lo: int, hi: int, p: np.ndarray, v: np.ndarra
                v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
                omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
                integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
-    """:func:`flown_step_body` on the rows ``lo..hi`` of the batch (every array whole, as the
-    step holds it; each vehicle's step is its own, so rows stepped apart give the numbers of
-    the batch stepped at once: the compiled period's blocks of trials)."""
+    """:func:`rigid_kernel.step_vehicles` flown by the autopilots on the rows ``lo..hi`` of the
+    batch, its constants read from :func:`_packed_constants`' array (views of it, the same
+    numbers). Every array is whole, as the step holds it; each vehicle's step is its own, so
+    rows stepped apart give the numbers of the batch stepped at once (the compiled period's
+    blocks of trials)."""
     n = p.shape[0]
     n_alpha, n_consts, n_stack = int(packed[0]), int(packed[1]), int(packed[2])
     n_mixer, n_map, n_drag = int(packed[3]), int(packed[4]), int(packed[5])
@@ -537,13 +521,13 @@ def flown_step(packed: np.ndarray, p: np.ndarray, v: np.ndarray, rot: np.ndarray
                 v_new: np.ndarray, rot_new: np.ndarray, w_new: np.ndarray,
                 omega_new: np.ndarray, thrust_new: np.ndarray, accel: np.ndarray,
                 integral_new: np.ndarray, yaw_sp_new: np.ndarray) -> None:
-    """:func:`flown_step_body` for a call from Python: any array layout (sealed to one general
-    signature, :func:`aerodock.jit.any_layout`); compiled callers call the body itself, which no
-    seal stops from compiling for their types."""
-    flown_step_body(packed, p, v, rot, w, omega, att, use_att, r_des, yaw_rate, thrust_cmd,
-                    torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp, ext_force,
-                    ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
-                    thrust_new, accel, integral_new, yaw_sp_new)
+    """:func:`flown_rows` on every row, for a call from Python: any array layout (sealed to one
+    general signature, :func:`aerodock.jit.any_layout`); compiled callers call
+    :func:`flown_rows` itself, which no seal stops from compiling for their types."""
+    flown_rows(packed, 0, p.shape[0], p, v, rot, w, omega, att, use_att, r_des, yaw_rate,
+               thrust_cmd, torque_ff, has_ff, gyro, gyro_noise, noisy, integral, yaw_sp,
+               ext_force, ext_torque, has_ext_torque, p_new, v_new, rot_new, w_new, omega_new,
+               thrust_new, accel, integral_new, yaw_sp_new)
 
 
 _NO_ATTITUDE = np.zeros((0, 3, 3))
