@@ -177,7 +177,7 @@ def _refill_columns(gens: list[np.random.Generator], kind: str, size: int, out: 
 
 
 _THREADED_MIN = 64  # trials per thread below which a refill stays in one thread
-_POOL: list[ThreadPoolExecutor] = []
+_POOL: dict[int, ThreadPoolExecutor] = {}
 
 
 def _threads() -> int:
@@ -189,10 +189,10 @@ def _threads() -> int:
 
 
 def _pool(threads: int) -> ThreadPoolExecutor:
-    """The process's refill threads (made at the first threaded refill)."""
-    if not _POOL or _POOL[0]._max_workers < threads:
-        _POOL[:] = [ThreadPoolExecutor(max_workers=threads, thread_name_prefix="aerodock-rng")]
-    return _POOL[0]
+    """The process's pool of ``threads`` refill threads (made at its first threaded refill)."""
+    if threads not in _POOL:
+        _POOL[threads] = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="aerodock-rng")
+    return _POOL[threads]
 
 
 def standard_normal_t(rng: np.random.Generator | TrialRNG, n: int, k: int) -> np.ndarray:

@@ -100,6 +100,13 @@ _WRITES = ("iv", "processes", "bar_noise", "gz1", "gz2", "gline", "az1", "az2", 
 
 
 @njit
+def _physics_draws(fc: np.ndarray, k: int) -> int:
+    """Each trial's normal draws of a step before the strain gauge's: the follower's wake
+    (3 + k), the bar's (3), the gyros' (6, with gyro noise) and the accelerometers' (6)."""
+    return 3 + k + 3 + (6 if fc[F_GYRO_SD] != 0.0 else 0) + 6
+
+
+@njit
 def _step_plan(iv: np.ndarray, fc: np.ndarray, k: int, n_draws: int, g_idle: bool,
                active_close: bool) -> tuple[int, int, bool, bool]:
     """What every block of a step shares, before it: (the step's index, the draws' cursor,
@@ -112,8 +119,7 @@ def _step_plan(iv: np.ndarray, fc: np.ndarray, k: int, n_draws: int, g_idle: boo
     rate = fc[F_SENSOR_RATE]
     sample = int(t_end * rate + 1e-9) != int((t_end - dt) * rate + 1e-9)
     gripper_runs = not (g_idle and not sample and not active_close)
-    need = 3 + k + 3 + 6 + (6 if fc[F_GYRO_SD] != 0.0 else 0) + (1 if sample else 0)
-    if pos + need > n_draws:
+    if pos + _physics_draws(fc, k) + (1 if sample else 0) > n_draws:
         pos = -1
     return step, pos, sample, gripper_runs
 
@@ -123,8 +129,7 @@ def _step_done(iv: np.ndarray, fc: np.ndarray, k: int, sample: bool, gripper_run
                gline: np.ndarray, aline: np.ndarray, ring: np.ndarray) -> None:
     """After every block of a step: the clock, the draws' cursor (the step's draws, in the
     terms' order) and the IMU chain's ring heads move on."""
-    iv[I_DRAW] += (3 + k + 3 + (6 if fc[F_GYRO_SD] != 0.0 else 0) + 6
-                   + (1 if gripper_runs and sample else 0))
+    iv[I_DRAW] += _physics_draws(fc, k) + (1 if gripper_runs and sample else 0)
     iv[I_STEP] += 1
     iv[I_GYRO_HEAD] = _next_slot(gline, iv[I_GYRO_HEAD])
     iv[I_ACCEL_HEAD] = _next_slot(aline, iv[I_ACCEL_HEAD])
