@@ -32,6 +32,7 @@ from llvmlite import ir  # noqa: E402
 from numba.core import cgutils, types  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
 
+from aerodock.product_order import PRODUCT_ORDERS  # noqa: E402
 from aerodock.sources import sources_digest  # noqa: E402
 
 JIT_ENABLED = not numba.config.DISABLE_JIT
@@ -43,8 +44,10 @@ def _kernel_sources_digest() -> str:
     numba keeps a kernel's machine code keyed by its own file only: a kernel that inlines a
     helper from another module would go on running the helper's old code after the helper
     changed. So the cache lives in a folder named by this digest, and any change to any
-    kernel's source starts a fresh one."""
-    return sources_digest(b"njit", [numba.__version__.encode()])[:16]
+    kernel's source starts a fresh one. The 3 x 3 products' order on this machine
+    (:mod:`aerodock.product_order`) is part of the compiled code, so it is in the digest too."""
+    return sources_digest(b"njit", [numba.__version__.encode(),
+                                    ",".join(PRODUCT_ORDERS).encode()])[:16]
 
 
 def cache_dir() -> Path:
@@ -196,6 +199,58 @@ else:  # the plain-Python run of the kernels: a * b + c, rounded twice
     def fma(a: float, b: float, c: float) -> float:
         """``a * b + c`` (rounded twice without the compiler)."""
         return a * b + c
+
+
+# -- a 3 x 3 product's element, summed as np.matmul sums it on this machine ------------------
+# (aerodock.product_order: the order is the BLAS kernel's, found at import; the kernels call
+# dot3_vecmat, dot3_matvec, dot3_matmat and dot3_tmatmat, each bound to one of these)
+@njit
+def _dot3_fma012(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    return fma(a2, b2, fma(a1, b1, a0 * b0))
+
+
+@njit
+def _dot3_fma102(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    return fma(a2, b2, fma(a0, b0, a1 * b1))
+
+
+@njit
+def _dot3_fma012_0(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    return 0.0 + fma(a2, b2, fma(a1, b1, a0 * b0))
+
+
+@njit
+def _dot3_fma102_0(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    return 0.0 + fma(a2, b2, fma(a0, b0, a1 * b1))
+
+
+@njit
+def _dot3_sum0(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    s = 0.0 + a0 * b0
+    s += a1 * b1
+    return s + a2 * b2
+
+
+@njit
+def _dot3_sum(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
+    s = a0 * b0 + a1 * b1
+    return s + a2 * b2
+
+
+_DOT3 = {"fma012": _dot3_fma012, "fma102": _dot3_fma102, "fma012_0": _dot3_fma012_0,
+         "fma102_0": _dot3_fma102_0, "sum0": _dot3_sum0, "sum": _dot3_sum,
+         "unknown": _dot3_fma012}
+dot3_vecmat = _DOT3[PRODUCT_ORDERS.vecmat]
+"""An element of a row vector ``a`` times a matrix (``a^T R``, ``b`` a column of ``R``), as
+``np.matmul`` rounds it here (an order not found: OpenBLAS's usual ``fma012``)."""
+dot3_matvec = _DOT3[PRODUCT_ORDERS.matvec]
+"""An element of a matrix times a column vector (``R f``: ``a`` a row of ``R``, ``b`` = f)."""
+dot3_matmat = _DOT3[PRODUCT_ORDERS.matmat]
+"""An element of a matrix times a matrix (``a`` a row of the first, ``b`` a column of the
+second)."""
+dot3_tmatmat = _DOT3[PRODUCT_ORDERS.tmatmat]
+"""An element of a transposed matrix times a matrix (``R_d^T R``: ``a`` a column of ``R_d``,
+``b`` a column of ``R``)."""
 
 
 # -- NumPy's own elementwise loops, called from compiled code ----------------------------------

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import NUMPY_LOOPS, fma, njit, np_arctan2
+from aerodock.jit import NUMPY_LOOPS, dot3_vecmat, njit, np_arctan2
 from aerodock.world.vehicles.rigid_kernel import exp_so3, load3x3, mat3_mul, store3x3
 
 
@@ -79,9 +79,9 @@ def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
     for i in range(m):
         r = rot_hat[i]
         c0, c1, c2 = comp[i, 0], comp[i, 1], comp[i, 2]
-        m0 = fma(c2, r[2, 0], fma(c1, r[1, 0], c0 * r[0, 0])) - accel_t[0, i]
-        m1 = fma(c2, r[2, 1], fma(c1, r[1, 1], c0 * r[0, 1])) - accel_t[1, i]
-        m2 = fma(c2, r[2, 2], fma(c1, r[1, 2], c0 * r[0, 2])) - accel_t[2, i]
+        m0 = dot3_vecmat(c0, c1, c2, r[0, 0], r[1, 0], r[2, 0]) - accel_t[0, i]
+        m1 = dot3_vecmat(c0, c1, c2, r[0, 1], r[1, 1], r[2, 1]) - accel_t[1, i]
+        m2 = dot3_vecmat(c0, c1, c2, r[0, 2], r[1, 2], r[2, 2]) - accel_t[2, i]
         norm = m0 * m0 + m1 * m1
         norm += m2 * m2
         norm = math.sqrt(norm)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import fma, njit, np_arctan2
+from aerodock.jit import dot3_vecmat, njit, np_arctan2
 from aerodock.world.attitude_estimator import estimate_into
 
 
@@ -260,7 +260,7 @@ def imu_samples(n: int, lo: int, hi: int, w: np.ndarray, gyro_draws: np.ndarray,
         vib = vibration * load
         sd = math.sqrt(accel_noise_sq + vib * vib)
         for c in range(3):
-            f = fma(a2, rot[j, 2, c], fma(a1, rot[j, 1, c], a0 * rot[j, 0, c]))
+            f = dot3_vecmat(a0, a1, a2, rot[j, 0, c], rot[j, 1, c], rot[j, 2, c])
             f += bias[j, c]
             f = f + accel_draws[3 * h + c, i] * sd
             f = max(f, -accel_range) if f == f else f

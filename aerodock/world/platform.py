@@ -19,7 +19,7 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze
-from aerodock.jit import NUMPY_LOOPS, any_layout, fma, njit, np_arctan2
+from aerodock.jit import NUMPY_LOOPS, any_layout, dot3_matvec, dot3_vecmat, njit, np_arctan2
 
 
 @dataclass(frozen=True)
@@ -338,8 +338,8 @@ def cable_wrench_kernel(cable: np.ndarray, rot: np.ndarray, anchor_below: float,
         force[i, 1] += c1
         force[i, 2] += c2
         if rigid:
-            b0 = fma(c2, rot[i, 2, 0], fma(c1, rot[i, 1, 0], c0 * rot[i, 0, 0]))
-            b1 = fma(c2, rot[i, 2, 1], fma(c1, rot[i, 1, 1], c0 * rot[i, 0, 1]))
+            b0 = dot3_vecmat(c0, c1, c2, rot[i, 0, 0], rot[i, 1, 0], rot[i, 2, 0])
+            b1 = dot3_vecmat(c0, c1, c2, rot[i, 0, 1], rot[i, 1, 1], rot[i, 2, 1])
             torque_t[0, i] -= anchor_below * b1
             torque_t[1, i] += anchor_below * b0
 
@@ -505,12 +505,12 @@ def _strikes(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray, seg_a: n
         ax0, ax1, ax2 = fol_r[i, 0, 2], fol_r[i, 1, 2], fol_r[i, 2, 2]
         for j in range(offsets.shape[0]):
             o0, o1, o2 = offsets[j, 0], offsets[j, 1], offsets[j, 2]
-            c0 = fol_p[i, 0] + fma(fol_r[i, 0, 2], o2, fma(fol_r[i, 0, 0], o0,
-                                                           fol_r[i, 0, 1] * o1))
-            c1 = fol_p[i, 1] + fma(fol_r[i, 1, 2], o2, fma(fol_r[i, 1, 0], o0,
-                                                           fol_r[i, 1, 1] * o1))
-            c2 = fol_p[i, 2] + fma(fol_r[i, 2, 2], o2, fma(fol_r[i, 2, 0], o0,
-                                                           fol_r[i, 2, 1] * o1))
+            c0 = fol_p[i, 0] + dot3_matvec(fol_r[i, 0, 0], fol_r[i, 0, 1],
+                                         fol_r[i, 0, 2], o0, o1, o2)
+            c1 = fol_p[i, 1] + dot3_matvec(fol_r[i, 1, 0], fol_r[i, 1, 1],
+                                         fol_r[i, 1, 2], o0, o1, o2)
+            c2 = fol_p[i, 2] + dot3_matvec(fol_r[i, 2, 0], fol_r[i, 2, 1],
+                                         fol_r[i, 2, 2], o0, o1, o2)
             for s in range(seg_a.shape[1]):
                 a0, a1, a2 = seg_a[i, s, 0], seg_a[i, s, 1], seg_a[i, s, 2]
                 ab0, ab1, ab2 = seg_b[i, s, 0] - a0, seg_b[i, s, 1] - a1, seg_b[i, s, 2] - a2

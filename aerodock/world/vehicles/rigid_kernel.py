@@ -5,11 +5,11 @@ This is the one implementation of these terms; :mod:`aerodock.world.vehicles.rig
 :mod:`aerodock.world.vehicles.autopilot` bind the parameters and call it. Each vehicle's numbers
 are computed operation by operation in the order the NumPy step computed them (the order is
 part of the numbers, and the batch's numbers equal its single trials'), and the 3 x 3 products
-in OpenBLAS's order (:func:`aerodock.jit.fma`):
-
-- a row vector times a matrix (``v^T R``) and a matrix times a matrix:
-  ``fma(a2, b2, fma(a1, b1, a0 b0))``;
-- a matrix times a column vector (``R f``): ``fma(a2, b2, fma(a0, b0, a1 b1))``.
+summed as ``np.matmul`` sums them on the machine at hand (:func:`aerodock.jit.dot3_vecmat` for a
+row vector times a matrix, ``v^T R``; ``dot3_matvec`` for ``R f``; ``dot3_matmat`` and
+``dot3_tmatmat`` for ``R E`` and ``R_d^T R``): the order is the BLAS kernel's, read at import
+(:mod:`aerodock.product_order`); OpenBLAS's AVX2 kernels, for example, round ``a^T R`` as
+``fma(a2, b2, fma(a1, b1, a0 b0))`` on one processor and as plain sums from zero on another.
 
 Maxima and minima follow NumPy's (``np.maximum`` keeps its first argument when it is NaN or
 when the two are equal), so a NaN propagates as it did.
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from aerodock.jit import any_layout, fma, njit
+from aerodock.jit import any_layout, dot3_matmat, dot3_matvec, dot3_tmatmat, dot3_vecmat, njit
 from aerodock.world.vehicles.stack_kernel import stack_torque
 
 
@@ -114,15 +114,15 @@ def exp_so3(phi0: float, phi1: float, phi2: float) -> tuple:
 @njit
 def mat3_mul(r: tuple, e: tuple) -> tuple:
     """``r e`` for row-major 3 x 3 tuples, rounded as OpenBLAS's ``np.matmul``."""
-    return (fma(r[2], e[6], fma(r[1], e[3], r[0] * e[0])),
-            fma(r[2], e[7], fma(r[1], e[4], r[0] * e[1])),
-            fma(r[2], e[8], fma(r[1], e[5], r[0] * e[2])),
-            fma(r[5], e[6], fma(r[4], e[3], r[3] * e[0])),
-            fma(r[5], e[7], fma(r[4], e[4], r[3] * e[1])),
-            fma(r[5], e[8], fma(r[4], e[5], r[3] * e[2])),
-            fma(r[8], e[6], fma(r[7], e[3], r[6] * e[0])),
-            fma(r[8], e[7], fma(r[7], e[4], r[6] * e[1])),
-            fma(r[8], e[8], fma(r[7], e[5], r[6] * e[2])))
+    return (dot3_matmat(r[0], r[1], r[2], e[0], e[3], e[6]),
+            dot3_matmat(r[0], r[1], r[2], e[1], e[4], e[7]),
+            dot3_matmat(r[0], r[1], r[2], e[2], e[5], e[8]),
+            dot3_matmat(r[3], r[4], r[5], e[0], e[3], e[6]),
+            dot3_matmat(r[3], r[4], r[5], e[1], e[4], e[7]),
+            dot3_matmat(r[3], r[4], r[5], e[2], e[5], e[8]),
+            dot3_matmat(r[6], r[7], r[8], e[0], e[3], e[6]),
+            dot3_matmat(r[6], r[7], r[8], e[1], e[4], e[7]),
+            dot3_matmat(r[6], r[7], r[8], e[2], e[5], e[8]))
 
 
 @njit
@@ -203,12 +203,12 @@ def autopilot(att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff:
     ``consts`` (18,): rows -attitude_p / 2, the rate limit, the integral limit, rate_p, rate_i,
     the nominal inertia, each (x, y, z).
     """
-    m21 = fma(rd[8], att[7], fma(rd[5], att[4], rd[2] * att[1]))
-    m12 = fma(rd[7], att[8], fma(rd[4], att[5], rd[1] * att[2]))
-    m02 = fma(rd[6], att[8], fma(rd[3], att[5], rd[0] * att[2]))
-    m20 = fma(rd[8], att[6], fma(rd[5], att[3], rd[2] * att[0]))
-    m10 = fma(rd[7], att[6], fma(rd[4], att[3], rd[1] * att[0]))
-    m01 = fma(rd[6], att[7], fma(rd[3], att[4], rd[0] * att[1]))
+    m21 = dot3_tmatmat(rd[2], rd[5], rd[8], att[1], att[4], att[7])
+    m12 = dot3_tmatmat(rd[1], rd[4], rd[7], att[2], att[5], att[8])
+    m02 = dot3_tmatmat(rd[0], rd[3], rd[6], att[2], att[5], att[8])
+    m20 = dot3_tmatmat(rd[2], rd[5], rd[8], att[0], att[3], att[6])
+    m10 = dot3_tmatmat(rd[1], rd[4], rd[7], att[0], att[3], att[6])
+    m01 = dot3_tmatmat(rd[0], rd[3], rd[6], att[1], att[4], att[7])
     sp2 = (m10 - m01) * consts[2]
     sp2 += yaw_rate
     tau0, n0 = _rate_loop((m21 - m12) * consts[0], g0, i0, consts[3], consts[6], consts[9],
@@ -406,9 +406,9 @@ def step_vehicles_body(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndar
         o0, o1, o2, o3 = omega[i, 0], omega[i, 1], omega[i, 2], omega[i, 3]
         kc = thrust_coeffs[i]
         # v^T R: the velocity in the body frame
-        vb0 = fma(vz, r[6], fma(vy, r[3], vx * r[0]))
-        vb1 = fma(vz, r[7], fma(vy, r[4], vx * r[1]))
-        vb2 = fma(vz, r[8], fma(vy, r[5], vx * r[2]))
+        vb0 = dot3_vecmat(vx, vy, vz, r[0], r[3], r[6])
+        vb1 = dot3_vecmat(vx, vy, vz, r[1], r[4], r[7])
+        vb2 = dot3_vecmat(vx, vy, vz, r[2], r[5], r[8])
         fb0, fb1, fb2, tq0, tq1, tq2 = rotor_wrench(o0, o1, o2, o3, kc, torque_gain[i], vb0,
                                                     vb1, vb2, wx, wy, wz, torque_map,
                                                     drag_sums, kd, kz)
@@ -417,9 +417,9 @@ def step_vehicles_body(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndar
             tq1 += ext_torque[i, 1]
             tq2 += ext_torque[i, 2]
         # translation: R f_b, parasitic drag, external force, gravity
-        a0 = fma(r[2], fb2, fma(r[0], fb0, r[1] * fb1))
-        a1 = fma(r[5], fb2, fma(r[3], fb0, r[4] * fb1))
-        a2 = fma(r[8], fb2, fma(r[6], fb0, r[7] * fb1))
+        a0 = dot3_matvec(r[0], r[1], r[2], fb0, fb1, fb2)
+        a1 = dot3_matvec(r[3], r[4], r[5], fb0, fb1, fb2)
+        a2 = dot3_matvec(r[6], r[7], r[8], fb0, fb1, fb2)
         if c_drag != 0.0:
             speed = vx * vx + vy * vy
             speed += vz * vz
