@@ -4,12 +4,14 @@ Run at the commit before the model-kind registry (``ea3179b``) to pin what the o
 predicted: ``PYTHONPATH=. python tests/learning/data/make_kind_pins.py``. Each kind gets a small
 randomly initialised model folder (hidden 8x8, a normalisation from real features) and the
 predictions of every path: the batched and one-sample NumPy runtime, the NumPy and torch
-feature maps, and the torch module (float64).
+feature maps, and the torch module (float64). ``--keyed``: only this machine's copy of the
+predictions, from the stored folders (``test_kind_pins.py``'s docstring).
 """
 
 from __future__ import annotations
 
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +40,29 @@ def scenes(n: int = 48) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return x, rot, scales
 
 
+def predictions(kind: str, folder: Path, x: np.ndarray, rot: np.ndarray,
+                scales: np.ndarray) -> dict[str, np.ndarray]:
+    """Every path's predictions of the model in ``folder`` for the scenes."""
+    ws = scales if kind in ("so2-leader", "so2-pair") else None
+    pred = Predictor.load(folder)
+    force, torque = pred.predict_wrench(x, rot, ws)
+    one = np.stack([pred.predict_one(x[j], rot[j], None if ws is None else ws[j])
+                    for j in range(x.shape[0])])
+    mod = load_torch_model(folder).double()
+    tw = None if ws is None else torch.as_tensor(ws)
+    with torch.no_grad():
+        tforce, ttorque = mod.wrench(torch.as_tensor(x), torch.as_tensor(rot), tw)
+        zt, mt = feature_map_torch(kind, torch.as_tensor(x), torch.as_tensor(rot),
+                                   wake_scales=tw)
+    z, m = feature_map(kind, x, rot, wake_scales=ws)
+    arrays = {"force": force, "one": one, "torch_force": tforce.numpy(),
+              "z": z, "m": np.asarray(m), "torch_z": zt.numpy(), "torch_m": mt.numpy()}
+    if torque is not None:
+        arrays["torque"] = torque
+        arrays["torch_torque"] = ttorque.numpy()
+    return arrays
+
+
 def main() -> None:
     x, rot, scales = scenes()
     if HERE.exists():
@@ -54,25 +79,24 @@ def main() -> None:
         model.eval()
         folder = save_model_dir(HERE / kind, model.spec(), model.weights(),
                                 training={"pinned": True})
-        pred = Predictor.load(folder)
-        force, torque = pred.predict_wrench(x, rot, ws)
-        one = np.stack([pred.predict_one(x[j], rot[j], None if ws is None else ws[j])
-                        for j in range(x.shape[0])])
-        mod = load_torch_model(folder).double()
-        tw = None if ws is None else torch.as_tensor(ws)
-        with torch.no_grad():
-            tforce, ttorque = mod.wrench(torch.as_tensor(x), torch.as_tensor(rot), tw)
-            zt, mt = feature_map_torch(kind, torch.as_tensor(x), torch.as_tensor(rot),
-                                       wake_scales=tw)
-        z, m = feature_map(kind, x, rot, wake_scales=ws)
-        arrays = {"force": force, "one": one, "torch_force": tforce.numpy(),
-                  "z": z, "m": np.asarray(m), "torch_z": zt.numpy(), "torch_m": mt.numpy()}
-        if torque is not None:
-            arrays["torque"] = torque
-            arrays["torch_torque"] = ttorque.numpy()
+        arrays = predictions(kind, folder, x, rot, scales)
         np.savez(HERE / f"{kind}_pins.npz", **arrays)
         print(kind, {k: v.shape for k, v in arrays.items()})
 
 
+def keyed() -> None:
+    """This machine's copy of the pins (``KIND_pins.KEY.npz``): the stored folders' predictions
+    for the stored scenes, by the code on the path, ``KEY`` this machine's numerics."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # tests/, for numerics_key
+    from numerics_key import numerics_key
+
+    key = numerics_key(torch=True)
+    with np.load(HERE / "scenes.npz") as data:
+        x, rot, scales = data["x"], data["rot"], data["scales"]
+    for kind in PINNED_KINDS:
+        np.savez(HERE / f"{kind}_pins.{key}.npz", **predictions(kind, HERE / kind, x, rot, scales))
+        print(kind, key)
+
+
 if __name__ == "__main__":
-    main()
+    keyed() if "--keyed" in sys.argv else main()
