@@ -27,7 +27,12 @@ import math
 import numpy as np
 
 from aerodock.jit import any_layout, dot3_matmat, dot3_matvec, dot3_tmatmat, dot3_vecmat, njit
-from aerodock.world.vehicles.stack_kernel import stack_torque
+from aerodock.world.vehicles.stack_kernel import (
+    constants_tuple,
+    stack_row,
+    stack_torque,
+    store_stack_row,
+)
 
 
 def flat(values: np.ndarray) -> np.ndarray:
@@ -227,17 +232,16 @@ def autopilot(att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff:
 
 
 @njit
-def stack_autopilot(state_new: np.ndarray, state: np.ndarray, i: int, stack_c: np.ndarray,
-                    att: tuple, rd: tuple, yaw_rate: float, thrust_cmd: float, has_ff: bool,
-                    ff0: float, ff1: float, ff2: float, g0: float, g1: float, g2: float,
-                    mixer_inv: tuple, rotor_thrust_max: float, thrust_coeff: float,
-                    dt: float) -> tuple:
+def stack_autopilot(row: tuple, stack_c: tuple, att: tuple, rd: tuple, yaw_rate: float,
+                    thrust_cmd: float, has_ff: bool, ff0: float, ff1: float, ff2: float,
+                    g0: float, g1: float, g2: float, mixer_inv: tuple, rotor_thrust_max: float,
+                    thrust_coeff: float, dt: float) -> tuple:
     """One vehicle's flight-stack autopilot (:func:`stack_kernel.stack_torque`) with the
-    torque feed-forward, the mixer and the rotor speed commands; its state row copied from
-    ``state`` into ``state_new`` and advanced there."""
-    for col in range(state.shape[1]):
-        state_new[i, col] = state[i, col]
-    tau0, tau1, tau2 = stack_torque(state_new, i, stack_c, att, rd, yaw_rate, g0, g1, g2, dt)
+    torque feed-forward, the mixer and the rotor speed commands, from its state ``row``
+    (:func:`stack_kernel.stack_row`) and the stack's constants
+    (:func:`stack_kernel.constants_tuple`):
+    the four commands and the new state row."""
+    tau0, tau1, tau2, new = stack_torque(row, stack_c, att, rd, yaw_rate, g0, g1, g2, dt)
     if has_ff:
         tau0 += ff0
         tau1 += ff1
@@ -253,9 +257,10 @@ def stack_autopilot(state_new: np.ndarray, state: np.ndarray, i: int, stack_c: n
         f3 = _min(_max(dot4(m[3], m[7], m[11], m[15], thrust_cmd, tau0, tau1, tau2), 0.0),
                   rotor_thrust_max)
         return (math.sqrt(f0 / thrust_coeff), math.sqrt(f1 / thrust_coeff),
-                math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff))
-    return rotor_commands(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max,
-                          thrust_coeff)
+                math.sqrt(f2 / thrust_coeff), math.sqrt(f3 / thrust_coeff), new)
+    c0, c1, c2, c3 = rotor_commands(thrust_cmd, tau0, tau1, tau2, mixer_inv, rotor_thrust_max,
+                                    thrust_coeff)
+    return c0, c1, c2, c3, new
 
 
 @njit
@@ -367,6 +372,7 @@ def step_vehicles_body(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndar
     """
     consts, mixer_inv = tuple18(consts_a), tuple16(mixer_a)
     torque_map, drag_sums = tuple12(torque_map_a), tuple28(drag_sums_a)
+    stack = constants_tuple(stack_on, stack_c)
     per_vehicle_alpha = alpha.shape[0] > 1
     half = 0.5 * dt
     for i in range(p.shape[0]):
@@ -381,10 +387,11 @@ def step_vehicles_body(p: np.ndarray, v: np.ndarray, rot: np.ndarray, w: np.ndar
             if has_ff:
                 ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
             if stack_on:
-                c0, c1, c2, c3 = stack_autopilot(
-                    integral_new, integral, i, stack_c, load3x3(att, i) if use_att else r,
+                c0, c1, c2, c3, row = stack_autopilot(
+                    stack_row(integral, i), stack, load3x3(att, i) if use_att else r,
                     load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff, ff0, ff1, ff2, g0,
                     g1, g2, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
+                store_stack_row(integral_new, i, row)
             else:
                 c0, c1, c2, c3, n0, n1, n2 = autopilot(
                     load3x3(att, i) if use_att else r, load3x3(r_des, i), yaw_rate[i],
@@ -506,6 +513,7 @@ def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
     """:func:`autopilot` for ``n`` vehicles: rotor speed commands ``cmd`` (n, 4) and new
     integrals (n, 3). The gyro reads ``gyro`` (plus ``gyro_noise`` when ``noisy``)."""
     consts, mixer_inv = tuple18(consts_a), tuple16(mixer_a)
+    stack = constants_tuple(stack_on, stack_c)
     for i in range(att.shape[0]):
         g0, g1, g2 = gyro[i, 0], gyro[i, 1], gyro[i, 2]
         if noisy:
@@ -516,10 +524,12 @@ def autopilot_batch(att: np.ndarray, r_des: np.ndarray, yaw_rate: np.ndarray,
         if has_ff:
             ff0, ff1, ff2 = torque_ff[i, 0], torque_ff[i, 1], torque_ff[i, 2]
         if stack_on:
-            c = stack_autopilot(integral_new, integral, i, stack_c, load3x3(att, i),
-                                load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff, ff0, ff1,
-                                ff2, g0, g1, g2, mixer_inv, rotor_thrust_max, thrust_coeff, dt)
-            cmd[i, 0], cmd[i, 1], cmd[i, 2], cmd[i, 3] = c[0], c[1], c[2], c[3]
+            c0, c1, c2, c3, row = stack_autopilot(
+                stack_row(integral, i), stack, load3x3(att, i), load3x3(r_des, i), yaw_rate[i],
+                thrust_cmd[i], has_ff, ff0, ff1, ff2, g0, g1, g2, mixer_inv, rotor_thrust_max,
+                thrust_coeff, dt)
+            store_stack_row(integral_new, i, row)
+            cmd[i, 0], cmd[i, 1], cmd[i, 2], cmd[i, 3] = c0, c1, c2, c3
             continue
         out = autopilot(load3x3(att, i), load3x3(r_des, i), yaw_rate[i], thrust_cmd[i], has_ff,
                         ff0, ff1, ff2, g0, g1, g2, integral[i, 0], integral[i, 1], integral[i, 2],

@@ -71,36 +71,68 @@ def sqrt_controller(error: float, p: float, accel: float) -> float:
     return math.copysign(math.sqrt(2.0 * accel * (abs(error) - 0.5 * knee)), error)
 
 
+_NO_STACK = np.zeros(CONSTANTS)  # the constants where no stack flies
+
+
 @njit
-def _shape_axis(s: np.ndarray, i: int, k: int, accel: float, command: float, p: float,
-                dt: float) -> float:
-    """One shaped axis (roll ``k`` = 0, pitch 1) of vehicle ``i``: its target's new rate, the
-    target advanced by it in place."""
-    target = s[i, _PHI_T + k]
-    rate = s[i, _PHI_RATE + k]
+def constants_tuple(stack_on: bool, a: np.ndarray) -> tuple:
+    """The :data:`CONSTANTS` numbers of a stack as a tuple, zeros where no stack flies (``a``
+    then any array, unread). Read once a call: the loops' helpers take numbers, never arrays,
+    whose reference counts (a pair of atomic operations an array a call) would cost more
+    than their arithmetic."""
+    if stack_on:
+        return _tuple47(a)
+    return _tuple47(_NO_STACK)
+
+
+@njit
+def _tuple47(a: np.ndarray) -> tuple:
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12],
+            a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23], a[24],
+            a[25], a[26], a[27], a[28], a[29], a[30], a[31], a[32], a[33], a[34], a[35], a[36],
+            a[37], a[38], a[39], a[40], a[41], a[42], a[43], a[44], a[45], a[46])
+
+
+@njit
+def stack_row(s: np.ndarray, i: int) -> tuple:
+    """Vehicle ``i``'s :data:`STATE_COLUMNS` numbers of state as a tuple."""
+    return (s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], s[i, 6], s[i, 7], s[i, 8],
+            s[i, 9], s[i, 10], s[i, 11], s[i, 12], s[i, 13], s[i, 14], s[i, 15], s[i, 16],
+            s[i, 17], s[i, 18], s[i, 19], s[i, 20], s[i, 21], s[i, 22])
+
+
+@njit
+def store_stack_row(s: np.ndarray, i: int, row: tuple) -> None:
+    """Write a state tuple (:func:`stack_torque`'s) into row ``i`` of ``s``."""
+    for col in range(STATE_COLUMNS):
+        s[i, col] = row[col]
+
+
+@njit
+def _shape_axis(target: float, rate: float, accel: float, command: float, p: float,
+                dt: float) -> tuple:
+    """One shaped axis: the target's new rate and the target advanced by it."""
     wanted = sqrt_controller(command - target, p, accel)
     if accel > 0.0:
         wanted = min(max(wanted, rate - accel * dt), rate + accel * dt)
-    s[i, _PHI_RATE + k] = wanted
-    s[i, _PHI_T + k] = target + wanted * dt
-    return wanted
+    return wanted, target + wanted * dt
 
 
 @njit
-def _shape(s: np.ndarray, i: int, c: np.ndarray, rd: tuple, yaw_rate: float,
+def _shape(phi_t: float, theta_t: float, phi_rate: float, theta_rate: float, seeded: bool,
+           tc: float, accel_phi: float, accel_theta: float, rd: tuple, yaw_rate: float,
            dt: float) -> tuple:
-    """The shaper's step for vehicle ``i``: the target rotation (row-major) and the target's
-    body rates (feed-forward), from the commanded ``rd``."""
+    """The shaper's step: the target rotation (row-major), the target's body rates
+    (feed-forward), from the commanded ``rd``; and the shaper's new state (target roll and
+    pitch, their rates)."""
     phi_cmd = math.atan2(rd[7], rd[8])
     theta_cmd = math.asin(min(max(-rd[6], -1.0), 1.0))
     psi = math.atan2(rd[3], rd[0])
-    tc = c[45]
-    if s[i, _SEEDED] == 0.0:
-        s[i, _PHI_T], s[i, _THETA_T] = phi_cmd, theta_cmd
-        s[i, _PHI_RATE] = s[i, _THETA_RATE] = 0.0
-    rate_phi = _shape_axis(s, i, 0, c[42], phi_cmd, 1.0 / tc, dt)
-    rate_theta = _shape_axis(s, i, 1, c[43], theta_cmd, 1.0 / tc, dt)
-    phi, theta = s[i, _PHI_T], s[i, _THETA_T]
+    if not seeded:
+        phi_t, theta_t = phi_cmd, theta_cmd
+        phi_rate = theta_rate = 0.0
+    rate_phi, phi = _shape_axis(phi_t, phi_rate, accel_phi, phi_cmd, 1.0 / tc, dt)
+    rate_theta, theta = _shape_axis(theta_t, theta_rate, accel_theta, theta_cmd, 1.0 / tc, dt)
     cf, sf = math.cos(phi), math.sin(phi)
     ct, st = math.cos(theta), math.sin(theta)
     cp, sp = math.cos(psi), math.sin(psi)
@@ -111,61 +143,60 @@ def _shape(s: np.ndarray, i: int, c: np.ndarray, rd: tuple, yaw_rate: float,
     w0 = rate_phi - st * yaw_rate
     w1 = cf * rate_theta + sf * ct * yaw_rate
     w2 = -sf * rate_theta + cf * ct * yaw_rate
-    return rt, w0, w1, w2
+    return rt, w0, w1, w2, phi, theta, rate_phi, rate_theta
 
 
 @njit
-def _axis(s: np.ndarray, i: int, c: np.ndarray, j: int, e: float, gyro: float, ff: float,
-          seeded: bool, dt: float) -> float:
-    """Axis ``j`` of vehicle ``i``'s loops (module docstring): its torque, N m, from the
-    attitude error ``e``, the gyro and the feed-forward rate ``ff``; its state in place."""
-    ref = sqrt_controller(e, c[j], c[3 + j])
-    if c[6 + j] != 0.0:
-        lim = c[9 + j]
-        acc = min(max(s[i, _A_INT + j] + e * dt, -lim), lim)
-        s[i, _A_INT + j] = acc
-        ref += c[6 + j] * acc
+def _axis(a_int: float, r_int: float, tgt: float, err: float, prev: float, der: float,
+          ang_p: float, ang_accel: float, ang_i: float, ang_ilim: float, rate_p: float,
+          rate_i: float, rate_d: float, rate_ilim: float, fltt: float, flte: float, fltd: float,
+          d_on_gyro: float, ref_inertia: float, torque_max: float, e: float, gyro: float,
+          ff: float, seeded: bool, dt: float) -> tuple:
+    """One axis's loops (module docstring): its torque, N m, from the attitude error ``e``, the
+    gyro and the feed-forward rate ``ff``; and its new state (angle integral, rate integral,
+    filtered reference, filtered error, the derivative's previous input, filtered
+    derivative)."""
+    ref = sqrt_controller(e, ang_p, ang_accel)
+    if ang_i != 0.0:
+        a_int = min(max(a_int + e * dt, -ang_ilim), ang_ilim)
+        ref += ang_i * a_int
     ref += ff
     if not seeded:
-        s[i, _TGT + j] = ref
-        s[i, _ERR + j] = ref - gyro
-        s[i, _PREV + j] = gyro if c[33 + j] != 0.0 else ref - gyro
-    tgt = s[i, _TGT + j]
-    tgt += _alpha(c[24 + j], dt) * (ref - tgt)
-    s[i, _TGT + j] = tgt
-    err = s[i, _ERR + j]
-    err += _alpha(c[27 + j], dt) * ((tgt - gyro) - err)
-    s[i, _ERR + j] = err
-    lim = c[21 + j]
-    integ = min(max(s[i, _R_INT + j] + err * dt, -lim), lim)
-    s[i, _R_INT + j] = integ
-    if c[33 + j] != 0.0:  # D on the measurement: the gyro's rate of change, negated
+        tgt = ref
+        err = ref - gyro
+        prev = gyro if d_on_gyro != 0.0 else ref - gyro
+    tgt += _alpha(fltt, dt) * (ref - tgt)
+    err += _alpha(flte, dt) * ((tgt - gyro) - err)
+    r_int = min(max(r_int + err * dt, -rate_ilim), rate_ilim)
+    if d_on_gyro != 0.0:  # D on the measurement: the gyro's rate of change, negated
         x = gyro
-        slope = -(x - s[i, _PREV + j]) / dt
+        slope = -(x - prev) / dt
     else:
         x = err
-        slope = (x - s[i, _PREV + j]) / dt
-    s[i, _PREV + j] = x
-    der = s[i, _DER + j] if seeded else 0.0
-    der += _alpha(c[30 + j], dt) * (slope - der)
-    s[i, _DER + j] = der
-    t = c[12 + j] * err + c[15 + j] * integ + c[18 + j] * der
+        slope = (x - prev) / dt
+    der = der if seeded else 0.0
+    der += _alpha(fltd, dt) * (slope - der)
+    t = rate_p * err + rate_i * r_int + rate_d * der
     # the SJC law's J_tune dw_r/dt: w_r = lambda (q_r - q) + dq_r/dt with the reference's
     # second derivative zero, so dw_r/dt = lambda (dq_r/dt - dq/dt), dq/dt from the gyro
     # (controller_sjc.c computes it so: Z(q) w; the identity at small angles)
-    t += c[36 + j] * c[j] * (ff - gyro)
-    tmax = c[39 + j]
-    return min(max(t, -tmax), tmax)
+    t += ref_inertia * ang_p * (ff - gyro)
+    return min(max(t, -torque_max), torque_max), a_int, r_int, tgt, err, x, der
 
 
 @njit
-def stack_torque(s: np.ndarray, i: int, c: np.ndarray, att: tuple, rd: tuple,
-                 yaw_rate: float, g0: float, g1: float, g2: float, dt: float) -> tuple:
+def stack_torque(row: tuple, c: tuple, att: tuple, rd: tuple, yaw_rate: float, g0: float,
+                 g1: float, g2: float, dt: float) -> tuple:
     """One vehicle's attitude loops (module docstring): body torques (N m) from the estimated
-    attitude ``att``, the commanded ``rd`` (row-major), the commanded yaw rate and the gyro;
-    the state row ``s[i]`` advanced in place."""
+    attitude ``att``, the commanded ``rd`` (row-major), the commanded yaw rate and the gyro,
+    with its state ``row`` (:func:`stack_row`) and the stack's constants ``c``
+    (:func:`constants_tuple`); returns the three torques and the new state row."""
+    phi_t, theta_t, phi_rate, theta_rate = row[_PHI_T], row[_THETA_T], row[_PHI_RATE], \
+        row[_THETA_RATE]
+    seeded = row[_SEEDED] != 0.0
     if c[45] > 0.0:
-        rt, ff0, ff1, ff2 = _shape(s, i, c, rd, yaw_rate, dt)
+        rt, ff0, ff1, ff2, phi_t, theta_t, phi_rate, theta_rate = _shape(
+            phi_t, theta_t, phi_rate, theta_rate, seeded, c[45], c[42], c[43], rd, yaw_rate, dt)
     else:
         rt, ff0, ff1, ff2 = rd, 0.0, 0.0, yaw_rate
     # e = -vee(R_t^T R - R^T R_t) / 2, with m = R_t^T R
@@ -175,9 +206,18 @@ def stack_torque(s: np.ndarray, i: int, c: np.ndarray, att: tuple, rd: tuple,
     m20 = rt[2] * att[0] + rt[5] * att[3] + rt[8] * att[6]
     m10 = rt[1] * att[0] + rt[4] * att[3] + rt[7] * att[6]
     m01 = rt[0] * att[1] + rt[3] * att[4] + rt[6] * att[7]
-    seeded = s[i, _SEEDED] != 0.0
-    t0 = _axis(s, i, c, 0, -0.5 * (m21 - m12), g0, ff0, seeded, dt)
-    t1 = _axis(s, i, c, 1, -0.5 * (m02 - m20), g1, ff1, seeded, dt)
-    t2 = _axis(s, i, c, 2, -0.5 * (m10 - m01), g2, ff2, seeded, dt)
-    s[i, _SEEDED] = 1.0
-    return t0, t1, t2
+    t0, ai0, ri0, tg0, er0, pv0, dr0 = _axis(
+        row[0], row[3], row[6], row[9], row[12], row[15], c[0], c[3], c[6], c[9], c[12], c[15],
+        c[18], c[21], c[24], c[27], c[30], c[33], c[36], c[39], -0.5 * (m21 - m12), g0, ff0,
+        seeded, dt)
+    t1, ai1, ri1, tg1, er1, pv1, dr1 = _axis(
+        row[1], row[4], row[7], row[10], row[13], row[16], c[1], c[4], c[7], c[10], c[13],
+        c[16], c[19], c[22], c[25], c[28], c[31], c[34], c[37], c[40], -0.5 * (m02 - m20), g1,
+        ff1, seeded, dt)
+    t2, ai2, ri2, tg2, er2, pv2, dr2 = _axis(
+        row[2], row[5], row[8], row[11], row[14], row[17], c[2], c[5], c[8], c[11], c[14],
+        c[17], c[20], c[23], c[26], c[29], c[32], c[35], c[38], c[41], -0.5 * (m10 - m01), g2,
+        ff2, seeded, dt)
+    new = (ai0, ai1, ai2, ri0, ri1, ri2, tg0, tg1, tg2, er0, er1, er2, pv0, pv1, pv2, dr0, dr1,
+           dr2, phi_t, theta_t, phi_rate, theta_rate, 1.0)
+    return t0, t1, t2, new
