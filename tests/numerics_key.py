@@ -77,9 +77,19 @@ def recorded_goldens(path: Path) -> list[Path]:
 
 def golden_for_this_machine(path: Path, torch: bool = False) -> tuple[Path, bool]:
     """(the golden to compare with, whether it was written on a machine with these numerics):
-    the keyed copy for this machine's :func:`numerics_key` if there is one, else ``path``."""
-    mine = keyed(path, numerics_key(torch))
-    return (mine, True) if mine.exists() else (path, False)
+    the keyed copy for this machine's :func:`numerics_key` if there is one, else ``path``
+    (written on this machine if it holds a ``numerics_key`` entry equal to this machine's)."""
+    key = numerics_key(torch)
+    mine = keyed(path, key)
+    if mine.exists():
+        return mine, True
+    with np.load(path) as data:
+        written_on = str(data[KEY_ENTRY]) if KEY_ENTRY in data.files else None
+    return path, written_on == key
+
+
+KEY_ENTRY = "numerics_key"
+"""A golden's entry naming the machine it was written on (goldens written since the key)."""
 
 
 def differing(now: dict[str, np.ndarray], golden: dict[str, np.ndarray], exact: bool,
