@@ -1,13 +1,15 @@
-"""Compiled kernels' common parts: numba's ``njit`` as the project uses it, and the fused
-multiply-add that NumPy's small matrix products round with.
+"""Compiled kernels' common parts: numba's ``njit`` as the project uses it, and the sums NumPy's
+small matrix products round with.
 
-Every kernel is compiled with ``cache=True`` (the machine code is kept beside the source, in
-``__pycache__``, and loaded in a fraction of a second by later processes) and without fast-math:
-LLVM then neither reorders sums nor fuses a product into an addition on its own, so a kernel's
-numbers follow its source operation by operation, as NumPy's do. Where NumPy's numbers come from
-OpenBLAS (``np.matmul`` of 3 x 3 stacks), the kernel writes OpenBLAS's order out with
-:func:`fma` (one rounding for ``a * b + c``), so the compiled step gives NumPy's numbers to the
-bit (``tests/unit/test_compiled_step.py``).
+Every kernel is compiled with ``cache=True`` (the machine code is kept on disk, in
+:func:`cache_dir`, and loaded in a fraction of a second by later processes) and without
+fast-math: LLVM then neither reorders sums nor fuses a product into an addition on its own, so a
+kernel's numbers follow its source operation by operation, as NumPy's do. Where NumPy's numbers
+come from the BLAS kernel (``np.matmul`` of 3 x 3 stacks), the kernels sum each element as that
+kernel does on the machine at hand (:func:`dot3_vecmat` and its kin, bound to the order
+:mod:`aerodock.product_order` reads at import: fused multiply-adds through :func:`fma`, one
+rounding for ``a * b + c``, or plain sums), so the compiled step gives NumPy's numbers to the bit
+(``tests/unit/test_compiled_step.py``, ``tests/unit/test_product_order.py``).
 
 ``AERODOCK_JIT=0`` in the environment runs the same kernels as plain Python (numba's
 ``NUMBA_DISABLE_JIT``): slow, for a debugger or a coverage run, with the same numbers except
