@@ -118,7 +118,7 @@ def exp_so3(phi0: float, phi1: float, phi2: float) -> tuple:
 
 @njit
 def mat3_mul(r: tuple, e: tuple) -> tuple:
-    """``r e`` for row-major 3 x 3 tuples, rounded as OpenBLAS's ``np.matmul``."""
+    """``r e`` for row-major 3 x 3 tuples, rounded as ``np.matmul`` here (:func:`dot3_matmat`)."""
     return (dot3_matmat(r[0], r[1], r[2], e[0], e[3], e[6]),
             dot3_matmat(r[0], r[1], r[2], e[1], e[4], e[7]),
             dot3_matmat(r[0], r[1], r[2], e[2], e[5], e[8]),
@@ -239,8 +239,7 @@ def stack_autopilot(row: tuple, stack_c: tuple, att: tuple, rd: tuple, yaw_rate:
     """One vehicle's flight-stack autopilot (:func:`stack_kernel.stack_torque`) with the
     torque feed-forward, the mixer and the rotor speed commands, from its state ``row``
     (:func:`stack_kernel.stack_row`) and the stack's constants
-    (:func:`stack_kernel.constants_tuple`):
-    the four commands and the new state row."""
+    (:func:`stack_kernel.constants_tuple`): the four commands and the new state row."""
     tau0, tau1, tau2, new = stack_torque(row, stack_c, att, rd, yaw_rate, g0, g1, g2, dt)
     if has_ff:
         tau0 += ff0
