@@ -147,15 +147,29 @@ def _shape(phi_t: float, theta_t: float, phi_rate: float, theta_rate: float, see
 
 
 @njit
-def _axis(a_int: float, r_int: float, tgt: float, err: float, prev: float, der: float,
-          ang_p: float, ang_accel: float, ang_i: float, ang_ilim: float, rate_p: float,
-          rate_i: float, rate_d: float, rate_ilim: float, fltt: float, flte: float, fltd: float,
-          d_on_gyro: float, ref_inertia: float, torque_max: float, e: float, gyro: float,
-          ff: float, seeded: bool, dt: float) -> tuple:
+def _axis_state(row: tuple, j: int) -> tuple:
+    """Axis ``j``'s six numbers of a state row: angle integral, rate integral, filtered
+    reference, filtered error, the derivative's previous input, filtered derivative."""
+    return (row[_A_INT + j], row[_R_INT + j], row[_TGT + j], row[_ERR + j], row[_PREV + j],
+            row[_DER + j])
+
+
+@njit
+def _axis_constants(c: tuple, j: int) -> tuple:
+    """Axis ``j``'s fourteen constants (the rows of :data:`CONSTANTS`, in their order)."""
+    return (c[j], c[3 + j], c[6 + j], c[9 + j], c[12 + j], c[15 + j], c[18 + j], c[21 + j],
+            c[24 + j], c[27 + j], c[30 + j], c[33 + j], c[36 + j], c[39 + j])
+
+
+@njit
+def _axis(state: tuple, k: tuple, e: float, gyro: float, ff: float, seeded: bool,
+          dt: float) -> tuple:
     """One axis's loops (module docstring): its torque, N m, from the attitude error ``e``, the
-    gyro and the feed-forward rate ``ff``; and its new state (angle integral, rate integral,
-    filtered reference, filtered error, the derivative's previous input, filtered
-    derivative)."""
+    gyro and the feed-forward rate ``ff``, with its state (:func:`_axis_state`) and constants
+    (:func:`_axis_constants`); and its new state."""
+    a_int, r_int, tgt, err, prev, der = state
+    (ang_p, ang_accel, ang_i, ang_ilim, rate_p, rate_i, rate_d, rate_ilim, fltt, flte, fltd,
+     d_on_gyro, ref_inertia, torque_max) = k
     ref = sqrt_controller(e, ang_p, ang_accel)
     if ang_i != 0.0:
         a_int = min(max(a_int + e * dt, -ang_ilim), ang_ilim)
@@ -206,18 +220,12 @@ def stack_torque(row: tuple, c: tuple, att: tuple, rd: tuple, yaw_rate: float, g
     m20 = rt[2] * att[0] + rt[5] * att[3] + rt[8] * att[6]
     m10 = rt[1] * att[0] + rt[4] * att[3] + rt[7] * att[6]
     m01 = rt[0] * att[1] + rt[3] * att[4] + rt[6] * att[7]
-    t0, ai0, ri0, tg0, er0, pv0, dr0 = _axis(
-        row[0], row[3], row[6], row[9], row[12], row[15], c[0], c[3], c[6], c[9], c[12], c[15],
-        c[18], c[21], c[24], c[27], c[30], c[33], c[36], c[39], -0.5 * (m21 - m12), g0, ff0,
-        seeded, dt)
-    t1, ai1, ri1, tg1, er1, pv1, dr1 = _axis(
-        row[1], row[4], row[7], row[10], row[13], row[16], c[1], c[4], c[7], c[10], c[13],
-        c[16], c[19], c[22], c[25], c[28], c[31], c[34], c[37], c[40], -0.5 * (m02 - m20), g1,
-        ff1, seeded, dt)
-    t2, ai2, ri2, tg2, er2, pv2, dr2 = _axis(
-        row[2], row[5], row[8], row[11], row[14], row[17], c[2], c[5], c[8], c[11], c[14],
-        c[17], c[20], c[23], c[26], c[29], c[32], c[35], c[38], c[41], -0.5 * (m10 - m01), g2,
-        ff2, seeded, dt)
+    t0, ai0, ri0, tg0, er0, pv0, dr0 = _axis(_axis_state(row, 0), _axis_constants(c, 0),
+                                             -0.5 * (m21 - m12), g0, ff0, seeded, dt)
+    t1, ai1, ri1, tg1, er1, pv1, dr1 = _axis(_axis_state(row, 1), _axis_constants(c, 1),
+                                             -0.5 * (m02 - m20), g1, ff1, seeded, dt)
+    t2, ai2, ri2, tg2, er2, pv2, dr2 = _axis(_axis_state(row, 2), _axis_constants(c, 2),
+                                             -0.5 * (m10 - m01), g2, ff2, seeded, dt)
     new = (ai0, ai1, ai2, ri0, ri1, ri2, tg0, tg1, tg2, er0, er1, er2, pv0, pv1, pv2, dr0, dr1,
-           dr2, phi_t, theta_t, phi_rate, theta_rate, 1.0)
+           dr2, phi_t, theta_t, phi_rate, theta_rate, 1.0)  # STATE_COLUMNS' order
     return t0, t1, t2, new
