@@ -329,9 +329,10 @@ def cable_wrench_kernel(cable: np.ndarray, rot: np.ndarray, anchor_below: float,
                         force: np.ndarray, torque_t: np.ndarray, rigid: bool) -> None:
     """The cables' pull on the leaders (rows ``0..n-1`` of the world's accumulators), in the
     order and rounding of NumPy's ``force[:n] += cable`` and, for rigid bodies,
-    ``c_b = matmul(cable[:, None, :], R[:n])[:, 0]`` (OpenBLAS's row vector times a matrix,
-    :func:`aerodock.jit.fma`), ``torque_t[0, :n] -= d c_b[:, 1]``,
-    ``torque_t[1, :n] += d c_b[:, 0]`` (the anchor ``d`` below the centre of mass)."""
+    ``c_b = matmul(cable[:, None, :], R[:n])[:, 0]`` (a row vector times a matrix, summed as
+    ``np.matmul`` sums it here: :func:`aerodock.jit.dot3_vecmat`),
+    ``torque_t[0, :n] -= d c_b[:, 1]``, ``torque_t[1, :n] += d c_b[:, 0]`` (the anchor ``d``
+    below the centre of mass)."""
     for i in range(cable.shape[0]):
         c0, c1, c2 = cable[i, 0], cable[i, 1], cable[i, 2]
         force[i, 0] += c0
@@ -493,11 +494,12 @@ def strike_kernel(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray,
 def _strikes(fol_p: np.ndarray, fol_r: np.ndarray, offsets: np.ndarray, seg_a: np.ndarray,
              seg_b: np.ndarray, axial_reach_m: float, radial_reach_m: float,
              hit: np.ndarray) -> None:
-    """:func:`rotor_strike` for each follower: a rotor ``c = p + R o`` (OpenBLAS's order for a
-    matrix times a column, :func:`aerodock.jit.fma`) and a segment ``a -> b`` meet when the
-    segment's point closest to ``c``, ``q = a + clip(t, 0, 1) (b - a)`` with
-    ``t = (c - a).(b - a) / max(|b - a|^2, 1e-12)``, lies within ``axial_reach_m`` of the
-    disk's plane (along ``R[:, 2]``) and ``radial_reach_m`` of its axis. Sums of three are
+    """:func:`rotor_strike` for each follower: a rotor ``c = p + R o`` (``np.matmul``'s order
+    here for a matrix times a column, :func:`aerodock.jit.dot3_matvec`) and a segment
+    ``a -> b`` meet when the segment's point closest to ``c``,
+    ``q = a + clip(t, 0, 1) (b - a)`` with ``t = (c - a).(b - a) / max(|b - a|^2, 1e-12)``,
+    lies within ``axial_reach_m`` of the disk's plane (along ``R[:, 2]``) and
+    ``radial_reach_m`` of its axis. Sums of three are
     NumPy's ``sum(-1)`` (left to right), maxima and clips NumPy's (a NaN propagates, and
     compares false: no strike)."""
     for i in range(fol_p.shape[0]):

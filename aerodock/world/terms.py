@@ -127,7 +127,8 @@ def cable_on_leader(state: WorldState, frame: StepFrame, params: WorldParams) ->
     """The cables pull the leader at their anchor, below its centre of mass (last step's
     tension: the bar moves after the vehicles). Compiled (:func:`~aerodock.world.platform.
     cable_wrench_kernel`: NumPy's ``force[:n] += cable`` and, for rigid bodies, the cable's
-    moment about the centre of mass from ``cable^T R`` in OpenBLAS's rounding)."""
+    moment about the centre of mass from ``cable^T R`` in ``np.matmul``'s rounding on the
+    machine at hand)."""
     torque = frame.torque_t
     cable_wrench_kernel(state.cable_force_n, frame.rot, params.platform.anchor_below_leader_m,
                         frame.force_n, _NO_TORQUE if torque is None else torque,

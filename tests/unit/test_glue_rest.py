@@ -37,7 +37,8 @@ def _platform() -> PlatformParams:
 @pytest.mark.parametrize("rigid", [True, False])
 def test_cable_wrench_is_numpys(n, rigid):
     """cable_wrench_kernel == the NumPy cable_on_leader (``+=``, the stacked matmul through
-    OpenBLAS, two scaled updates), onto accumulators that already hold numbers, -0.0 too."""
+    the machine's BLAS, two scaled updates), onto accumulators that already hold numbers, -0.0
+    too."""
     rng = np.random.default_rng(n + 10 * rigid)
     for trial in range(20):
         cable = rng.normal(size=(n, 3)) * 10.0 ** rng.integers(-3, 3)
