@@ -75,17 +75,17 @@ def recorded_goldens(path: Path) -> list[Path]:
             if p.exists()]
 
 
-def golden_for_this_machine(path: Path, torch: bool = False) -> tuple[Path, bool]:
-    """(the golden to compare with, whether it was written on a machine with these numerics):
-    the keyed copy for this machine's :func:`numerics_key` if there is one, else ``path``
-    (written on this machine if it holds a ``numerics_key`` entry equal to this machine's)."""
+def load_golden(path: Path, torch: bool = False) -> tuple[dict[str, np.ndarray], bool]:
+    """(the golden's arrays, whether they were written on a machine with these numerics): the
+    keyed copy for this machine's :func:`numerics_key` if there is one, else ``path`` itself
+    (written on this machine if it holds a :data:`KEY_ENTRY` equal to this machine's key;
+    that entry is not among the arrays returned)."""
     key = numerics_key(torch)
     mine = keyed(path, key)
-    if mine.exists():
-        return mine, True
-    with np.load(path) as data:
+    with np.load(mine if mine.exists() else path) as data:
+        arrays = {k: data[k] for k in data.files if k != KEY_ENTRY}
         written_on = str(data[KEY_ENTRY]) if KEY_ENTRY in data.files else None
-    return path, written_on == key
+    return arrays, mine.exists() or written_on == key
 
 
 KEY_ENTRY = "numerics_key"

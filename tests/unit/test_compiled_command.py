@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from numerics_key import differing, golden_for_this_machine
+from numerics_key import differing, load_golden
 
 from aerodock.control.inversion import (
     accel_to_attitude_thrust,
@@ -60,9 +60,7 @@ def cases() -> dict[str, np.ndarray]:
 
 
 def test_the_compiled_command_gives_the_numpy_numbers():
-    path, exact = golden_for_this_machine(GOLDEN)
-    with np.load(path) as data:
-        golden = dict(data)
+    golden, exact = load_golden(GOLDEN)
     now = cases()
     assert sorted(golden) == sorted(now)
     assert not differing(now, golden, exact)

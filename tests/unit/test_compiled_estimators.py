@@ -24,7 +24,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from numerics_key import differing, golden_for_this_machine
+from numerics_key import differing, load_golden
 
 from aerodock.config import load_config
 from aerodock.control.accel_observer import AccelObserver
@@ -120,9 +120,7 @@ def cases() -> dict[str, np.ndarray]:
 
 
 def test_the_compiled_estimators_and_step_give_the_numpy_numbers():
-    path, exact = golden_for_this_machine(GOLDEN)
-    with np.load(path) as data:
-        golden = dict(data)
+    golden, exact = load_golden(GOLDEN)
     now = cases()
     assert sorted(now) == sorted(golden)
     if not exact:  # another machine's copy: its last bits (tests/numerics_key.py)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numerics_key import differing, golden_for_this_machine
+from numerics_key import differing, load_golden
 from worlds import EARLIER_WAKE, EARLIER_WORLD
 
 GOLDEN = Path(__file__).resolve().parents[1] / "data" / "numpy_step_ea3179b.npz"
@@ -105,9 +105,7 @@ def field_outputs() -> dict[str, np.ndarray]:
 
 @pytest.fixture(scope="module")
 def golden() -> tuple[dict[str, np.ndarray], bool]:
-    path, exact = golden_for_this_machine(GOLDEN)
-    with np.load(path) as data:
-        return dict(data), exact
+    return load_golden(GOLDEN)
 
 
 def test_the_world_flies_the_numpy_steps_numbers(golden):
