@@ -189,6 +189,9 @@ def run(argv: list[str] | None = None) -> int:
         typer.echo("interrupted", err=True)
         return 130
     except Exception as err:  # noqa: BLE001 - the one place errors become messages
+        if _from_interrupt(err):
+            typer.echo("interrupted", err=True)
+            return 130
         if os.environ.get("AERODOCK_DEBUG"):
             raise
         expected = isinstance(err, ValueError | OSError | MemoryError)
@@ -203,6 +206,21 @@ def run(argv: list[str] | None = None) -> int:
         if not expected:
             typer.echo("(set AERODOCK_DEBUG=1 for a traceback)", err=True)
         return 2 if expected else 1
+
+
+def _from_interrupt(err: BaseException) -> bool:
+    """Whether ``err`` came of a Ctrl-C: a ``KeyboardInterrupt`` among its causes. The
+    interrupt can land while a compiled kernel returns (numba's kernels release the GIL, and
+    the signal's handler runs when they take it back); Python then reports "returned a result
+    with an exception set" as a ``SystemError`` caused by the interrupt."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 def _terminate(signum: int, frame: Any) -> None:

@@ -213,3 +213,27 @@ def test_targets_refuses_bad_trials_in_one_line():
     bad = aerodock("targets", "--trials", "0", check=False)
     assert bad.returncode == 2
     assert bad.stderr.strip().count("\n") == 0 and "--trials" in bad.stderr
+
+
+def test_an_interrupt_reported_as_a_system_error_is_an_interrupt(monkeypatch, capsys):
+    """Ctrl-C landing while a compiled kernel returns reaches Python as a SystemError caused
+    by the KeyboardInterrupt: the command line says 'interrupted' and exits 130, as for any
+    Ctrl-C; a SystemError of its own is still a bug (exit 1, its type named)."""
+    import aerodock.cli.app as app_module
+
+    def interrupted_kernel() -> None:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as stop:
+            raise SystemError("returned a result with an exception set") from stop
+
+    def broken_kernel() -> None:
+        raise SystemError("a bug")
+
+    for kernel, want in ((interrupted_kernel, (130, "interrupted\n")),
+                         (broken_kernel, (1, "error: SystemError: a bug\n"
+                                             "(set AERODOCK_DEBUG=1 for a traceback)\n"))):
+        monkeypatch.setattr(app_module, "_expand_repeatable", lambda args, k=kernel: k())
+        monkeypatch.delenv("AERODOCK_DEBUG", raising=False)
+        rc = app_module.run(["dock"])
+        assert (rc, capsys.readouterr().err) == want
