@@ -7,7 +7,10 @@ and body rates) against the fitted jet's at the same states (aerodock/identify/w
 The jet is examples/crazyflie_small_under_large.toml's (the fitted wake, cf101's fitted rotors);
 the inertias are that file's: the small Crazyflie's [vehicle] and the large cf101's [leader]
 (the small one's scaled by mass and the logged arm: an assumption). The samples are 0.15-0.45 m
-below the other vehicle, binned by the horizontal offset from its axis (2 cm).
+below the other vehicle, binned by the horizontal offset from its axis (2 cm), out to 30 cm.
+Beside the torque: the downward force by offset below the other vehicle and, as a control
+without a wake, above it (0.15-0.45 m; 0.45-0.80 m, where the small follower flew under the
+large leader), and the thrust map's slope in free air against the accelerometer.
 """
 
 from __future__ import annotations
@@ -18,18 +21,27 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
 from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.identify.flights import prepare_flights
-from aerodock.identify.wake_torque import free_air_map_check, motor_command_range, torque_profile
+from aerodock.identify.wake_torque import (
+    force_profile,
+    free_air_map_check,
+    motor_command_range,
+    thrust_map_slope,
+    torque_profile,
+)
 from aerodock.ingest.data_dir import find_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
 DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
+MAX_OFFSET_M = 0.30
+FORCE_SEPARATIONS_M = ((0.15, 0.45), (0.45, 0.80))
 
 
 def main() -> int:
@@ -49,7 +61,10 @@ def main() -> int:
     inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
                "cf101": cfg.leader.inertia_kgm2}
     profile = torque_profile(params, prepare_flights(logs), logs, inertia,
-                             rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
+                             rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
+                             max_offset_m=MAX_OFFSET_M)
+    forces = {sep: force_profile(logs, separation_m=sep) for sep in FORCE_SEPARATIONS_M}
+    slopes = thrust_map_slope(logs)
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
@@ -60,6 +75,10 @@ def main() -> int:
             "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad, "lever_m": b.lever_m}
                                for b in bins]
                         for pair, bins in profile.items()},
+            "force_profile": {f"{lo:.2f}-{hi:.2f} m": {pair: [asdict(b) for b in bins]
+                                                        for pair, bins in by_pair.items()}
+                              for (lo, hi), by_pair in forces.items()},
+            "thrust_map_slope": slopes,
             "motor_commands": commands, "free_air_map_check": map_check,
             "world_small_nm_per_rad": world_nm_per_rad}, indent=2))
         return 0
@@ -89,9 +108,28 @@ def main() -> int:
         cells = ", ".join(f"{r['pwm_lo']:.2f}-{r['pwm_hi']:.2f}: "
                           f"{r['vertical_residual_mps2']:+.3f} ({r['samples']})" for r in rows)
         print(f"  {vid}: {cells}")
+    print("the downward force by offset [mN (se)], below the other vehicle / above it (a control "
+          "without a wake):")
+    for (lo, hi), by_pair in forces.items():
+        for pair, bins in by_pair.items():
+            if not any(np.isfinite(b.below_n) for b in bins):
+                continue
+            print(f"  {pair}, {lo:.2f}-{hi:.2f} m apart:")
+            for b in bins:
+                print(f"    {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  "
+                      f"{_cell(b.below_n, b.below_se_n)}  /  {_cell(b.above_n, b.above_se_n)}")
+    print("the thrust map's slope in free air (the accelerometer's thrust on the logged, "
+          "0.5-4 Hz; forward and reverse bracket it):")
+    for vid, r in slopes.items():
+        print(f"  {vid}: {r['forward']:.2f}-{r['reverse']:.2f} (correlation "
+              f"{r['correlation']:.2f}, lag {1e3 * r['delay_s']:.0f} ms, {r['samples']} samples)")
     print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
           f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0
+
+
+def _cell(mean_n: float, se_n: float) -> str:
+    return f"{1e3 * mean_n:6.1f} ({1e3 * se_n:.1f})" if np.isfinite(mean_n) else " " * 12
 
 
 if __name__ == "__main__":

@@ -19,6 +19,9 @@ What the logged torque stands on: the per-motor thrusts are the logs' estimate f
 commands (PWM and battery voltage), a still-air map. Where the motors nearest the axis run near
 their ceiling (``follower_motor_pwm``, 0..1), that map is least certain and the follower is at
 the limit of its roll authority; the profile reports those motors' median command per bin.
+:func:`thrust_map_slope` checks the map's slope in free air against the accelerometer (the
+torque labels scale with it), and :func:`force_profile` reads the force beside the torque out
+beyond the jet's edge, below the other vehicle and, as a control, above it.
 """
 
 from __future__ import annotations
@@ -30,10 +33,10 @@ import numpy as np
 
 from aerodock.downwash.jet import quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
-from aerodock.geometry import quat_to_rotmat
-from aerodock.identify.flights import FlightSamples, WakeFitError
+from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
+from aerodock.identify.flights import FlightSamples, WakeFitError, log_geometry, pair_name
 from aerodock.identify.wake_fit import build_jet, geometry_with
-from aerodock.learning.labels import free_air_mask, raw_labels
+from aerodock.learning.labels import free_air_mask, raw_labels, valid_mask
 
 MOTOR_TORQUE_KEY = "follower_motor_torque_nm"
 BODY_RATES_KEY = "follower_body_rates_radps"
@@ -267,6 +270,116 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 real_moving_in_nm=_mean_if_enough(real[m & (radial_v < -RADIAL_SPEED_MPS)]),
                 real_moving_out_nm=_mean_if_enough(real[m & (radial_v > RADIAL_SPEED_MPS)])))
         out[pair] = bins
+    return out
+
+
+@dataclass(frozen=True)
+class ForceBin:
+    """One bin of horizontal offset from the other vehicle's axis: the follower's mean downward
+    force (its vertical label, less its flight's free-air median, times its mass), N, with the
+    follower below the other vehicle and, as a control without a wake, above it."""
+
+    offset_lo_m: float
+    offset_hi_m: float
+    below_samples: int
+    below_n: float
+    below_se_n: float
+    above_samples: int
+    above_n: float
+    above_se_n: float
+
+
+def force_profile(logs: Sequence[FlightLog], *, separation_m: tuple[float, float] = (0.15, 0.45),
+                  bin_m: float = 0.02, max_offset_m: float = 0.40,
+                  free_air_offset_m: float = FREE_AIR_OFFSET_M) -> dict[str, list[ForceBin]]:
+    """Per pairing (:func:`~aerodock.identify.flights.pair_name`), the real wake's downward
+    force against the horizontal offset, ``separation_m`` below the other vehicle and the same
+    distance above it (the swaps' own manoeuvre at the same offsets, without a wake). Beyond the
+    jet's edge the flights show an upward force below the leader and none above it: an upwash
+    about the wake that a Gaussian jet has no term for. Bins with fewer than
+    ``MIN_BIN_SAMPLES`` on a side hold nan there."""
+    parts: dict[str, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
+    for log in logs:
+        geometry = log_geometry(log)
+        far = free_air_mask(log, free_air_offset_m)
+        if far.sum() < MIN_FREE_SAMPLES:
+            continue
+        vertical = raw_labels(log)[:, 2]
+        down = (vertical - np.nanmedian(vertical[far])) * geometry["follower_mass_kg"]
+        dp = log.follower_pos_m - log.leader_pos_m
+        keep = valid_mask(log) & np.isfinite(down)
+        parts.setdefault(pair_name(geometry), []).append(
+            (np.hypot(dp[keep, 0], dp[keep, 1]), dp[keep, 2], down[keep]))
+    out: dict[str, list[ForceBin]] = {}
+    for pair, chunks in parts.items():
+        horizontal, below_m, down = (np.concatenate(c) for c in zip(*chunks))
+        sides = ((below_m >= separation_m[0]) & (below_m <= separation_m[1]),
+                 (-below_m >= separation_m[0]) & (-below_m <= separation_m[1]))
+        bins = []
+        for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
+            ring = (horizontal >= lo) & (horizontal < lo + bin_m)
+            cells = []
+            for side in sides:
+                x = down[ring & side]
+                ok = x.size >= MIN_BIN_SAMPLES
+                cells += [int(x.size), float(x.mean()) if ok else float("nan"),
+                          float(x.std() / np.sqrt(x.size)) if ok else float("nan")]
+            if cells[0] >= MIN_BIN_SAMPLES or cells[3] >= MIN_BIN_SAMPLES:
+                bins.append(ForceBin(float(lo), float(lo + bin_m), *cells))
+        out[pair] = bins
+    return out
+
+
+def thrust_map_slope(logs: Sequence[FlightLog], *, band_hz: tuple[float, float] = (0.5, 4.0),
+                     max_delay_s: float = 0.2,
+                     free_air_offset_m: float = FREE_AIR_OFFSET_M) -> dict[str, dict[str, float]]:
+    """How much thrust the logs' still-air map gives for the thrust the vehicle makes, per
+    follower vehicle id, in free air: the logged collective thrust against the one its
+    accelerometer measures (``-m (a_obs - g e3) . R e3``), both band-passed (``band_hz``,
+    zero-phase Butterworth), the measured one delayed by the lag (up to ``max_delay_s``) that
+    correlates best. ``forward`` (measured on logged) and ``reverse`` (the inverse of logged on
+    measured) bracket the slope when either side carries noise of its own (the closed loop's
+    own disturbances are small in free air). The torque labels are the same map's differences,
+    so a map that overstated its slope by a factor would make them that factor too large (and
+    the force labels with them).
+
+    Returns ``{vid: {"forward", "reverse", "correlation", "delay_s", "samples"}}``."""
+    from scipy.signal import butter, sosfiltfilt
+
+    per: dict[str, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
+    dts = []
+    for log in logs:
+        if log.n_samples < 50:
+            continue
+        mass = log_geometry(log)["follower_mass_kg"]
+        e3 = quat_to_rotmat(log.follower_quat)[:, :, 2]
+        g = float(log.meta.get("gravity_mps2", GRAVITY_MPS2))
+        specific = log.follower_obs_accel_mps2 - np.array([0.0, 0.0, g])
+        measured = -mass * np.einsum("ni,ni->n", specific, e3)
+        dt = float(np.median(np.diff(log.t_s)))
+        sos = butter(2, band_hz, btype="band", fs=1.0 / dt, output="sos")
+        free = free_air_mask(log, free_air_offset_m)
+        edge = int(round(2.0 / band_hz[0] / dt))  # the filter's start-up at either end
+        free[:edge] = False
+        free[-edge:] = False
+        per.setdefault(str(log.meta.get("follower_id")), []).append(
+            (sosfiltfilt(sos, log.follower_thrust_n), sosfiltfilt(sos, measured), free))
+        dts.append(dt)
+    out: dict[str, dict[str, float]] = {}
+    dt = float(np.median(dts)) if dts else 0.01
+    for vid in sorted(per):
+        best = None
+        for lag in range(int(round(max_delay_s / dt)) + 1):
+            x = np.concatenate([a[:a.size - lag][f[lag:]] for a, _, f in per[vid]])
+            y = np.concatenate([b[lag:][f[lag:]] for _, b, f in per[vid]])
+            if x.size < MIN_FREE_SAMPLES:
+                continue
+            r = float(np.corrcoef(x, y)[0, 1])
+            if best is None or r > best["correlation"]:
+                best = {"forward": float(x @ y / (x @ x)), "reverse": float(y @ y / (x @ y)),
+                        "correlation": r, "delay_s": lag * dt, "samples": int(x.size)}
+        if best is not None:
+            out[vid] = best
     return out
 
 
