@@ -28,6 +28,7 @@ from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.identify.flights import prepare_flights
 from aerodock.identify.wake_torque import (
+    disk_profile_torque,
     force_profile,
     free_air_map_check,
     motor_command_range,
@@ -65,6 +66,9 @@ def main() -> int:
                              max_offset_m=MAX_OFFSET_M)
     forces = {sep: force_profile(logs, separation_m=sep) for sep in FORCE_SEPARATIONS_M}
     slopes = thrust_map_slope(logs)
+    near = forces[FORCE_SEPARATIONS_M[0]]
+    carried = {pair: disk_profile_torque(near[pair], bins) for pair, bins in profile.items()
+               if bins and sum(np.isfinite(b.below_n) for b in near.get(pair, [])) >= 6}
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
@@ -79,6 +83,8 @@ def main() -> int:
                                                         for pair, bins in by_pair.items()}
                               for (lo, hi), by_pair in forces.items()},
             "thrust_map_slope": slopes,
+            "disk_profile": {pair: {"torque_nm": torque.tolist(), "params": fitted}
+                             for pair, (torque, fitted) in carried.items()},
             "motor_commands": commands, "free_air_map_check": map_check,
             "world_small_nm_per_rad": world_nm_per_rad}, indent=2))
         return 0
@@ -118,6 +124,16 @@ def main() -> int:
             for b in bins:
                 print(f"    {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f}  "
                       f"{_cell(b.below_n, b.below_se_n)}  /  {_cell(b.above_n, b.above_se_n)}")
+    print("the torque the force would make on the disks alone (a core-and-ring disk profile "
+          "fitted to the force by offset), mN m, and the real over it:")
+    for pair, (torque, fitted) in carried.items():
+        cells = ", ".join(f"{100 * b.offset_lo_m:.0f}-{100 * b.offset_hi_m:.0f}: "
+                          f"{1e3 * t:.2f} ({b.real_nm / t:.1f}x)"
+                          for b, t in zip(profile[pair], torque, strict=True)
+                          if b.offset_hi_m <= 0.121)
+        ring = (f"ring {1e3 * fitted['core_n'] * fitted['ring_fraction']:.1f} mN per disk "
+                f"at {100 * fitted['ring_radius_m']:.0f} cm")
+        print(f"  {pair}: {cells} ({ring})")
     print("the thrust map's slope in free air (the accelerometer's thrust on the logged, "
           "0.5-4 Hz; forward and reverse bracket it):")
     for vid, r in slopes.items():
