@@ -1,7 +1,9 @@
 """The learnt models across curriculum seeds: is the deep model's miss of the 10 % check
 (``results.json`` -> ``targets.learnt_mean``) a bias of the pipeline or one seed's, and how far
 apart do the seeds' models dock (``--dock N``: the headline's hover at 0.36 m, ``N`` trials,
-campaign seed 1, ours and the paper's controller with each seed's deep model)?
+campaign seed 1, ours and the paper's controller with each seed's deep model)? With
+``--config examples/learnt_wrench.toml`` the curriculum trains the learnt wrench (so2-wrench on
+thrust-basis labels) and ours feeds its torque forward, as the headline's targets row.
 
     .venv/bin/python studies/learnt_mean_seeds.py [--seeds 0 1 2] [--config FILE]
         [--out DIR] [--dock N] [--json] [--smoke]
@@ -84,6 +86,7 @@ def main() -> int:
     if args.smoke:
         cfg = smoke_config(cfg).with_overrides({"curriculum": SMOKE_CURRICULUM})
         args.seeds, train_kwargs = args.seeds[:1], {"max_epochs": SMOKE_EPOCHS}
+    kind = cfg.curriculum.model  # the deep curriculum's kind (so2-wrench: the learnt wrench)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         base = args.out if args.out is not None else Path(tmp)
@@ -106,11 +109,11 @@ def main() -> int:
                 paper_txt = ("-" if paper is None else f"{paper.relative_error:+.1%}")
                 dock_txt = ("" if not args.dock else "; docked of {}: {}".format(
                     args.dock, ", ".join(f"{k} {v}" for k, v in row["docked"].items())))
-                print(f"seed {seed}: deep model {deep.relative_error:+.1%}, paper's "
+                print(f"seed {seed}: {kind} model {deep.relative_error:+.1%}, paper's "
                       f"{paper_txt}; labels minus the mean field on the axis 0.3-0.4 m "
                       f"{bias:+.3f} m/s^2 ({samples} samples){dock_txt}", flush=True)
     deep_all = np.array([r["deep_relative_error"] for r in rows])
-    summary = {"seeds": rows, "deep_mean_relative_error": float(deep_all.mean()),
+    summary = {"model": kind, "seeds": rows, "deep_mean_relative_error": float(deep_all.mean()),
                "deep_sd_relative_error": float(deep_all.std(ddof=1)) if len(rows) > 1 else None}
     if args.dock:
         summary["docked_range"] = {k: [min(r["docked"][k] for r in rows),
@@ -120,7 +123,8 @@ def main() -> int:
         print(json.dumps(summary, indent=2))
     else:
         sd = summary["deep_sd_relative_error"]
-        print(f"deep model over {len(rows)} seeds: {summary['deep_mean_relative_error']:+.1%} "
+        print(f"{kind} model over {len(rows)} seeds: "
+              f"{summary['deep_mean_relative_error']:+.1%} "
               f"mean" + (f", sd {sd:.1%}" if sd is not None else ""))
         if args.dock:
             print("docked of {} over the seeds: {}".format(args.dock, ", ".join(

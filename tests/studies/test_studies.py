@@ -111,9 +111,9 @@ STUDY_CASES = (
            rf"^  32 g under 32 g \(\d+ samples, \d+ flights, median speed {NUMBER} m/s\)",
            r"^held out flights, ", r"^fitted on flights, "), frozenset({"data"})),
     Study("learnt_mean_seeds.py", ("--dock", "4"),
-          (rf"^seed 0: deep model {NUMBER}%, paper's {NUMBER}%; labels minus the mean field"
+          (rf"^seed 0: so2 model {NUMBER}%, paper's {NUMBER}%; labels minus the mean field"
            rf".*; docked of 4: ours [0-4], paper [0-4]$",
-           rf"^deep model over 1 seeds: {NUMBER}% mean$",
+           rf"^so2 model over 1 seeds: {NUMBER}% mean$",
            r"^docked of 4 over the seeds: ours [0-4]-[0-4], paper [0-4]-[0-4]$"), slow=True),
     Study("pairing_heldout.py", ("{files}/ss_train.npz", "{files}/sl_train.npz",
                                  "{files}/ss_test.npz", "{files}/sl_test.npz", "so2-pair", "so2"),
