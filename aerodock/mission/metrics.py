@@ -15,7 +15,8 @@ from aerodock.mission.spec import PhaseCode
 from aerodock.world import World
 from aerodock.world.platform import platform_strike
 
-TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "ref_p", "phase", "ff", "gate")
+TRACE_KEYS = ("t_s", "follower_p", "leader_p", "bar_p", "bar_yaw", "ref_p", "phase", "ff",
+              "gate")
 TERMINAL_WINDOW_S = 0.5
 """The paper's table integrates over the final 0.5 s of the approach."""
 
@@ -72,6 +73,7 @@ class MissionMetrics:
             tr["follower_p"].append(fol_p.copy())
             tr["leader_p"].append(lead_p.copy())
             tr["bar_p"].append(world.bar.p.copy())
+            tr["bar_yaw"].append(world.bar.yaw_rad.copy())
             tr["ref_p"].append(p_ref.copy())
             tr["phase"].append(phase.copy())
             tr["ff"].append(fout.feedforward_mps2.copy())

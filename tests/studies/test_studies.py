@@ -134,6 +134,9 @@ STUDY_CASES = (
                           "so2, rotor footprint", "so2-leader, rotor footprint")
              for who in ("small under large", "large under small"))),
           frozenset({"files"})),
+    Study("slip_throughs.py", (),
+          (r"^hover_0\.36: [0-2]/2 docked, [0-2] slipped through, [0-2] missed, [0-2] aborted, "
+           r"[0-2] never closed the gate \(mouth \+-4\.5 cm\)$",)),
     Study("peer_rotorpy.py", (), (r"^rotor \+ parasitic drag on : over 0\.2 s at 500 Hz",),
           frozenset({"rotorpy"}), check=_peer_within_tolerance),
     Study("post_dock.py", (),
