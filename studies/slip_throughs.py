@@ -13,8 +13,9 @@ The cells and their campaign seeds are ``targets``' (``seed + 10 k``). Across th
 bar's centre relative to the gate's axis (the follower's contact arm, ``mount_height_m`` above
 its centre, attitude neglected), perpendicular to the bar; the gate holds a bar within
 ``aperture / 2`` less its radius of that axis when it finishes closing (the software latency and
-the servo's travel after the command). ``--smoke``: one cell, a few trials, the mission's waits
-cut.
+the servo's travel after the command). The bar's swing is its horizontal speed relative to the
+leader, at the command and half a second before it (a swing it had, or a kick of the contact).
+``--smoke``: one cell, a few trials, the mission's waits cut.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from aerodock.world.gripper import GateState
 
 ROOT = Path(__file__).resolve().parents[1]
 DIFF_PERIODS = 2  # the relative velocity: positions this many control periods apart
+SWING_BEFORE_S = 0.5  # the bar's swing read again this long before the command
 
 
 def across_mouth(trace: dict[str, np.ndarray], mount_m: float) -> tuple[np.ndarray, ...]:
@@ -63,6 +65,21 @@ def across_mouth(trace: dict[str, np.ndarray], mount_m: float) -> tuple[np.ndarr
                       / (DIFF_PERIODS * dt))
         offset1[i] = across[min(last[i] + 1, steps - 1), i]
     return first, offset0, outward, offset1
+
+
+def swing_speed(trace: dict[str, np.ndarray], first: np.ndarray, before_s: float) -> np.ndarray:
+    """Per trial whose gate closed, the bar's horizontal speed relative to the leader (its swing
+    on the cables), m/s, ``before_s`` before the close was commanded (nan where the trace does
+    not reach back that far)."""
+    dt = float(np.median(np.diff(trace["t_s"])))
+    swing = trace["bar_p"][..., :2] - trace["leader_p"][..., :2]
+    out = np.full(first.shape, np.nan)
+    for i in np.nonzero(first >= 0)[0]:
+        k = first[i] - int(round(before_s / dt))
+        if k >= DIFF_PERIODS:
+            out[i] = float(np.hypot(*(swing[k, i] - swing[k - DIFF_PERIODS, i]))
+                           / (DIFF_PERIODS * dt))
+    return out
 
 
 def main() -> int:
@@ -92,6 +109,8 @@ def main() -> int:
             seed=args.seed + 10 * k), predictor, record="trace")
         s = res.summary()
         first, off0, out, off1 = across_mouth(res.trace, cfg.gripper.mount_height_m)
+        swing_now = swing_speed(res.trace, first, 0.0)
+        swing_before = swing_speed(res.trace, first, SWING_BEFORE_S)
         closed = first >= 0
         row = {"cell": name, "trials": s["trials"], "docked": s["docked"],
                "slip_throughs": s["slip_throughs"], "missed": s["missed"], "aborts": s["aborts"],
@@ -103,6 +122,8 @@ def main() -> int:
                     "offset_at_command_m": _quantiles(np.abs(off0[sel])),
                     "outward_speed_mps": _quantiles(out[sel]),
                     "left_the_mouth": int((np.abs(off1[sel]) > mouth_m).sum()),
+                    "swing_rms_mps": _rms(swing_now[sel]),
+                    "swing_rms_before_mps": _rms(swing_before[sel]),
                 }
         rows.append(row)
         if not args.json:
@@ -115,10 +136,18 @@ def main() -> int:
                     print(f"  {label} ({r['trials']}): across the mouth at the command "
                           f"{_cm(r['offset_at_command_m'])} cm, moving out of it at "
                           f"{_fmt(r['outward_speed_mps'])} m/s (10/50/90 %); "
-                          f"bar outside the mouth when the gate resolved: {r['left_the_mouth']}")
+                          f"bar outside the mouth when the gate resolved: {r['left_the_mouth']}; "
+                          f"the bar's swing (rms, relative to the leader) "
+                          f"{r['swing_rms_mps']:.2f} m/s, {r['swing_rms_before_mps']:.2f} "
+                          f"{SWING_BEFORE_S:g} s before")
     if args.json:
         print(json.dumps({"rows": rows}, indent=2))
     return 0
+
+
+def _rms(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.sqrt(np.mean(x ** 2))) if x.size else float("nan")
 
 
 def _quantiles(x: np.ndarray) -> list[float]:
