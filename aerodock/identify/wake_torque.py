@@ -330,6 +330,54 @@ def force_profile(logs: Sequence[FlightLog], *, separation_m: tuple[float, float
     return out
 
 
+def disk_profile_torque(force: Sequence[ForceBin], torque: Sequence[TorqueBin], *,
+                        yaws: int = 12) -> tuple[np.ndarray, dict[str, float]]:
+    """The inward torque that the wake's force, if carried by the follower's disks alone,
+    would make at ``torque``'s bins: a radial profile of the force on one disk, a Gaussian core
+    less a Gaussian ring outside it (an upwash about the wake, at most as strong as the core;
+    none if the fit wants none),
+
+        f(r) = A (exp(-r^2 / 2 s1^2) - c exp(-(r - r0)^2 / 2 s2^2)),  0 <= c <= 1, r0 >= 5 cm,
+
+    fitted (weighted least squares) to the force profile ``force`` (its ``below_n``) as the sum
+    over four disks on the follower's half diagonal, averaged over ``yaws`` yaws of the follower
+    to its offset; its torque is the same disks' forces times their levers. On flights of a
+    wake sampled at the disks it gives their torque; a real torque several times it is not a
+    distribution of thrust over the disks.
+
+    Returns the torque per ``torque`` bin (N·m) and the profile's parameters (N, m).
+
+    Raises:
+        WakeFitError: fewer than six force bins below the other vehicle.
+    """
+    from scipy.optimize import least_squares
+
+    below = [b for b in force if np.isfinite(b.below_n)]
+    if len(below) < 6 or not torque:
+        raise WakeFitError("too few offset bins below the other vehicle to fit a disk profile")
+    x_f = np.array([(b.offset_lo_m + b.offset_hi_m) / 2.0 for b in below])
+    f_n = np.array([b.below_n for b in below])
+    se = np.maximum(np.array([b.below_se_n for b in below]), 1e-4)
+    x_t = np.array([(b.offset_lo_m + b.offset_hi_m) / 2.0 for b in torque])
+    half = float(np.mean([b.half_diagonal_m for b in torque]))
+    angle = (np.linspace(0.0, np.pi / 2.0, yaws, endpoint=False)[:, None] + np.pi / 4.0
+             + np.arange(4) * np.pi / 2.0)
+    ox, oy = half * np.cos(angle), half * np.sin(angle)  # (yaw, disk), e_r along x
+
+    def carried(p: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, s1, c, r0, s2 = p
+        r = np.hypot(x[:, None, None] + ox[None], oy[None])
+        disk = a * (np.exp(-r ** 2 / (2 * s1 ** 2)) - c * np.exp(-(r - r0) ** 2 / (2 * s2 ** 2)))
+        return disk.sum(axis=2).mean(axis=1), (disk * -ox[None]).sum(axis=2).mean(axis=1)
+
+    peak = max(float(f_n.max()), 1e-3) / 4.0
+    fit = least_squares(lambda p: (carried(p, x_f)[0] - f_n) / se,
+                        [peak, 0.05, 0.05, 0.2, 0.05],
+                        bounds=([0.0, 0.005, 0.0, 0.05, 0.005], [np.inf, 0.3, 1.0, 0.5, 0.3]))
+    names = ("core_n", "core_sd_m", "ring_fraction", "ring_radius_m", "ring_sd_m")
+    return carried(fit.x, x_t)[1], dict(zip(names, map(float, fit.x), strict=True))
+
+
 def thrust_map_slope(logs: Sequence[FlightLog], *, band_hz: tuple[float, float] = (0.5, 4.0),
                      max_delay_s: float = 0.2,
                      free_air_offset_m: float = FREE_AIR_OFFSET_M) -> dict[str, dict[str, float]]:
@@ -400,50 +448,3 @@ def _motor_order() -> np.ndarray:
 
 _LOG_MOTOR_ORDER = _motor_order()
 
-
-def disk_profile_torque(force: Sequence[ForceBin], torque: Sequence[TorqueBin], *,
-                        yaws: int = 12) -> tuple[np.ndarray, dict[str, float]]:
-    """The inward torque that the wake's force, if carried by the follower's disks alone,
-    would make at ``torque``'s bins: a radial profile of the force on one disk, a Gaussian core
-    less a Gaussian ring outside it (an upwash about the wake, at most as strong as the core;
-    none if the fit wants none),
-
-        f(r) = A (exp(-r^2 / 2 s1^2) - c exp(-(r - r0)^2 / 2 s2^2)),  0 <= c <= 1, r0 >= 5 cm,
-
-    fitted (weighted least squares) to the force profile ``force`` (its ``below_n``) as the sum
-    over four disks on the follower's half diagonal, averaged over ``yaws`` yaws of the follower
-    to its offset; its torque is the same disks' forces times their levers. On flights of a
-    wake sampled at the disks it gives their torque; a real torque several times it is not a
-    distribution of thrust over the disks.
-
-    Returns the torque per ``torque`` bin (N·m) and the profile's parameters (N, m).
-
-    Raises:
-        WakeFitError: fewer than six force bins below the other vehicle.
-    """
-    from scipy.optimize import least_squares
-
-    below = [b for b in force if np.isfinite(b.below_n)]
-    if len(below) < 6 or not torque:
-        raise WakeFitError("too few offset bins below the other vehicle to fit a disk profile")
-    x_f = np.array([(b.offset_lo_m + b.offset_hi_m) / 2.0 for b in below])
-    f_n = np.array([b.below_n for b in below])
-    se = np.maximum(np.array([b.below_se_n for b in below]), 1e-4)
-    x_t = np.array([(b.offset_lo_m + b.offset_hi_m) / 2.0 for b in torque])
-    half = float(np.mean([b.half_diagonal_m for b in torque]))
-    angle = (np.linspace(0.0, np.pi / 2.0, yaws, endpoint=False)[:, None] + np.pi / 4.0
-             + np.arange(4) * np.pi / 2.0)
-    ox, oy = half * np.cos(angle), half * np.sin(angle)  # (yaw, disk), e_r along x
-
-    def carried(p: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        a, s1, c, r0, s2 = p
-        r = np.hypot(x[:, None, None] + ox[None], oy[None])
-        disk = a * (np.exp(-r ** 2 / (2 * s1 ** 2)) - c * np.exp(-(r - r0) ** 2 / (2 * s2 ** 2)))
-        return disk.sum(axis=2).mean(axis=1), (disk * -ox[None]).sum(axis=2).mean(axis=1)
-
-    peak = max(float(f_n.max()), 1e-3) / 4.0
-    fit = least_squares(lambda p: (carried(p, x_f)[0] - f_n) / se,
-                        [peak, 0.05, 0.05, 0.2, 0.05],
-                        bounds=([0.0, 0.005, 0.0, 0.05, 0.005], [np.inf, 0.3, 1.0, 0.5, 0.3]))
-    names = ("core_n", "core_sd_m", "ring_fraction", "ring_radius_m", "ring_sd_m")
-    return carried(fit.x, x_t)[1], dict(zip(names, map(float, fit.x), strict=True))
