@@ -31,8 +31,8 @@ Figures (``aerodock bench --json``; ``--quick`` runs fewer, shorter repetitions)
 - ``reproduce_quick``: wall time of ``aerodock reproduce --quick`` (one run, subprocess).
 - ``memory``: peak memory of a 1024-trial campaign (fresh subprocesses): of the whole process,
   and of the campaign's own allocations.
-- ``gym_vector_env``: env-steps per second of :class:`aerodock.envs.DockingVectorEnv` at 1 and
-  256 environments (:func:`aerodock.bench.vector_env.bench_vector_env`; needs
+- ``gym_vector_env``: env-steps per second of :class:`aerodock.envs.DockingVectorEnv` at 1, 128
+  and 256 environments (:func:`aerodock.bench.vector_env.bench_vector_env`; needs
   ``aerodock[gym]``).
 - ``gym_env_reset``: wall time of :meth:`aerodock.envs.DockingEnv.reset`: a trial settled alone,
   a reset that settles a block of upcoming trials, one served from the block, and the mean over

@@ -11,7 +11,7 @@ import numpy as np
 from aerodock.bench.timing import figure, measure
 from aerodock.envs import DockingVectorEnv  # gymnasium: ImportError without aerodock[gym]
 
-ENV_BATCHES = (1, 256)
+ENV_BATCHES = (1, 128, 256)  # 128: issue 38's target for the vector env
 
 
 def bench_vector_env(cfg: Any, batches: tuple[int, ...] = ENV_BATCHES, quick: bool = False,
