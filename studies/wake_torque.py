@@ -16,7 +16,6 @@ large leader), and the thrust map's slope in free air against the accelerometer.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -26,6 +25,7 @@ from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
+from aerodock.fileio import dumps_json, json_ready
 from aerodock.identify.flights import prepare_flights
 from aerodock.identify.wake_torque import (
     disk_profile_torque,
@@ -75,7 +75,7 @@ def main() -> int:
     ap = cfg.autopilot
     world_nm_per_rad = float(cfg.vehicle.inertia_kgm2[0] * ap.attitude_p[0] * ap.rate_p[0])
     if args.json:
-        print(json.dumps({
+        print(dumps_json(json_ready({
             "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad, "lever_m": b.lever_m}
                                for b in bins]
                         for pair, bins in profile.items()},
@@ -86,7 +86,7 @@ def main() -> int:
             "disk_profile": {pair: {"torque_nm": torque.tolist(), "params": fitted}
                              for pair, (torque, fitted) in carried.items()},
             "motor_commands": commands, "free_air_map_check": map_check,
-            "world_small_nm_per_rad": world_nm_per_rad}, indent=2))
+            "world_small_nm_per_rad": world_nm_per_rad})))
         return 0
     for pair, bins in profile.items():
         if not bins:
