@@ -21,7 +21,6 @@ leader, at the command and half a second before it (a swing it had, or a kick of
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -31,6 +30,7 @@ from _smoke import SMOKE_TRIALS, add_smoke_option, smoke_config  # studies/, on 
 from aerodock.config import load_config
 from aerodock.control.profiles import controller_config
 from aerodock.experiments.targets import SCENARIOS
+from aerodock.fileio import dumps_json, json_ready
 from aerodock.learning.runtime import Predictor
 from aerodock.mission import MissionSpec, run_campaign
 from aerodock.mission.spec import Compensation
@@ -141,7 +141,7 @@ def main() -> int:
                           f"{r['swing_rms_mps']:.2f} m/s, {r['swing_rms_before_mps']:.2f} "
                           f"{SWING_BEFORE_S:g} s before")
     if args.json:
-        print(json.dumps({"rows": rows}, indent=2))
+        print(dumps_json(json_ready({"rows": rows})))
     return 0
 
 
