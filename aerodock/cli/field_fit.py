@@ -461,6 +461,13 @@ def _print_scores(scores: list) -> None:
         met = [k for k, ok in s.met.items() if ok]
         typer.echo(f"  {s.follower} under {s.leader}: met {len(met)}/5"
                    + (f" ({', '.join(met)})" if met else ""))
+    typer.echo("beyond the edge (3.5-6 leader equivalent radii off the axis), mean vertical "
+               "acceleration, down +, m/s^2: world / flights (se)")
+    for s in scores:
+        e = s.edge_mps2
+        if e and e["samples"]:
+            typer.echo(f"  {s.follower} under {s.leader}: {e['world']:+.3f} / "
+                       f"{e['flights']:+.3f} ({e['flights_se']:.3f}), {e['samples']} samples")
 
 
 def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],

@@ -7,7 +7,10 @@ figures against the flights' (world over flights minus one, signed):
 - the lateral half-magnitude radius;
 - the vertical and lateral turbulence sd near the axis, above the labels' noise;
 - the inward torque on the follower per 2 cm bin of horizontal offset, 4-10 cm off the axis
-  (where the logs carry the motors' torque), as the world's over the flights'.
+  (where the logs carry the motors' torque), as the world's over the flights';
+- beside them, not a target: the mean vertical acceleration in a ring beyond the jet's edge
+  (3.5-6 leader equivalent radii off the axis), world and flights, where the real flights are
+  pushed up.
 
 Beside each, the flights' own reference: the pairing's flights dealt alternately into two
 halves, one half's real figure taken as the prediction of the other's (the same error figures).
@@ -68,6 +71,10 @@ class PairScore:
     half_width_m: dict[str, float] = field(default_factory=dict)
     turbulence_mps2: dict[str, dict[str, float]] = field(default_factory=dict)
     torque_bins: list[dict[str, float | list[float]]] = field(default_factory=list)
+    edge_mps2: dict[str, float] = field(default_factory=dict)
+    """The mean vertical acceleration (down positive) in the ring beyond the jet's edge
+    (:data:`aerodock.identify.wake_score.EDGE_RADII`), world and flights, and its samples: the
+    flights' upwash, which no target scores."""
 
     @property
     def met(self) -> dict[str, bool]:
@@ -137,7 +144,11 @@ def score_field(params: dict[str, float], flights: Sequence[FlightSamples],
                               for axis, key in (("vertical", "vertical_sd"),
                                                 ("lateral", "lateral_sd"))},
             torque_bins=[{"offset_m": list(b), "world_nm": w, "flights_nm": r}
-                         for b, w, r in zip(TORQUE_BINS_M, world_nm, real_nm, strict=True)]))
+                         for b, w, r in zip(TORQUE_BINS_M, world_nm, real_nm, strict=True)],
+            edge_mps2={"world": entry["edge"]["fitted_mps2"],
+                       "flights": entry["edge"]["real_mps2"],
+                       "flights_se": entry["edge"]["real_se_mps2"],
+                       "samples": entry["edge"]["samples"]}))
     return out
 
 

@@ -4,7 +4,8 @@
 - synthetic flights made by a known jet, whose motors answer a known multiple of its torque: the
   jet that made them scores near zero on every figure and the torque ratio is one over the
   multiple; a wrong jet scores its error;
-- the shared real flights: the default world's torque is a small fraction of the real one;
+- the shared real flights: the default world's torque is a small fraction of the real one, and
+  beyond the jet's edge the flights are pushed up where the world is not;
 - the command: the JSON the issue names, a fit folder and a config as FIT, bad input as one
   line.
 """
@@ -53,6 +54,10 @@ def test_the_jet_that_made_the_flights_scores_its_own_torque_gap(truth, answered
             assert ratio == pytest.approx(1.0, rel=0.15), s
         met = s.met
         assert met["mean_worst_bin_rel"] and not met["torque_ratio"]
+        # beyond the edge the jet that made the flights is what they feel: no upwash either
+        edge = s.edge_mps2
+        assert edge["samples"] > 50, s
+        assert abs(edge["flights"] - edge["world"]) < 3 * edge["flights_se"] + 0.01, s
     # the same flights scored by a jet with three times the disks' torque: the gap closes
     tripled = {**truth, "disk_torque_gain": 3.0}
     for s in fs.score_field(tripled, flights, answered, INERTIA):
@@ -93,6 +98,11 @@ def test_the_default_world_on_the_real_flights(shared_data):
         assert all(0.2 < r < 0.5 for r in s.torque_ratio_bins), s
         assert all(not np.isfinite(r) or 1 / 3 < r < 3
                    for r in s.reference["torque_ratio_bins"]), s
+        # beyond the jet's edge the real flights are pushed up (measured -0.04 to -0.10 m/s^2,
+        # 7-33 standard errors) and the Gaussian jet is not
+        edge = s.edge_mps2
+        assert edge["flights"] < -5 * edge["flights_se"], s
+        assert edge["world"] > -0.005, s
 
 
 # -- the command ------------------------------------------------------------------------------
