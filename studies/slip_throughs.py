@@ -41,6 +41,17 @@ DIFF_PERIODS = 2  # the relative velocity: positions this many control periods a
 SWING_BEFORE_S = 0.5  # the bar's swing read again this long before the command
 
 
+def _period_s(trace: dict[str, np.ndarray]) -> float:
+    """The trace's control period, s."""
+    return float(np.median(np.diff(trace["t_s"])))
+
+
+def _rate(series: np.ndarray, k: int, i: int, dt: float) -> np.ndarray:
+    """Trial ``i``'s rate of ``series`` (periods first) at period ``k``: the difference over
+    :data:`DIFF_PERIODS` periods back, per second."""
+    return (series[k, i] - series[k - DIFF_PERIODS, i]) / (DIFF_PERIODS * dt)
+
+
 def across_mouth(trace: dict[str, np.ndarray], mount_m: float) -> tuple[np.ndarray, ...]:
     """Per trial whose gate closed: the period the close began, the bar's offset across the
     gate's mouth then (m, signed), its speed out of the mouth (m/s, positive: away from the
@@ -54,15 +65,14 @@ def across_mouth(trace: dict[str, np.ndarray], mount_m: float) -> tuple[np.ndarr
     rel[..., 2] += mount_m  # NED: the arm is above the centre
     yaw = trace["bar_yaw"]
     across = -np.sin(yaw) * rel[..., 0] + np.cos(yaw) * rel[..., 1]  # perpendicular to the bar
-    dt = float(np.median(np.diff(trace["t_s"])))
+    dt = _period_s(trace)
     offset0 = np.full(n, np.nan)
     outward = np.full(n, np.nan)
     offset1 = np.full(n, np.nan)
     for i in np.nonzero(first >= DIFF_PERIODS)[0]:
         k = first[i]
         offset0[i] = across[k, i]
-        outward[i] = (np.sign(across[k, i]) * (across[k, i] - across[k - DIFF_PERIODS, i])
-                      / (DIFF_PERIODS * dt))
+        outward[i] = np.sign(across[k, i]) * _rate(across, k, i, dt)
         offset1[i] = across[min(last[i] + 1, steps - 1), i]
     return first, offset0, outward, offset1
 
@@ -71,14 +81,13 @@ def swing_speed(trace: dict[str, np.ndarray], first: np.ndarray, before_s: float
     """Per trial whose gate closed, the bar's horizontal speed relative to the leader (its swing
     on the cables), m/s, ``before_s`` before the close was commanded (nan where the trace does
     not reach back that far)."""
-    dt = float(np.median(np.diff(trace["t_s"])))
+    dt = _period_s(trace)
     swing = trace["bar_p"][..., :2] - trace["leader_p"][..., :2]
     out = np.full(first.shape, np.nan)
     for i in np.nonzero(first >= 0)[0]:
         k = first[i] - int(round(before_s / dt))
         if k >= DIFF_PERIODS:
-            out[i] = float(np.hypot(*(swing[k, i] - swing[k - DIFF_PERIODS, i]))
-                           / (DIFF_PERIODS * dt))
+            out[i] = float(np.hypot(*_rate(swing, k, i, dt)))
     return out
 
 

@@ -26,7 +26,7 @@ from _smoke import add_smoke_option  # studies/, on sys.path
 from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.fileio import dumps_json, json_ready
-from aerodock.identify.flights import prepare_flights
+from aerodock.identify.flights import WakeFitError, prepare_flights
 from aerodock.identify.wake_torque import (
     disk_profile_torque,
     force_profile,
@@ -43,6 +43,7 @@ DATA_DIR = find_data_dir().path or ROOT.parent / "shared" / "data"
 WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
 MAX_OFFSET_M = 0.30
 FORCE_SEPARATIONS_M = ((0.15, 0.45), (0.45, 0.80))
+PRINTED_DISK_OFFSET_M = 0.12  # the disk profile's torque is printed out to this offset
 
 
 def main() -> int:
@@ -67,8 +68,12 @@ def main() -> int:
     forces = {sep: force_profile(logs, separation_m=sep) for sep in FORCE_SEPARATIONS_M}
     slopes = thrust_map_slope(logs)
     near = forces[FORCE_SEPARATIONS_M[0]]
-    carried = {pair: disk_profile_torque(near[pair], bins) for pair, bins in profile.items()
-               if bins and sum(np.isfinite(b.below_n) for b in near.get(pair, [])) >= 6}
+    carried = {}
+    for pair, bins in profile.items():
+        try:  # a pairing without enough offset bins below the other vehicle has no fit
+            carried[pair] = disk_profile_torque(near.get(pair, []), bins)
+        except WakeFitError:
+            pass
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
@@ -130,7 +135,7 @@ def main() -> int:
         cells = ", ".join(f"{100 * b.offset_lo_m:.0f}-{100 * b.offset_hi_m:.0f}: "
                           f"{1e3 * t:.2f} ({b.real_nm / t:.1f}x)"
                           for b, t in zip(profile[pair], torque, strict=True)
-                          if b.offset_hi_m <= 0.121)
+                          if b.offset_hi_m <= PRINTED_DISK_OFFSET_M + 1e-9)
         ring = (f"ring {1e3 * fitted['core_n'] * fitted['ring_fraction']:.1f} mN per disk "
                 f"at {100 * fitted['ring_radius_m']:.0f} cm")
         print(f"  {pair}: {cells} ({ring})")
