@@ -9,8 +9,10 @@ flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judg
 
 The worlds are examples/crazyflie.toml (small under small),
 examples/crazyflie_small_under_large.toml (small under large) and
-examples/crazyflie_large_under_small.toml (large under small). ``--smoke``: small under small
-only (unless ``--pair`` names one), one flight in two depth bands, 8 epochs.
+examples/crazyflie_large_under_small.toml (large under small). The simulated flights are the
+curriculum's wake-excitation flights and the Neural-Swarm swap task's (aerodock/collect/swaps.py).
+``--smoke``: small under small only (unless ``--pair`` names one), one flight in three depth
+bands and one swap, 8 epochs.
 """
 
 from __future__ import annotations

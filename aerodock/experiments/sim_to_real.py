@@ -50,6 +50,10 @@ from aerodock.config import Config
 from aerodock.experiments.real_data import FREE_AIR_RADIUS_M
 from aerodock.flightlog import FlightLog
 
+SWAP_FLIGHTS = 30
+"""Swap-task flights each pairing's simulated flights hold besides the curriculum's (about as
+many minutes: 30 flights of 18.6 s against the curriculum's 45 of 12.5 s)."""
+SWAP_SEED_OFFSET = 50_000  # the swaps' streams: apart from every curriculum band's
 TARGET_REDUCTION = 0.5
 """The issue's target: the simulation-trained model cuts the zero model's real interaction-region
 vertical RMSE by at least this fraction."""
@@ -65,6 +69,9 @@ class RealPair:
         vehicle: the reader's ``vehicle`` option (None: both small).
         train_flights, test_flights: flight numbers (``"00"``) of each part.
         follower: keep only the flights with this vehicle following (None: every flight).
+        sizes: (the follower's, the leader's) size, ``"small"`` or ``"large"``: which of the
+            swap task's separations the simulated swaps draw from
+            (:data:`aerodock.collect.swaps.SWAP_SEPARATIONS_M`).
     """
 
     name: str
@@ -73,6 +80,7 @@ class RealPair:
     train_flights: tuple[str, ...]
     test_flights: tuple[str, ...]
     follower: str | None = None
+    sizes: tuple[str, str] = ("small", "small")
 
 
 PAIRS: dict[str, RealPair] = {
@@ -81,10 +89,12 @@ PAIRS: dict[str, RealPair] = {
         ("00", "01", "02", "03", "04"), ("05", "06")),
     "small_under_large": RealPair(
         "small under large", "swap_sl_2020-06-19", "cf51=small,cf101=large",
-        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf51"),
+        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf51",
+        ("small", "large")),
     "large_under_small": RealPair(
         "large under small", "swap_sl_2020-06-19", "cf51=small,cf101=large",
-        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf101"),
+        ("00", "01", "02", "03", "04", "05", "06", "07"), ("08", "09", "10", "11"), "cf101",
+        ("large", "small")),
 }
 """The pairings the study judges, each with its world in ``examples/`` (see the module doc)."""
 
@@ -110,8 +120,10 @@ def leader_speed_p95_mps(logs: list[FlightLog]) -> float:
 def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
                       leader_drift_max_mps: float | None = None, seed: int = 0,
                       progress: Callable[[str], None] | None = None,
-                      bands: Sequence[int] | None = None) -> list[FlightLog]:
-    """Wake-excitation flights of the world ``cfg`` over its curriculum depth bands, flown by
+                      bands: Sequence[int] | None = None, swaps: int = 0,
+                      swap_separation_m: tuple[float, float] | None = None) -> list[FlightLog]:
+    """Wake-excitation flights of the world ``cfg`` over its curriculum depth bands and, with
+    ``swaps``, flights of the Neural-Swarm swap task (:mod:`aerodock.collect.swaps`), flown by
     the nominal controller, their labels in the thrust basis (see the module doc).
 
     Args:
@@ -119,13 +131,21 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
         flights_per_band: flights per depth band (None: the curriculum's, ``flights_per_stage``
             and ``deep_flights_per_stage``).
         leader_drift_max_mps: top speed of the drifting leaders (None: the config's).
-        seed: random seed (band ``k`` flies seed ``seed + 1000 k``, as the curriculum does).
+        seed: random seed (band ``k`` flies seed ``seed + 1000 k``, as the curriculum does; the
+            swaps ``seed + SWAP_SEED_OFFSET``).
         progress: called with a line per band.
         bands: the indices of the depth bands to fly (None: every band). Each band is a batch
             of its own (its bar hangs out of the way at its own depth), so the cost grows with
             the number of bands more than with the flights per band.
+        swaps: swap-task flights flown besides (one batch), the leader ``swap_separation_m``
+            above the follower (a range, m; needed with ``swaps``).
     """
-    from aerodock.collect.curriculum import curriculum_stages, excitation_flights
+    from aerodock.collect.curriculum import (
+        curriculum_stages,
+        excitation_flights,
+        label_free_air_radius_m,
+    )
+    from aerodock.collect.swaps import swap_flights
 
     overrides: dict[str, Any] = {"label_basis": "thrust"}
     if leader_drift_max_mps is not None:
@@ -144,6 +164,15 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
         logs.extend(excitation_flights(cfg, n, stage.depth_min_m, stage.depth_max_m,
                                        seed + 1000 * stage.index, None,
                                        name=f"sim-band{stage.index}"))
+    if swaps:
+        if swap_separation_m is None:
+            raise ValueError("swap flights need the separation range (swap_separation_m)")
+        if progress:
+            progress(f"  flying {swaps} swap-task flights, {swap_separation_m[0]:.2f}-"
+                     f"{swap_separation_m[1]:.2f} m apart")
+        logs.extend(swap_flights(cfg, swaps, swap_separation_m, seed + SWAP_SEED_OFFSET,
+                                 free_air_radius_m=label_free_air_radius_m(cfg),
+                                 name="sim-swap"))
     return logs
 
 
@@ -184,8 +213,35 @@ def smoke_bands(cfg: Config) -> tuple[int, ...]:
     return tuple(sorted({0, max(last - 1, 0), last}))
 
 
+MOVING_MPS = 0.15  # both vehicles faster than this horizontally: "both moving"
+
+
+def velocity_alignment(x: np.ndarray, mask: np.ndarray) -> dict[str, float | None]:
+    """How the two vehicles' horizontal velocities line up over the samples ``mask`` of model
+    inputs ``x`` (``[dp, v_A, v_B]``): the share of samples where both move faster than
+    :data:`MOVING_MPS`, and there the median cosine between them and the share moving in
+    opposite directions (cosine below -0.5; both None where no sample has both moving). A model
+    can tell the leader's velocity (which skews its wake) from the follower's only from samples
+    where the two differ."""
+    va, vb = x[mask, 3:5], x[mask, 6:8]
+    speed_a, speed_b = np.linalg.norm(va, axis=1), np.linalg.norm(vb, axis=1)
+    moving = (speed_a > MOVING_MPS) & (speed_b > MOVING_MPS)
+    if not moving.any():
+        return {"both_moving": 0.0, "median_cos": None, "opposite": None}
+    cos = np.sum(va[moving] * vb[moving], axis=1) / (speed_a[moving] * speed_b[moving])
+    return {"both_moving": float(moving.mean()), "median_cos": float(np.median(cos)),
+            "opposite": float(np.mean(cos < -0.5))}
+
+
 def _vertical(ev: dict[str, Any]) -> float:
     return float(ev["interaction"]["model"]["rmse_mps2"]["z"])
+
+
+def _swap_rows(ds: Any, logs: list[FlightLog]) -> np.ndarray:
+    """(n,) bool: the dataset's samples from swap-task flights (``meta["task"]``), by name."""
+    names = {log.name for log in logs if log.meta.get("task") == "swap"}
+    swap = np.array([f["name"] in names for f in ds.meta["flights"]], dtype=bool)
+    return swap[ds.flight_id]
 
 
 def _mean_z(pred: np.ndarray, mask: np.ndarray) -> float:
@@ -233,9 +289,13 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     drift_mps = round(leader_speed_p95_mps(train_real), 2)
     say(f"{pair.name}: simulated flights in {cfg.source} (leaders drifting up to "
         f"{drift_mps:g} m/s)")
+    from aerodock.collect.swaps import SWAP_SEPARATIONS_M
+
     sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
                                  leader_drift_max_mps=drift_mps, seed=seed, progress=progress,
-                                 bands=smoke_bands(cfg) if smoke else None)
+                                 bands=smoke_bands(cfg) if smoke else None,
+                                 swaps=1 if smoke else 4 if quick else SWAP_FLIGHTS,
+                                 swap_separation_m=SWAP_SEPARATIONS_M[pair.sizes])
     epochs = 8 if smoke else 40 if quick else 200
     sim_ds = build_dataset(sim_logs)
     test_ds = build_dataset(test_real, free_air_radius_m=FREE_AIR_RADIUS_M)
@@ -268,10 +328,17 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
         "real_test_flights": [lg.name for lg in test_real],
         "real_train_minutes": real_ds.minutes, "interaction_samples": int(mask.sum()),
         "sim": {"config": cfg.source, "flights": len(sim_logs), "minutes": sim_ds.minutes,
+                "swap_flights": sum(lg.meta.get("task") == "swap" for lg in sim_logs),
+                "swap_separation_m": list(SWAP_SEPARATIONS_M[pair.sizes]),
                 "label_basis": "thrust", "leader_drift_max_mps": drift_mps,
                 "free_air_radius_m": sim_ds.meta["labels"]["free_air_radius_m"],
                 "val_rmse_mps2": sim_model.info.get("val_rmse_mps2")},
         "rmse_vertical_mps2": rmse,
+        "velocity_alignment": {
+            "real_test": velocity_alignment(test_ds.x, mask),
+            "sim": velocity_alignment(sim_ds.x, sim_ds.interaction_mask()),
+            "sim_without_swaps": velocity_alignment(
+                sim_ds.x, sim_ds.interaction_mask() & ~_swap_rows(sim_ds, sim_logs))},
         "reduction_vs_zero": reduction,
         "mean_vertical_mps2": mean_z,
         "target_reduction": TARGET_REDUCTION,

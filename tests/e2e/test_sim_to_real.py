@@ -1,8 +1,8 @@
 """The sim-to-real check on the shared real flights (small under small), run as a user runs it:
 ``studies/sim_to_real.py`` (a separate process). In the suite at its smallest (``--smoke``: one
-simulated flight in each of three depth bands, 8 epochs); ``AERODOCK_E2E=quick``
-(``make test-e2e``) at its quick size, checking that a model of real flights halves the zero
-model's error.
+simulated flight in each of three depth bands and one swap-task flight, 8 epochs);
+``AERODOCK_E2E=quick`` (``make test-e2e``) at its quick size, checking that a model of real
+flights halves the zero model's error.
 
 This is also the smoke run of ``studies/sim_to_real.py`` (``tests/studies/test_studies.py``
 leaves it to this test): the script's summary line is checked here, and the study's numbers
@@ -52,6 +52,9 @@ def test_sim_to_real(shared_data, tmp_path):
     assert not set(r["real_train_flights"]) & set(r["real_test_flights"])
     assert r["interaction_samples"] > 500
     assert r["sim"]["flights"] >= (2 if QUICK else 1) and r["sim"]["label_basis"] == "thrust"
+    # besides the curriculum's flights, the swap task's, at the script's small-small separation
+    assert r["sim"]["swap_flights"] == (4 if QUICK else 1)
+    assert r["sim"]["swap_separation_m"] == [0.2, 0.4]
     rmse = r["rmse_vertical_mps2"]
     assert all(math.isfinite(v) and v > 0 for v in rmse.values())
     if QUICK:  # a model of real flights of the pair cuts the zero model's error by half (~70 %)
