@@ -5,7 +5,7 @@ flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judg
     .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
         [--pair small_under_small|small_under_large|large_under_small]
         [--data $AERODOCK_DATA_DIR/neural-swarm]
-        [--out sim_to_real.json] [--json] [--smoke]
+        [--swaps 30] [--out sim_to_real.json] [--json] [--smoke]
 
 The worlds are examples/crazyflie.toml (small under small),
 examples/crazyflie_small_under_large.toml (small under large) and
@@ -46,10 +46,15 @@ def main() -> int:
     parser.add_argument("--model", default="so2", choices=("so2", "so2-ext", "mlp"))
     parser.add_argument("--quick", action="store_true", help="2 flights per band, 40 epochs")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--swaps", type=int, default=None,
+                        help="swap-task flights among the simulated ones (default: the study's "
+                             "30; 0: the curriculum's flights alone)")
     parser.add_argument("--out", type=Path, help="write the results as JSON here")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     add_smoke_option(parser)
     args = parser.parse_args()
+    if args.swaps is not None and args.swaps < 0:
+        parser.error(f"--swaps must be 0 or more, got {args.swaps}")
     if args.smoke and not args.pair:
         args.pair = ["small_under_small"]
     if not args.data.is_dir():
@@ -57,7 +62,7 @@ def main() -> int:
         return 2
     worlds = {key: load_config(WORLDS[key]) for key in (args.pair or sorted(PAIRS))}
     result = sim_to_real_study(worlds, args.data, kind=args.model, quick=args.quick,
-                               seed=args.seed, smoke=args.smoke,
+                               seed=args.seed, smoke=args.smoke, swaps=args.swaps,
                                progress=None if args.json else lambda m: print(m, flush=True))
     if args.out is not None:
         write_json(args.out, result, final_newline=True)

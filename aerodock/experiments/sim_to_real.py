@@ -251,7 +251,7 @@ def _mean_z(pred: np.ndarray, mask: np.ndarray) -> float:
 def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
                      kind: str = "so2", quick: bool = False, seed: int = 0,
                      progress: Callable[[str], None] | None = None,
-                     smoke: bool = False) -> dict[str, Any]:
+                     smoke: bool = False, swaps: int | None = None) -> dict[str, Any]:
     """One pairing: train ``kind`` on the world ``cfg``'s simulated flights and on the real
     training flights, judge both and the zero model on the real test flights.
 
@@ -265,7 +265,10 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
         seed: flights, split and weights.
         progress: called with a line per step.
         smoke: the smallest run that crosses every step (1 flight in each of
-            :func:`smoke_bands`, 8 epochs: the suite's size; no figure worth quoting).
+            :func:`smoke_bands` and one swap, 8 epochs: the suite's size; no figure worth
+            quoting).
+        swaps: swap-task flights among the simulated ones (None: :data:`SWAP_FLIGHTS`, 4 when
+            ``quick``, 1 when ``smoke``; 0: the curriculum's flights alone, as before them).
 
     Returns:
         A JSON-ready dict: the flights used, the interaction region's vertical RMSE of the zero,
@@ -294,7 +297,8 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
                                  leader_drift_max_mps=drift_mps, seed=seed, progress=progress,
                                  bands=smoke_bands(cfg) if smoke else None,
-                                 swaps=1 if smoke else 4 if quick else SWAP_FLIGHTS,
+                                 swaps=(swaps if swaps is not None else 1 if smoke
+                                        else 4 if quick else SWAP_FLIGHTS),
                                  swap_separation_m=SWAP_SEPARATIONS_M[pair.sizes])
     epochs = 8 if smoke else 40 if quick else 200
     sim_ds = build_dataset(sim_logs)
@@ -349,14 +353,14 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
 def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str = "so2",
                       quick: bool = False, seed: int = 0,
                       progress: Callable[[str], None] | None = None,
-                      smoke: bool = False) -> dict[str, Any]:
+                      smoke: bool = False, swaps: int | None = None) -> dict[str, Any]:
     """The sim-to-real check for each pairing of :data:`PAIRS` that ``worlds`` gives a world.
 
     Args:
         worlds: the Crazyflie world of each pairing, by its key in :data:`PAIRS`
             (``"small_under_small"``, ``"small_under_large"``).
         data_dir: the Neural-Swarm folder (holding ``swap_ss`` and ``swap_sl_2020-06-19``).
-        kind, quick, seed, progress, smoke: as :func:`sim_to_real_pair`.
+        kind, quick, seed, progress, smoke, swaps: as :func:`sim_to_real_pair`.
 
     Returns:
         ``{"pairs": {key: sim_to_real_pair(...)}, "target_reduction", "all_met"}``.
@@ -374,6 +378,6 @@ def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str
         pair = PAIRS[key]
         logs = read_logs("neural-swarm", [Path(data_dir) / pair.folder], vehicle=pair.vehicle)
         out["pairs"][key] = sim_to_real_pair(cfg, logs, pair, kind=kind, quick=quick, seed=seed,
-                                             progress=progress, smoke=smoke)
+                                             progress=progress, smoke=smoke, swaps=swaps)
     out["all_met"] = all(p["met"] for p in out["pairs"].values())
     return out
