@@ -3,7 +3,7 @@
 ::
 
     AERODOCK_CACHE_DIR=$(mktemp -d) python tools/perf_map.py record --trials 1 --out perf.data
-    perf report -i perf.data --no-children --sort sym
+    perf report -i perf.data --no-children --sort sym     # or --sort dso: by library
 
     AERODOCK_CACHE_DIR=$(mktemp -d) python tools/perf_map.py census
 
@@ -98,6 +98,9 @@ def main() -> None:
     rec.add_argument("--controllers", action="store_true")
     rec.add_argument("--seconds", type=float, default=20.0)
     rec.add_argument("--out", default="perf.data")
+    rec.add_argument("--warm", type=int, default=2,
+                     help="rounds of 100 periods flown before recording (after the first "
+                          "compile: what a later period compiles, or collects, stays out)")
     sub.add_parser("census", help="reference-count calls per function of the period kernel")
     args = parser.parse_args()
     if args.what == "census":
@@ -111,6 +114,9 @@ def main() -> None:
 
     loop = SimLoop(load_config(None), args.trials)
     loop.run(3, args.controllers)  # compiles (an empty cache: minutes)
+    for _ in range(args.warm):
+        loop.reset()
+        loop.run(100, args.controllers)
     print(f"named {write_perf_map()} functions; recording {args.seconds:g} s", file=sys.stderr)
     perf = subprocess.Popen(["perf", "record", "-q", "-p", str(os.getpid()), "-o", args.out])
     start = time.time()
