@@ -138,13 +138,11 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
             of its own (its bar hangs out of the way at its own depth), so the cost grows with
             the number of bands more than with the flights per band.
         swaps: swap-task flights flown besides (one batch), the leader ``swap_separation_m``
-            above the follower (a range, m; needed with ``swaps``).
+            above the follower (a range, m; needed with ``swaps``), their labels' free air where
+            the real flights' is (:data:`aerodock.experiments.real_data.FREE_AIR_RADIUS_M`:
+            they stand for those flights).
     """
-    from aerodock.collect.curriculum import (
-        curriculum_stages,
-        excitation_flights,
-        label_free_air_radius_m,
-    )
+    from aerodock.collect.curriculum import curriculum_stages, excitation_flights
     from aerodock.collect.swaps import swap_flights
 
     overrides: dict[str, Any] = {"label_basis": "thrust"}
@@ -171,8 +169,7 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
             progress(f"  flying {swaps} swap-task flights, {swap_separation_m[0]:.2f}-"
                      f"{swap_separation_m[1]:.2f} m apart")
         logs.extend(swap_flights(cfg, swaps, swap_separation_m, seed + SWAP_SEED_OFFSET,
-                                 free_air_radius_m=label_free_air_radius_m(cfg),
-                                 name="sim-swap"))
+                                 free_air_radius_m=FREE_AIR_RADIUS_M, name="sim-swap"))
     return logs
 
 
