@@ -91,10 +91,10 @@ def swap_reference(t_s: float, home: np.ndarray, away: np.ndarray,
     return Reference(p0 + s * d, (ds / duration) * d, (dds / duration**2) * d, zero_n, zero_n)
 
 
-def swap_flights(cfg: Config, n_flights: int, separation_m: tuple[float, float], seed: int, *,
-                 free_air_radius_m: float, radius_m: float = SWAP_RADIUS_M,
-                 times_s: tuple[float, ...] = SWAP_TIMES_S, name: str = "swap",
-                 first_trial: int = 0) -> list[FlightLog]:
+def swap_task_flights(cfg: Config, n_flights: int, separation_m: tuple[float, float],
+                      seed: int, *, free_air_radius_m: float, radius_m: float = SWAP_RADIUS_M,
+                      times_s: tuple[float, ...] = SWAP_TIMES_S, name: str = "swap",
+                      first_trial: int = 0) -> list[FlightLog]:
     """Fly ``n_flights`` swap-task flights at once (module docstring) and return their logs.
 
     Args:

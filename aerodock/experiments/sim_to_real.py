@@ -143,7 +143,7 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
             they stand for those flights).
     """
     from aerodock.collect.curriculum import curriculum_stages, excitation_flights
-    from aerodock.collect.swaps import swap_flights
+    from aerodock.collect.swaps import swap_task_flights
 
     overrides: dict[str, Any] = {"label_basis": "thrust"}
     if leader_drift_max_mps is not None:
@@ -168,7 +168,7 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
         if progress:
             progress(f"  flying {swaps} swap-task flights, {swap_separation_m[0]:.2f}-"
                      f"{swap_separation_m[1]:.2f} m apart")
-        logs.extend(swap_flights(cfg, swaps, swap_separation_m, seed + SWAP_SEED_OFFSET,
+        logs.extend(swap_task_flights(cfg, swaps, swap_separation_m, seed + SWAP_SEED_OFFSET,
                                  free_air_radius_m=FREE_AIR_RADIUS_M, name="sim-swap"))
     return logs
 

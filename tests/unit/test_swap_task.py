@@ -10,9 +10,9 @@ import pytest
 from aerodock.collect.swaps import (
     SWAP_SEPARATIONS_M,
     goto_profile,
-    swap_flights,
     swap_reference,
     swap_schedule,
+    swap_task_flights,
 )
 from aerodock.config import load_config
 
@@ -70,7 +70,7 @@ def test_swap_flights_fly_the_task_in_the_world():
     cfg = load_config(ROOT / "examples" / "crazyflie.toml").with_overrides(
         {"curriculum": {"label_basis": "thrust"}})
     sep = SWAP_SEPARATIONS_M[("small", "small")]
-    logs = swap_flights(cfg, 3, sep, seed=4, free_air_radius_m=0.2, times_s=(2.0,))
+    logs = swap_task_flights(cfg, 3, sep, seed=4, free_air_radius_m=0.2, times_s=(2.0,))
     assert len(logs) == 3
     for log in logs:
         assert log.meta["task"] == "swap" and log.meta["free_air_radius_m"] == 0.2
@@ -109,4 +109,4 @@ def test_swap_flights_refuse_bad_arguments(kwargs, message):
     args = {"n_flights": 1, "separation_m": (0.2, 0.3), "seed": 0, "free_air_radius_m": 0.2,
             **kwargs}
     with pytest.raises(ValueError, match=message):
-        swap_flights(cfg, **args)
+        swap_task_flights(cfg, **args)
