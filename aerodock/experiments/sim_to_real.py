@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -234,6 +234,13 @@ def _vertical(ev: dict[str, Any]) -> float:
     return float(ev["interaction"]["model"]["rmse_mps2"]["z"])
 
 
+def _percentiles(x: np.ndarray) -> list[float | None]:
+    """The 5th, 50th and 95th percentiles of ``x`` (no samples: three Nones)."""
+    if x.size == 0:
+        return [None, None, None]
+    return [float(v) for v in np.percentile(x, [5, 50, 95])]
+
+
 def _swap_rows(ds: Any, logs: list[FlightLog]) -> np.ndarray:
     """(n,) bool: the dataset's samples from swap-task flights (``meta["task"]``), by name."""
     names = {log.name for log in logs if log.meta.get("task") == "swap"}
@@ -322,6 +329,12 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     rmse["field"] = float(np.sqrt(np.mean((field[mask, 2] - test_ds.y[mask, 2]) ** 2)))
     mean_z["field"] = _mean_z(field, mask)
     reduction = {name: 1.0 - rmse[name] / rmse["zero"] for name in ("sim", "real", "field")}
+    # The same mean wake with each test sample's leader held still: how much of it is the skew
+    # a moving leader gives its wake (what a model learns only where the two velocities differ).
+    still = field_on_logs(cfg, [replace(lg, leader_vel_mps=np.zeros_like(lg.leader_vel_mps))
+                                for lg in test_real])
+    rmse_still = float(np.sqrt(np.mean((still[mask, 2] - test_ds.y[mask, 2]) ** 2)))
+    sim_mask = sim_ds.interaction_mask()
     return {
         "pair": pair.name, "real_folder": pair.folder, "follower": pair.follower,
         "model": kind, "seed": seed, "quick": quick,
@@ -335,11 +348,15 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
                 "free_air_radius_m": sim_ds.meta["labels"]["free_air_radius_m"],
                 "val_rmse_mps2": sim_model.info.get("val_rmse_mps2")},
         "rmse_vertical_mps2": rmse,
+        "field_leader_still": {"rmse_vertical_mps2": rmse_still,
+                               "reduction_vs_zero": 1.0 - rmse_still / rmse["zero"]},
+        "separation_m": {"real_test": _percentiles(test_ds.x[mask, 2]),
+                         "sim": _percentiles(sim_ds.x[sim_mask, 2])},
         "velocity_alignment": {
             "real_test": velocity_alignment(test_ds.x, mask),
-            "sim": velocity_alignment(sim_ds.x, sim_ds.interaction_mask()),
+            "sim": velocity_alignment(sim_ds.x, sim_mask),
             "sim_without_swaps": velocity_alignment(
-                sim_ds.x, sim_ds.interaction_mask() & ~_swap_rows(sim_ds, sim_logs))},
+                sim_ds.x, sim_mask & ~_swap_rows(sim_ds, sim_logs))},
         "reduction_vs_zero": reduction,
         "mean_vertical_mps2": mean_z,
         "target_reduction": TARGET_REDUCTION,

@@ -55,6 +55,14 @@ def test_sim_to_real(shared_data, tmp_path):
     # besides the curriculum's flights, the swap task's, at the script's small-small separation
     assert r["sim"]["swap_flights"] == (4 if QUICK else 1)
     assert r["sim"]["swap_separation_m"] == [0.2, 0.4]
+    lo, hi = r["sim"]["swap_separation_m"]
+    assert lo <= r["separation_m"]["real_test"][1] <= hi  # the script's range holds the real one
+    # the mean wake at the real samples leans on the leader's velocity (its skew): held still,
+    # it explains less of the real labels
+    assert (r["field_leader_still"]["reduction_vs_zero"]
+            < r["reduction_vs_zero"]["field"] - 0.02)
+    real_va = r["velocity_alignment"]["real_test"]
+    assert real_va["both_moving"] > r["velocity_alignment"]["sim_without_swaps"]["both_moving"]
     rmse = r["rmse_vertical_mps2"]
     assert all(math.isfinite(v) and v > 0 for v in rmse.values())
     if QUICK:  # a model of real flights of the pair cuts the zero model's error by half (~70 %)
