@@ -18,22 +18,24 @@ zero model; the issue's target is a cut of at least half by the simulation-train
 trained on real flights does about 70 %).
 
 The simulated flights are the curriculum's wake-excitation flights
-(:func:`aerodock.collect.curriculum.excitation_flights`) over the world's curriculum depth
-bands (:func:`aerodock.collect.curriculum.curriculum_stages`, the deep ones included), flown by
-the nominal controller (bias observer, no model: the curriculum deploys models to fly closer
-safely, not to make other labels). In the real swaps the upper vehicle moves as fast as the lower
-one (0.27 m/s median, 0.53 m/s at the 95th percentile below the other vehicle), faster than the
-curriculum's drifting leader (``curriculum.leader_drift_max_mps``); so that the simulated flights
-cover the real flights' envelope, the drifting leaders' top speed is the 95th percentile of the
-leader's speed in the real *training* flights (never the test flights). The labels are taken
-in the real logs' basis: the real logs have no commanded acceleration, so the Neural-Swarm
-reader makes the label the thrust-based residual ``a_obs - (g e3 - R e3 T / m)``; the simulated
-flights record the same
-(``curriculum.label_basis = "thrust"``). Both are NED (z down), m/s²: the reader converts the
-logs' z-up frame (``aerodock/ingest/neural_swarm.py``), so a downward push on the follower is a
-positive vertical label in both. Each flight's constant bias is removed from its free-air
-samples (the real flights' free air starts at :data:`aerodock.experiments.real_data.
-FREE_AIR_RADIUS_M`; the simulated flights record theirs).
+(:func:`aerodock.collect.curriculum.excitation_flights`) over the world's curriculum depth bands
+(:func:`aerodock.collect.curriculum.curriculum_stages`, the deep ones included) and
+:data:`SWAP_FLIGHTS` flights of the swap task that made the real flights
+(:mod:`aerodock.collect.swaps`: the curriculum's flights move the two vehicles together, the real
+swaps move them apart, and only the latter show a model the leader's velocity apart from the
+follower's), flown by the nominal controller (bias observer, no model: the curriculum deploys
+models to fly closer safely, not to make other labels). In the real swaps the upper vehicle moves
+as fast as the lower one (0.27 m/s median, 0.53 m/s at the 95th percentile below the other
+vehicle), faster than the curriculum's drifting leader (``curriculum.leader_drift_max_mps``); so
+that the simulated flights cover the real flights' envelope, the drifting leaders' top speed is the
+95th percentile of the leader's speed in the real *training* flights (never the test flights). The
+labels are taken in the real logs' basis: the real logs have no commanded acceleration, so the
+Neural-Swarm reader makes the label the thrust-based residual ``a_obs - (g e3 - R e3 T / m)``; the
+simulated flights record the same (``curriculum.label_basis = "thrust"``). Both are NED (z down),
+m/s²: the reader converts the logs' z-up frame (``aerodock/ingest/neural_swarm.py``), so a downward
+push on the follower is a positive vertical label in both. Each flight's constant bias is removed
+from its free-air samples (the real flights' free air starts at
+:data:`aerodock.experiments.real_data.FREE_AIR_RADIUS_M`; the simulated flights record theirs).
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ SWAP_FLIGHTS = 30
 """Swap-task flights each pairing's simulated flights hold besides the curriculum's (about as
 many minutes: 30 flights of 18.6 s against the curriculum's 45 of 12.5 s)."""
 SWAP_SEED_OFFSET = 50_000  # the swaps' streams: apart from every curriculum band's
+MOVING_MPS = 0.15  # both vehicles faster than this horizontally: "both moving"
 TARGET_REDUCTION = 0.5
 """The issue's target: the simulation-trained model cuts the zero model's real interaction-region
 vertical RMSE by at least this fraction."""
@@ -169,7 +172,7 @@ def simulated_flights(cfg: Config, *, flights_per_band: int | None = None,
             progress(f"  flying {swaps} swap-task flights, {swap_separation_m[0]:.2f}-"
                      f"{swap_separation_m[1]:.2f} m apart")
         logs.extend(swap_task_flights(cfg, swaps, swap_separation_m, seed + SWAP_SEED_OFFSET,
-                                 free_air_radius_m=FREE_AIR_RADIUS_M, name="sim-swap"))
+                                      free_air_radius_m=FREE_AIR_RADIUS_M, name="sim-swap"))
     return logs
 
 
@@ -208,9 +211,6 @@ def smoke_bands(cfg: Config) -> tuple[int, ...]:
 
     last = len(curriculum_stages(cfg)) - 1
     return tuple(sorted({0, max(last - 1, 0), last}))
-
-
-MOVING_MPS = 0.15  # both vehicles faster than this horizontally: "both moving"
 
 
 def velocity_alignment(x: np.ndarray, mask: np.ndarray) -> dict[str, float | None]:
@@ -282,6 +282,7 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
         and predictions there, and whether the target (:data:`TARGET_REDUCTION`) is met by the
         simulation-trained model.
     """
+    from aerodock.collect.swaps import SWAP_SEPARATIONS_M
     from aerodock.learning.dataset import build_dataset
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
@@ -296,8 +297,6 @@ def sim_to_real_pair(cfg: Config, real_logs: list[FlightLog], pair: RealPair, *,
     drift_mps = round(leader_speed_p95_mps(train_real), 2)
     say(f"{pair.name}: simulated flights in {cfg.source} (leaders drifting up to "
         f"{drift_mps:g} m/s)")
-    from aerodock.collect.swaps import SWAP_SEPARATIONS_M
-
     sim_logs = simulated_flights(cfg, flights_per_band=1 if smoke else 2 if quick else None,
                                  leader_drift_max_mps=drift_mps, seed=seed, progress=progress,
                                  bands=smoke_bands(cfg) if smoke else None,
