@@ -2,7 +2,7 @@
 follower holds the wake's torque beside the real Neural-Swarm flights (issue 39, items 1-2).
 
     .venv/bin/python studies/attitude_stacks.py [--data $AERODOCK_DATA_DIR/neural-swarm]
-        [--flights 8] [--torque-gain 1] [--json] [--smoke]
+        [--flights 8] [--swaps 40] [--torque-gain 1] [--json] [--smoke]
 
 Step: a 5 deg roll step from hover, one exactly nominal vehicle, the ideal IMU chain; the fraction
 of the step reached at 0.05, 0.1 and 0.2 s and the peak, each stack on its vehicle (the paper's
@@ -17,15 +17,17 @@ Crazyflie stack: how many end more than 0.2 m from where they were held.
 Under the wake (``--data`` given or found): per pairing of the shared flights (small under small:
 examples/crazyflie.toml; small under large: examples/crazyflie_small_under_large.toml; large under
 small: examples/crazyflie_large_under_small.toml), the follower's inward wake torque, its lean into
-the leader's axis and their ratio (N m per radian of lean: an apparent stiffness, the lean being the
-position loop's too) per 2 cm bin of horizontal offset, 4-10 cm, read by the same code
+the leader's axis and their ratio (N m per radian of lean: an apparent stiffness, the lean being
+the position loop's too) per 2 cm bin of horizontal offset, 4-10 cm, read by the same code
 (:func:`aerodock.identify.wake_torque.torque_profile`) from the real flights and from the world's
 wake-excitation flights (the sim-to-real study's, :func:`aerodock.experiments.sim_to_real.
-simulated_flights`) flown with each stack. The simulated logs' rotor torque (what the rotors
-explain from their speeds) stands for the real logs' motor torque (the Crazyflie's own mixer of
-its per-motor thrust estimates). ``--torque-gain`` scales the world's wake torque
+simulated_flights`) flown with each stack, and from the world flying the real flights' own
+manoeuvre (``--swaps`` flights of the swap task, :mod:`aerodock.collect.swaps`; their trim taken as
+the real flights', in free air 0.4 m to the side). The simulated logs' rotor torque (what the
+rotors explain from their speeds) stands for the real logs' motor torque (the Crazyflie's own mixer
+of its per-motor thrust estimates). ``--torque-gain`` scales the world's wake torque
 (``disk_torque_gain``). ``--smoke``: the step of ArduCopter, the hover of the stock PID (two
-vehicles, 0.5 s), its flights under the wake (one flight in one band).
+vehicles, 0.5 s), its flights under the wake (one flight in one band, two swaps).
 """
 
 from __future__ import annotations
@@ -54,6 +56,9 @@ WORLDS = {"32 g under 32 g": (CRAZYFLIE, "swap_ss", None),
                               "swap_sl_2020-06-19", "cf51=small,cf101=large"),
           "67 g under 32 g": (ROOT / "examples" / "crazyflie_large_under_small.toml",
                               "swap_sl_2020-06-19", "cf51=small,cf101=large")}
+# (follower, leader) sizes of each pairing: the swap task's separations for its simulated swaps
+SIZES = {"32 g under 32 g": ("small", "small"), "32 g under 67 g": ("small", "large"),
+         "67 g under 32 g": ("large", "small")}
 # The generic autopilot as the Crazyflie world flew it before the flight stacks: gains fitted to
 # drone-models' identified step response (studies/crazyflie_autopilot_fit.py).
 GENERIC_FITTED = {"stack": "generic", "attitude_p": [10.3, 10.3, 7.9],
@@ -134,7 +139,9 @@ def _as_motor_torque(logs):
             for lg in logs]
 
 
-def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list[dict]:
+def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
+              smoke: bool) -> list[dict]:
+    from aerodock.collect.swaps import SWAP_SEPARATIONS_M, swap_task_flights
     from aerodock.experiments.sim_to_real import simulated_flights
     from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M
     from aerodock.ingest import read_logs
@@ -147,7 +154,7 @@ def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list
         real = read_logs("neural-swarm", [data / folder],
                          **({"vehicle": vehicles} if vehicles else {}))
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
-                 "world": {}}
+                 "world": {}, "world_swaps": {}}
         for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
@@ -157,6 +164,11 @@ def wake_rows(data: Path, flights: int, torque_gain: float, smoke: bool) -> list
             # the flights' free-air waypoints are curriculum.free_air_m to the side
             entry["world"][stack] = _torque_rows(_as_motor_torque(logs), cfg, pair,
                                                  0.8 * cfg.curriculum.free_air_m)
+            # the same manoeuvre as the real flights: the swap task, its trim read as theirs
+            swap_logs = swap_task_flights(cfg, swaps, SWAP_SEPARATIONS_M[SIZES[pair]], seed=0,
+                                          free_air_radius_m=FREE_AIR_OFFSET_M, name="swap")
+            entry["world_swaps"][stack] = _torque_rows(_as_motor_torque(swap_logs), cfg, pair,
+                                                       FREE_AIR_OFFSET_M)
         rows.append(entry)
     return rows
 
@@ -165,6 +177,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DATA_DIR / "neural-swarm")
     parser.add_argument("--flights", type=int, default=8, help="simulated flights per band")
+    parser.add_argument("--swaps", type=int, default=40,
+                        help="simulated flights of the swap task per pairing and stack")
     parser.add_argument("--torque-gain", type=float, default=1.0)
     parser.add_argument("--json", action="store_true")
     add_smoke_option(parser)
@@ -174,8 +188,11 @@ def main() -> int:
               "lost": hover_losses(stack, over, n=2 if args.smoke else 16,
                                    seconds=0.5 if args.smoke else 3.0)}
              for stack, over in (HOVER_CASES[:1] if args.smoke else HOVER_CASES)]
-    wake = (wake_rows(args.data, 1 if args.smoke else args.flights, args.torque_gain,
-                      args.smoke) if args.data.is_dir() else [])
+    if args.flights < 1 or args.swaps < 1:
+        parser.error("--flights and --swaps must be 1 or more")
+    wake = (wake_rows(args.data, 1 if args.smoke else args.flights,
+                      2 if args.smoke else args.swaps, args.torque_gain, args.smoke)
+            if args.data.is_dir() else [])
     if args.json:
         print(json.dumps({"step": steps, "hover": hover, "wake": wake}, indent=2))
         return 0
@@ -192,11 +209,12 @@ def main() -> int:
         print(f"no flights at {args.data}: the wake part skipped")
     for entry in wake:
         print(f"{entry['pair']}: inward torque mN m, lean deg, mN m per rad, per offset bin")
-        for who, bins in [("real", entry["real"])] + list(entry["world"].items()):
+        for who, bins in ([("real", entry["real"])] + list(entry["world"].items())
+                          + [(f"{stack}, swaps", b) for stack, b in entry["world_swaps"].items()]):
             cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {b['torque_mnm']:.2f} / "
                               f"{b['lean_deg']:.1f} / {b['mnm_per_rad']:.0f}"
                               for lo, b in sorted(bins.items()))
-            print(f"  {who:<14} {cells or 'no bin with samples'}")
+            print(f"  {who:<21} {cells or 'no bin with samples'}")
     return 0
 
 

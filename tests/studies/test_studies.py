@@ -81,7 +81,8 @@ STUDY_CASES = (
            r"^  crazyflie-pid\s+as configured: \d+$",
            r"^32 g under 32 g: inward torque mN m, lean deg, mN m per rad, per offset bin$",
            rf"^  real\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
-           rf"^  crazyflie-pid\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm"),
+           rf"^  crazyflie-pid\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
+           rf"^  crazyflie-pid, swaps\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm"),
           frozenset({"data"})),
     Study("baseline_ladder.py", ("--model", "{model}"),
           (r"^\s*\d/2 with,\s+\d/2 without\s+\(slips \d, err \d+\.\d{3} m\)\s+"
