@@ -183,13 +183,13 @@ def main() -> int:
     parser.add_argument("--json", action="store_true")
     add_smoke_option(parser)
     args = parser.parse_args()
+    if args.flights < 1 or args.swaps < 1:
+        parser.error("--flights and --swaps must be 1 or more")
     steps = step_rows(STEP_STACKS[1:2] if args.smoke else STEP_STACKS)
     hover = [{"stack": stack, "overrides": over,
               "lost": hover_losses(stack, over, n=2 if args.smoke else 16,
                                    seconds=0.5 if args.smoke else 3.0)}
              for stack, over in (HOVER_CASES[:1] if args.smoke else HOVER_CASES)]
-    if args.flights < 1 or args.swaps < 1:
-        parser.error("--flights and --swaps must be 1 or more")
     wake = (wake_rows(args.data, 1 if args.smoke else args.flights,
                       2 if args.smoke else args.swaps, args.torque_gain, args.smoke)
             if args.data.is_dir() else [])
