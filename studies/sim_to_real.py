@@ -2,7 +2,7 @@
 worlds, judged on the real Neural-Swarm flights beside the zero model and a model trained on real
 flights (aerodock/experiments/sim_to_real.py has what is flown, trained and judged).
 
-    .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0] [--model so2]
+    .venv/bin/python studies/sim_to_real.py [--quick] [--seed 0 [1 2]] [--model so2]
         [--pair small_under_small|small_under_large|large_under_small]
         [--data $AERODOCK_DATA_DIR/neural-swarm]
         [--swaps 30] [--out sim_to_real.json] [--json] [--smoke]
@@ -25,7 +25,7 @@ from pathlib import Path
 from _smoke import add_smoke_option  # studies/, on sys.path
 
 from aerodock.config import load_config
-from aerodock.experiments.sim_to_real import PAIRS, sim_to_real_study
+from aerodock.experiments.sim_to_real import PAIRS, mean_over_seeds, sim_to_real_study
 from aerodock.fileio import write_json
 from aerodock.ingest.data_dir import find_data_dir
 
@@ -45,7 +45,9 @@ def main() -> int:
                         help="a pairing to judge (repeatable; default: all three)")
     parser.add_argument("--model", default="so2", choices=("so2", "so2-ext", "mlp"))
     parser.add_argument("--quick", action="store_true", help="2 flights per band, 40 epochs")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, nargs="+", default=[0],
+                        help="seed(s) of the flights and weights; several: each in turn, then "
+                             "their mean (the figures move by a few points with the seed)")
     parser.add_argument("--swaps", type=int, default=None,
                         help="swap-task flights among the simulated ones (default: the study's "
                              "30; 0: the curriculum's flights alone)")
@@ -61,22 +63,34 @@ def main() -> int:
         print(f"error: {args.data}: no such folder (the Neural-Swarm flights)", file=sys.stderr)
         return 2
     worlds = {key: load_config(WORLDS[key]) for key in (args.pair or sorted(PAIRS))}
-    result = sim_to_real_study(worlds, args.data, kind=args.model, quick=args.quick,
-                               seed=args.seed, smoke=args.smoke, swaps=args.swaps,
-                               progress=None if args.json else lambda m: print(m, flush=True))
+    results = [sim_to_real_study(worlds, args.data, kind=args.model, quick=args.quick,
+                                 seed=seed, smoke=args.smoke, swaps=args.swaps,
+                                 progress=None if args.json else lambda m: print(m, flush=True))
+               for seed in args.seed]
+    several = len(results) > 1
+    record = ({"seeds": args.seed, "runs": results, "mean": mean_over_seeds(results)}
+              if several else results[0])
     if args.out is not None:
-        write_json(args.out, result, final_newline=True)
+        write_json(args.out, record, final_newline=True)
     if args.json:
-        print(json.dumps(result, indent=2))
+        print(json.dumps(record, indent=2))
         return 0
-    for key, r in result["pairs"].items():
-        rm, red = r["rmse_vertical_mps2"], r["reduction_vs_zero"]
-        print(f"{r['pair']}: interaction vertical RMSE zero {rm['zero']:.3f}, "
-              f"simulation-trained {rm['sim']:.3f} ({red['sim']:.1%}), "
-              f"real-trained {rm['real']:.3f} ({red['real']:.1%}), the world's own mean wake "
-              f"{rm['field']:.3f} ({red['field']:.1%}) m/s^2, "
-              f"{r['interaction_samples']} samples; target >= {r['target_reduction']:.0%}: "
-              f"{'met' if r['met'] else 'not met'} [{key}]")
+    for seed, result in zip(args.seed, results, strict=True):
+        for key, r in result["pairs"].items():
+            rm, red = r["rmse_vertical_mps2"], r["reduction_vs_zero"]
+            print(f"{f'seed {seed}: ' if several else ''}{r['pair']}: interaction vertical RMSE "
+                  f"zero {rm['zero']:.3f}, simulation-trained {rm['sim']:.3f} "
+                  f"({red['sim']:.1%}), real-trained {rm['real']:.3f} ({red['real']:.1%}), the "
+                  f"world's own mean wake {rm['field']:.3f} ({red['field']:.1%}) m/s^2, "
+                  f"{r['interaction_samples']} samples; target >= {r['target_reduction']:.0%}: "
+                  f"{'met' if r['met'] else 'not met'} [{key}]")
+    if several:
+        for key, m in record["mean"].items():
+            red = m["reduction_vs_zero"]
+            print(f"mean of {m['seeds']} seeds, {PAIRS[key].name}: simulation-trained "
+                  f"{red['sim']:.1%}, real-trained {red['real']:.1%}, the world's own mean wake "
+                  f"{red['field']:.1%}; within 5 points of the real-trained model and above the "
+                  f"mean wake: {'yes' if m['close_to_real'] else 'no'} [{key}]")
     return 0
 
 

@@ -60,6 +60,9 @@ MOVING_MPS = 0.15  # both vehicles faster than this horizontally: "both moving"
 TARGET_REDUCTION = 0.5
 """The issue's target: the simulation-trained model cuts the zero model's real interaction-region
 vertical RMSE by at least this fraction."""
+CLOSE_POINTS = 0.05
+"""Issue 39's sharper target: the simulation-trained model within this much (a fraction of the
+zero model's error: 5 points) of the real-trained one, and above the world's own mean wake."""
 
 
 @dataclass(frozen=True)
@@ -393,4 +396,29 @@ def sim_to_real_study(worlds: Mapping[str, Config], data_dir: Path, *, kind: str
         out["pairs"][key] = sim_to_real_pair(cfg, logs, pair, kind=kind, quick=quick, seed=seed,
                                              progress=progress, smoke=smoke, swaps=swaps)
     out["all_met"] = all(p["met"] for p in out["pairs"].values())
+    return out
+
+
+def mean_over_seeds(results: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per pairing, the mean over several :func:`sim_to_real_study` results (one a seed) of each
+    reduction against the zero model (``sim``, ``real``, ``field``), and whether the mean meets
+    the first target (:data:`TARGET_REDUCTION`) and the sharper one (:data:`CLOSE_POINTS` of the
+    real-trained model, above the world's mean wake). A pairing missing from a result is left
+    out of the mean for that result.
+
+    Raises:
+        ValueError: no results.
+    """
+    if not results:
+        raise ValueError("no results to average")
+    keys = sorted({key for r in results for key in r["pairs"]})
+    out: dict[str, dict[str, Any]] = {}
+    for key in keys:
+        runs = [r["pairs"][key]["reduction_vs_zero"] for r in results if key in r["pairs"]]
+        mean = {name: float(np.mean([run[name] for run in runs]))
+                for name in ("sim", "real", "field")}
+        out[key] = {"seeds": len(runs), "reduction_vs_zero": mean,
+                    "met": bool(mean["sim"] >= TARGET_REDUCTION),
+                    "close_to_real": bool(mean["sim"] >= mean["real"] - CLOSE_POINTS
+                                          and mean["sim"] > mean["field"])}
     return out
