@@ -21,21 +21,22 @@ The simulated flights are the curriculum's wake-excitation flights
 (:func:`aerodock.collect.curriculum.excitation_flights`) over the world's curriculum depth bands
 (:func:`aerodock.collect.curriculum.curriculum_stages`, the deep ones included) and
 :data:`SWAP_FLIGHTS` flights of the swap task that made the real flights
-(:mod:`aerodock.collect.swaps`: the curriculum's flights move the two vehicles together, the real
-swaps move them apart, and only the latter show a model the leader's velocity apart from the
-follower's), flown by the nominal controller (bias observer, no model: the curriculum deploys
-models to fly closer safely, not to make other labels). In the real swaps the upper vehicle moves
-as fast as the lower one (0.27 m/s median, 0.53 m/s at the 95th percentile below the other
-vehicle), faster than the curriculum's drifting leader (``curriculum.leader_drift_max_mps``); so
-that the simulated flights cover the real flights' envelope, the drifting leaders' top speed is the
-95th percentile of the leader's speed in the real *training* flights (never the test flights). The
-labels are taken in the real logs' basis: the real logs have no commanded acceleration, so the
-Neural-Swarm reader makes the label the thrust-based residual ``a_obs - (g e3 - R e3 T / m)``; the
-simulated flights record the same (``curriculum.label_basis = "thrust"``). Both are NED (z down),
-m/s²: the reader converts the logs' z-up frame (``aerodock/ingest/neural_swarm.py``), so a downward
-push on the follower is a positive vertical label in both. Each flight's constant bias is removed
-from its free-air samples (the real flights' free air starts at
-:data:`aerodock.experiments.real_data.FREE_AIR_RADIUS_M`; the simulated flights record theirs).
+(:mod:`aerodock.collect.swaps`: the curriculum's flights move the follower with the leader, the
+real swaps move the two each its own way, and only the latter show a model the leader's velocity
+apart from the follower's), flown by the nominal controller (bias observer, no model: the
+curriculum deploys models to fly closer safely, not to make other labels). In the real swaps the
+upper vehicle moves as fast as the lower one (0.27 m/s median, 0.53 m/s at the 95th percentile
+below the other vehicle), faster than the curriculum's drifting leader
+(``curriculum.leader_drift_max_mps``); so that the simulated flights cover the real flights'
+envelope, the drifting leaders' top speed is the 95th percentile of the leader's speed in the real
+*training* flights (never the test flights). The labels are taken in the real logs' basis: the real
+logs have no commanded acceleration, so the Neural-Swarm reader makes the label the thrust-based
+residual ``a_obs - (g e3 - R e3 T / m)``; the simulated flights record the same
+(``curriculum.label_basis = "thrust"``). Both are NED (z down), m/s²: the reader converts the logs'
+z-up frame (``aerodock/ingest/neural_swarm.py``), so a downward push on the follower is a positive
+vertical label in both. Each flight's constant bias is removed from its free-air samples (the real
+flights' free air starts at :data:`aerodock.experiments.real_data.FREE_AIR_RADIUS_M`; the simulated
+flights record theirs).
 """
 
 from __future__ import annotations
