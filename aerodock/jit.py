@@ -203,6 +203,49 @@ else:  # the plain-Python run of the kernels: a * b + c, rounded twice
         return a * b + c
 
 
+# -- borrowed views: arrays without a reference count ------------------------------------------
+# numba counts the references of every array a compiled function holds: each array argument of
+# each call, each view, each variable bound to one, an atomic increment and decrement apiece
+# (about 9.5 ns a pair here, and a shared cache line between threads). The world's period makes
+# some 1,400 such pairs a physics step at a batch of one, most of its time there. A borrowed view
+# is the same array (data, shape, strides) without its memory's owner record: numba's count then
+# sees a null owner and does nothing, and views of it are borrowed too. It is safe only where the
+# owner outlives every use: a kernel's own arguments, which its Python caller holds for the call.
+@intrinsic
+def _borrowed_intrinsic(typingctx: Any, arrays: Any) -> Any:
+    """A tuple's arrays as borrowed views (other items as they are)."""
+    if not isinstance(arrays, types.BaseTuple):
+        return None
+    sig = arrays(arrays)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        items = cgutils.unpack_tuple(builder, args[0], len(arrays))
+        out = []
+        for ty, value in zip(arrays, items):
+            if isinstance(ty, types.Array):
+                src = context.make_array(ty)(context, builder, value)
+                view = context.make_array(ty)(context, builder)
+                view.meminfo = cgutils.get_null_value(view.meminfo.type)
+                view.parent = cgutils.get_null_value(view.parent.type)
+                view.nitems, view.itemsize, view.data = src.nitems, src.itemsize, src.data
+                view.shape, view.strides = src.shape, src.strides
+                value = view._getvalue()
+            elif context.enable_nrt:
+                context.nrt.incref(builder, ty, value)  # the result is a new reference
+            out.append(value)
+        return context.make_tuple(builder, signature.return_type, out)
+
+    return sig, codegen
+
+
+if JIT_ENABLED:
+    borrowed = _borrowed_intrinsic
+else:  # the plain-Python run of the kernels: nothing is counted
+    def borrowed(arrays: tuple[Any, ...]) -> tuple[Any, ...]:
+        """``arrays`` as they are (without the compiler)."""
+        return arrays
+
+
 # -- a 3 x 3 product's element, summed as np.matmul sums it on this machine ------------------
 # (aerodock.product_order: the order is the BLAS kernel's, found at import; the kernels call
 # dot3_vecmat, dot3_matvec, dot3_matmat and dot3_tmatmat, each bound to one of these)

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from aerodock.downwash.jet_kernel import wake_step
-from aerodock.jit import _unary, any_layout, njit, njit_parallel
+from aerodock.jit import _unary, any_layout, borrowed, njit, njit_parallel
 from aerodock.world.gripper import contact_kernel_body, contact_push
 from aerodock.world.imu import _next_slot, imu_step
 from aerodock.world.params import WorldParams
@@ -365,6 +365,30 @@ def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle
 
     Returns (steps done, why it stopped (``STOP_*``), the ``CHANGED_*`` bits of the grippers'
     steps, OR-ed)."""
+    # Every array argument as a borrowed view (aerodock.jit.borrowed): the caller holds them
+    # for the call, and the step's some 1,400 reference counts then cost nothing.
+    (loops, trig, fc, iv, g_passive, g_active, close, draws, packed, p0, v0, rot0, w0,
+     omega0, integral0, yaw_sp0, thrust0, r_des, yaw_rate, thrust_cmd, torque_ff,
+     fol_mass, fol_mass_rows, gravity, hover, captured, thrust_gain, rotor_loss,
+     torque_map, jp, cols, offsets, coeff, processes, bar_noise, bar_consts, bar_p0,
+     bar_v0, bar_yaw0, bar_rate0, bar_mass, cable0, gyro_c, gz1, gz2, gline, accel_c,
+     az1, az2, aline, bias, ring, nav_accel, lead_accel0, fol_accel0, rot_hat0,
+     att_ring, g_gate, g_bias_true, g_bias_est, g_reading, g_servo, g_by_contact,
+     g_inside_start, g_slipped, g_resolved, g_close_time, g_stuck, contact_seen,
+     contact_sensed, ground_contact, P, V, RM, W, OM, TH, ACC, INT, YSP, BP, BV, BY, BR,
+     CAB, GT, AT, ATT, WT, downwash, go_reading, go_by_contact, go_servo, go_gate,
+     go_inside_start, go_slipped, go_resolved) = borrowed((
+        loops, trig, fc, iv, g_passive, g_active, close, draws, packed, p0, v0, rot0,
+        w0, omega0, integral0, yaw_sp0, thrust0, r_des, yaw_rate, thrust_cmd, torque_ff,
+        fol_mass, fol_mass_rows, gravity, hover, captured, thrust_gain, rotor_loss,
+        torque_map, jp, cols, offsets, coeff, processes, bar_noise, bar_consts, bar_p0,
+        bar_v0, bar_yaw0, bar_rate0, bar_mass, cable0, gyro_c, gz1, gz2, gline, accel_c,
+        az1, az2, aline, bias, ring, nav_accel, lead_accel0, fol_accel0, rot_hat0,
+        att_ring, g_gate, g_bias_true, g_bias_est, g_reading, g_servo, g_by_contact,
+        g_inside_start, g_slipped, g_resolved, g_close_time, g_stuck, contact_seen,
+        contact_sensed, ground_contact, P, V, RM, W, OM, TH, ACC, INT, YSP, BP, BV, BY,
+        BR, CAB, GT, AT, ATT, WT, downwash, go_reading, go_by_contact, go_servo,
+        go_gate, go_inside_start, go_slipped, go_resolved))
     n = p0.shape[0] // 2
     k = offsets.shape[0]
     (bar_axis, contact, inside, up, force, torque_t, bar_force, hang_mass, wake,
