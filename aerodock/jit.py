@@ -246,6 +246,80 @@ else:  # the plain-Python run of the kernels: nothing is counted
         return arrays
 
 
+@njit
+def keep_alive(owners: Any) -> None:
+    """Nothing: a use of ``owners`` that keeps them, and so the views borrowed from them, alive
+    until this call (numba lets an array go right after its last use)."""
+
+
+# A kernel's temporary rows as views of one scratch allocation: one allocation and no reference
+# counts, instead of one of each per row. ``work`` is a borrowed (or any) contiguous float64
+# array; the views are C-contiguous, borrowed, and laid out one after the other.
+@intrinsic
+def _scratch_view(typingctx: Any, work: Any, at: Any, shape: Any) -> Any:
+    """The C-contiguous float64 array of ``shape`` (a tuple of ints) whose first element is
+    ``work[at]``: no owner record (a borrowed view), nothing checked."""
+    if not (isinstance(work, types.Array) and isinstance(shape, types.UniTuple)):
+        return None
+    ndim = shape.count
+    out_ty = types.Array(types.float64, ndim, "C")
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        src = context.make_array(signature.args[0])(context, builder, args[0])
+        view = context.make_array(out_ty)(context, builder)
+        intp = context.get_value_type(types.intp)
+        dims = [builder.sext(d, intp) if d.type.width < intp.width else d
+                for d in cgutils.unpack_tuple(builder, args[2], ndim)]
+        itemsize = context.get_constant(types.intp, 8)
+        strides = [None] * ndim
+        stride = itemsize
+        for i in reversed(range(ndim)):
+            strides[i] = stride
+            stride = builder.mul(stride, dims[i])
+        nitems = context.get_constant(types.intp, 1)
+        for d in dims:
+            nitems = builder.mul(nitems, d)
+        view.meminfo = cgutils.get_null_value(view.meminfo.type)
+        view.parent = cgutils.get_null_value(view.parent.type)
+        view.nitems, view.itemsize = nitems, itemsize
+        view.data = builder.gep(src.data, [args[1]])
+        view.shape = cgutils.pack_array(builder, dims)
+        view.strides = cgutils.pack_array(builder, strides)
+        return view._getvalue()
+
+    return out_ty(work, at, shape), codegen
+
+
+if JIT_ENABLED:
+    @njit
+    def scratch_row(work: Any, at: int, cols: int) -> tuple[Any, int]:
+        """(cols,) of ``work`` from ``at``, and ``at + cols``."""
+        return _scratch_view(work, at, (cols,)), at + cols
+
+    @njit
+    def scratch_rows(work: Any, at: int, rows: int, cols: int) -> tuple[Any, int]:
+        """(rows, cols) of ``work`` from ``at`` (C order), and where the next view starts."""
+        return _scratch_view(work, at, (rows, cols)), at + rows * cols
+
+    @njit
+    def scratch_slab(work: Any, at: int, slabs: int, rows: int, cols: int) -> tuple[Any, int]:
+        """(slabs, rows, cols) of ``work`` from ``at`` (C order), and where the next starts."""
+        return _scratch_view(work, at, (slabs, rows, cols)), at + slabs * rows * cols
+else:  # the plain-Python run of the kernels: NumPy's views
+    def scratch_row(work: Any, at: int, cols: int) -> tuple[Any, int]:
+        """(cols,) of ``work`` from ``at``, and ``at + cols``."""
+        return work[at:at + cols], at + cols
+
+    def scratch_rows(work: Any, at: int, rows: int, cols: int) -> tuple[Any, int]:
+        """(rows, cols) of ``work`` from ``at`` (C order), and where the next view starts."""
+        return work[at:at + rows * cols].reshape((rows, cols)), at + rows * cols
+
+    def scratch_slab(work: Any, at: int, slabs: int, rows: int, cols: int) -> tuple[Any, int]:
+        """(slabs, rows, cols) of ``work`` from ``at`` (C order), and where the next starts."""
+        end = at + slabs * rows * cols
+        return work[at:end].reshape((slabs, rows, cols)), end
+
+
 # -- a 3 x 3 product's element, summed as np.matmul sums it on this machine ------------------
 # (aerodock.product_order: the order is the BLAS kernel's, found at import; the kernels call
 # dot3_vecmat, dot3_matvec, dot3_matmat and dot3_tmatmat, each bound to one of these)

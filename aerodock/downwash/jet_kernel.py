@@ -18,7 +18,18 @@ import math
 
 import numpy as np
 
-from aerodock.jit import any_layout, njit, np_exp, np_log, np_power
+from aerodock.jit import (
+    any_layout,
+    borrowed,
+    keep_alive,
+    njit,
+    np_exp,
+    np_log,
+    np_power,
+    scratch_row,
+    scratch_rows,
+    scratch_slab,
+)
 
 # jet parameters (a float64 array)
 JP_B0, JP_SPREAD, JP_P, JP_JET_CONST, JP_TIME_RATIO, JP_LENGTH_RATIO, JP_PAIR_DIST = range(7)
@@ -76,6 +87,13 @@ def _depth_terms(r0: float, r1: float, r2: float, a0: float, a1: float, a2: floa
     return depth, half_width, centre, q0, q1, q2
 
 
+@njit
+def _jet_scratch_size(n: int, k: int) -> int:
+    """How many floats :func:`jet_forces`'s temporary rows take (k disks, n trials)."""
+    npts = k + 1
+    return n * (17 + 12 * npts + k) + 4 * npts
+
+
 @any_layout("processes", "force", "torque", "body", "axial", "tau_out", "share_out")
 @njit
 def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.ndarray,
@@ -109,20 +127,23 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
     for q in range(k):
         if offsets[q, 2] != 0.0:
             flat = False
-    axis = np.empty((3, n))
-    jet = np.empty(n)
-    jet_min = np.empty(n)
-    v_perp = np.empty((3, n))
+    # every temporary row below is a view of one allocation (aerodock.jit's scratch views)
+    owner = np.empty(_jet_scratch_size(n, k))
+    (work,) = borrowed((owner,))
+    axis, at = scratch_rows(work, 0, 3, n)
+    jet, at = scratch_row(work, at, n)
+    jet_min, at = scratch_row(work, at, n)
+    v_perp, at = scratch_rows(work, at, 3, n)
     leader_wake(lead_r, lead_thrust, lead_v, jp[JP_JET_CONST], axis, jet, jet_min, v_perp)
-    depth = np.empty((npts, n))
-    half_width = np.empty((npts, n))
-    centre = np.empty((npts, n))
-    radial = np.empty((3, npts, n))
-    d2 = np.empty((npts, n))
-    v_axial = np.empty(n)
-    ratio = np.empty((npts, n))
-    spread = np.empty((npts, n))
-    exp_args = np.empty((2, n))  # the turbulence's decay and share, before exp
+    depth, at = scratch_rows(work, at, npts, n)
+    half_width, at = scratch_rows(work, at, npts, n)
+    centre, at = scratch_rows(work, at, npts, n)
+    radial, at = scratch_slab(work, at, 3, npts, n)
+    d2, at = scratch_rows(work, at, npts, n)
+    v_axial, at = scratch_row(work, at, n)
+    ratio, at = scratch_rows(work, at, npts, n)
+    spread, at = scratch_rows(work, at, npts, n)
+    exp_args, at = scratch_rows(work, at, 2, n)  # the turbulence's decay and share, before exp
     any_above = False
     # -- phase 1: geometry at the k disk centres and the body centre -------------------------
     for i in range(n):
@@ -169,22 +190,22 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
         exp_args[0, i] = -dt / tau
         exp_args[1, i] = -jp[JP_PAIR_DIST] / (jp[JP_LENGTH_RATIO] * b_c)
     # -- phase 2: the transcendental rows -----------------------------------------------------
-    exps = np.empty((2, n))
+    exps, at = scratch_rows(work, at, 2, n)
     np_exp(loops, exp_args[0], exps[0])
     np_exp(loops, exp_args[1], share_out)
-    log_g = np.empty((k, n))
+    log_g, at = scratch_rows(work, at, k, n)
     for q in range(k):
         np_log(loops, ratio[q], log_g[q])
     for q in range(k):
         for i in range(n):
             g = log_g[q, i] - spread[q, i]
             log_g[q, i] = g / p
-    w = np.empty((npts, n))
+    w, at = scratch_rows(work, at, npts, n)
     for q in range(k):
         np_exp(loops, log_g[q], w[q])
         for i in range(n):
             w[q, i] = centre[q, i] * w[q, i]
-    neg = np.empty(n)
+    neg, at = scratch_row(work, at, n)
     for i in range(n):
         neg[i] = -spread[k, i]
     np_exp(loops, neg, neg)
@@ -192,7 +213,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
         wb = centre[k, i] * math.sqrt(ratio[k, i])
         w[k, i] = wb * neg[i]
     if any_above:  # nothing above the rotors: the wake fades above the rotor plane
-        fade = np.empty(n)
+        fade, _ = scratch_row(work, at, n)
         for q in range(npts):
             for i in range(n):
                 x = depth[q, i] / b0
@@ -202,9 +223,10 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
                 if depth[q, i] < 0.0:
                     w[q, i] *= fade[i]
     # the ingest laws: phi(w - v) - phi(-v), phi(x) = sign(x) |x|^p (the body's p = 2)
-    rel = np.empty((npts, n))
-    mag = np.empty((npts, n))
-    own = np.empty(n)
+    at += n  # (fade's)
+    rel, at = scratch_rows(work, at, npts, n)
+    mag, at = scratch_rows(work, at, npts, n)
+    own, at = scratch_row(work, at, n)
     for q in range(npts):
         for i in range(n):
             r = w[q, i] - v_axial[i]
@@ -222,7 +244,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
                 a = rel[q, i] * mag[q, i]
                 axial[q, i] = a + v_axial[i] * own[i]
     else:
-        pw = np.empty(n)
+        pw, _ = scratch_row(work, at, n)
         for i in range(n):
             pw[i] = p
         for q in range(k):
@@ -250,8 +272,9 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
     gain = jp[JP_TORQUE_GAIN]
     planar_on = jp[JP_PLANAR] != 0.0
     turb_v, turb_l = jp[JP_TURB_V], jp[JP_TURB_L]
-    along = np.empty(npts)
-    fq = np.empty((3, npts))
+    at += n  # (pw's)
+    along, at = scratch_row(work, at, npts)
+    fq, at = scratch_rows(work, at, 3, npts)
     for i in range(n):
         if noisy:
             sh = share_out[i]
@@ -363,6 +386,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
         if not flat:
             torque[i, 0] -= u0
             torque[i, 1] += u1
+    keep_alive(owner)
 
 
 @any_layout("axis", "speed", "half_width", "centre")
@@ -375,12 +399,14 @@ def point_wake(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
     air speed, half-width and centreline speed (n,) (a point: no averaging over an area)."""
     n = lead_r.shape[0]
     b0 = jp[JP_B0]
-    jet = np.empty(n)
-    jet_min = np.empty(n)
-    v_perp = np.empty((3, n))
+    owner = np.empty(7 * n)  # the temporary rows below are views of it
+    (work,) = borrowed((owner,))
+    jet, at = scratch_row(work, 0, n)
+    jet_min, at = scratch_row(work, at, n)
+    v_perp, at = scratch_rows(work, at, 3, n)
     leader_wake(lead_r, lead_thrust, lead_v, jp[JP_JET_CONST], axis, jet, jet_min, v_perp)
-    depth = np.empty(n)
-    arg = np.empty(n)
+    depth, at = scratch_row(work, at, n)
+    arg, at = scratch_row(work, at, n)
     any_above = False
     for i in range(n):
         dep, hw, cen, q0, q1, q2 = _depth_terms(
@@ -405,6 +431,7 @@ def point_wake(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
         for i in range(n):
             if depth[i] < 0.0:
                 speed[i] *= arg[i]
+    keep_alive(owner)
 
 
 @any_layout("noise", "out")
@@ -419,14 +446,17 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
     ``advance``; the force (n, 3), N, NED, into ``out``. ``bar_consts``: (a, b, drag) =
     (bar_turb_vertical / 2, bar_turb_lateral, rho C_d A / 2)."""
     n = lead_r.shape[0]
-    axis = np.empty((3, n))
-    speed = np.empty(n)
-    half_width = np.empty(n)
-    centre = np.empty(n)
+    owner = np.empty(7 * n + 3)  # the temporary rows below are views of it
+    (work,) = borrowed((owner,))
+    axis, at = scratch_rows(work, 0, 3, n)
+    speed, at = scratch_row(work, at, n)
+    half_width, at = scratch_row(work, at, n)
+    centre, at = scratch_row(work, at, n)
+    decay, at = scratch_row(work, at, n)
+    u, at = scratch_row(work, at, 3)
     point_wake(loops, jp, lead_r, lead_thrust, lead_v, lead_p, bar_p, axis, speed, half_width,
                centre)
     if advance:
-        decay = np.empty(n)
         for i in range(n):
             c = centre[i]
             tau = jp[JP_TIME_RATIO] * half_width[i] / (c if (c >= 1e-6 or c != c) else 1e-6)
@@ -439,7 +469,6 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
                 x = draws[r, i] * innov
                 noise[r, i] = x + dc * noise[r, i]
     half_v, lat, drag = bar_consts[0], bar_consts[1], bar_consts[2]
-    u = np.empty(3)
     for i in range(n):
         s = speed[i]
         along = half_v * noise[0, i]
@@ -463,6 +492,7 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
         norm = math.sqrt(norm) * drag
         for c in range(3):
             out[i, c] = norm * u[c]
+    keep_alive(owner)
 
 
 @any_layout("processes", "bar_noise", "out")
@@ -484,11 +514,14 @@ def wake_step(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.n
     theirs called one after the other."""
     n = lead_r.shape[0]
     npts = offsets.shape[0] + 1
-    axial = np.empty((npts, n))
-    tau = np.empty(n)
-    share = np.empty(n)
+    owner = np.empty((npts + 2) * n)  # the temporary rows below are views of it
+    (work,) = borrowed((owner,))
+    axial, at = scratch_rows(work, 0, npts, n)
+    tau, at = scratch_row(work, at, n)
+    share, at = scratch_row(work, at, n)
     jet_forces(loops, jp, cols, offsets, lead_r, lead_thrust, lead_v, lead_p, fol_r, fol_p,
                fol_v, coeff, processes, draws, dt, True, True, True, True, out[0], out[1],
                out[2], axial, tau, share)
     bar_force(loops, jp, lead_r, lead_thrust, lead_v, lead_p, bar_p, bar_v, bar_axis, has_axis,
               bar_noise, bar_draws, bar_dt, bar_advance, bar_consts, out[3])
+    keep_alive(owner)

@@ -23,7 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import NUMPY_LOOPS, dot3_vecmat, njit, np_arctan2
+from aerodock.jit import (
+    NUMPY_LOOPS,
+    borrowed,
+    dot3_vecmat,
+    keep_alive,
+    njit,
+    np_arctan2,
+    scratch_row,
+)
 from aerodock.world.vehicles.rigid_kernel import exp_so3, load3x3, mat3_mul, store3x3
 
 
@@ -67,9 +75,11 @@ def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
     ``g_b x (R^T e3)`` plus the heading's about the world's down axis, and the exact rotation
     by ``(w_gyro + k_p e + k_yaw yaw_err R^T e3) dt``."""
     m = rot_hat.shape[0]
-    yaw_err = np.zeros(m)
+    owner = np.zeros(2 * m)  # both rows below are views of it
+    (work,) = borrowed((owner,))
+    yaw_err, at = scratch_row(work, 0, m)
     if k_yaw != 0.0:
-        yaw_hat = np.empty(m)
+        yaw_hat, _ = scratch_row(work, at, m)
         np_arctan2(loops, rot_hat[:, 1, 0], rot_hat[:, 0, 0], yaw_hat)
         for i in range(m):
             e = yaw_ext[i] - yaw_hat[i]
@@ -99,3 +109,4 @@ def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
             w1 += y * e1
             w2 += y * e2
         store3x3(out, i, mat3_mul(load3x3(rot_hat, i), exp_so3(w0 * dt, w1 * dt, w2 * dt)))
+    keep_alive(owner)

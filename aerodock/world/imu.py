@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import dot3_vecmat, njit, np_arctan2
+from aerodock.jit import borrowed, dot3_vecmat, keep_alive, njit, np_arctan2
 from aerodock.world.attitude_estimator import estimate_into
 
 
@@ -374,7 +374,8 @@ def imu_step(loops: np.ndarray, n: int, lo: int, hi: int, w: np.ndarray,
                 az2, ring[ring_head])
     ring_head = _next_slot(ring, ring_head)
     count = min(substeps, ring.shape[0])
-    yaw_ext = np.empty(2 * n)  # each half's, without joining the rotations first
+    owner = np.empty(2 * n)  # each half's heading, without joining the rotations first
+    (yaw_ext,) = borrowed((owner,))
     for a, b in ((lo, hi), (n + lo, n + hi)):  # the block's leaders, then its followers
         if step_index % substeps == 0:
             _ring_mean_into(ring[:, a:b], ring_head, count, nav_accel[a:b])
@@ -383,4 +384,5 @@ def imu_step(loops: np.ndarray, n: int, lo: int, hi: int, w: np.ndarray,
     for a, b in ((lo, hi), (n + lo, n + hi)):
         estimate_into(loops, rot_hat[a:b], gyro_out[:, a:b], accel_out[:, a:b], nav_accel[a:b],
                       yaw_ext[a:b], k_p, k_yaw, dt, rot_hat_out[a:b])
+    keep_alive(owner)
     return _next_slot(gyro_line, gyro_head), _next_slot(accel_line, accel_head), ring_head

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from aerodock.downwash.jet_kernel import wake_step
-from aerodock.jit import _unary, any_layout, borrowed, njit, njit_parallel
+from aerodock.jit import _unary, any_layout, borrowed, keep_alive, njit, njit_parallel
 from aerodock.world.gripper import contact_kernel_body, contact_push
 from aerodock.world.imu import _next_slot, imu_step
 from aerodock.world.params import WorldParams
@@ -332,12 +332,14 @@ def _trial_rows(flags: np.ndarray, lo: int, hi: int) -> np.ndarray:
 
 
 @njit
-def _scratch(n: int, gyro_sd: float) -> tuple:
-    """A period's scratch rows, shared by its steps and blocks (each block its own rows)."""
+def _scratch(n: int, gyro_sd: float, blocks: int) -> tuple:
+    """A period's scratch rows, shared by its steps and blocks (each block its own rows), and
+    each block's gripper changes."""
     m = 2 * n
     return (np.zeros((3, n)), np.empty(n), np.empty(n, dtype=np.bool_), np.empty((n, 3)),
             np.empty((m, 3)), np.empty((3, m)), np.empty((n, 3)), np.empty(n),
-            np.empty((4, n, 3)), np.empty((3, m)) if gyro_sd != 0.0 else np.zeros((3, 0)))
+            np.empty((4, n, 3)), np.empty((3, m)) if gyro_sd != 0.0 else np.zeros((3, 0)),
+            np.zeros(blocks, dtype=np.int64))
 
 
 def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle, g_passive_any,
@@ -391,9 +393,9 @@ def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle
         go_gate, go_inside_start, go_slipped, go_resolved))
     n = p0.shape[0] // 2
     k = offsets.shape[0]
-    (bar_axis, contact, inside, up, force, torque_t, bar_force, hang_mass, wake,
-     noise) = _scratch(n, fc[F_GYRO_SD])
-    changed_b = np.zeros(blocks, dtype=np.int64)
+    owners = _scratch(n, fc[F_GYRO_SD], blocks)  # kept to the end: views borrow them
+    (bar_axis, contact, inside, up, force, torque_t, bar_force, hang_mass, wake, noise,
+     changed_b) = borrowed(owners)
     changed_all = 0
     g_ran = False
     for s in range(steps):
@@ -439,6 +441,7 @@ def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle
         _step_done(iv, fc, k, sample, gripper_runs, gline, aline, ring)
         if changed & (CHANGED_SERVO | CHANGED_START | CHANGED_DONE):
             return s + 1, STOP_GRIPPER, changed_all
+    keep_alive(owners)
     return steps, STOP_DONE, changed_all
 
 

@@ -19,7 +19,18 @@ import numpy as np
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze
-from aerodock.jit import NUMPY_LOOPS, any_layout, dot3_matvec, dot3_vecmat, njit, np_arctan2
+from aerodock.jit import (
+    NUMPY_LOOPS,
+    any_layout,
+    borrowed,
+    dot3_matvec,
+    dot3_vecmat,
+    keep_alive,
+    njit,
+    np_arctan2,
+    scratch_row,
+    scratch_rows,
+)
 
 
 @dataclass(frozen=True)
@@ -286,14 +297,17 @@ def hanging_bar_kernel_body(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndar
     and end positions, NumPy's elementwise operations), the yaw by NumPy's arctan2 loop when
     ``yaw_from_rot``, then :func:`step_bar_kernel` on the first ``n`` rows."""
     n = bar_p.shape[0]
-    anchor_p, anchor_p_next = np.empty((n, 3)), np.empty((n, 3))
+    owner = np.empty(7 * n)  # the rows below are views of it
+    (work,) = borrowed((owner,))
+    anchor_p, at = scratch_rows(work, 0, n, 3)
+    anchor_p_next, at = scratch_rows(work, at, n, 3)
     for i in range(n):
         for k in range(3):
             offset = lead_r[i, k, 2] * anchor_below
             anchor_p[i, k] = lead_p[i, k] + offset
             anchor_p_next[i, k] = lead_p_next[i, k] + offset
     if yaw_from_rot:
-        yaw = np.empty(n)
+        yaw, at = scratch_row(work, at, n)
         np_arctan2(loops, lead_r[:n, 1, 0], lead_r[:n, 0, 0], yaw)
         step_bar_kernel(bar_p, bar_v, bar_yaw, bar_yaw_rate, anchor_p, lead_v[:n], lead_a[:n],
                         anchor_p_next, yaw, force, mass, length, swing_damping, gravity,
@@ -302,6 +316,7 @@ def hanging_bar_kernel_body(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndar
         step_bar_kernel(bar_p, bar_v, bar_yaw, bar_yaw_rate, anchor_p, lead_v[:n], lead_a[:n],
                         anchor_p_next, lead_yaw, force, mass, length, swing_damping, gravity,
                         yaw_omega2, yaw_damping, dt, p_new, v_new, yaw_new, yaw_rate_new, cable)
+    keep_alive(owner)
 
 
 @any_layout("p_new", "v_new", "yaw_new", "yaw_rate_new", "cable")

@@ -1,0 +1,93 @@
+"""Borrowed views and scratch views (``aerodock.jit.borrowed``, ``scratch_row``/``rows``/``slab``):
+the same elements as the arrays they borrow from, written through to them, in any layout; the
+scratch views laid out one after the other in their owner, C-contiguous; and the plain-Python
+forms (``AERODOCK_JIT=0``) giving the same layout."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numba
+import numpy as np
+import pytest
+
+from aerodock import jit
+
+pytestmark = pytest.mark.skipif(not jit.JIT_ENABLED, reason="the compiled forms")
+
+
+@numba.njit
+def _double_through_borrowed(a, b, flags, scale):
+    """Every array borrowed, then written through views of the views."""
+    a, b, flags, scale = jit.borrowed((a, b, flags, scale))
+    for i in range(a.shape[0]):
+        row = a[i]
+        row *= scale
+    b[1:, 0] = -b[1:, 0]
+    flags[:] = ~flags
+    return a.sum() + b.sum()
+
+
+def test_borrowed_views_read_and_write_the_callers_arrays():
+    a = np.arange(12.0).reshape(4, 3)
+    wide = np.arange(40.0).reshape(5, 8)
+    b = wide[:, ::3]  # strided: another layout
+    flags = np.array([True, False, True])
+    a0, b0 = a.copy(), b.copy()
+    total = _double_through_borrowed(a, b, flags, 2.0)
+    np.testing.assert_array_equal(a, 2.0 * a0)
+    expected = b0.copy()
+    expected[1:, 0] *= -1
+    np.testing.assert_array_equal(b, expected)
+    np.testing.assert_array_equal(wide[:, ::3], expected)  # written into the wider array
+    np.testing.assert_array_equal(flags, [False, True, False])
+    assert total == pytest.approx(a.sum() + b.sum())
+
+
+@numba.njit
+def _carve(owner, n):
+    (work,) = jit.borrowed((owner,))
+    row, at = jit.scratch_row(work, 0, n)
+    rows, at = jit.scratch_rows(work, at, 2, n)
+    slab, at = jit.scratch_slab(work, at, 2, 3, n)
+    empty, at2 = jit.scratch_row(work, at, 0)
+    for i in range(n):
+        row[i] = 1.0 + i
+        for r in range(2):
+            rows[r, i] = 10.0 * (r + 1) + i
+        for s in range(2):
+            for r in range(3):
+                slab[s, r, i] = 100.0 * (s + 1) + 10.0 * r + i
+    jit.keep_alive(owner)
+    return at, at2, empty.shape[0], rows.strides, slab.strides, slab.flags.c_contiguous
+
+
+@pytest.mark.parametrize("n", [1, 3, 7])
+def test_scratch_views_are_consecutive_c_contiguous_rows_of_their_owner(n):
+    owner = np.full(9 * n + 2, np.nan)
+    at, at2, empty, row_strides, slab_strides, c_contiguous = _carve(owner, n)
+    assert at == at2 == 9 * n and empty == 0
+    assert row_strides == (8 * n, 8) and slab_strides == (24 * n, 8 * n, 8) and c_contiguous
+    i = np.arange(n)
+    np.testing.assert_array_equal(owner[:n], 1.0 + i)
+    np.testing.assert_array_equal(owner[n:3 * n].reshape(2, n), [10.0 + i, 20.0 + i])
+    slab = owner[3 * n:9 * n].reshape(2, 3, n)
+    np.testing.assert_array_equal(slab[1, 2], 220.0 + i)
+    np.testing.assert_array_equal(slab[0, 1], 110.0 + i)
+    assert np.isnan(owner[9 * n:]).all()  # nothing written past the views
+
+
+def test_plain_python_scratch_views_have_the_same_layout():
+    code = ("import numpy as np\nfrom aerodock import jit\nassert not jit.JIT_ENABLED\n"
+            "w = np.arange(40.0)\nr, at = jit.scratch_row(w, 0, 3)\n"
+            "m, at = jit.scratch_rows(w, at, 2, 3)\ns, at = jit.scratch_slab(w, at, 2, 2, 3)\n"
+            "(b,) = jit.borrowed((w,))\nassert b is w\n"
+            "print(at, r.tolist(), m[1].tolist(), s[1, 1].tolist())")
+    env = {**os.environ, "AERODOCK_JIT": "0"}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         check=True).stdout.split(maxsplit=1)
+    assert int(out[0]) == 21
+    assert out[1].strip() == "[0.0, 1.0, 2.0] [6.0, 7.0, 8.0] [18.0, 19.0, 20.0]"
