@@ -72,18 +72,31 @@ class TrialRNG:
 
     def _take(self, kind: str, per_trial: int) -> np.ndarray:
         """(per_trial, n): every trial's next ``per_trial`` draws, one row per draw (a view)."""
+        self._reserve(kind, per_trial)
+        pos = self._pos[kind]
+        self._pos[kind] = end = pos + per_trial
+        return self._buf[kind][pos:end]
+
+    def _reserve(self, kind: str, per_trial: int) -> None:
+        """The buffer holding every trial's next ``per_trial`` draws: when it does not, the
+        unread rows kept and ``max(_CHUNK, per_trial)`` new ones drawn after them."""
         buf, pos = self._buf[kind], self._pos[kind]
-        end = pos + per_trial
-        if end > buf.shape[0]:
+        if pos + per_trial > buf.shape[0]:
             left = buf.shape[0] - pos
             size = max(_CHUNK, per_trial)
             new = np.empty((left + size, self.n))
             new[:left] = buf[pos:]
             _refill(self._gens, kind, size, new[left:])
-            self._buf[kind] = buf = new
-            pos, end = 0, per_trial
-        self._pos[kind] = end
-        return buf[pos:end]
+            self._buf[kind], self._pos[kind] = new, 0
+
+    def reserve_normals(self, per_trial: int) -> None:
+        """Refill the normal buffer now if it does not hold every trial's next ``per_trial``
+        draws, as the first draw past its end would (:meth:`normal_buffer`'s compiled reader
+        calls it before a step whose draws overflow the buffer). The numbers drawn later are
+        the same as long as nothing else draws from the trials' streams in between and
+        ``per_trial`` stays below the refill's chunk (the size drawn is then the chunk either
+        way)."""
+        self._reserve("normal", int(per_trial))
 
     def _batch(self, kind: str, size: Any) -> np.ndarray:
         shape = (size,) if isinstance(size, int | np.integer) else tuple(size or ())
@@ -105,9 +118,9 @@ class TrialRNG:
     def normal_buffer(self) -> tuple[np.ndarray, int]:
         """The pre-drawn standard normal numbers, draw-major (draws, n), and the cursor: the
         row of every trial's next draw. A compiled caller reads rows ``cursor..`` in the order
-        :meth:`standard_normal_t` would hand them out, never past the buffer's end (the next
-        draw there refills it, as the Python path does), then moves the cursor
-        (:meth:`set_normal_cursor`)."""
+        :meth:`standard_normal_t` would hand them out, never past the buffer's end (before
+        draws that would go past it, :meth:`reserve_normals` refills it as the Python path's
+        draw would), then moves the cursor (:meth:`set_normal_cursor`)."""
         return self._buf["normal"], self._pos["normal"]
 
     def set_normal_cursor(self, cursor: int) -> None:

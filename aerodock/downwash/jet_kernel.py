@@ -28,6 +28,7 @@ from aerodock.jit import (
     np_power,
     scratch_row,
     scratch_rows,
+    scratch_size,
     scratch_slab,
 )
 
@@ -91,7 +92,7 @@ def _depth_terms(r0: float, r1: float, r2: float, a0: float, a1: float, a2: floa
 def _jet_scratch_size(n: int, k: int) -> int:
     """How many floats :func:`jet_forces`'s temporary rows take (k disks, n trials)."""
     npts = k + 1
-    return n * (17 + 12 * npts + k) + 4 * npts
+    return scratch_size(n * (17 + 12 * npts + k) + 4 * npts, 24)
 
 
 @any_layout("processes", "force", "torque", "body", "axial", "tau_out", "share_out")
@@ -206,6 +207,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
         for i in range(n):
             w[q, i] = centre[q, i] * w[q, i]
     neg, at = scratch_row(work, at, n)
+    fade, at = scratch_row(work, at, n)
     for i in range(n):
         neg[i] = -spread[k, i]
     np_exp(loops, neg, neg)
@@ -213,7 +215,6 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
         wb = centre[k, i] * math.sqrt(ratio[k, i])
         w[k, i] = wb * neg[i]
     if any_above:  # nothing above the rotors: the wake fades above the rotor plane
-        fade, _ = scratch_row(work, at, n)
         for q in range(npts):
             for i in range(n):
                 x = depth[q, i] / b0
@@ -223,10 +224,10 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
                 if depth[q, i] < 0.0:
                     w[q, i] *= fade[i]
     # the ingest laws: phi(w - v) - phi(-v), phi(x) = sign(x) |x|^p (the body's p = 2)
-    at += n  # (fade's)
     rel, at = scratch_rows(work, at, npts, n)
     mag, at = scratch_rows(work, at, npts, n)
     own, at = scratch_row(work, at, n)
+    pw, at = scratch_row(work, at, n)
     for q in range(npts):
         for i in range(n):
             r = w[q, i] - v_axial[i]
@@ -244,7 +245,6 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
                 a = rel[q, i] * mag[q, i]
                 axial[q, i] = a + v_axial[i] * own[i]
     else:
-        pw, _ = scratch_row(work, at, n)
         for i in range(n):
             pw[i] = p
         for q in range(k):
@@ -272,7 +272,6 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
     gain = jp[JP_TORQUE_GAIN]
     planar_on = jp[JP_PLANAR] != 0.0
     turb_v, turb_l = jp[JP_TURB_V], jp[JP_TURB_L]
-    at += n  # (pw's)
     along, at = scratch_row(work, at, npts)
     fq, at = scratch_rows(work, at, 3, npts)
     for i in range(n):
@@ -399,7 +398,7 @@ def point_wake(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
     air speed, half-width and centreline speed (n,) (a point: no averaging over an area)."""
     n = lead_r.shape[0]
     b0 = jp[JP_B0]
-    owner = np.empty(7 * n)  # the temporary rows below are views of it
+    owner = np.empty(scratch_size(7 * n, 5))  # the temporary rows below are views of it
     (work,) = borrowed((owner,))
     jet, at = scratch_row(work, 0, n)
     jet_min, at = scratch_row(work, at, n)
@@ -446,7 +445,7 @@ def bar_force(loops: np.ndarray, jp: np.ndarray, lead_r: np.ndarray,
     ``advance``; the force (n, 3), N, NED, into ``out``. ``bar_consts``: (a, b, drag) =
     (bar_turb_vertical / 2, bar_turb_lateral, rho C_d A / 2)."""
     n = lead_r.shape[0]
-    owner = np.empty(7 * n + 3)  # the temporary rows below are views of it
+    owner = np.empty(scratch_size(7 * n + 3, 6))  # the temporary rows below are views of it
     (work,) = borrowed((owner,))
     axis, at = scratch_rows(work, 0, 3, n)
     speed, at = scratch_row(work, at, n)
@@ -514,7 +513,7 @@ def wake_step(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.n
     theirs called one after the other."""
     n = lead_r.shape[0]
     npts = offsets.shape[0] + 1
-    owner = np.empty((npts + 2) * n)  # the temporary rows below are views of it
+    owner = np.empty(scratch_size((npts + 2) * n, 3))  # the temporary rows below are views of it
     (work,) = borrowed((owner,))
     axial, at = scratch_rows(work, 0, npts, n)
     tau, at = scratch_row(work, at, n)

@@ -31,6 +31,7 @@ from aerodock.jit import (
     njit,
     np_arctan2,
     scratch_row,
+    scratch_size,
 )
 from aerodock.world.vehicles.rigid_kernel import exp_so3, load3x3, mat3_mul, store3x3
 
@@ -75,7 +76,7 @@ def estimate_into(loops: np.ndarray, rot_hat: np.ndarray, gyro_t: np.ndarray,
     ``g_b x (R^T e3)`` plus the heading's about the world's down axis, and the exact rotation
     by ``(w_gyro + k_p e + k_yaw yaw_err R^T e3) dt``."""
     m = rot_hat.shape[0]
-    owner = np.zeros(2 * m)  # both rows below are views of it
+    owner = np.zeros(scratch_size(2 * m, 2))  # both rows below are views of it
     (work,) = borrowed((owner,))
     yaw_err, at = scratch_row(work, 0, m)
     if k_yaw != 0.0:

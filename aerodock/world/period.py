@@ -54,8 +54,11 @@ from aerodock.world.period_kernel import (
     I_ACCEL_HEAD,
     I_DRAW,
     I_GYRO_HEAD,
+    I_NEED,
     I_RING_HEAD,
+    I_SIZE,
     I_STEP,
+    STOP_DRAWS,
     STOP_UNCOVERED,
     float_constants,
     period_kernel,
@@ -113,7 +116,7 @@ class PeriodCache:
         self.att_ring = np.empty((slots, 2 * n, 3, 3))
         self.seen: list[Any] = [None] * slots
         self.spare = _gripper_arrays(n)
-        self.iv = np.zeros(5, dtype=np.int64)
+        self.iv = np.zeros(I_SIZE, dtype=np.int64)
         gp = params.gripper  # the armed triggers, as the gripper's step reads them
         self.triggers = (_armed_any(gp.passive), _trigger_rows(gp.passive),
                          _armed_any(gp.active), _trigger_rows(gp.active))
@@ -302,6 +305,9 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         DISABLED.append(f"{type(err).__name__}: {err}")
         return 0, STOP_UNCOVERED
     done, why, changed = result
+    if why == STOP_DRAWS:  # the next step's draws, refilled now as its first draw past the
+        # buffer's end would refill it (a covered step draws nothing else): the next call goes on
+        rng.reserve_normals(int(iv[I_NEED]))
     if done == 0:
         return 0, why
     # the state the steps left, as the per-step path leaves it

@@ -46,8 +46,10 @@ from aerodock.world.vehicles.rigid_kernel import hold_rows
  F_MOUNT, F_BAR_RADIUS, F_APERTURE, F_BAR_HALF_LENGTH, F_GATE_HEIGHT, F_STIFFNESS,
  F_DAMPING, F_BAR_MASS, F_HANG_OFFSET, F_THRUST_COEFF) = range(29)
 F_SIZE = 29
-# the kernel's integers in and out: the clock, the draws' cursor, the IMU chain's heads
-I_STEP, I_DRAW, I_GYRO_HEAD, I_ACCEL_HEAD, I_RING_HEAD = range(5)
+# the kernel's integers in and out: the clock, the draws' cursor, the IMU chain's heads; out:
+# the normal draws the step it stopped before (STOP_DRAWS) takes
+I_STEP, I_DRAW, I_GYRO_HEAD, I_ACCEL_HEAD, I_RING_HEAD, I_NEED = range(6)
+I_SIZE = 6
 # why the kernel stopped (its second result)
 STOP_DONE, STOP_DRAWS, STOP_GRIPPER, STOP_UNCOVERED = range(4)
 
@@ -111,7 +113,7 @@ def _step_plan(iv: np.ndarray, fc: np.ndarray, k: int, n_draws: int, g_idle: boo
                active_close: bool) -> tuple[int, int, bool, bool]:
     """What every block of a step shares, before it: (the step's index, the draws' cursor,
     whether the strain gauge samples at its end, whether the grippers step); a cursor of -1:
-    the buffer does not hold the step's draws."""
+    the buffer does not hold the step's draws (their number then in ``iv[I_NEED]``)."""
     step = iv[I_STEP]
     pos = iv[I_DRAW]
     dt = fc[F_DT]
@@ -119,7 +121,9 @@ def _step_plan(iv: np.ndarray, fc: np.ndarray, k: int, n_draws: int, g_idle: boo
     rate = fc[F_SENSOR_RATE]
     sample = int(t_end * rate + 1e-9) != int((t_end - dt) * rate + 1e-9)
     gripper_runs = not (g_idle and not sample and not active_close)
-    if pos + _physics_draws(fc, k) + (1 if sample else 0) > n_draws:
+    need = _physics_draws(fc, k) + (1 if gripper_runs and sample else 0)  # (_step_done's)
+    if pos + need > n_draws:
+        iv[I_NEED] = need
         pos = -1
     return step, pos, sample, gripper_runs
 

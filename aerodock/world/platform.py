@@ -30,6 +30,7 @@ from aerodock.jit import (
     np_arctan2,
     scratch_row,
     scratch_rows,
+    scratch_size,
 )
 
 
@@ -297,7 +298,7 @@ def hanging_bar_kernel_body(loops: np.ndarray, bar_p: np.ndarray, bar_v: np.ndar
     and end positions, NumPy's elementwise operations), the yaw by NumPy's arctan2 loop when
     ``yaw_from_rot``, then :func:`step_bar_kernel` on the first ``n`` rows."""
     n = bar_p.shape[0]
-    owner = np.empty(7 * n)  # the rows below are views of it
+    owner = np.empty(scratch_size(7 * n, 3))  # the rows below are views of it
     (work,) = borrowed((owner,))
     anchor_p, at = scratch_rows(work, 0, n, 3)
     anchor_p_next, at = scratch_rows(work, at, n, 3)

@@ -36,7 +36,7 @@ from aerodock.world.gripper import (
 )
 from aerodock.world.imu import start_imu
 from aerodock.world.params import WorldParams
-from aerodock.world.period import STOP_UNCOVERED, covered, run_period, runs_step
+from aerodock.world.period import STOP_DRAWS, STOP_UNCOVERED, covered, run_period, runs_step
 from aerodock.world.platform import BarState, PlatformParams, anchor_point, hanging_bar
 from aerodock.world.sensors import Observation
 from aerodock.world.state import AccelWindow, BatchConstants, WorldState
@@ -411,7 +411,7 @@ class World:
                 left -= done
                 if not left or why == STOP_UNCOVERED:
                     break
-                if not done:  # the per-step path draws (or refills) and goes on
+                if not done and why != STOP_DRAWS:  # (the draws refilled: the kernel goes on)
                     step_world(state, params, terms, targets, close_command)
                     left -= 1
         for _ in range(left):

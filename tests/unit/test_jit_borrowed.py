@@ -66,22 +66,30 @@ def _carve(owner, n):
 
 @pytest.mark.parametrize("n", [1, 3, 7])
 def test_scratch_views_are_consecutive_c_contiguous_rows_of_their_owner(n):
-    owner = np.full(9 * n + 2, np.nan)
+    pad = jit.SCRATCH_PAD
+    size = jit.scratch_size(9 * n, 4)
+    assert size == 9 * n + 4 * pad
+    owner = np.full(size + 2, np.nan)
     at, at2, empty, row_strides, slab_strides, c_contiguous = _carve(owner, n)
-    assert at == at2 == 9 * n and empty == 0
+    assert at == 9 * n + 3 * pad and at2 == size and empty == 0
     assert row_strides == (8 * n, 8) and slab_strides == (24 * n, 8 * n, 8) and c_contiguous
     i = np.arange(n)
     np.testing.assert_array_equal(owner[:n], 1.0 + i)
-    np.testing.assert_array_equal(owner[n:3 * n].reshape(2, n), [10.0 + i, 20.0 + i])
-    slab = owner[3 * n:9 * n].reshape(2, 3, n)
+    start = n + pad
+    np.testing.assert_array_equal(owner[start:start + 2 * n].reshape(2, n),
+                                  [10.0 + i, 20.0 + i])
+    start += 2 * n + pad
+    slab = owner[start:start + 6 * n].reshape(2, 3, n)
     np.testing.assert_array_equal(slab[1, 2], 220.0 + i)
     np.testing.assert_array_equal(slab[0, 1], 110.0 + i)
-    assert np.isnan(owner[9 * n:]).all()  # nothing written past the views
+    written = np.zeros(owner.size, dtype=bool)
+    written[:n] = written[n + pad:3 * n + pad] = written[start:start + 6 * n] = True
+    assert np.isnan(owner[~written]).all()  # the pads and the tail untouched
 
 
 def test_plain_python_scratch_views_have_the_same_layout():
     code = ("import numpy as np\nfrom aerodock import jit\nassert not jit.JIT_ENABLED\n"
-            "w = np.arange(40.0)\nr, at = jit.scratch_row(w, 0, 3)\n"
+            "w = np.arange(80.0)\nr, at = jit.scratch_row(w, 0, 3)\n"
             "m, at = jit.scratch_rows(w, at, 2, 3)\ns, at = jit.scratch_slab(w, at, 2, 2, 3)\n"
             "(b,) = jit.borrowed((w,))\nassert b is w\n"
             "print(at, r.tolist(), m[1].tolist(), s[1, 1].tolist())")
@@ -89,5 +97,9 @@ def test_plain_python_scratch_views_have_the_same_layout():
     env.pop("NUMBA_DISABLE_JIT", None)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          check=True).stdout.split(maxsplit=1)
-    assert int(out[0]) == 21
-    assert out[1].strip() == "[0.0, 1.0, 2.0] [6.0, 7.0, 8.0] [18.0, 19.0, 20.0]"
+    pad = jit.SCRATCH_PAD
+    assert int(out[0]) == 21 + 3 * pad
+    first, second, third = 0, 3 + pad, 9 + 2 * pad
+    assert out[1].strip() == (f"{np.arange(first, first + 3.0).tolist()} "
+                              f"{np.arange(second + 3, second + 6.0).tolist()} "
+                              f"{np.arange(third + 9, third + 12.0).tolist()}")
