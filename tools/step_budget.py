@@ -3,6 +3,7 @@
 ::
 
     python tools/step_budget.py [--envs 1] [--steps 300]
+    python tools/step_budget.py --sim [--envs 1] [--steps 2000] [--physics-only]
 
 Wraps the parts of a step with timers (the env's ``step``, the mission's ``fly`` and ``decide``,
 the world's ``advance`` and its compiled period kernel, both position controllers, the mission's
@@ -11,6 +12,11 @@ residual actions, and prints each part's time per environment step and its calls
 parts nest (``fly`` holds ``advance`` and ``decide``; ``advance`` holds the kernel), so the
 figures do not add up; what a part costs beyond those it holds is its figure less theirs. The
 timers cost about 0.2 µs a call.
+
+``--sim``: the same for the bench's ``SimLoop`` instead of an environment (``--envs`` trials,
+``--steps`` control periods; with both controllers, or held hover commands with
+``--physics-only``): the period, ``advance``, the kernel, the autopilots' targets, the per-step
+path, the motion capture and the controllers, µs per period.
 """
 
 from __future__ import annotations
@@ -45,8 +51,13 @@ def timed(owner: Any, name: str, label: str) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--envs", type=int, default=1)
-    parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--steps", type=int, default=None)
+    parser.add_argument("--sim", action="store_true", help="the bench's SimLoop, not an env")
+    parser.add_argument("--physics-only", action="store_true", help="with --sim: no controllers")
     args = parser.parse_args()
+    if args.sim:
+        return sim_budget(args.envs, args.steps or 2000, not args.physics_only)
+    args.steps = args.steps or 300
 
     import aerodock.control.controller as controller
     import aerodock.envs.vector as vector
@@ -87,6 +98,42 @@ def main() -> int:
         if CALLS[label]:
             print(f"{label:42s} {1e6 * TIMES[label] / args.steps:8.1f}  "
                   f"({CALLS[label] / args.steps:.2f})")
+    return 0
+
+
+def sim_budget(n: int, periods: int, controllers: bool) -> int:
+    """The ``--sim`` budget: SimLoop's parts, µs of wall time per control period."""
+    import aerodock.control.controller as controller
+    import aerodock.world.period as period
+    import aerodock.world.world as world
+    from aerodock.bench.simulator import SimLoop
+    from aerodock.config import load_config
+
+    timed(world.World, "advance", "  world advance")
+    timed(period, "period_kernel", "    period kernel (serial)")
+    timed(period, "period_kernel_parallel", "    period kernel (blocks)")
+    timed(world.World, "_targets", "    autopilots' targets")
+    timed(world, "step_world", "    per-step path")
+    timed(world.World, "observe", "  motion capture")
+    timed(controller.PositionController, "step", "  position controllers (both)")
+    loop = SimLoop(load_config(), n)
+    loop.run(200, controllers)
+    loop.reset()
+    loop.run(200, controllers)
+    TIMES.clear()
+    CALLS.clear()
+    start = time.perf_counter()
+    loop.run(periods, controllers)
+    whole = time.perf_counter() - start
+    what = "with both controllers" if controllers else "physics only"
+    print(f"SimLoop, {n} trial(s), {periods} periods, {what}: µs per period (calls per period)")
+    print(f"{'period':42s} {1e6 * whole / periods:8.1f}")
+    for label in ("  world advance", "    period kernel (serial)", "    period kernel (blocks)",
+                  "    autopilots' targets", "    per-step path", "  motion capture",
+                  "  position controllers (both)"):
+        if CALLS[label]:
+            print(f"{label:42s} {1e6 * TIMES[label] / periods:8.1f}  "
+                  f"({CALLS[label] / periods:.2f})")
     return 0
 
 
