@@ -9,8 +9,11 @@ A restructuring that "changes no number" is checked with this script, not by eye
 ``capture`` runs ``aerodock reproduce --quick --seed 0`` (its ``results.json``) and four docking
 campaigns that between them cross every path of the world and the mission (the paper's
 controller, ours with the model ``reproduce`` trained, the oracle under a moving leader with
-faults, the point-mass vehicle on a stand), each printed with ``dock --json``. ``compare`` says,
-file by file, whether the bytes are identical; the exit status is 0 only when all are.
+faults, the point-mass vehicle on a stand), each printed with ``dock --json``, and, where
+gymnasium is installed, a rollout of the vector environment (``env_rollout.json``: four
+environments, 800 steps of seeded random actions through an autoreset; every observation,
+reward and end flag). ``capture --env-only`` runs the rollout alone. ``compare`` says, file by
+file, whether the bytes are identical; the exit status is 0 only when all are.
 
 ``results.json`` records how long each stage took (wall-clock seconds) and where it wrote its
 files: the reproduction always runs in the same folder (``RUN_DIR``), and the comparison blanks
@@ -58,9 +61,36 @@ def _aerodock() -> str:
     return str(exe) if exe.exists() else "aerodock"
 
 
-def capture(out: Path) -> None:
-    """Run the reproduction and the campaigns; write their outputs below ``out``."""
+# The rollout, run in a fresh process (the aerodock on its path): JSON of every step's outputs.
+_ENV_ROLLOUT = """
+import json, numpy as np
+from aerodock.envs import DockingVectorEnv
+env = DockingVectorEnv(num_envs=4)
+obs, _ = env.reset(seed=0)
+steps = [obs.tolist()]
+for a in np.random.default_rng(0).uniform(-1.0, 1.0, (800, 4, 3)).astype(np.float32):
+    obs, reward, terminated, truncated, _ = env.step(a)
+    steps.append([obs.tolist(), reward.tolist(), terminated.tolist(), truncated.tolist()])
+print(json.dumps(steps))
+"""
+
+
+def capture_env(out: Path) -> None:
+    """The vector environment's rollout into ``out/env_rollout.json`` (nothing without
+    gymnasium: the file is then left out, and ``compare`` skips what the first capture lacks)."""
     out.mkdir(parents=True, exist_ok=True)
+    done = subprocess.run([sys.executable, "-c", _ENV_ROLLOUT], capture_output=True)
+    if done.returncode != 0:
+        print("no env rollout:", done.stderr.decode().strip().splitlines()[-1:])
+        return
+    (out / "env_rollout.json").write_bytes(done.stdout)
+
+
+def capture(out: Path) -> None:
+    """Run the reproduction, the campaigns and the env rollout; write their outputs below
+    ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    capture_env(out)
     shutil.rmtree(RUN_DIR, ignore_errors=True)
     subprocess.run([_aerodock(), "reproduce", "--quick", "--seed", "0", "--out", str(RUN_DIR)],
                    check=True, stdout=subprocess.DEVNULL)
@@ -79,8 +109,9 @@ def capture(out: Path) -> None:
 
 
 def _files(root: Path) -> list[Path]:
-    names = [Path("reproduce/results.json")]
+    names = [Path("reproduce/results.json")] if (root / "reproduce").exists() else []
     names += sorted(p.relative_to(root) for p in root.glob("dock_*.json"))
+    names += sorted(p.relative_to(root) for p in root.glob("env_*.json"))
     return names
 
 
@@ -129,13 +160,15 @@ def compare(a: Path, b: Path) -> bool:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="verb", required=True)
-    sub.add_parser("capture").add_argument("out", type=Path)
+    cap = sub.add_parser("capture")
+    cap.add_argument("out", type=Path)
+    cap.add_argument("--env-only", action="store_true", help="the env rollout alone")
     cmp_ = sub.add_parser("compare")
     cmp_.add_argument("a", type=Path)
     cmp_.add_argument("b", type=Path)
     args = parser.parse_args()
     if args.verb == "capture":
-        capture(args.out)
+        (capture_env if args.env_only else capture)(args.out)
         return 0
     return 0 if compare(args.a, args.b) else 1
 

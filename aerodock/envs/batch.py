@@ -22,11 +22,12 @@ import numpy as np
 
 from aerodock.config import Config
 from aerodock.control.compensation import AccelPredictor, Compensation
-from aerodock.mission import AbortReason, MissionBatch, MissionSpec, Phase, SettledStart
+from aerodock.mission import MissionBatch, MissionSpec, SettledStart
 from aerodock.mission.checks import MissionSpecError, check_mission, check_positive
+from aerodock.mission.phases.gate_sensing import GateCode
+from aerodock.mission.spec import AbortCode, PhaseCode
 from aerodock.planning.docking import docking_point_m
 from aerodock.world import World
-from aerodock.world.gripper import GateState
 
 MAX_RESIDUAL_MPS2 = 50.0
 """Largest residual acceleration bound ``residual_max_mps2`` an environment accepts, m/s² (the
@@ -187,10 +188,11 @@ class DockingBatch:
         dock_now = docking_point_m(obs_l_f.p, obs_l_f.v, mb.geom)
         cols = [obs_f.p - p_ref, obs_f.v - v_ref, obs_f.p - dock_now, obs_f.v - obs_l_f.v,
                 a_ref, bias, ff, np.full((n, 1), mb.t_s - mb.arrival_s),
-                (d.phase == Phase.TERMINAL)[:, None].astype(float),
-                (mb.world.gripper.gate == GateState.CLOSING)[:, None].astype(float)]
+                (d.phase == PhaseCode.TERMINAL)[:, None].astype(float),
+                (mb.world.gripper.gate == GateCode.CLOSING)[:, None].astype(float)]
         out = np.concatenate(cols, axis=1).astype(np.float32)
-        return np.clip(out, OBS_LOW, OBS_HIGH)
+        np.maximum(out, OBS_LOW, out=out)  # np.clip's numbers (a NaN stays NaN), in place
+        return np.minimum(out, OBS_HIGH, out=out)
 
     def act(self, action: np.ndarray) -> StepOutcome:
         """Fly one control period with the normalised residual ``action`` (n, 3) in [-1, 1]
@@ -198,11 +200,11 @@ class DockingBatch:
         acceleration while it approaches), then decide the next period."""
         mb, n = self.mission, self.n
         action = np.asarray(action, dtype=float).reshape(n, 3)
-        if not np.all(np.isfinite(action)):
+        if not np.isfinite(action).all():
             bad = np.flatnonzero(~np.all(np.isfinite(action), axis=1)).tolist()
             raise ValueError(f"the action holds NaN or infinite values (rows {bad}); actions "
                              "must be finite, in [-1, 1]")
-        action = np.clip(action, -1.0, 1.0)
+        action = np.minimum(np.maximum(action, -1.0), 1.0)  # np.clip's numbers
         active = mb.active
         flown = mb.fly(action * self.residual_max_mps2)
         none = np.zeros(n, dtype=bool)
@@ -215,7 +217,7 @@ class DockingBatch:
                           - w.action_per_s * np.sum(action**2, axis=1) * dt, 0.0)
         reward += w.dock * docked - w.miss * missed
         reward -= w.abort * aborted + w.clearance * flown.clearance_violated
-        timed_out = aborted & live & (mb.abort_reason == AbortReason.TIMEOUT)
+        timed_out = aborted & live & (mb.abort_reason == AbortCode.TIMEOUT)
         out = StepOutcome(reward=np.where(live, reward, 0.0),
                           docked=docked & live, missed=missed & live,
                           aborted=aborted & live,
