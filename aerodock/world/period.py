@@ -305,10 +305,9 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         DISABLED.append(f"{type(err).__name__}: {err}")
         return 0, STOP_UNCOVERED
     done, why, changed = result
-    if why == STOP_DRAWS:  # the next step's draws, refilled now as its first draw past the
-        # buffer's end would refill it (a covered step draws nothing else): the next call goes on
-        rng.reserve_normals(int(iv[I_NEED]))
     if done == 0:
+        if why == STOP_DRAWS:
+            rng.reserve_normals(int(iv[I_NEED]))  # (as below)
         return 0, why
     # the state the steps left, as the per-step path leaves it
     rng.set_normal_cursor(int(iv[I_DRAW]))
@@ -349,4 +348,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         state.gripper = gripper_after(gripper, changed, reading, by_contact, servo, gate,
                                       inside_start, slipped, resolved)
         cache.spare = _gripper_arrays(n)
+    if why == STOP_DRAWS:  # the next step's draws, refilled now (the cursor moved on above) as
+        # its first draw past the buffer's end would refill them (a covered step draws nothing
+        # else): the next call goes on
+        rng.reserve_normals(int(iv[I_NEED]))
     return done, why

@@ -108,9 +108,18 @@ def test_a_small_random_buffer_stops_the_kernel_mid_period(n, monkeypatch):
     goes on: every step compiled, the numbers the per-step path's."""
     monkeypatch.setattr(aerodock.rng, "_CHUNK", 40)
     ref, _ = _fly(n, 10, False, monkeypatch)
+    reserve, short = aerodock.rng.TrialRNG.reserve_normals, []
+
+    def checked(rng, per_trial):  # each refill asked for where the buffer, as the stream's
+        # cursor stands, lacks the step's draws (a stale cursor would refill at the wrong row)
+        short.append(rng._pos["normal"] + per_trial > rng._buf["normal"].shape[0])
+        reserve(rng, per_trial)
+
+    monkeypatch.setattr(aerodock.rng.TrialRNG, "reserve_normals", checked)
     got, stops = _fly(n, 10, True, monkeypatch)
     assert stops.get(period_stops.STOP_DRAWS, 0) >= 5  # mid-period stops
     assert stops["steps"] == 10 * 5
+    assert short and all(short)
     _assert_same(ref, got)
 
 
