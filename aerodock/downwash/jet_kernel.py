@@ -18,19 +18,15 @@ import math
 
 import numpy as np
 
-from aerodock.jit import (
-    any_layout,
+from aerodock.borrowed import (
     borrowed,
     keep_alive,
-    njit,
-    np_exp,
-    np_log,
-    np_power,
     scratch_row,
     scratch_rows,
     scratch_size,
     scratch_slab,
 )
+from aerodock.jit import any_layout, njit, np_exp, np_log, np_power
 
 # jet parameters (a float64 array)
 JP_B0, JP_SPREAD, JP_P, JP_JET_CONST, JP_TIME_RATIO, JP_LENGTH_RATIO, JP_PAIR_DIST = range(7)

@@ -23,16 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import (
-    NUMPY_LOOPS,
-    borrowed,
-    dot3_vecmat,
-    keep_alive,
-    njit,
-    np_arctan2,
-    scratch_row,
-    scratch_size,
-)
+from aerodock.borrowed import borrowed, keep_alive, scratch_row, scratch_size
+from aerodock.jit import NUMPY_LOOPS, dot3_vecmat, njit, np_arctan2
 from aerodock.world.vehicles.rigid_kernel import exp_so3, load3x3, mat3_mul, store3x3
 
 

@@ -29,7 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.jit import borrowed, dot3_vecmat, keep_alive, njit, np_arctan2
+from aerodock.borrowed import borrowed, keep_alive
+from aerodock.jit import dot3_vecmat, njit, np_arctan2
 from aerodock.world.attitude_estimator import estimate_into
 
 

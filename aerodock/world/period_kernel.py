@@ -17,8 +17,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from aerodock.borrowed import borrowed, keep_alive
 from aerodock.downwash.jet_kernel import wake_step
-from aerodock.jit import _unary, any_layout, borrowed, keep_alive, njit, njit_parallel
+from aerodock.jit import _unary, any_layout, njit, njit_parallel
 from aerodock.world.gripper import contact_kernel_body, contact_push
 from aerodock.world.imu import _next_slot, imu_step
 from aerodock.world.params import WorldParams
@@ -371,7 +372,7 @@ def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle
 
     Returns (steps done, why it stopped (``STOP_*``), the ``CHANGED_*`` bits of the grippers'
     steps, OR-ed)."""
-    # Every array argument as a borrowed view (aerodock.jit.borrowed): the caller holds them
+    # Every array argument as a borrowed view (aerodock.borrowed): the caller holds them
     # for the call, and the step's some 1,400 reference counts then cost nothing.
     (loops, trig, fc, iv, g_passive, g_active, close, draws, packed, p0, v0, rot0, w0,
      omega0, integral0, yaw_sp0, thrust0, r_des, yaw_rate, thrust_cmd, torque_ff,

@@ -16,22 +16,11 @@ from functools import cached_property
 
 import numpy as np
 
+from aerodock.borrowed import borrowed, keep_alive, scratch_row, scratch_rows, scratch_size
 from aerodock.config import Config
 from aerodock.downwash.base import frozen_record
 from aerodock.frozen import freeze
-from aerodock.jit import (
-    NUMPY_LOOPS,
-    any_layout,
-    borrowed,
-    dot3_matvec,
-    dot3_vecmat,
-    keep_alive,
-    njit,
-    np_arctan2,
-    scratch_row,
-    scratch_rows,
-    scratch_size,
-)
+from aerodock.jit import NUMPY_LOOPS, any_layout, dot3_matvec, dot3_vecmat, njit, np_arctan2
 
 
 @dataclass(frozen=True)

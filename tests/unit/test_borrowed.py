@@ -1,7 +1,7 @@
-"""Borrowed views and scratch views (``aerodock.jit.borrowed``, ``scratch_row``/``rows``/``slab``):
-the same elements as the arrays they borrow from, written through to them, in any layout; the
-scratch views laid out one after the other in their owner, C-contiguous; and the plain-Python
-forms (``AERODOCK_JIT=0``) giving the same layout."""
+"""Borrowed views and scratch views (:mod:`aerodock.borrowed`: ``borrowed``, ``scratch_row``,
+``scratch_rows``, ``scratch_slab``): the same elements as the arrays they borrow from, written
+through to them, in any layout; the scratch views laid out one after the other in their owner,
+C-contiguous; and the plain-Python forms (``AERODOCK_JIT=0``) giving the same layout."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ import numba
 import numpy as np
 import pytest
 
+from aerodock import borrowed as views
 from aerodock import jit
 
 pytestmark = pytest.mark.skipif(not jit.JIT_ENABLED, reason="the compiled forms")
@@ -21,7 +22,7 @@ pytestmark = pytest.mark.skipif(not jit.JIT_ENABLED, reason="the compiled forms"
 @numba.njit
 def _double_through_borrowed(a, b, flags, scale):
     """Every array borrowed, then written through views of the views."""
-    a, b, flags, scale = jit.borrowed((a, b, flags, scale))
+    a, b, flags, scale = views.borrowed((a, b, flags, scale))
     for i in range(a.shape[0]):
         row = a[i]
         row *= scale
@@ -48,11 +49,11 @@ def test_borrowed_views_read_and_write_the_callers_arrays():
 
 @numba.njit
 def _carve(owner, n):
-    (work,) = jit.borrowed((owner,))
-    row, at = jit.scratch_row(work, 0, n)
-    rows, at = jit.scratch_rows(work, at, 2, n)
-    slab, at = jit.scratch_slab(work, at, 2, 3, n)
-    empty, at2 = jit.scratch_row(work, at, 0)
+    (work,) = views.borrowed((owner,))
+    row, at = views.scratch_row(work, 0, n)
+    rows, at = views.scratch_rows(work, at, 2, n)
+    slab, at = views.scratch_slab(work, at, 2, 3, n)
+    empty, at2 = views.scratch_row(work, at, 0)
     for i in range(n):
         row[i] = 1.0 + i
         for r in range(2):
@@ -60,14 +61,14 @@ def _carve(owner, n):
         for s in range(2):
             for r in range(3):
                 slab[s, r, i] = 100.0 * (s + 1) + 10.0 * r + i
-    jit.keep_alive(owner)
+    views.keep_alive(owner)
     return at, at2, empty.shape[0], rows.strides, slab.strides, slab.flags.c_contiguous
 
 
 @pytest.mark.parametrize("n", [1, 3, 7])
 def test_scratch_views_are_consecutive_c_contiguous_rows_of_their_owner(n):
-    pad = jit.SCRATCH_PAD
-    size = jit.scratch_size(9 * n, 4)
+    pad = views.SCRATCH_PAD
+    size = views.scratch_size(9 * n, 4)
     assert size == 9 * n + 4 * pad
     owner = np.full(size + 2, np.nan)
     at, at2, empty, row_strides, slab_strides, c_contiguous = _carve(owner, n)
@@ -88,16 +89,17 @@ def test_scratch_views_are_consecutive_c_contiguous_rows_of_their_owner(n):
 
 
 def test_plain_python_scratch_views_have_the_same_layout():
-    code = ("import numpy as np\nfrom aerodock import jit\nassert not jit.JIT_ENABLED\n"
-            "w = np.arange(80.0)\nr, at = jit.scratch_row(w, 0, 3)\n"
-            "m, at = jit.scratch_rows(w, at, 2, 3)\ns, at = jit.scratch_slab(w, at, 2, 2, 3)\n"
-            "(b,) = jit.borrowed((w,))\nassert b is w\n"
+    code = ("import numpy as np\nfrom aerodock import borrowed as views\n"
+            "from aerodock.jit import JIT_ENABLED\nassert not JIT_ENABLED\n"
+            "w = np.arange(80.0)\nr, at = views.scratch_row(w, 0, 3)\n"
+            "m, at = views.scratch_rows(w, at, 2, 3)\ns, at = views.scratch_slab(w, at, 2, 2, 3)\n"
+            "(b,) = views.borrowed((w,))\nassert b is w\n"
             "print(at, r.tolist(), m[1].tolist(), s[1, 1].tolist())")
     env = {**os.environ, "AERODOCK_JIT": "0"}
     env.pop("NUMBA_DISABLE_JIT", None)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          check=True).stdout.split(maxsplit=1)
-    pad = jit.SCRATCH_PAD
+    pad = views.SCRATCH_PAD
     assert int(out[0]) == 21 + 3 * pad
     first, second, third = 0, 3 + pad, 9 + 2 * pad
     assert out[1].strip() == (f"{np.arange(first, first + 3.0).tolist()} "
