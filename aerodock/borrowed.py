@@ -18,10 +18,11 @@ from __future__ import annotations
 
 from typing import Any
 
+# isort: off
+from aerodock.jit import JIT_ENABLED, njit  # first: it applies AERODOCK_JIT before numba loads
 from numba.core import cgutils, types
 from numba.extending import intrinsic
-
-from aerodock.jit import JIT_ENABLED, njit
+# isort: on
 
 
 @intrinsic
