@@ -115,33 +115,46 @@ def _scratch_view(typingctx: Any, work: Any, at: Any, shape: Any) -> Any:
     return out_ty(work, at, shape), codegen
 
 
+@njit
+def _room(work: Any, at: int, size: int) -> int:
+    """``at + size``, once it is checked that ``work`` holds ``size`` floats from ``at`` (a view
+    past the allocation would read and write another array's memory)."""
+    end = at + size
+    if at < 0 or size < 0 or end > work.shape[0]:
+        raise IndexError("a scratch view reaches past its allocation (scratch_size too small)")
+    return end
+
+
 if JIT_ENABLED:
     @njit
     def scratch_row(work: Any, at: int, cols: int) -> tuple[Any, int]:
         """(cols,) of ``work`` from ``at``, and where the next view starts."""
-        return _scratch_view(work, at, (cols,)), at + cols + SCRATCH_PAD
+        end = _room(work, at, cols)
+        return _scratch_view(work, at, (cols,)), end + SCRATCH_PAD
 
     @njit
     def scratch_rows(work: Any, at: int, rows: int, cols: int) -> tuple[Any, int]:
         """(rows, cols) of ``work`` from ``at`` (C order), and where the next view starts."""
-        return _scratch_view(work, at, (rows, cols)), at + rows * cols + SCRATCH_PAD
+        end = _room(work, at, rows * cols)
+        return _scratch_view(work, at, (rows, cols)), end + SCRATCH_PAD
 
     @njit
     def scratch_slab(work: Any, at: int, slabs: int, rows: int, cols: int) -> tuple[Any, int]:
         """(slabs, rows, cols) of ``work`` from ``at`` (C order), and where the next starts."""
-        end = at + slabs * rows * cols
+        end = _room(work, at, slabs * rows * cols)
         return _scratch_view(work, at, (slabs, rows, cols)), end + SCRATCH_PAD
 else:  # the plain-Python run of the kernels: NumPy's views
     def scratch_row(work: Any, at: int, cols: int) -> tuple[Any, int]:
         """(cols,) of ``work`` from ``at``, and where the next view starts."""
-        return work[at:at + cols], at + cols + SCRATCH_PAD
+        end = _room(work, at, cols)
+        return work[at:end], end + SCRATCH_PAD
 
     def scratch_rows(work: Any, at: int, rows: int, cols: int) -> tuple[Any, int]:
         """(rows, cols) of ``work`` from ``at`` (C order), and where the next view starts."""
-        end = at + rows * cols
+        end = _room(work, at, rows * cols)
         return work[at:end].reshape((rows, cols)), end + SCRATCH_PAD
 
     def scratch_slab(work: Any, at: int, slabs: int, rows: int, cols: int) -> tuple[Any, int]:
         """(slabs, rows, cols) of ``work`` from ``at`` (C order), and where the next starts."""
-        end = at + slabs * rows * cols
+        end = _room(work, at, slabs * rows * cols)
         return work[at:end].reshape((slabs, rows, cols)), end + SCRATCH_PAD

@@ -124,7 +124,7 @@ def jet_forces(loops: np.ndarray, jp: np.ndarray, cols: np.ndarray, offsets: np.
     for q in range(k):
         if offsets[q, 2] != 0.0:
             flat = False
-    # every temporary row below is a view of one allocation (aerodock.jit's scratch views)
+    # every temporary row below is a view of one allocation (aerodock.borrowed's scratch)
     owner = np.empty(_jet_scratch_size(n, k))
     (work,) = borrowed((owner,))
     axis, at = scratch_rows(work, 0, 3, n)

@@ -105,3 +105,19 @@ def test_plain_python_scratch_views_have_the_same_layout():
     assert out[1].strip() == (f"{np.arange(first, first + 3.0).tolist()} "
                               f"{np.arange(second + 3, second + 6.0).tolist()} "
                               f"{np.arange(third + 9, third + 12.0).tolist()}")
+
+
+@numba.njit
+def _too_far(owner, n):
+    (work,) = views.borrowed((owner,))
+    row, at = views.scratch_row(work, 0, n)
+    rows, at = views.scratch_rows(work, at, 2, n)  # needs n + pad + 2n floats
+    views.keep_alive(owner)
+    return at
+
+
+def test_a_scratch_view_past_its_allocation_is_refused():
+    n = 4
+    assert _too_far(np.empty(views.scratch_size(3 * n, 2)), n) == 3 * n + 2 * views.SCRATCH_PAD
+    with pytest.raises(IndexError, match="past its allocation"):
+        _too_far(np.empty(3 * n + views.SCRATCH_PAD - 1), n)
