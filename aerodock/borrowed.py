@@ -83,9 +83,11 @@ def scratch_size(floats: int, views: int) -> int:
 @intrinsic
 def _scratch_view(typingctx: Any, work: Any, at: Any, shape: Any) -> Any:
     """The C-contiguous float64 array of ``shape`` (a tuple of ints) whose first element is
-    ``work[at]``: no owner record (a borrowed view), nothing checked."""
-    if not (isinstance(work, types.Array) and isinstance(shape, types.UniTuple)):
-        return None
+    ``work[at]`` (``work``: a C-contiguous float64 row): no owner record (a borrowed view); its
+    bounds are the caller's to check (the ``scratch_*`` helpers do)."""
+    if not (isinstance(work, types.Array) and work.dtype == types.float64 and work.ndim == 1
+            and work.layout == "C" and isinstance(shape, types.UniTuple)):
+        return None  # (numba then reports no matching signature)
     ndim = shape.count
     out_ty = types.Array(types.float64, ndim, "C")
 

@@ -373,7 +373,7 @@ def _period_driver(loops, trig, steps, fc, iv, substeps, latency, has_ff, g_idle
     Returns (steps done, why it stopped (``STOP_*``), the ``CHANGED_*`` bits of the grippers'
     steps, OR-ed)."""
     # Every array argument as a borrowed view (aerodock.borrowed): the caller holds them
-    # for the call, and the step's some 1,400 reference counts then cost nothing.
+    # for the call, and the step's some 1,400 reference counts then need no atomic instruction.
     (loops, trig, fc, iv, g_passive, g_active, close, draws, packed, p0, v0, rot0, w0,
      omega0, integral0, yaw_sp0, thrust0, r_des, yaw_rate, thrust_cmd, torque_ff,
      fol_mass, fol_mass_rows, gravity, hover, captured, thrust_gain, rotor_loss,
