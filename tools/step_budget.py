@@ -68,16 +68,17 @@ def main() -> int:
     import aerodock.world.world as world
     from aerodock.config import load_config
 
-    timed(vector.DockingVectorEnv, "step", "env step")
-    timed(batch.MissionBatch, "fly", "  mission fly")
-    timed(world.World, "advance", "    world advance")
-    timed(period, "period_kernel", "      period kernel (serial)")
-    timed(period, "period_kernel_parallel", "      period kernel (blocks)")
-    timed(batch.MissionBatch, "decide", "    mission decide")
-    timed(leader, "leader_command", "      leader's command (its controller)")
-    timed(approach, "replan", "      approach replan")
-    timed(world.World, "observe", "      motion capture")
-    timed(controller.PositionController, "step", "  position controllers (both)")
+    labels = time_parts([
+        (vector.DockingVectorEnv, "step", "env step"),
+        (batch.MissionBatch, "fly", "  mission fly"),
+        (world.World, "advance", "    world advance"),
+        (period, "period_kernel", "      period kernel (serial)"),
+        (period, "period_kernel_parallel", "      period kernel (blocks)"),
+        (batch.MissionBatch, "decide", "    mission decide"),
+        (leader, "leader_command", "      leader's command (its controller)"),
+        (approach, "replan", "      approach replan"),
+        (world.World, "observe", "      motion capture"),
+        (controller.PositionController, "step", "  position controllers (both)")])
 
     env = vector.DockingVectorEnv(num_envs=args.envs, config=load_config())
     actions = np.random.default_rng(0).uniform(-1.0, 1.0, (args.steps, args.envs, 3))
@@ -89,16 +90,23 @@ def main() -> int:
     CALLS.clear()
     for a in actions:
         env.step(a.astype(np.float32))
-    order = ["env step", "  mission fly", "    world advance", "      period kernel (serial)",
-             "      period kernel (blocks)", "    mission decide",
-             "      leader's command (its controller)", "      approach replan",
-             "      motion capture", "  position controllers (both)"]
     print(f"{args.envs} environment(s), {args.steps} steps: µs per step (calls per step)")
-    for label in order:
-        if CALLS[label]:
-            print(f"{label:42s} {1e6 * TIMES[label] / args.steps:8.1f}  "
-                  f"({CALLS[label] / args.steps:.2f})")
+    report(labels, args.steps)
     return 0
+
+
+def time_parts(parts: list[tuple[Any, str, str]]) -> list[str]:
+    """:func:`timed` on each (owner, name, label); the labels, in order."""
+    for owner, name, label in parts:
+        timed(owner, name, label)
+    return [label for _, _, label in parts]
+
+
+def report(labels: list[str], count: int) -> None:
+    """Each timed part that ran: µs and calls per step (or period) over ``count`` of them."""
+    for label in labels:
+        if CALLS[label]:
+            print(f"{label:42s} {1e6 * TIMES[label] / count:8.1f}  ({CALLS[label] / count:.2f})")
 
 
 def sim_budget(n: int, periods: int, controllers: bool) -> int:
@@ -109,13 +117,14 @@ def sim_budget(n: int, periods: int, controllers: bool) -> int:
     from aerodock.bench.simulator import SimLoop
     from aerodock.config import load_config
 
-    timed(world.World, "advance", "  world advance")
-    timed(period, "period_kernel", "    period kernel (serial)")
-    timed(period, "period_kernel_parallel", "    period kernel (blocks)")
-    timed(world.World, "_targets", "    autopilots' targets")
-    timed(world, "step_world", "    per-step path")
-    timed(world.World, "observe", "  motion capture")
-    timed(controller.PositionController, "step", "  position controllers (both)")
+    labels = time_parts([
+        (world.World, "advance", "  world advance"),
+        (period, "period_kernel", "    period kernel (serial)"),
+        (period, "period_kernel_parallel", "    period kernel (blocks)"),
+        (world.World, "_targets", "    autopilots' targets"),
+        (world, "step_world", "    per-step path"),
+        (world.World, "observe", "  motion capture"),
+        (controller.PositionController, "step", "  position controllers (both)")])
     loop = SimLoop(load_config(), n)
     loop.run(200, controllers)
     loop.reset()
@@ -128,12 +137,7 @@ def sim_budget(n: int, periods: int, controllers: bool) -> int:
     what = "with both controllers" if controllers else "physics only"
     print(f"SimLoop, {n} trial(s), {periods} periods, {what}: µs per period (calls per period)")
     print(f"{'period':42s} {1e6 * whole / periods:8.1f}")
-    for label in ("  world advance", "    period kernel (serial)", "    period kernel (blocks)",
-                  "    autopilots' targets", "    per-step path", "  motion capture",
-                  "  position controllers (both)"):
-        if CALLS[label]:
-            print(f"{label:42s} {1e6 * TIMES[label] / periods:8.1f}  "
-                  f"({CALLS[label] / periods:.2f})")
+    report(labels, periods)
     return 0
 
 
