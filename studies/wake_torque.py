@@ -27,6 +27,7 @@ from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.fileio import dumps_json, json_ready
 from aerodock.identify.flights import WakeFitError, prepare_flights
+from aerodock.identify.motor_commands import CEILING_PWM, MAP_FIT_PWM, MotorMap, logs_as_sent
 from aerodock.identify.wake_torque import (
     disk_profile_torque,
     force_profile,
@@ -44,6 +45,7 @@ WORLD = ROOT / "examples" / "crazyflie_small_under_large.toml"
 MAX_OFFSET_M = 0.30
 FORCE_SEPARATIONS_M = ((0.15, 0.45), (0.45, 0.80))
 PRINTED_DISK_OFFSET_M = 0.12  # the disk profile's torque is printed out to this offset
+PRINTED_FORCE_OFFSETS_M = (0.0, 0.04, 0.08, 0.14, 0.18, 0.22)  # the force as sent, printed there
 
 
 def main() -> int:
@@ -74,6 +76,13 @@ def main() -> int:
             carried[pair] = disk_profile_torque(near.get(pair, []), bins)
         except WakeFitError:
             pass
+    # the same, from the motors' commands as sent (aerodock/identify/motor_commands.py): the
+    # thrust the firmware asked for beyond a motor's ceiling taken away, torque and force alike
+    sent_logs, maps = logs_as_sent(logs)
+    sent = torque_profile(params, prepare_flights(sent_logs), sent_logs, inertia,
+                          rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
+                          max_offset_m=MAX_OFFSET_M)
+    sent_force = force_profile(sent_logs, separation_m=FORCE_SEPARATIONS_M[0])
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
@@ -91,7 +100,12 @@ def main() -> int:
             "disk_profile": {pair: {"torque_nm": torque.tolist(), "params": fitted}
                              for pair, (torque, fitted) in carried.items()},
             "motor_commands": commands, "free_air_map_check": map_check,
-            "world_small_nm_per_rad": world_nm_per_rad})))
+            "world_small_nm_per_rad": world_nm_per_rad,
+            "as_sent": {"profile": {pair: [{**asdict(b), "lever_m": b.lever_m} for b in bins]
+                                    for pair, bins in sent.items()},
+                        "force_profile": {pair: [asdict(b) for b in bins]
+                                          for pair, bins in sent_force.items()},
+                        "motor_maps": [asdict(m) for m in maps]}})))
         return 0
     for pair, bins in profile.items():
         if not bins:
@@ -144,9 +158,46 @@ def main() -> int:
     for vid, r in slopes.items():
         print(f"  {vid}: {r['forward']:.2f}-{r['reverse']:.2f} (correlation "
               f"{r['correlation']:.2f}, lag {1e3 * r['delay_s']:.0f} ms, {r['samples']} samples)")
+    print_as_sent(profile, sent, sent_force, maps)
     print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
           f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0
+
+
+def print_as_sent(asked: dict, sent: dict, sent_force: dict, maps: list[MotorMap]) -> None:
+    """The torque and force from the motors' commands as sent, beside the asked-for ones."""
+    print(f"the motors' command maps (each motor's asked-for thrust on its command and the "
+          f"battery's voltage, fitted where every command is below {MAP_FIT_PWM}), per vehicle: "
+          f"the largest residual sd, and the thrust asked for beyond the map's at commands of "
+          f"{CEILING_PWM} and up:")
+    for vid in sorted({m.vehicle for m in maps}):
+        mine = [m for m in maps if m.vehicle == vid]
+        top = [m for m in mine if m.ceiling_samples]
+        count = sum(m.ceiling_samples for m in top)
+        excess = (sum(m.ceiling_excess_n * m.ceiling_samples for m in top) / count if count
+                  else float("nan"))
+        print(f"  {vid}: {len(mine)} flights, residual sd up to "
+              f"{1e3 * max(m.residual_sd_n for m in mine):.1f} mN; {count} motor samples at the "
+              f"ceiling (commands up to {max(m.top_pwm for m in mine):.3f}), "
+              f"{1e3 * excess:.1f} mN asked beyond the map there")
+    print("the inward wake torque from the commands as sent, mN m: asked-for / as sent / jet, "
+          "as sent over the jet, the lever as sent [cm] (its force as sent too):")
+    for pair, bins in sent.items():
+        before = {(b.offset_lo_m, b.offset_hi_m): b for b in asked.get(pair, [])}
+        for b in bins:
+            a = before.get((b.offset_lo_m, b.offset_hi_m))
+            if a is None or b.offset_hi_m > PRINTED_DISK_OFFSET_M + 1e-9:
+                continue
+            print(f"  {pair} {100 * b.offset_lo_m:4.0f}-{100 * b.offset_hi_m:<4.0f} "
+                  f"{1e3 * a.real_nm:6.2f} / {1e3 * b.real_nm:6.2f} / {1e3 * b.jet_nm:5.2f}  "
+                  f"{b.ratio:5.1f}  {100 * b.lever_m:6.1f}")
+    print("the downward force below the other vehicle from the commands as sent, 0.15-0.45 m "
+          "apart [mN (se)]:")
+    for pair, bins in sent_force.items():
+        cells = ", ".join(f"{100 * b.offset_lo_m:.0f}-{100 * b.offset_hi_m:.0f}: "
+                          f"{_cell(b.below_n, b.below_se_n).strip()}" for b in bins
+                          if np.isfinite(b.below_n) and b.offset_lo_m in PRINTED_FORCE_OFFSETS_M)
+        print(f"  {pair}: {cells}")
 
 
 def _cell(mean_n: float, se_n: float) -> str:

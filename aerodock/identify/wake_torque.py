@@ -1,8 +1,9 @@
 """The wake's torque on the follower, read from real flights, beside the jet's.
 
 A fit of the wake (:mod:`aerodock.identify.wake_fit`) sees the follower's acceleration only.
-Flights whose logs carry the torque the motors make (``follower_motor_torque_nm``, N·m, body
-FRD: the Neural-Swarm logs' own mixer of their per-motor thrusts) and the body rates
+Flights whose logs carry the motors' torque (``follower_motor_torque_nm``, N·m, body FRD: the
+Neural-Swarm logs' own mixer of the per-motor thrusts the firmware asked for, its commanded torque;
+:mod:`aerodock.identify.motor_commands` gives the torque of the commands as sent) and the body rates
 (``follower_body_rates_radps``) also give the wake's torque, from Euler's equation:
 
     tau_wake = J dw/dt + w x J w - (tau_motors - tau_free)
@@ -15,8 +16,10 @@ unit vector from the axis to the follower): the jet's torque at the wake's edge,
 oscillatory behaviour. Binned by the horizontal offset, it is set beside the jet's mean torque at
 the same logged states (:func:`torque_profile`).
 
-What the logged torque stands on: the per-motor thrusts are the logs' estimate from the motor
-commands (PWM and battery voltage), a still-air map. Where the motors nearest the axis run near
+What the logged torque stands on: the per-motor thrusts are the ones the firmware asked for, and
+each motor's command (PWM, 0..1) follows from them and the battery's voltage by a still-air map,
+up to the top of the commands' range, where the command stops short of the thrust asked for
+(:mod:`aerodock.identify.motor_commands`). Where the motors nearest the axis run near
 their ceiling (``follower_motor_pwm``, 0..1), that map is least certain and the follower is at
 the limit of its roll authority; the profile reports those motors' median command per bin.
 :func:`thrust_map_slope` checks the map's slope in free air against the accelerometer (the

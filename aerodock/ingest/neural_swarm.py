@@ -208,13 +208,20 @@ def read_vehicle_file(path: Path, *, time_unit: str = "auto") -> VehicleTrack:
     if all(i is not None for i in torque_idx):
         torques = table.data[:, torque_idx]
         if np.all(np.isfinite(torques)):
-            # The torque the motors' logged thrusts make (the logs' own mixer), FLU -> FRD.
+            # The torque the firmware commanded: the logs' own mixer of the per-motor thrusts it
+            # asked for (u1..u4), FLU -> FRD.
             extra["body_torque_nm"] = convert_vectors(FLIP_YZ, torques)
     pwm_idx = [_find(index, n, "pwm") for n in _MOTOR_N]
     if all(i is not None for i in pwm_idx):
         pwm = table.data[:, pwm_idx]
         if np.all(np.isfinite(pwm)):
             extra["motor_pwm"] = pwm  # normalised 0..1, the motors in the logs' order
+    # The per-motor thrusts the firmware asked for (u1..u4, N, the logs' order: what the torque
+    # columns mix) and the battery's voltage: with the PWM, each motor's own command map
+    extra["motor_thrust_n"] = stack["motor_n"]
+    vbat = _find(index, "vbat")
+    if vbat is not None and np.all(np.isfinite(table.data[:, vbat])):
+        extra["battery_v"] = table.data[:, vbat]
     return VehicleTrack(
         path=path,
         vehicle_id=vehicle_id,
@@ -384,8 +391,9 @@ def build_flightlog(follower: VehicleTrack, leader: VehicleTrack, *, follower_ma
         extra["follower_body_rates_radps"] = follower.extra["body_rates_radps"][keep]
     if "body_torque_nm" in follower.extra:
         extra["follower_motor_torque_nm"] = follower.extra["body_torque_nm"][keep]
-    if "motor_pwm" in follower.extra:
-        extra["follower_motor_pwm"] = follower.extra["motor_pwm"][keep]
+    for key in ("motor_pwm", "motor_thrust_n", "battery_v"):
+        if key in follower.extra:
+            extra[f"follower_{key}"] = follower.extra[key][keep]
     return FlightLog(
         t_s=t - t[0],
         leader_pos_m=resample_linear(leader.t_s, leader.pos_m, t),

@@ -174,6 +174,10 @@ def test_motor_torque_and_commands_are_kept(tmp_path: Path) -> None:
     assert log.meta["follower_id"] == "cf1"
     np.testing.assert_allclose(log.extra["follower_motor_torque_nm"], [[1e-3, -2e-3, 3e-4]] * n)
     np.testing.assert_allclose(log.extra["follower_motor_pwm"], pwm)
+    # the per-motor thrusts asked for (u1..u4) and the battery's voltage, as logged
+    np.testing.assert_allclose(log.extra["follower_motor_thrust_n"],
+                               0.032 * 9.81 / 4 * np.ones((n, 4)), rtol=1e-3)
+    np.testing.assert_allclose(log.extra["follower_battery_v"], 3.7)
 
 
 @pytest.mark.parametrize("scale, unit", [(1.0, "us"), (1e-3, "ms"), (1e-6, "s")])

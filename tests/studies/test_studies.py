@@ -171,6 +171,9 @@ STUDY_CASES = (
            r"^\| ours \+ deep model \| 4/4 \(51%-100%\) met \|")),
     Study("wake_torque.py", ("--data", "{data}"),
           (r"^cf51's motor commands: \d\.\d\d median in free air",
+           rf"^  cf101: 12 flights, residual sd up to {NUMBER} mN; \d+ motor samples at the "
+           rf"ceiling \(commands up to {NUMBER}\), {NUMBER} mN asked beyond the map there$",
+           rf"^  32 g under 32 g +4-6 +{NUMBER} / +{NUMBER} / +{NUMBER} +{NUMBER} +{NUMBER}$",
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
           frozenset({"data"})),
 )
