@@ -36,6 +36,21 @@ class NoiseMode(StrEnum):
     SPEED = "speed"
 
 
+class CommandsMode(StrEnum):
+    """``field fit --commands``: which motor thrusts the labels stand on, where logs carry both."""
+
+    ASKED = "asked"
+    SENT = "sent"
+
+
+CommandsOpt = Annotated[CommandsMode, typer.Option(
+    "--commands",
+    help="Where the logs carry the per-motor thrusts the firmware asked for and the commands "
+         "it sent (Neural-Swarm's do): 'asked' (the labels as logged) or 'sent' (each motor's "
+         "command map fitted per flight, and the force and torque labels from what the "
+         "commands sent make: the thrust asked for beyond a motor's ceiling taken away; "
+         "aerodock/identify/motor_commands.py). Other logs are used as they are either way.")]
+
 FIT_OUTPUTS = ("report.md", "fit.json", "wake.toml", "figures")
 JET_FIELD = "aerodock.downwash.jet:RoundJetField"
 
@@ -67,6 +82,7 @@ def field_fit(
              "do), fit the jet's disk torque beside the force, and the body's share of the "
              "force with it (body_area_ratio). Without such logs the fit is the force's "
              "alone either way.")] = True,
+    commands: CommandsOpt = CommandsMode.ASKED,
     folds: Annotated[int, typer.Option(
         help="Cross-validation over flights: every flight held out once, in this many folds, "
              "each scored by a fit on the others; the spread a new flight should expect "
@@ -99,7 +115,7 @@ def field_fit(
     check_output_dir(out, FIT_OUTPUTS)
     if config_out is not None:
         check_writable_target(config_out)
-    logs = _read_flightlogs(data)
+    logs = _read_flightlogs(data, commands)
     fit, flights, fitted, held, cross = _fit_flights(
         logs, holdout or [], estimate_rotor or [], bootstrap=bootstrap, noise=noise,
         folds=folds, seed=seed, quiet=as_json, torque_of=cfg if torque else None)
@@ -109,7 +125,7 @@ def field_fit(
     paper = {"config": cfg.source, "rows": _fitted_wake_table(fit, cfg)}
     command = _fit_command(data, holdout or [], estimate_rotor or [], bootstrap=bootstrap,
                            seed=seed, noise=noise, folds=folds, config=config, sets=sets or [],
-                           torque=torque)
+                           torque=torque, commands=commands)
     held_names = sorted({f.flight for f in held})
     toml_text = config_fragment(fit, held_names, command)
     result = {
@@ -119,7 +135,8 @@ def field_fit(
         "samples": fit.samples, "mean_rms_mps2": fit.mean_rms_mps2,
         "torque_flights": fit.torque_flights, "torque_rms_mps2": fit.torque_rms_mps2,
         "held_out": scores, "fitted": fit_scores, "turbulence_bins": fit.turbulence_bins,
-        "world": paper, "command": command, "noise": noise, **checks,
+        "world": paper, "command": command, "noise": noise, "commands": str(commands),
+        **checks,
         "cross_validation": cross,
     }
     _write_fit_outputs(out, config_out, fit, scores, fit_scores, paper, command,
@@ -241,7 +258,7 @@ def _fitted_wake_table(fit: WakeFit, cfg: Config) -> list[dict]:
 
 def _fit_command(data: list[Path], holdout: list[str], estimate_rotor: list[str], *,
                  bootstrap: int, seed: int, noise: str, folds: int, config: Path | None,
-                 sets: list[str], torque: bool = True) -> str:
+                 sets: list[str], torque: bool = True, commands: str = "asked") -> str:
     """The ``aerodock field fit`` command line that repeats this fit (for the report and TOML);
     options at their defaults are left out, except ``--bootstrap`` and ``--seed``."""
     import shlex
@@ -253,6 +270,7 @@ def _fit_command(data: list[Path], holdout: list[str], estimate_rotor: list[str]
     words += ["--noise", noise] if noise != "pooled" else []
     words += ["--folds", str(folds)] if folds else []
     words += [] if torque else ["--no-torque"]
+    words += ["--commands", str(commands)] if commands != "asked" else []
     words += ["--config", str(config)] if config is not None else []
     words += [w for text in sets for w in ("--set", text)]
     return "aerodock field fit " + " ".join(shlex.quote(w) for w in words)
@@ -326,6 +344,7 @@ def field_score(
     torque_separation: Annotated[tuple[float, float], typer.Option(
         "--torque-separation", help="The depths below the leader the torque is read over, "
                                     "m: LOW HIGH.")] = (0.10, 0.70),
+    commands: CommandsOpt = CommandsMode.ASKED,
     config: ConfigOpt = None,
     sets: SetOpt = None,
     trust: TrustOpt = None,
@@ -348,7 +367,7 @@ def field_score(
     if not paths:
         fail("no flights: give FlightLog files with --data")
     params, radii, cfg = _scored_wake(fit, config, sets, trust)
-    logs = _read_flightlogs(paths)
+    logs = _read_flightlogs(paths, commands)
     try:
         flights = fl.prepare_flights(logs)
         inertia = fs.scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
@@ -359,7 +378,7 @@ def field_score(
         fail(one_line(err))
     result = {"fit": str(fit), "params": params, "rotor_radii_m": radii,
               "targets": fs.TARGETS, "torque_bins_m": [list(b) for b in fs.TORQUE_BINS_M],
-              "torque_separation_m": [lo, hi],
+              "torque_separation_m": [lo, hi], "commands": str(commands),
               "pairs": [s.as_dict() for s in scores]}
     if as_json:
         print_json(json_ready(result))
@@ -367,10 +386,15 @@ def field_score(
     _print_scores(scores)
 
 
-def _read_flightlogs(paths: list[Path]) -> list[FlightLog]:
-    """Every FlightLog of ``paths``; a file that is not one is a one-line error."""
+def _read_flightlogs(paths: list[Path],
+                     commands: CommandsMode = CommandsMode.ASKED) -> list[FlightLog]:
+    """Every FlightLog of ``paths``, those with motor commands taken as sent for
+    ``--commands sent`` (:func:`aerodock.identify.motor_commands.sent_where_logged`); a file
+    that is not one, or commands whose maps cannot be fitted, is a one-line error."""
     from aerodock.fileio import one_line
     from aerodock.flightlog import FlightLogError, load_flightlogs
+    from aerodock.identify.flights import WakeFitError
+    from aerodock.identify.motor_commands import sent_where_logged
 
     logs: list[FlightLog] = []
     for path in paths:
@@ -378,7 +402,12 @@ def _read_flightlogs(paths: list[Path]) -> list[FlightLog]:
             logs += load_flightlogs(path)
         except (FlightLogError, OSError) as err:
             fail(one_line(err))
-    return logs
+    if commands != CommandsMode.SENT:
+        return logs
+    try:
+        return sent_where_logged(logs)
+    except WakeFitError as err:
+        fail(one_line(err))
 
 
 def _scored_wake(fit: Path, config: Path | None, sets: list[str] | None,

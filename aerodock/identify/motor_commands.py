@@ -151,6 +151,17 @@ def logs_as_sent(logs: Sequence[FlightLog]) -> tuple[list[FlightLog], list[Motor
     return out, maps
 
 
+def sent_where_logged(logs: Sequence[FlightLog]) -> list[FlightLog]:
+    """``logs`` with every one that carries the motor commands taken as sent (:func:`as_sent`),
+    the others as they are (flights of a simulated world, whose torque is the rotors' own).
+
+    Raises:
+        WakeFitError: a log carries the motor commands but its maps cannot be fitted (as
+            :func:`as_sent`).
+    """
+    return [as_sent(log)[0] if has_motor_commands(log) else log for log in logs]
+
+
 def _map_design(pwm: np.ndarray, volts: np.ndarray | None) -> np.ndarray:
     """The map's terms: 1, the command and its square, and (with the voltage) each times it."""
     terms = [np.ones_like(pwm), pwm, pwm**2]

@@ -145,3 +145,32 @@ def test_real_commands_reach_a_ceiling_and_the_torque_as_sent_is_smaller(shared_
         assert len(edge) == 1
         a, s = edge[0]
         assert s.below_n < 0.95 * a.below_n, (pair, a, s)  # measured 0.48-0.89
+
+
+def test_sent_where_logged_leaves_other_logs_as_they_are(flight):
+    log, sent, volts = commanded(flight, cap=0.93)
+    out = mc.sent_where_logged([log, flight])
+    assert out[1] is flight  # no motor commands: a simulated world's log, as it is
+    np.testing.assert_allclose(out[0].follower_thrust_n,
+                               firmware_map(sent, volts[:, None]).sum(axis=1), atol=1e-9)
+
+
+def test_field_fit_refuses_commands_it_cannot_map_in_one_line(tmp_path, flight):
+    """``field fit --commands sent`` on a log whose every command sits at the top: one line
+    naming the flight, exit code 2, nothing written."""
+    from cli_process import aerodock as run_cli
+
+    from aerodock.flightlog import save_flightlogs
+
+    log, _, _ = commanded(flight, cap=0.93)
+    high = replace(log, extra={**log.extra, wt.MOTOR_PWM_KEY:
+                               np.full_like(log.extra[wt.MOTOR_PWM_KEY], 0.95)})
+    data = tmp_path / "flights.npz"
+    save_flightlogs(data, [high])
+    proc = run_cli("field", "fit", str(data), "--commands", "sent", "--bootstrap", "0",
+                   "--out", str(tmp_path / "o"), check=False)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
+    assert log.name in lines[0] and "needed to fit the maps" in lines[0]
+    assert not (tmp_path / "o").exists()

@@ -193,6 +193,7 @@ def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
     assert set(result["params"]) == set(wf.FITTED_PARAMS)
     assert result["held_out_flights"] == ["synth_ss_03"]
     assert result["bootstrap_runs"] == 2
+    assert result["commands"] == "asked" and "--commands" not in result["command"]
     assert [r["separation_m"] for r in result["world"]["rows"]] == [0.36, 0.64, 1.35]
     for name in ("report.md", "fit.json", "wake.toml", "figures/mean_vs_separation.png",
                  "figures/mean_vs_offset.png", "figures/autocorrelation.png",
@@ -224,6 +225,7 @@ def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
     (["DATA", "--holdout", "synth_*"], "--holdout leaves no flight to fit"),
     (["DATA", "--bootstrap", "-1"], "--bootstrap must be between 0 and 1000"),
     (["DATA", "--noise", "fast"], "'fast' is not one of 'pooled', 'speed'"),
+    (["DATA", "--commands", "wanted"], "'wanted' is not one of 'asked', 'sent'"),
     (["DATA", "--estimate-rotor", "cf77"], "--estimate-rotor cf77: no log has a vehicle"),
     (["NOTLOG"], "NOTLOG"),
 ])
