@@ -202,8 +202,10 @@ def kernel_blocks(n: int) -> int:
     """How many blocks of trials a period of ``n`` trials is stepped in: one a thread of
     numba's (:func:`numba.get_num_threads`) from :data:`PARALLEL_MIN_TRIALS` trials on, else 1
     (the serial kernel)."""
+    if n < PARALLEL_MIN_TRIALS:
+        return 1  # (asking numba for its threads costs about 5 µs: a batch of one's period)
     threads = numba.get_num_threads()
-    return threads if threads > 1 and n >= PARALLEL_MIN_TRIALS else 1
+    return threads if threads > 1 else 1
 
 
 _BLAS_LIMIT: list[Any] = []
@@ -320,9 +322,10 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     slots = params.latency_steps + 1
     history, seen = state.history, cache.seen
     step0 = state.step_index
-    for s in range(done):
-        p, v, r = slab_p[s], slab_v[s], slab_r[s]
-        entry = (p[:n], v[:n], r[:n], p[n:], v[n:], r[n:])
+    # each step's entry: its leaders' then followers' positions, velocities and attitudes (the
+    # views made by iterating the slabs' halves: NumPy's own loop, not one indexing a view)
+    for s, entry in enumerate(zip(slab_p[:done, :n], slab_v[:done, :n], slab_r[:done, :n],
+                                  slab_p[:done, n:], slab_v[:done, n:], slab_r[:done, n:])):
         slot = (step0 + s + 1) % slots
         history[slot] = seen[slot] = entry
     if log is not None:  # what the vehicles term hands the log, step by step
