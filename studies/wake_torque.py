@@ -34,6 +34,7 @@ from aerodock.identify.wake_torque import (
     free_air_map_check,
     motor_command_range,
     thrust_map_slope,
+    torque_by_motor_angle,
     torque_profile,
 )
 from aerodock.ingest.data_dir import find_data_dir
@@ -83,6 +84,11 @@ def main() -> int:
                           rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
                           max_offset_m=MAX_OFFSET_M)
     sent_force = force_profile(sent_logs, separation_m=FORCE_SEPARATIONS_M[0])
+    # the torque by where the motors point, as asked for and as sent
+    radii = {"cf101": cfg.leader.rotor_radius_m}
+    by_angle = {name: torque_by_motor_angle(params, prepare_flights(some), some, inertia,
+                                            rotor_radii_m=radii)
+                for name, some in (("asked", logs), ("sent", sent_logs))}
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
@@ -105,7 +111,10 @@ def main() -> int:
                                     for pair, bins in sent.items()},
                         "force_profile": {pair: [asdict(b) for b in bins]
                                           for pair, bins in sent_force.items()},
-                        "motor_maps": [asdict(m) for m in maps]}})))
+                        "motor_maps": [asdict(m) for m in maps]},
+            "by_motor_angle": {name: {pair: [asdict(b) for b in bins]
+                                      for pair, bins in rows.items()}
+                               for name, rows in by_angle.items()}})))
         return 0
     for pair, bins in profile.items():
         if not bins:
@@ -159,6 +168,15 @@ def main() -> int:
         print(f"  {vid}: {r['forward']:.2f}-{r['reverse']:.2f} (correlation "
               f"{r['correlation']:.2f}, lag {1e3 * r['delay_s']:.0f} ms, {r['samples']} samples)")
     print_as_sent(profile, sent, sent_force, maps)
+    print("the inward torque 4-10 cm off the axis by the angle between the line to the axis and "
+          "the nearest motor arm (0: a motor on it), mN m, real (se) / jet:")
+    for name, rows in by_angle.items():
+        for pair, bins in rows.items():
+            if bins:
+                cells = ", ".join(f"{b.angle_lo_deg:.0f}-{b.angle_hi_deg:.0f} deg: "
+                                  f"{1e3 * b.real_nm:.2f} ({1e3 * b.real_se_nm:.2f}) / "
+                                  f"{1e3 * b.jet_nm:.2f}" for b in bins)
+                print(f"  {name}, {pair}: {cells}")
     print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
           f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0

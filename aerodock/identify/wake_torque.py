@@ -205,54 +205,13 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
     Raises:
         WakeFitError: no flight with the motor torque, or a follower without an inertia.
     """
-    by_name = {log.name: log for log in logs}
-    parts: dict[str, list[tuple[np.ndarray, ...]]] = {}
-    for flight in flights:
-        log = by_name.get(flight.name)
-        if log is None or not has_motor_torque(log):
-            continue
-        vehicle = flight.vehicles.get("follower")
-        if vehicle not in inertia_kgm2:
-            raise WakeFitError(f"{flight.name}: no inertia for the follower {vehicle!r}")
-        real_body = real_wake_torque_nm(log, inertia_kgm2[vehicle],
-                                        free_air_offset_m=free_air_offset_m)
-        if real_body is None:
-            continue
-        i = flight.index
-        rot = quat_to_rotmat(log.follower_quat[i])
-        geometry = geometry_with(flight, rotor_radii_m or {})
-        jet = build_jet(params, geometry)
-        jet_body = jet.mean_disk_torque_nm(flight.leader, flight.follower)
-        dp = flight.follower.p - flight.leader.p
-        horizontal = np.hypot(dp[:, 0], dp[:, 1])
-        e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]
-        real = inward_nm(np.einsum("nij,nj->ni", rot, real_body[i]), e_r)
-        model = inward_nm(np.einsum("nij,nj->ni", rot, jet_body), e_r)
-        # The lean towards the axis: the thrust axis (-body z) tipped towards -e_r.
-        up = -rot[:, :, 2]
-        lean = np.degrees(np.arcsin(np.clip(-(up[:, 0] * e_r[:, 0] + up[:, 1] * e_r[:, 1]),
-                                            -1.0, 1.0)))
-        near_pwm = np.full(i.size, np.nan)
-        if MOTOR_PWM_KEY in log.extra:
-            offsets = quad_rotor_offsets_body_m(geometry["follower_diagonal_m"], 4)
-            motors = flight.follower.p[:, None, :2] + np.einsum(
-                "nij,kj->nki", rot, offsets)[:, :, :2]
-            nearest = np.argmin(np.linalg.norm(motors - flight.leader.p[:, None, :2], axis=2),
-                                axis=1)
-            near_pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)[
-                i, _LOG_MOTOR_ORDER[nearest]]
-        down = flight.label_mps2[:, 2] * geometry["follower_mass_kg"]
-        half = np.full(i.size, geometry["follower_diagonal_m"] / 2.0)
-        radial_v = np.sum(flight.follower.v[:, :2] * e_r, axis=1)  # its own, through the air
-        parts.setdefault(flight.pair, []).append((horizontal, dp[:, 2], real, model, lean,
-                                                  near_pwm, down, half, radial_v))
-    if not parts:
-        raise WakeFitError("no flight carries the motor torque and body rates with free air "
-                           "to take the trim from")
+    samples = _inward_samples(params, flights, logs, inertia_kgm2, rotor_radii_m or {},
+                              free_air_offset_m)
     out: dict[str, list[TorqueBin]] = {}
-    for pair, chunks in parts.items():
+    for pair, x in samples.items():
         horizontal, sep, real, model, lean, pwm, down, half, radial_v = (
-            np.concatenate(c) for c in zip(*chunks))
+            x[k] for k in ("horizontal", "separation", "real", "model", "lean", "near_pwm",
+                           "down", "half", "radial_v"))
         below = (sep >= separation_m[0]) & (sep <= separation_m[1])
         bins = []
         for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
@@ -272,6 +231,125 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                                 else None),
                 real_moving_in_nm=_mean_if_enough(real[m & (radial_v < -RADIAL_SPEED_MPS)]),
                 real_moving_out_nm=_mean_if_enough(real[m & (radial_v > RADIAL_SPEED_MPS)])))
+        out[pair] = bins
+    return out
+
+
+def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
+                    logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]],
+                    rotor_radii_m: dict[str, float], free_air_offset_m: float,
+                    ) -> dict[str, dict[str, np.ndarray]]:
+    """Per pairing, every fitted sample of the flights that carry the motor torque: the
+    horizontal offset and separation, the real and the jet's inward torque, the lean into the
+    axis, the command of the motor nearest it (nan: not logged), the real downward force, the
+    half diagonal, the follower's own radial speed and the angle (deg, 0-45 on a quad) between
+    the line to the axis and its nearest motor arm, in the body's plane.
+
+    Raises:
+        WakeFitError: no flight with the motor torque, or a follower without an inertia.
+    """
+    by_name = {log.name: log for log in logs}
+    parts: dict[str, list[dict[str, np.ndarray]]] = {}
+    for flight in flights:
+        log = by_name.get(flight.name)
+        if log is None or not has_motor_torque(log):
+            continue
+        vehicle = flight.vehicles.get("follower")
+        if vehicle not in inertia_kgm2:
+            raise WakeFitError(f"{flight.name}: no inertia for the follower {vehicle!r}")
+        real_body = real_wake_torque_nm(log, inertia_kgm2[vehicle],
+                                        free_air_offset_m=free_air_offset_m)
+        if real_body is None:
+            continue
+        i = flight.index
+        rot = quat_to_rotmat(log.follower_quat[i])
+        geometry = geometry_with(flight, rotor_radii_m)
+        jet = build_jet(params, geometry)
+        jet_body = jet.mean_disk_torque_nm(flight.leader, flight.follower)
+        dp = flight.follower.p - flight.leader.p
+        horizontal = np.hypot(dp[:, 0], dp[:, 1])
+        e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]
+        # The lean towards the axis: the thrust axis (-body z) tipped towards -e_r.
+        up = -rot[:, :, 2]
+        lean = np.degrees(np.arcsin(np.clip(-(up[:, 0] * e_r[:, 0] + up[:, 1] * e_r[:, 1]),
+                                            -1.0, 1.0)))
+        offsets = quad_rotor_offsets_body_m(geometry["follower_diagonal_m"], 4)
+        near_pwm = np.full(i.size, np.nan)
+        if MOTOR_PWM_KEY in log.extra:
+            motors = flight.follower.p[:, None, :2] + np.einsum(
+                "nij,kj->nki", rot, offsets)[:, :, :2]
+            nearest = np.argmin(np.linalg.norm(motors - flight.leader.p[:, None, :2], axis=2),
+                                axis=1)
+            near_pwm = np.asarray(log.extra[MOTOR_PWM_KEY], dtype=float)[
+                i, _LOG_MOTOR_ORDER[nearest]]
+        # the line to the axis (-e_r) in the body's plane against the motor arms
+        to_axis = np.einsum("nji,nj->ni", rot[:, :2, :], -e_r)[:, :2]
+        arms = offsets[:, :2] / np.linalg.norm(offsets[:, :2], axis=1, keepdims=True)
+        cos = (to_axis @ arms.T) / np.maximum(np.linalg.norm(to_axis, axis=1), 1e-12)[:, None]
+        parts.setdefault(flight.pair, []).append({
+            "horizontal": horizontal, "separation": dp[:, 2],
+            "real": inward_nm(np.einsum("nij,nj->ni", rot, real_body[i]), e_r),
+            "model": inward_nm(np.einsum("nij,nj->ni", rot, jet_body), e_r), "lean": lean,
+            "near_pwm": near_pwm, "down": flight.label_mps2[:, 2] * geometry["follower_mass_kg"],
+            "half": np.full(i.size, geometry["follower_diagonal_m"] / 2.0),
+            "radial_v": np.sum(flight.follower.v[:, :2] * e_r, axis=1),  # its own, in the air
+            "motor_angle_deg": np.degrees(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0)))})
+    if not parts:
+        raise WakeFitError("no flight carries the motor torque and body rates with free air "
+                           "to take the trim from")
+    return {pair: {key: np.concatenate([c[key] for c in chunks]) for key in chunks[0]}
+            for pair, chunks in parts.items()}
+
+
+@dataclass(frozen=True)
+class AngleBin:
+    """The inward torque by where the follower's motors point: the angle between the line to
+    the leader's axis and the nearest motor arm (0: a motor on it; 45 on a quad: the axis
+    between two), N·m."""
+
+    angle_lo_deg: float
+    angle_hi_deg: float
+    samples: int
+    real_nm: float
+    real_se_nm: float
+    jet_nm: float
+
+
+def torque_by_motor_angle(params: dict[str, float], flights: Sequence[FlightSamples],
+                          logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]],
+                          *, rotor_radii_m: dict[str, float] | None = None,
+                          separation_m: tuple[float, float] = (0.15, 0.45),
+                          offset_m: tuple[float, float] = (0.04, 0.10),
+                          bands_deg: Sequence[tuple[float, float]] = ((0.0, 15.0), (15.0, 30.0),
+                                                                      (30.0, 45.0)),
+                          free_air_offset_m: float = FREE_AIR_OFFSET_M,
+                          ) -> dict[str, list[AngleBin]]:
+    """Per pairing, the real and the jet's inward torque ``offset_m`` off the axis and
+    ``separation_m`` below it, by the angle between the line to the axis and the nearest motor
+    arm (``bands_deg``). A torque made by the wake's force on the disks is largest with a motor
+    on that line (its lever the half diagonal, against that over sqrt 2 between two motors on a
+    quad), as the disk-sampled jet's is; one made elsewhere would not depend on the angle.
+
+    Raises:
+        WakeFitError: as :func:`torque_profile`.
+    """
+    samples = _inward_samples(params, flights, logs, inertia_kgm2, rotor_radii_m or {},
+                              free_air_offset_m)
+    out: dict[str, list[AngleBin]] = {}
+    for pair, x in samples.items():
+        near = ((x["separation"] >= separation_m[0]) & (x["separation"] <= separation_m[1])
+                & (x["horizontal"] >= offset_m[0]) & (x["horizontal"] < offset_m[1]))
+        bins = []
+        for lo, hi in bands_deg:
+            angle = x["motor_angle_deg"]
+            upper = angle <= hi if (lo, hi) == tuple(bands_deg[-1]) else angle < hi
+            m = near & (angle >= lo) & upper
+            n = int(m.sum())
+            if n >= MIN_BIN_SAMPLES:
+                bins.append(AngleBin(angle_lo_deg=float(lo), angle_hi_deg=float(hi), samples=n,
+                                     real_nm=float(x["real"][m].mean()),
+                                     real_se_nm=float(x["real"][m].std() / np.sqrt(n)),
+                                     jet_nm=float(x["model"][m].mean())))
         out[pair] = bins
     return out
 
