@@ -174,6 +174,7 @@ STUDY_CASES = (
            rf"^  cf101: 12 flights, residual sd up to {NUMBER} mN; \d+ motor samples at the "
            rf"ceiling \(commands up to {NUMBER}\), {NUMBER} mN asked beyond the map there$",
            rf"^  32 g under 32 g +4-6 +{NUMBER} / +{NUMBER} / +{NUMBER} +{NUMBER} +{NUMBER}$",
+           rf"^  sent, 67 g under 32 g: 0-15 deg: {NUMBER} \({NUMBER}\) / {NUMBER}, 15-30 deg: ",
            rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
           frozenset({"data"})),
 )
