@@ -19,6 +19,18 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 INERTIA = {vid: (1.7e-5, 1.7e-5, 3.0e-5) for vid in ("cf1", "cf2", "cf9")}
 
 
+def real_flights(shared_data):
+    """The shared swap flights, the small-under-large world (its fitted jet, cf101's rotors) and
+    the followers' inertias by vehicle id, as studies/wake_torque.py reads them."""
+    from aerodock.experiments.swap_flights import read_swap_flights
+
+    logs = read_swap_flights(shared_data("neural-swarm"))
+    cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
+    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
+               "cf101": cfg.leader.inertia_kgm2}
+    return logs, cfg, inertia
+
+
 @pytest.fixture(scope="module")
 def params():
     cfg = load_config()
@@ -77,12 +89,7 @@ def test_real_torque_depends_on_where_the_large_followers_motors_point(shared_da
     with a motor on the line to the axis, by more than the disk-sampled jet's (real 10.9 against
     7.2 mN m between two motors, the jet's 4.2 against 3.0; docs/crazyflie.md): a torque made at
     the disks."""
-    from aerodock.experiments.swap_flights import read_swap_flights
-
-    logs = read_swap_flights(shared_data("neural-swarm"))
-    cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
-    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
-               "cf101": cfg.leader.inertia_kgm2}
+    logs, cfg, inertia = real_flights(shared_data)
     rows = wt.torque_by_motor_angle(dict(cfg.downwash.params), fl.prepare_flights(logs), logs,
                                     inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
     on, between = rows["67 g under 32 g"][0], rows["67 g under 32 g"][-1]
@@ -133,12 +140,7 @@ def test_real_wake_torque_is_inward_and_larger_than_the_jets(shared_data):
     off the other's axis, two to four times the disk torque of the jet fitted with it
     (docs/crazyflie.md, "The wake's torque in the logs"; 5-8 times the force-only fit's), with the
     motor nearest the axis commanded far above hover."""
-    from aerodock.experiments.swap_flights import read_swap_flights
-
-    logs = read_swap_flights(shared_data("neural-swarm"))
-    cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
-    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
-               "cf101": cfg.leader.inertia_kgm2}
+    logs, cfg, inertia = real_flights(shared_data)
     profile = wt.torque_profile(dict(cfg.downwash.params), fl.prepare_flights(logs), logs,
                                 inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m})
     commands = wt.motor_command_range(logs)
@@ -294,12 +296,7 @@ def test_real_torque_is_more_than_the_force_on_the_disks_can_make(shared_data):
     """On the real flights the same fit (with an upwash ring allowed) leaves the real torque
     4-10 cm off the axis 2.6-3.7 times what the force, carried by the disks, makes: not a
     distribution of thrust over the disks (docs/crazyflie.md)."""
-    from aerodock.experiments.swap_flights import read_swap_flights
-
-    logs = read_swap_flights(shared_data("neural-swarm"))
-    cfg = load_config(EXAMPLES / "crazyflie_small_under_large.toml")
-    inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
-               "cf101": cfg.leader.inertia_kgm2}
+    logs, cfg, inertia = real_flights(shared_data)
     torque = wt.torque_profile(dict(cfg.downwash.params), fl.prepare_flights(logs), logs,
                                inertia, rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
                                max_offset_m=0.3)
