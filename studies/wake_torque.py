@@ -27,7 +27,13 @@ from aerodock.config import load_config
 from aerodock.experiments.swap_flights import read_swap_flights
 from aerodock.fileio import dumps_json, json_ready
 from aerodock.identify.flights import WakeFitError, prepare_flights
-from aerodock.identify.motor_commands import CEILING_PWM, MAP_FIT_PWM, MotorMap, logs_as_sent
+from aerodock.identify.motor_commands import (
+    CEILING_PWM,
+    MAP_FIT_PWM,
+    MotorMap,
+    ceiling_by_vehicle,
+    logs_as_sent,
+)
 from aerodock.identify.wake_torque import (
     disk_profile_torque,
     force_profile,
@@ -188,16 +194,11 @@ def print_as_sent(asked: dict, sent: dict, sent_force: dict, maps: list[MotorMap
           f"battery's voltage, fitted where every command is below {MAP_FIT_PWM}), per vehicle: "
           f"the largest residual sd, and the thrust asked for beyond the map's at commands of "
           f"{CEILING_PWM} and up:")
-    for vid in sorted({m.vehicle for m in maps}):
-        mine = [m for m in maps if m.vehicle == vid]
-        top = [m for m in mine if m.ceiling_samples]
-        count = sum(m.ceiling_samples for m in top)
-        excess = (sum(m.ceiling_excess_n * m.ceiling_samples for m in top) / count if count
-                  else float("nan"))
-        print(f"  {vid}: {len(mine)} flights, residual sd up to "
-              f"{1e3 * max(m.residual_sd_n for m in mine):.1f} mN; {count} motor samples at the "
-              f"ceiling (commands up to {max(m.top_pwm for m in mine):.3f}), "
-              f"{1e3 * excess:.1f} mN asked beyond the map there")
+    for row in ceiling_by_vehicle(maps):
+        print(f"  {row['vehicle']}: {row['flights']} flights, residual sd up to "
+              f"{1e3 * row['residual_sd_n']:.1f} mN; {row['ceiling_samples']} motor samples at "
+              f"the ceiling (commands up to {row['top_pwm']:.3f}), "
+              f"{1e3 * row['ceiling_excess_n']:.1f} mN asked beyond the map there")
     print("the inward wake torque from the commands as sent, mN m: asked-for / as sent / jet, "
           "as sent over the jet, the lever as sent [cm] (its force as sent too):")
     for pair, bins in sent.items():

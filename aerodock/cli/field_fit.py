@@ -140,7 +140,8 @@ def field_fit(
         "cross_validation": cross,
     }
     _write_fit_outputs(out, config_out, fit, scores, fit_scores, paper, command,
-                       {**checks, "cross_validation": cross, "noise": noise}, toml_text, result)
+                       {**checks, "cross_validation": cross, "noise": noise,
+                        "commands": str(commands)}, toml_text, result)
     if as_json:
         print_json(json_ready(result))
         return
@@ -503,7 +504,9 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
                 flights: list[FlightSamples], fitted: list[FlightSamples],
                 held: list[FlightSamples]) -> dict:
     """What the fit's report adds beside the fit: the turbulence read above the labels' noise at
-    the follower's own speed, and the wake's torque where the logs carry the motors' torque
+    the follower's own speed, the motors' ceiling where the logs carry the commands
+    (:func:`aerodock.identify.motor_commands.ceiling_by_vehicle`), and the wake's torque where
+    the logs carry the motors' torque
     (the follower's inertia scaled from the configured vehicle's by its mass and diagonal
     squared: an assumption, for a term, J dw/dt, that averages out in the profile)."""
     from dataclasses import asdict
@@ -511,9 +514,11 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
     from aerodock.identify import wake_fit as wf
     from aerodock.identify.field_score import scaled_inertia
     from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
+    from aerodock.identify.motor_commands import ceiling_by_vehicle, logs_as_sent
     from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
-    out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None}
+    out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None,
+                 "motor_ceiling": ceiling_by_vehicle(logs_as_sent(logs)[1]) or None}
     try:
         noise = noise_by_speed(logs)
     except wf.WakeFitError:

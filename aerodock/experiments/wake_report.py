@@ -285,6 +285,7 @@ def _checks_markdown(checks: dict[str, Any]) -> list[str]:
                     f"{_num(r['lateral_model'])} | {_num(r['vertical_pooled'])} / "
                     f"{_num(r['vertical_speed'])} [{_num(r['vertical_speed_p95'])}] / "
                     f"{_num(r['vertical_model'])} |")
+    lines += _ceiling_markdown(checks.get("motor_ceiling"), checks.get("commands", "asked"))
     lines += ["", "## The wake's torque", ""]
     torque = checks.get("wake_torque")
     if not torque:
@@ -305,6 +306,29 @@ def _checks_markdown(checks: dict[str, Any]) -> list[str]:
                          f" cm | {b['samples']} | {1e3 * b['real_nm']:.2f} | "
                          f"{1e3 * b['jet_nm']:.2f} | {_num(b['ratio'], 2)} | "
                          f"{100 * b['lever_m']:.1f} cm | {100 * b['half_diagonal_m']:.1f} cm |")
+    return lines
+
+
+def _ceiling_markdown(rows: list[dict[str, Any]] | None, commands: str) -> list[str]:
+    """The report's section on the motors' ceiling, where the logs carry the motor commands."""
+    if not rows:
+        return []
+    labels = ("These labels are from the commands as sent (`--commands sent`): the excess is "
+              "not in them." if commands == "sent" else
+              "These labels are as the firmware asked for them: the excess is in them, most near "
+              "the axis; `--commands sent` takes it away.")
+    lines = ["", "## The motors' ceiling", "",
+             "The logs' per-motor thrusts are the ones the firmware asked for; each motor's "
+             "command follows from them by a map (fitted per flight where every command is "
+             "below 0.88, aerodock/identify/motor_commands.py) up to the top of the commands' "
+             f"range, where the thrust asked for runs past what the command sent makes. {labels}",
+             "", "| follower | flights | map residual sd, up to | motor samples at 0.9 and up | "
+             "highest command | asked beyond the map there |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        lines.append(f"| {r['vehicle']} | {r['flights']} | {1e3 * r['residual_sd_n']:.1f} mN | "
+                     f"{r['ceiling_samples']} | {r['top_pwm']:.3f} | "
+                     f"{_num(1e3 * r['ceiling_excess_n'])} mN |")
     return lines
 
 

@@ -151,6 +151,23 @@ def logs_as_sent(logs: Sequence[FlightLog]) -> tuple[list[FlightLog], list[Motor
     return out, maps
 
 
+def ceiling_by_vehicle(maps: Sequence[MotorMap]) -> list[dict[str, float | int | str]]:
+    """Per follower vehicle (sorted by id): its flights, the largest map residual sd (N), its
+    motor samples at :data:`CEILING_PWM` and up, the highest command sent, and the mean thrust
+    asked for beyond the map there (N; nan: none at the ceiling)."""
+    out: list[dict[str, float | int | str]] = []
+    for vid in sorted({m.vehicle for m in maps}):
+        mine = [m for m in maps if m.vehicle == vid]
+        count = sum(m.ceiling_samples for m in mine)
+        excess = (sum(m.ceiling_excess_n * m.ceiling_samples for m in mine if m.ceiling_samples)
+                  / count if count else float("nan"))
+        out.append({"vehicle": vid, "flights": len(mine),
+                    "residual_sd_n": max(m.residual_sd_n for m in mine),
+                    "ceiling_samples": count, "top_pwm": max(m.top_pwm for m in mine),
+                    "ceiling_excess_n": excess})
+    return out
+
+
 def sent_where_logged(logs: Sequence[FlightLog]) -> list[FlightLog]:
     """``logs`` with every one that carries the motor commands taken as sent (:func:`as_sent`),
     the others as they are (flights of a simulated world, whose torque is the rotors' own).

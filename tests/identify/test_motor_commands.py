@@ -174,3 +174,17 @@ def test_field_fit_refuses_commands_it_cannot_map_in_one_line(tmp_path, flight):
     assert len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
     assert log.name in lines[0] and "needed to fit the maps" in lines[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_ceiling_by_vehicle_weighs_each_flight_by_its_samples_at_the_top():
+    maps = [mc.MotorMap("a", "cf9", 100, 0.001, 10, 0.020, 0.95),
+            mc.MotorMap("b", "cf9", 100, 0.003, 30, 0.040, 0.93),
+            mc.MotorMap("c", "cf9", 100, 0.002, 0, float("nan"), 0.85),
+            mc.MotorMap("d", "cf1", 100, 0.001, 0, float("nan"), 0.80)]
+    rows = mc.ceiling_by_vehicle(maps)
+    assert [r["vehicle"] for r in rows] == ["cf1", "cf9"]
+    cf1, cf9 = rows
+    assert cf9["flights"] == 3 and cf9["ceiling_samples"] == 40
+    assert cf9["ceiling_excess_n"] == pytest.approx((10 * 0.020 + 30 * 0.040) / 40)
+    assert cf9["residual_sd_n"] == 0.003 and cf9["top_pwm"] == 0.95
+    assert cf1["ceiling_samples"] == 0 and np.isnan(cf1["ceiling_excess_n"])

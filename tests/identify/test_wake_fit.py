@@ -208,9 +208,11 @@ def test_field_fit_writes_the_report_and_the_config(tmp_path, synthetic):
         for r in rows.values():
             assert r["vertical_speed"] == pytest.approx(r["vertical_pooled"], rel=0.25)
     assert result["wake_torque"] is None
+    assert result["motor_ceiling"] is None  # nor the motor commands: no ceiling to report
     report = (out / "report.md").read_text()
     assert "## The turbulence above the labels' noise at the follower's speed" in report
     assert "No log carries the follower's motor torque" in report
+    assert "## The motors' ceiling" not in report
     # the fragment loads as a world's config, with the fitted values
     from aerodock.config import load_config
 
