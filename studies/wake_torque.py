@@ -10,7 +10,11 @@ the inertias are that file's: the small Crazyflie's [vehicle] and the large cf10
 below the other vehicle, binned by the horizontal offset from its axis (2 cm), out to 30 cm.
 Beside the torque: the downward force by offset below the other vehicle and, as a control
 without a wake, above it (0.15-0.45 m; 0.45-0.80 m, where the small follower flew under the
-large leader), and the thrust map's slope in free air against the accelerometer.
+large leader), and the thrust map's slope in free air against the accelerometer. Then the same
+torque and force from the motors' commands as sent (aerodock/identify/motor_commands.py: each
+motor's map of its command fitted per flight, the thrust asked for beyond its ceiling taken
+away), and the torque by the angle between the line to the axis and the nearest motor arm, as
+asked for and as sent.
 """
 
 from __future__ import annotations
@@ -85,13 +89,12 @@ def main() -> int:
             pass
     # the same, from the motors' commands as sent (aerodock/identify/motor_commands.py): the
     # thrust the firmware asked for beyond a motor's ceiling taken away, torque and force alike
+    radii = {"cf101": cfg.leader.rotor_radius_m}
     sent_logs, maps = logs_as_sent(logs)
     sent = torque_profile(params, prepare_flights(sent_logs), sent_logs, inertia,
-                          rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
-                          max_offset_m=MAX_OFFSET_M)
+                          rotor_radii_m=radii, max_offset_m=MAX_OFFSET_M)
     sent_force = force_profile(sent_logs, separation_m=FORCE_SEPARATIONS_M[0])
     # the torque by where the motors point, as asked for and as sent
-    radii = {"cf101": cfg.leader.rotor_radius_m}
     by_angle = {name: torque_by_motor_angle(params, prepare_flights(some), some, inertia,
                                             rotor_radii_m=radii)
                 for name, some in (("asked", logs), ("sent", sent_logs))}

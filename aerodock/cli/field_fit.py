@@ -514,11 +514,11 @@ def _fit_checks(cfg: Config, fit: WakeFit, logs: list[FlightLog],
     from aerodock.identify import wake_fit as wf
     from aerodock.identify.field_score import scaled_inertia
     from aerodock.identify.label_noise import noise_by_speed, speed_matched_turbulence
-    from aerodock.identify.motor_commands import ceiling_by_vehicle, logs_as_sent
+    from aerodock.identify.motor_commands import ceiling_by_vehicle, command_maps
     from aerodock.identify.wake_torque import has_motor_torque, torque_profile
 
     out: dict = {"turbulence_above_speed_noise": None, "wake_torque": None,
-                 "motor_ceiling": ceiling_by_vehicle(logs_as_sent(logs)[1]) or None}
+                 "motor_ceiling": ceiling_by_vehicle(command_maps(logs)) or None}
     try:
         noise = noise_by_speed(logs)
     except wf.WakeFitError:

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from aerodock.identify.motor_commands import CEILING_PWM, MAP_FIT_PWM
 from aerodock.identify.wake_fit import WakeFit
 from aerodock.identify.wake_score import TARGETS
 
@@ -320,10 +321,11 @@ def _ceiling_markdown(rows: list[dict[str, Any]] | None, commands: str) -> list[
     lines = ["", "## The motors' ceiling", "",
              "The logs' per-motor thrusts are the ones the firmware asked for; each motor's "
              "command follows from them by a map (fitted per flight where every command is "
-             "below 0.88, aerodock/identify/motor_commands.py) up to the top of the commands' "
-             f"range, where the thrust asked for runs past what the command sent makes. {labels}",
-             "", "| follower | flights | map residual sd, up to | motor samples at 0.9 and up | "
-             "highest command | asked beyond the map there |",
+             f"below {MAP_FIT_PWM}, aerodock/identify/motor_commands.py) up to the top of the "
+             "commands' range, where the thrust asked for runs past what the command sent "
+             f"makes. {labels}",
+             "", "| follower | flights | map residual sd, up to | motor samples at "
+             f"{CEILING_PWM} and up | highest command | asked beyond the map there |",
              "| --- | --- | --- | --- | --- | --- |"]
     for r in rows:
         lines.append(f"| {r['vehicle']} | {r['flights']} | {1e3 * r['residual_sd_n']:.1f} mN | "

@@ -1,4 +1,4 @@
-"""The torque the follower's motors make from the commands they were sent, not the ones asked for.
+"""What the follower's motors make from the commands they were sent, not what was asked for.
 
 The Neural-Swarm logs' torque columns (``torquex..z``, :data:`~aerodock.identify.wake_torque.
 MOTOR_TORQUE_KEY`) are the firmware's *commanded* torques: an exact linear mix of the per-motor
@@ -72,9 +72,9 @@ def made_thrusts(log: FlightLog) -> tuple[np.ndarray, MotorMap]:
     motor's own map (module docstring), and what the maps say.
 
     Raises:
-        WakeFitError: the log lacks the asked-for thrusts, commands or torque columns; its
-            torque columns are not a mix of the asked-for thrusts; or fewer than
-            :data:`MIN_MAP_SAMPLES` samples have every command below :data:`MAP_FIT_PWM`.
+        WakeFitError: the log lacks the asked-for thrusts, commands or torque columns, or
+            fewer than :data:`MIN_MAP_SAMPLES` samples have every command below
+            :data:`MAP_FIT_PWM`.
     """
     if not has_motor_commands(log):
         raise WakeFitError(f"{log.name}: the log has no {MOTOR_THRUST_KEY}, {MOTOR_PWM_KEY} "
@@ -149,6 +149,20 @@ def logs_as_sent(logs: Sequence[FlightLog]) -> tuple[list[FlightLog], list[Motor
         out.append(sent)
         maps.append(motor_map)
     return out, maps
+
+
+def command_maps(logs: Sequence[FlightLog]) -> list[MotorMap]:
+    """:func:`made_thrusts`' maps of each of ``logs`` that carries the motor commands (those
+    whose maps cannot be fitted left out); a log already taken as sent keeps its asked-for
+    thrusts and commands, so its maps are its own."""
+    maps = []
+    for log in logs:
+        if has_motor_commands(log):
+            try:
+                maps.append(made_thrusts(log)[1])
+            except WakeFitError:
+                continue
+    return maps
 
 
 def ceiling_by_vehicle(maps: Sequence[MotorMap]) -> list[dict[str, float | int | str]]:

@@ -203,7 +203,7 @@ def kernel_blocks(n: int) -> int:
     numba's (:func:`numba.get_num_threads`) from :data:`PARALLEL_MIN_TRIALS` trials on, else 1
     (the serial kernel)."""
     if n < PARALLEL_MIN_TRIALS:
-        return 1  # (asking numba for its threads costs about 5 µs: a batch of one's period)
+        return 1  # (asking numba for its threads costs about 2 µs, at every period)
     threads = numba.get_num_threads()
     return threads if threads > 1 else 1
 

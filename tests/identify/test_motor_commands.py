@@ -188,3 +188,11 @@ def test_ceiling_by_vehicle_weighs_each_flight_by_its_samples_at_the_top():
     assert cf9["ceiling_excess_n"] == pytest.approx((10 * 0.020 + 30 * 0.040) / 40)
     assert cf9["residual_sd_n"] == 0.003 and cf9["top_pwm"] == 0.95
     assert cf1["ceiling_samples"] == 0 and np.isnan(cf1["ceiling_excess_n"])
+
+
+def test_a_log_taken_as_sent_keeps_its_own_maps(flight):
+    """The report reads the maps from the logs it fitted: taken as sent, a log still gives the
+    maps (and the excess at the ceiling) of the commands it logged."""
+    log, _, _ = commanded(flight, cap=0.93)
+    sent, motor_map = mc.as_sent(log)
+    assert mc.command_maps([sent, flight]) == [motor_map]
