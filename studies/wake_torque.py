@@ -75,9 +75,16 @@ def main() -> int:
     params = dict(cfg.downwash.params)
     inertia = {"cf50": cfg.vehicle.inertia_kgm2, "cf51": cfg.vehicle.inertia_kgm2,
                "cf101": cfg.leader.inertia_kgm2}
-    profile = torque_profile(params, prepare_flights(logs), logs, inertia,
-                             rotor_radii_m={"cf101": cfg.leader.rotor_radius_m},
-                             max_offset_m=MAX_OFFSET_M)
+    radii = {"cf101": cfg.leader.rotor_radius_m}
+    # the labels as asked for and, from the motors' commands as sent
+    # (aerodock/identify/motor_commands.py), with the thrust the firmware asked for beyond a
+    # motor's ceiling taken away, torque and force alike: each set's samples prepared once
+    sent_logs, maps = logs_as_sent(logs)
+    labels = {"asked": (logs, prepare_flights(logs)),
+              "sent": (sent_logs, prepare_flights(sent_logs))}
+    profile, sent = (torque_profile(params, flights, some, inertia, rotor_radii_m=radii,
+                                    max_offset_m=MAX_OFFSET_M)
+                     for some, flights in labels.values())
     forces = {sep: force_profile(logs, separation_m=sep) for sep in FORCE_SEPARATIONS_M}
     slopes = thrust_map_slope(logs)
     near = forces[FORCE_SEPARATIONS_M[0]]
@@ -87,17 +94,10 @@ def main() -> int:
             carried[pair] = disk_profile_torque(near.get(pair, []), bins)
         except WakeFitError:
             pass
-    # the same, from the motors' commands as sent (aerodock/identify/motor_commands.py): the
-    # thrust the firmware asked for beyond a motor's ceiling taken away, torque and force alike
-    radii = {"cf101": cfg.leader.rotor_radius_m}
-    sent_logs, maps = logs_as_sent(logs)
-    sent = torque_profile(params, prepare_flights(sent_logs), sent_logs, inertia,
-                          rotor_radii_m=radii, max_offset_m=MAX_OFFSET_M)
     sent_force = force_profile(sent_logs, separation_m=FORCE_SEPARATIONS_M[0])
     # the torque by where the motors point, as asked for and as sent
-    by_angle = {name: torque_by_motor_angle(params, prepare_flights(some), some, inertia,
-                                            rotor_radii_m=radii)
-                for name, some in (("asked", logs), ("sent", sent_logs))}
+    by_angle = {name: torque_by_motor_angle(params, flights, some, inertia, rotor_radii_m=radii)
+                for name, (some, flights) in labels.items()}
     commands = motor_command_range(logs)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
