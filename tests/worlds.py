@@ -18,6 +18,14 @@ EARLIER_WAKE = {"width0_ratio": 1.008, "spread_rate": 0.02309, "ingest_coeff": 0
                 "turb_time_ratio": 3.829}
 """The wake fitted to the force alone (examples/crazyflie_wake_fitted.toml before issue 39)."""
 
+UNSETTLED_WAKE = {"width0_ratio": 0.7353, "spread_rate": 1.105e-05, "ingest_coeff": 0.8051,
+                  "ingest_exponent": 0.561, "planar_ratio": 0.003171, "body_area_ratio": 2.158e-14,
+                  "turb_vertical": 0.1845, "turb_lateral": 0.0484, "turb_length_ratio": 1.585,
+                  "turb_time_ratio": 9.386}
+"""The wake fitted to force and torque before the fit settled its least squares
+(``wake_fit.settled_least_squares``): defaults.toml's and the Crazyflie worlds' until 7 December
+2026, what the goldens written before then flew."""
+
 EARLIER_WORLD: dict[str, Any] = {
     "autopilot": {"stack": "generic"},
     "vehicle": {"inertia_kgm2": [0.0023, 0.0023, 0.004]},

@@ -2,9 +2,9 @@
 (ArduCopter's attitude loops) and of the Crazyflie world (the firmware's SJC controller), batches
 of 1 and 3, against the arrays the code wrote before the loops' helpers took numbers instead of
 arrays (``2f2c2c6``: ``PYTHONPATH=<that tree> python tests/unit/test_stack_golden.py OUT.npz``,
-run from ``tests/unit``). Bit for bit on the machine that wrote the file (its
-``numerics_key`` entry, ``tests/numerics_key.py``), within 1e-9 of each array's largest
-elsewhere."""
+run from ``tests/unit``), on the wake the worlds flew then (``worlds.UNSETTLED_WAKE``). Bit for
+bit on the machine that wrote the file (its ``numerics_key`` entry, ``tests/numerics_key.py``),
+within 1e-9 of each array's largest elsewhere."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 from numerics_key import KEY_ENTRY, differing, load_golden, numerics_key
+from worlds import UNSETTLED_WAKE
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 GOLDEN = Path(__file__).resolve().parents[1] / "data" / "stack_world_2f2c2c6.npz"
@@ -28,7 +29,9 @@ def fly() -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     for name, path in (("arducopter", None), ("crazyflie", EXAMPLES / "crazyflie.toml")):
         for n in (1, 3):
-            loop = SimLoop(load_config(path), n, seed=3)
+            # the wake the file was written with (the worlds' defaults then)
+            cfg = load_config(path).with_overrides({"downwash": {"params": UNSETTLED_WAKE}})
+            loop = SimLoop(cfg, n, seed=3)
             loop.run(40)
             world = loop.world
             for key in _STATE:
