@@ -221,6 +221,7 @@ SETTLE_RTOL = 1e-9
 """A fit's least squares is restarted from its result until a restart lowers the cost by less
 than this fraction (:func:`settled_least_squares`)."""
 SETTLE_RESTARTS = 10
+"""At most this many restarts (four settle the shared flights' fit)."""
 
 
 def settled_least_squares(fun: Callable[[np.ndarray], np.ndarray], x0: Sequence[float],
@@ -261,7 +262,6 @@ def fit_mean(flights: Sequence[FlightSamples], start: dict[str, float] | None = 
         ``estimate_rotor_for`` (vehicle ids), and the vertical residual's RMS, m/s² (each
         vehicle pair weighs the same in the fit).
     """
-
     start = {**START, **(start or {})}
     rotors = list(estimate_rotor_for)
     for vid in rotors:
@@ -375,7 +375,6 @@ def fit_turbulence(params: dict[str, float], flights: Sequence[FlightSamples],
     """The turbulence parameters, given the mean ones: the vertical intensity and the disks'
     shared share (length ratio) from the vertical spread per pair and offset band, the lateral
     intensity from the lateral spread, the correlation time from the autocorrelation."""
-
     params = {**START, **params}
 
     def bins_with(x: dict[str, float]) -> list[dict[str, Any]]:
@@ -455,7 +454,6 @@ def fit_correlation_time(params: dict[str, float], flights: Sequence[FlightSampl
     plateau: each pair's ``A exp(-lag / tau) + (1 - A)``, where the plateau ``1 - A`` is what
     varies more slowly than 80 ms (the mean's own error along a pass; the model does not read it
     as turbulence's time scale)."""
-
     unit = autocorrelations({**params, "turb_time_ratio": 1.0}, flights, rotor_radii_m)
     if not unit:
         return float(params.get("turb_time_ratio", START["turb_time_ratio"]))
