@@ -4,8 +4,10 @@ Each command area has its module in :mod:`aerodock.cli` (``field``, ``dock``, ``
 ``compensation``, ``experiments``, ``ingest``, ``node``, ``view``, ``sweep``, ``bench``) holding
 plain functions;
 nothing registers itself on import. The order below is the order of ``aerodock --help``. Heavy
-dependencies (PyTorch, rclpy, Ray, rerun) are imported inside the commands that need them, so
-``aerodock --help`` stays fast and every other command works without those extras.
+dependencies (PyTorch, rclpy, Ray, rerun; numba and SciPy, through the modules that fly or fit)
+are imported inside the commands that need them, so ``aerodock --help`` stays fast (tested:
+``test_help_does_not_load_the_compiled_world``) and every other command works without the
+extras.
 """
 
 from __future__ import annotations
