@@ -32,7 +32,7 @@ PYTEST_XDIST := -n 2 --dist loadfile --no-loadscope-reorder --durations=15
 
 # The import layering first (a second; pyproject.toml's [tool.importlinter] contracts): a broken
 # contract fails CI before the tests run.
-# The bytecode first: where PYTHONDONTWRITEBYTECODE is set (this project's machines set it),
+# Then the bytecode: where PYTHONDONTWRITEBYTECODE is set (this project's machines set it),
 # every process the suite starts (its CLI runs, study scripts, xdist workers) would otherwise
 # compile the package's sources again (importing the mission, the CLI and the learnt runtime:
 # 1.4 s against 0.75 s from bytecode); compileall writes them once, and only what changed since.
