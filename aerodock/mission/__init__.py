@@ -1,16 +1,33 @@
-"""The docking mission: N trials flown as one batch, phase by phase, and their outcomes."""
+"""The docking mission: N trials flown as one batch, phase by phase, and their outcomes.
 
-from aerodock.mission.batch import (
-    Decision,
-    Flown,
-    MissionBatch,
-    Status,
-    run_campaign,
-    settle_trials,
-)
-from aerodock.mission.outcome import CampaignResult, wilson_interval
-from aerodock.mission.settle import SettledStart
-from aerodock.mission.spec import AbortReason, MissionSpec, Phase
+The names below load their modules on first use: the batch imports the compiled world (numba),
+which a command refusing its input (a fault file, a mission's size), or one reading only the
+mission's specification, should not wait for."""
 
-__all__ = ["AbortReason", "CampaignResult", "Decision", "Flown", "MissionBatch", "MissionSpec",
-           "Phase", "SettledStart", "Status", "run_campaign", "settle_trials", "wilson_interval"]
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_HOMES = {
+    "AbortReason": "aerodock.mission.spec",
+    "CampaignResult": "aerodock.mission.outcome",
+    "Decision": "aerodock.mission.batch",
+    "Flown": "aerodock.mission.batch",
+    "MissionBatch": "aerodock.mission.batch",
+    "MissionSpec": "aerodock.mission.spec",
+    "Phase": "aerodock.mission.spec",
+    "SettledStart": "aerodock.mission.settle",
+    "Status": "aerodock.mission.batch",
+    "run_campaign": "aerodock.mission.batch",
+    "settle_trials": "aerodock.mission.batch",
+    "wilson_interval": "aerodock.mission.outcome",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'aerodock.mission' has no attribute {name!r}")
+    return getattr(importlib.import_module(_HOMES[name]), name)
