@@ -5,8 +5,7 @@ which a command that never flies a controller, or ``aerodock --help``, should no
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from aerodock.lazy import lazy_names
 
 _HOMES = {
     "BiasObserver": "aerodock.control.observer",
@@ -19,8 +18,4 @@ _HOMES = {
 
 __all__ = sorted(_HOMES)
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _HOMES:
-        raise AttributeError(f"module 'aerodock.control' has no attribute {name!r}")
-    return getattr(importlib.import_module(_HOMES[name]), name)
+__getattr__ = lazy_names(__name__, _HOMES)

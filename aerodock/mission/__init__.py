@@ -6,8 +6,7 @@ mission's specification, should not wait for."""
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from aerodock.lazy import lazy_names
 
 _HOMES = {
     "AbortReason": "aerodock.mission.spec",
@@ -26,8 +25,4 @@ _HOMES = {
 
 __all__ = sorted(_HOMES)
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _HOMES:
-        raise AttributeError(f"module 'aerodock.mission' has no attribute {name!r}")
-    return getattr(importlib.import_module(_HOMES[name]), name)
+__getattr__ = lazy_names(__name__, _HOMES)
