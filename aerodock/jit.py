@@ -31,7 +31,7 @@ from pathlib import Path  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
-from numba.core import cgutils, types  # noqa: E402
+from numba.core import caching, cgutils, types  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
 
 from aerodock.product_order import PRODUCT_ORDERS  # noqa: E402
@@ -62,6 +62,49 @@ def cache_dir() -> Path:
 
 if "NUMBA_CACHE_DIR" not in os.environ:  # the user's own choice stands
     numba.config.CACHE_DIR = str(cache_dir())
+
+
+# -- one cache for every copy of the same sources ----------------------------------------------
+# numba files a kernel's machine code under a hash of its source file's absolute folder, so two
+# copies of the same sources (a second clone, a reinstalled wheel, a CI checkout) compile every
+# kernel again (8 minutes here) and keep a copy each. The folder named by the kernels' digest
+# (cache_dir) already says which sources the code was compiled from, and numba checks each file's
+# bytes (its source stamp is a hash of the file's contents), so aerodock's kernels are filed
+# under their path inside the package instead: every copy of the same sources loads the same
+# machine code. Other packages' kernels are filed as numba files them (and a user's own
+# NUMBA_CACHE_LOCATOR_CLASSES or NUMBA_CACHE_DIR replaces this).
+class _PackageCacheLocator(caching.UserProvidedCacheLocator):
+    """numba's cache locator for aerodock's own modules: ``CACHE_DIR/<folder in the package>``
+    (``aerodock/world/vehicles``) in place of numba's hash of the absolute folder."""
+
+    def __init__(self, py_func: Any, py_file: str) -> None:
+        super().__init__(py_func, py_file)
+        inside = package_folder(py_file)
+        assert inside is not None  # from_function only builds it for the package's files
+        self._cache_path = os.path.join(numba.config.CACHE_DIR, inside)
+
+    @classmethod
+    def from_function(cls, py_func: Any, py_file: str) -> Any:
+        if package_folder(py_file) is None:
+            return None  # not aerodock's: numba's own locators file it
+        return super().from_function(py_func, py_file)
+
+
+_PACKAGE_PARENT = Path(__file__).resolve().parent.parent
+
+
+def package_folder(py_file: str) -> str | None:
+    """The folder of ``py_file`` as a path inside aerodock's parent folder
+    (``aerodock/world/vehicles``), or None for a file outside the package."""
+    try:
+        inside = Path(py_file).resolve().parent.relative_to(_PACKAGE_PARENT)
+    except ValueError:
+        return None
+    return inside.as_posix() if inside.parts[:1] == ("aerodock",) else None
+
+
+if "NUMBA_CACHE_DIR" not in os.environ:  # numba's own locators file the user's cache folder
+    caching.CacheImpl._locator_classes.insert(0, _PackageCacheLocator)
 
 
 def njit(fn: Callable[..., Any]) -> Callable[..., Any]:
