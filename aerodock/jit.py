@@ -32,6 +32,7 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
 from numba.core import caching, cgutils, types  # noqa: E402
+from numba.core.compiler_lock import global_compiler_lock  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
 
 from aerodock.product_order import PRODUCT_ORDERS  # noqa: E402
@@ -133,7 +134,8 @@ def njit_parallel(fn: Callable[..., Any]) -> Callable[..., Any]:
 # layouts or flags run the general signature (numba's dispatcher picks it in C, converting the
 # arguments' types, at the cost of an exact call), with the same numbers: the same source,
 # compiled without fast-math, reads the same elements and computes them in the same order. A
-# process that only ever meets one signature (a docking run) loads nothing more.
+# process that only ever meets one signature (a docking run) loads nothing more; a process whose
+# first call meets layouts no process compiled loads the general signature if one is cached.
 
 
 def any_layout(*writes: str, contiguous: tuple[str, ...] = (),
@@ -201,9 +203,11 @@ def general_signature(first: tuple[Any, ...],
 
 class _SealOnSecondSignature:
     """A marked kernel's handler of a call that no compiled signature takes: the first
-    signature compiled (or loaded) as numba does; a later one seals the kernel (its general
-    signature, compiled once and then loaded from numba's cache, and no more compiling) when
-    the call's arguments convert to it, else compiled as numba does."""
+    signature loaded from numba's cache, or, when only the general signature is cached (another
+    process compiled it), that one, sealed; else compiled as numba does. A later signature
+    seals the kernel (its general signature, compiled once and then loaded from numba's cache,
+    and no more compiling) when the call's arguments convert to it, else compiled as numba
+    does."""
 
     def __init__(self, kernel: Any, kinds: tuple[tuple[bool, bool], ...],
                  compile_for_args: Callable[..., Any], general_only: bool = False) -> None:
@@ -222,7 +226,46 @@ class _SealOnSecondSignature:
                 entry = kernel.compile(general)
                 kernel.disable_compile()
                 return entry  # numba calls it with these arguments
+        if not kws and len(args) == len(self.kinds) and not kernel.overloads:
+            entry = self._first_from_the_cache(args)
+            if entry is not None:
+                return entry
         return self.compile_for_args(*args, **kws)
+
+    def _first_from_the_cache(self, args: tuple[Any, ...]) -> Any:
+        """A process's first call: its exact signature from numba's disk cache, else the
+        general one (sealed: another process compiled it for other layouts), else None (numba
+        compiles the exact one, as before). Without this, every process whose first call met
+        layouts no earlier process had met compiled them again, with the general code cached."""
+        kernel = self.kernel
+        try:
+            exact = tuple(kernel.typeof_pyval(a) for a in args)
+            general = general_signature(exact, self.kinds)
+        except Exception:  # noqa: BLE001 (a type numba cannot read: numba says so below)
+            return None
+        entry = _load_cached(kernel, exact)
+        if entry is None and general != exact:
+            entry = _load_cached(kernel, general)
+            if entry is not None:
+                kernel.disable_compile()
+        return entry
+
+
+def _load_cached(kernel: Any, signature: tuple[Any, ...]) -> Any:
+    """``kernel``'s machine code for ``signature`` loaded from numba's disk cache and installed
+    as numba's own ``Dispatcher.compile`` installs a cache hit; None when it is not cached
+    (nothing is compiled)."""
+    with global_compiler_lock:
+        existing = kernel.overloads.get(signature)
+        if existing is not None:
+            return existing.entry_point
+        cres = kernel._cache.load_overload(signature, kernel.targetctx)
+        if cres is None:
+            return None
+        if not cres.objectmode:
+            kernel.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+        kernel.add_overload(cres)
+        return cres.entry_point
 
 
 @intrinsic

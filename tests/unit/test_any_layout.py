@@ -86,3 +86,51 @@ def test_the_vehicles_step_with_frozen_and_transposed_arrays_compiles_nothing_ne
                      (first[0].R, other[0].R), (first[0].w, other[0].w),
                      (first[0].rotor_speed, other[0].rotor_speed), (first[1], other[1])):
             np.testing.assert_array_equal(a, b)
+
+
+_MODULE = '''
+import numpy as np
+from aerodock.jit import any_layout, njit
+
+@any_layout("out")
+@njit
+def weighted_rows(a, w, out):
+    for i in range(a.shape[0]):
+        out[i] = a[i, 0] * w[0] + a[i, 1] * w[1] - a[i, 2] / w[2]
+'''
+_CALLS = {  # each process's calls, in order
+    "c-then-fortran": "a = np.arange(21.0).reshape(7, 3)\nfor x in (a, np.asfortranarray(a)):\n"
+                      "    out = np.empty(7); m.weighted_rows(x, np.ones(3), out)\n",
+    "read-only": "a = np.arange(21.0).reshape(7, 3); a.flags.writeable = False\n"
+                 "out = np.empty(7); m.weighted_rows(a, np.ones(3), out)\n",
+    "c": "a = np.arange(21.0).reshape(7, 3)\n"
+         "out = np.empty(7); m.weighted_rows(a, np.ones(3), out)\n",
+}
+
+
+def _process(folder, cache, calls: str) -> str:
+    import os
+    import subprocess
+    import sys
+
+    code = f"import numpy as np\nimport layout_kernel as m\n{calls}print(out.tolist())\n"
+    env = {**os.environ, "PYTHONPATH": str(folder), "AERODOCK_CACHE_DIR": str(cache),
+           "NUMBA_DEBUG_CACHE": "1"}
+    env.pop("NUMBA_CACHE_DIR", None)
+    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=folder, text=True,
+                          capture_output=True, timeout=120, check=True)
+    return done.stdout
+
+
+def test_a_process_whose_first_call_meets_new_layouts_loads_the_general_code(tmp_path):
+    (tmp_path / "layout_kernel.py").write_text(_MODULE)
+    cache = tmp_path / "cache"
+    first = _process(tmp_path, cache, _CALLS["c-then-fortran"])
+    assert first.count("data saved") == 2  # its exact signature, then the general one
+    # another process meets a layout no process has met first: it loads the general code
+    later = _process(tmp_path, cache, _CALLS["read-only"])
+    assert "data saved" not in later and later.count("data loaded") == 1
+    assert later.strip().splitlines()[-1] == first.strip().splitlines()[-1]
+    # and one whose first call is the exact signature cached loads that one
+    exact = _process(tmp_path, cache, _CALLS["c"])
+    assert "data saved" not in exact and exact.count("data loaded") == 1
