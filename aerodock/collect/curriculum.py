@@ -118,7 +118,7 @@ _MIN_CABLE_M = 0.05
 _DEFAULT_CABLE_SPACING_M = 0.15
 
 
-def _bar_out_of_the_way(cfg: Config, depth_min_m: float) -> Config:
+def bar_out_of_the_way(cfg: Config, depth_min_m: float) -> Config:
     """``cfg`` with the leader's cables shortened, if needed, so that the bar hangs above the
     follower's gate at the shallowest depth flown (the deep stages fly the follower above where
     the bar would hang at full length; nobody collects data with the bar through the vehicle)."""
@@ -147,7 +147,7 @@ def excitation_flights(cfg: Config, n_flights: int, depth_min_m: float, depth_ma
         first_trial: index of the first flight (for per-flight random streams).
     """
     n = n_flights
-    cfg = _bar_out_of_the_way(cfg, depth_min_m)
+    cfg = bar_out_of_the_way(cfg, depth_min_m)
     rng = TrialRNG(seed, n, first_trial)
     c = cfg.curriculum
     world = World(cfg, n, rng, field=build_field(cfg))

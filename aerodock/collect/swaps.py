@@ -114,7 +114,7 @@ def swap_task_flights(cfg: Config, n_flights: int, separation_m: tuple[float, fl
         ValueError: no flights, a separation range that is not ``0 < low <= high``, or a radius
             or swap time that is not positive.
     """
-    from aerodock.collect.curriculum import _bar_out_of_the_way
+    from aerodock.collect.curriculum import bar_out_of_the_way
 
     lo, hi = (float(v) for v in separation_m)
     if n_flights < 1:
@@ -126,7 +126,7 @@ def swap_task_flights(cfg: Config, n_flights: int, separation_m: tuple[float, fl
         raise ValueError(f"swap flights: radius {radius_m} m and swap times {times_s} s must "
                          "be positive")
     n = int(n_flights)
-    cfg = _bar_out_of_the_way(cfg, lo)
+    cfg = bar_out_of_the_way(cfg, lo)
     rng = TrialRNG(seed, n, first_trial)
     world = World(cfg, n, rng, field=build_field(cfg))
     angles = rng.uniform(0.0, 2 * np.pi, size=(n, 2))  # the leader's, the follower's

@@ -36,9 +36,9 @@ def collected(short_cfg, tmp_path_factory):
 
 
 def test_deep_stages_fly_the_bar_above_the_follower(cfg, collected):
-    from aerodock.collect.curriculum import _bar_out_of_the_way
+    from aerodock.collect.curriculum import bar_out_of_the_way
 
-    assert _bar_out_of_the_way(cfg, 0.5).platform.cable_length_m == 0.36  # paper's stages as is
+    assert bar_out_of_the_way(cfg, 0.5).platform.cable_length_m == 0.36  # paper's stages as is
     out, _, flown = collected
     logs = load_flightlogs(out / "stage2.npz")  # the deep stage, 0.27-0.3 m
     gp = flown.gripper

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from aerodock.collect.curriculum import (
-    _bar_out_of_the_way,
+    bar_out_of_the_way,
     excitation_flights,
     label_free_air_radius_m,
 )
@@ -150,10 +150,10 @@ def test_curriculum_flights_of_a_heterogeneous_pair_record_the_leader(cf_sl):
 
 
 def test_the_curriculum_shortens_the_cables_in_proportion(cf):
-    cfg = _bar_out_of_the_way(cf, 0.05)  # no room at all: the shortest cable
+    cfg = bar_out_of_the_way(cf, 0.05)  # no room at all: the shortest cable
     assert cfg.platform.cable_length_m == pytest.approx(cf.platform.cable_spacing_m / 3)
     default = load_config()
-    assert _bar_out_of_the_way(default, 0.1).platform.cable_length_m == 0.05
+    assert bar_out_of_the_way(default, 0.1).platform.cable_length_m == 0.05
 
 
 @pytest.mark.parametrize("path", [SMALL, SMALL_LARGE])
