@@ -33,6 +33,7 @@ import numpy as np  # noqa: E402
 from llvmlite import ir  # noqa: E402
 from numba.core import caching, cgutils, types  # noqa: E402
 from numba.core.compiler_lock import global_compiler_lock  # noqa: E402
+from numba.core.typeconv import Conversion  # noqa: E402
 from numba.extending import intrinsic  # noqa: E402
 
 from aerodock.product_order import PRODUCT_ORDERS  # noqa: E402
@@ -204,7 +205,7 @@ def general_signature(first: tuple[Any, ...],
 class _SealOnSecondSignature:
     """A marked kernel's handler of a call that no compiled signature takes: the first
     signature loaded from numba's cache, or, when only the general signature is cached (another
-    process compiled it), that one, sealed; else compiled as numba does. A later signature
+    process compiled it), that one; else compiled as numba does. A later signature
     seals the kernel (its general signature, compiled once and then loaded from numba's cache,
     and no more compiling) when the call's arguments convert to it, else compiled as numba
     does."""
@@ -234,9 +235,12 @@ class _SealOnSecondSignature:
 
     def _first_from_the_cache(self, args: tuple[Any, ...]) -> Any:
         """A process's first call: its exact signature from numba's disk cache, else the
-        general one (sealed: another process compiled it for other layouts), else None (numba
-        compiles the exact one, as before). Without this, every process whose first call met
-        layouts no earlier process had met compiled them again, with the general code cached."""
+        general one (another process compiled it for other layouts) when every argument
+        converts to it without loss (a Fortran array where the kernel wants C order, or a
+        read-only one where it writes, does not), else None (numba compiles the exact one, as
+        before). Nothing is sealed here: the next signature the process meets seals the kernel
+        as before. Without this, every process whose first call met layouts no earlier process
+        had met compiled them again, with the general code cached."""
         kernel = self.kernel
         try:
             exact = tuple(kernel.typeof_pyval(a) for a in args)
@@ -244,11 +248,18 @@ class _SealOnSecondSignature:
         except Exception:  # noqa: BLE001 (a type numba cannot read: numba says so below)
             return None
         entry = _load_cached(kernel, exact)
-        if entry is None and general != exact:
+        if entry is None and general != exact and all(
+                _converts_safely(kernel, a, t) for a, t in zip(exact, general, strict=True)):
             entry = _load_cached(kernel, general)
-            if entry is not None:
-                kernel.disable_compile()
         return entry
+
+
+def _converts_safely(kernel: Any, actual: Any, wanted: Any) -> bool:
+    """Whether numba converts an argument of type ``actual`` to ``wanted`` without loss (exact,
+    promoted or safe: not a narrowing, and not at all where the layouts or writability do not
+    allow it)."""
+    kind = kernel.typingctx.can_convert(actual, wanted)
+    return kind is not None and kind <= Conversion.safe
 
 
 def _load_cached(kernel: Any, signature: tuple[Any, ...]) -> Any:

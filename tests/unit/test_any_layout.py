@@ -134,3 +134,40 @@ def test_a_process_whose_first_call_meets_new_layouts_loads_the_general_code(tmp
     # and one whose first call is the exact signature cached loads that one
     exact = _process(tmp_path, cache, _CALLS["c"])
     assert "data saved" not in exact and exact.count("data loaded") == 1
+
+
+_CONTIGUOUS_MODULE = '''
+import numpy as np
+from aerodock.jit import any_layout, njit
+
+@any_layout("out", contiguous=("a",))
+@njit
+def flat_sum(a, w, out):
+    flat = a.reshape(-1)  # C order only: a Fortran array must not reach this code
+    for i in range(out.shape[0]):
+        out[i] = flat[i] * w[i % w.shape[0]]
+'''
+
+
+def test_a_first_call_loads_the_general_code_only_where_its_arguments_convert(tmp_path):
+    """Not where an argument wants C order and comes in Fortran order (the general code would
+    read it in the wrong order), nor a read-only one where the kernel writes; and a later call
+    of another dtype still compiles (the first call seals nothing)."""
+    (tmp_path / "layout_kernel.py").write_text(_CONTIGUOUS_MODULE)
+    cache = tmp_path / "cache"
+    setup = ("a = np.arange(6.0).reshape(2, 3)\nout = np.empty(6)\n"
+             "m.flat_sum(a, np.ones(3), out)\nm.flat_sum(a, np.ones(6)[::2], out)\n")
+    assert _process(tmp_path, cache, setup).count("data saved") == 2  # exact, general
+    fortran = ("a = np.asfortranarray(np.arange(6.0).reshape(2, 3))\nout = np.empty(6)\n"
+               "try:\n    m.flat_sum(a, np.ones(3), out)\n    print('ran', out.tolist())\n"
+               "except Exception as err:\n    print('refused', type(err).__name__)\n")
+    run = _process(tmp_path, cache, fortran)
+    # numba refuses to compile the reshape of a Fortran array, as it did before; the general
+    # code (C order assumed) is not borrowed to read it in the wrong order
+    assert "refused" in run and "ran" not in run, run
+    strided = ("a = np.arange(6.0).reshape(2, 3)\nout = np.empty(6)\n"
+               "m.flat_sum(a, np.ones(6)[::2], out)\n"
+               "m.flat_sum(a.astype(np.float32), np.ones(3, np.float32), out)\n")
+    run = _process(tmp_path, cache, strided)
+    assert run.strip().splitlines()[-1] == str([0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
+    assert run.count("data saved") == 1  # only the float32 call's signature
