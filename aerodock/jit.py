@@ -207,8 +207,11 @@ class _SealOnSecondSignature:
     signature loaded from numba's cache, or, when only the general signature is cached (another
     process compiled it), that one; else compiled as numba does. A later signature
     seals the kernel (its general signature, compiled once and then loaded from numba's cache,
-    and no more compiling) when the call's arguments convert to it, else compiled as numba
-    does."""
+    and no more compiling) when the call's arguments convert to it without loss (a float where
+    the first call had an integer does not: it is compiled as numba does, not truncated). Once
+    sealed, numba's dispatcher converts a later call's types to the general signature itself,
+    as it does for any kernel whose compiling is disabled: the kernels are called with the
+    dtypes of their first call."""
 
     def __init__(self, kernel: Any, kinds: tuple[tuple[bool, bool], ...],
                  compile_for_args: Callable[..., Any], general_only: bool = False) -> None:
@@ -221,11 +224,15 @@ class _SealOnSecondSignature:
             first = (kernel.signatures[0] if kernel.overloads
                      else tuple(kernel.typeof_pyval(a) for a in args))
             general = general_signature(first, self.kinds)
-            can_convert = kernel.typingctx.can_convert
-            if all(can_convert(kernel.typeof_pyval(a), t) is not None
+            if all(_converts_safely(kernel, kernel.typeof_pyval(a), t)
                    for a, t in zip(args, general, strict=True)):
-                entry = kernel.compile(general)
-                kernel.disable_compile()
+                # under numba's lock: another thread sealing the kernel meanwhile has compiled
+                # the general signature already, and a sealed kernel compiles nothing more
+                with global_compiler_lock:
+                    existing = kernel.overloads.get(general)
+                    entry = (existing.entry_point if existing is not None
+                             else kernel.compile(general))
+                    kernel.disable_compile()
                 return entry  # numba calls it with these arguments
         if not kws and len(args) == len(self.kinds) and not kernel.overloads:
             entry = self._first_from_the_cache(args)

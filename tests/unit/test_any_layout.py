@@ -59,6 +59,25 @@ def test_the_general_signature_keeps_written_arrays_writable():
     assert general[3] == types.boolean
 
 
+@any_layout("out")
+@njit
+def _scaled_rows(a: np.ndarray, scale: float, out: np.ndarray) -> None:
+    for i in range(a.shape[0]):
+        out[i] = a[i] * scale
+
+
+def test_a_second_signature_that_would_lose_a_value_compiles_instead_of_sealing():
+    a = np.arange(4.0)
+    out = np.empty(4)
+    _scaled_rows(a, 2, out)  # the first call: an integer scale
+    _scaled_rows(a, 2.5, out)  # a float: sealing to the integer signature would truncate it
+    np.testing.assert_array_equal(out, a * 2.5)
+    assert len(_scaled_rows.signatures) == 2 and _scaled_rows._can_compile  # compiled, unsealed
+    _scaled_rows(a[::-1], 3, out)  # strided, an integer again: converts, so it seals
+    np.testing.assert_array_equal(out, a[::-1] * 3)
+    assert not _scaled_rows._can_compile
+
+
 def test_a_name_that_is_not_an_argument_is_refused():
     def kernel(a, out):
         out[0] = a[0]
