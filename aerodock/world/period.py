@@ -84,12 +84,18 @@ PERIOD_OK = bool(TRIG_LOOPS.all())
 _NO_FF = np.zeros((1, 4))
 _NO_LOSS = np.zeros((0, 4))  # no rotor fault
 _NO_TORQUES = np.zeros((0, 0, 3))  # no torque log
-# numba's OpenMP threads sleep between parallel regions instead of spinning (the user's own
-# setting stands; read when numba starts its threads, at the first period in blocks): a spinning
-# thread would take a core from the Python between control periods (a learnt model's
+# numba's OpenMP threads sleep between control periods instead of spinning through them (the
+# user's own settings stand; read when numba starts its threads, at the first period in blocks):
+# a thread spinning on would take a core from the Python between control periods (a learnt model's
 # prediction, the mission, the trial streams' refills) and from another process on the machine
-# (the test suite's second worker); a sleeping one costs a wake-up, a few microseconds a step.
+# (the test suite's second worker). But a thread that sleeps at once pays a wake-up at every
+# physics step's blocks, about 80 µs on a 2-core VM (7 December 2026: at 32-128 trials the
+# period in blocks was then slower than the serial one, 0.54-0.82 of its speed): GNU OpenMP's
+# threads (numba's `omp` layer) first spin this many turns, about 0.6 ms on that machine, which
+# keeps them awake through a period's steps and most of the Python between two periods, then
+# sleep (docs/performance.md, "The threads' wake-ups"). Both are the user's to override.
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+os.environ.setdefault("GOMP_SPINCOUNT", "10000")
 
 PARALLEL_MIN_TRIALS = 64
 """From this many trials on, a period's blocks of trials run across numba's threads
