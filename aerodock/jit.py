@@ -220,21 +220,23 @@ class _SealOnSecondSignature:
 
     def __call__(self, *args: Any, **kws: Any) -> Any:
         kernel = self.kernel
-        if not kws and len(args) == len(self.kinds) and (kernel.overloads or self.general_only):
+        if kws or len(args) != len(self.kinds):
+            return self.compile_for_args(*args, **kws)
+        if kernel.overloads or self.general_only:
             first = (kernel.signatures[0] if kernel.overloads
                      else tuple(kernel.typeof_pyval(a) for a in args))
             general = general_signature(first, self.kinds)
             if all(_converts_safely(kernel, kernel.typeof_pyval(a), t)
                    for a, t in zip(args, general, strict=True)):
-                # under numba's lock: another thread sealing the kernel meanwhile has compiled
-                # the general signature already, and a sealed kernel compiles nothing more
+                # under numba's lock: another thread sealing the kernel meanwhile has left the
+                # general signature installed, and a sealed kernel compiles nothing more
                 with global_compiler_lock:
-                    existing = kernel.overloads.get(general)
-                    entry = (existing.entry_point if existing is not None
-                             else kernel.compile(general))
+                    entry = _load_cached(kernel, general)
+                    if entry is None:
+                        entry = kernel.compile(general)
                     kernel.disable_compile()
                 return entry  # numba calls it with these arguments
-        if not kws and len(args) == len(self.kinds) and not kernel.overloads:
+        if not kernel.overloads:
             entry = self._first_from_the_cache(args)
             if entry is not None:
                 return entry
@@ -270,9 +272,9 @@ def _converts_safely(kernel: Any, actual: Any, wanted: Any) -> bool:
 
 
 def _load_cached(kernel: Any, signature: tuple[Any, ...]) -> Any:
-    """``kernel``'s machine code for ``signature`` loaded from numba's disk cache and installed
-    as numba's own ``Dispatcher.compile`` installs a cache hit; None when it is not cached
-    (nothing is compiled)."""
+    """``kernel``'s machine code for ``signature``: already installed, or loaded from numba's
+    disk cache and installed as numba's own ``Dispatcher.compile`` installs a cache hit; None
+    when it is neither (nothing is compiled)."""
     with global_compiler_lock:
         existing = kernel.overloads.get(signature)
         if existing is not None:
