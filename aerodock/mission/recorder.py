@@ -68,10 +68,10 @@ class FlightRecorder:
         r["t"].append(t_s)
         r["lp"].append(obs_l.p)
         r["lv"].append(obs_l.v)
-        r["lq"].append(rotmat_to_quat(obs_l.R))
+        r["lq"].append(obs_l.R.copy())  # (as quaternions in flightlogs(), all at once)
         r["fp"].append(obs_f.p)
         r["fv"].append(obs_f.v)
-        r["fq"].append(rotmat_to_quat(obs_f.R))
+        r["fq"].append(obs_f.R.copy())
         r["u"].append(out.applied_accel_mps2 if self.label_basis == "command"
                       else thrust_accel(obs_f.R, out.command.thrust_n, self.mass_kg))
         r["thrust"].append(out.command.thrust_n)
@@ -107,6 +107,10 @@ class FlightRecorder:
     def flightlogs(self, meta: Callable[[int], dict[str, Any]]) -> list[FlightLog]:
         """One FlightLog per trial; ``meta(i)`` gives trial ``i``'s metadata."""
         arr = {k: np.asarray(v) for k, v in self.rows.items()}  # (T, n, ...)
+        # the attitudes, recorded as rotation matrices: one conversion of every row (each row's
+        # quaternion is its own arithmetic, so the same as converting step by step; a period's
+        # two conversions cost 170 µs at a batch of four, a sixth of a recorded period)
+        arr["lq"], arr["fq"] = rotmat_to_quat(arr["lq"]), rotmat_to_quat(arr["fq"])
         n = arr["lp"].shape[1]
         torque = {name: arr[key] for key, name in TORQUE_EXTRAS.items()
                   if len(self.rows[key]) == len(self.rows["t"]) and self.rows["t"]}
