@@ -87,6 +87,11 @@ def _per_call(fn: Callable[[], Any], calls: int, repeats: int, scale: float, uni
     return figure([t / calls * scale for t in times], unit, note)
 
 
+QUICK_TRAIN_EPOCHS = 10
+"""``bench --quick`` trains for at most this many epochs (a check that training runs and a
+model to time; the full bench trains with the defaults, early stopping after up to 200)."""
+
+
 def bench_training(cfg: Any, quick: bool = False,
                    progress: Progress = quiet) -> tuple[dict[str, Any], Any]:
     """Wall time to train the SO(2) model on 5 minutes of data; also returns the trained model."""
@@ -94,6 +99,7 @@ def bench_training(cfg: Any, quick: bool = False,
         from aerodock.learning.train import train_model
     except Exception as err:  # noqa: BLE001 - optional part
         return unavailable(f"training not available ({failure_reason(err)})", "s"), None
+    max_epochs = QUICK_TRAIN_EPOCHS if quick else 200  # (200: train_model's own default)
     progress("training: building 5 minutes of data")
     try:
         data = synthetic_dataset(cfg)
@@ -102,15 +108,17 @@ def bench_training(cfg: Any, quick: bool = False,
         trained: list[Any] = []
 
         def train() -> None:
-            trained.append(train_model("so2", data, seed=0))
+            trained.append(train_model("so2", data, seed=0, max_epochs=max_epochs))
 
         progress("training: the SO(2) model on 5 minutes")
         times = measure(train, 1 if quick else 3, warmup=0)
     except Exception as err:  # noqa: BLE001 - optional part, never crash the benchmark
         return unavailable(f"training failed ({failure_reason(err)})", "s"), None
     info = trained[-1].info
+    limit = (f"quick: at most {QUICK_TRAIN_EPOCHS} epochs, {info.get('epochs')} run" if quick
+             else f"early stopping: {info.get('epochs')} epochs")
     note = (f"so2, {data.n} samples ({data.minutes:g} min at 100 Hz), defaults "
-            f"(early stopping: {info.get('epochs')} epochs), 1 torch thread")
+            f"({limit}), 1 torch thread")
     return figure(times, "s", note), trained[-1]
 
 

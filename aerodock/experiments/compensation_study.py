@@ -62,6 +62,8 @@ SHORT_PAIRINGS = {"small-under-small": "S/S", "small-under-large": "S/L",
                   "large-under-small": "L/S"}
 """Follower/leader, for narrow tables."""
 QUICK_MAX_EPOCHS = 30
+SMOKE_MAX_EPOCHS = 5
+"""The model's training in ``reproduce --smoke`` (a check that the step runs, not a figure)."""
 PAIRING_ORDER = ("small-under-small", "small-under-large", "large-under-small")
 
 Say = Callable[[str], None]
@@ -102,15 +104,17 @@ def _dataset(groups: list) -> Any:
 
 
 def train_study_model(root: Path, *, kind: str = "so2", seed: int = 0, quick: bool = False,
-                      progress: Callable[[int, int, float, float | None], None] | None = None
-                      ) -> Any:
-    """A ``kind`` model trained on the study's training flights (``quick``: at most
-    :data:`QUICK_MAX_EPOCHS` epochs) with the project's trainer; returns the TrainedModel."""
+                      progress: Callable[[int, int, float, float | None], None] | None = None,
+                      max_epochs: int | None = None) -> Any:
+    """A ``kind`` model trained on the study's training flights (at most ``max_epochs`` epochs;
+    by default :data:`QUICK_MAX_EPOCHS` when ``quick``, else 200) with the project's trainer;
+    returns the TrainedModel."""
     from aerodock.learning.train import train_model
 
     ds = _dataset(_folder_logs(root, "train"))
-    return train_model(kind, ds, seed=seed, max_epochs=QUICK_MAX_EPOCHS if quick else 200,
-                       progress=progress)
+    if max_epochs is None:
+        max_epochs = QUICK_MAX_EPOCHS if quick else 200
+    return train_model(kind, ds, seed=seed, max_epochs=max_epochs, progress=progress)
 
 
 def compensation_study(
@@ -126,6 +130,7 @@ def compensation_study(
     figure: Path | None = None,
     say: Say | None = None,
     train_progress: Callable[[int, int, float, float | None], None] | None = None,
+    max_epochs: int | None = None,
 ) -> dict[str, Any]:
     """Every compensation replayed over the held-out flights under ``root`` (the folder holding
     ``swap_ss`` and ``swap_sl_2020-06-19``), scored (JSON-ready dict).
@@ -143,6 +148,7 @@ def compensation_study(
         figure: a PNG file for the residual against each compensation along a held-out pass.
         say: progress messages.
         train_progress: the trainer's per-epoch callback.
+        max_epochs: the training's epoch limit, overriding ``quick``'s.
 
     Raises:
         FileNotFoundError: a folder missing under ``root``.
@@ -163,7 +169,7 @@ def compensation_study(
     else:
         say(f"training {kind} on swap_ss 00-04 and swap_sl 00-07")
         trained = train_study_model(root, kind=kind, seed=seed, quick=quick,
-                                    progress=train_progress)
+                                    progress=train_progress, max_epochs=max_epochs)
         predictor = trained.predictor()
         info = trained.info
         model_info = {"model_dir": None, "kind": kind, "trained_here": True, "seed": seed,
@@ -199,12 +205,14 @@ def compensation_study(
 
 
 def compensation_section(shared_data: Path, fig_dir: Path, quick: bool = False, seed: int = 0,
-                         cfg: Config | None = None) -> dict[str, Any]:
+                         cfg: Config | None = None, smoke: bool = False) -> dict[str, Any]:
     """The hook for ``reproduce``: :func:`compensation_study` on ``shared_data/neural-swarm``
-    (a model trained here; ``quick``: a quick training), the figure as
-    ``fig_dir/compensation_replay.png``. Render it with :func:`compensation_markdown`."""
-    return compensation_study(Path(shared_data) / "neural-swarm", cfg=cfg, quick=quick,
-                              seed=seed, figure=Path(fig_dir) / "compensation_replay.png")
+    (a model trained here; ``quick``: a quick training; ``smoke``: at most
+    :data:`SMOKE_MAX_EPOCHS` epochs), the figure as ``fig_dir/compensation_replay.png``. Render
+    it with :func:`compensation_markdown`."""
+    return compensation_study(Path(shared_data) / "neural-swarm", cfg=cfg, quick=quick or smoke,
+                              seed=seed, figure=Path(fig_dir) / "compensation_replay.png",
+                              max_epochs=SMOKE_MAX_EPOCHS if smoke else None)
 
 
 def _pct(x: float | None) -> str:

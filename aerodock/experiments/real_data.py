@@ -27,9 +27,10 @@ TEST_FLIGHTS = ("05", "06")
 # The sample-efficiency curve: minutes of training data (the five training flights hold about
 # four) and seeds, by run size (``reproduce``'s full, quick and smoke runs).
 SE_MINUTES = {"full": (0.5, 1, 2, 3), "quick": (0.5, 1, 2), "smoke": (0.5,)}
-SMOKE_MAX_EPOCHS = 25
-"""The held-out models' training under ``smoke`` (a check that every step runs; else up to 200
-epochs with early stopping)."""
+SMOKE_MAX_EPOCHS = 5
+"""Every training's epoch limit under ``smoke`` (the held-out models and the sample-efficiency
+point: a check that every step runs, not a figure; else up to 200 epochs with early
+stopping)."""
 SE_SEEDS = {"full": (0, 1, 2), "quick": (0, 1), "smoke": (0,)}
 
 
@@ -106,7 +107,7 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``. With
     ``other_pair`` (the small-large day's folder), the models are also judged on it
     (:func:`transfer_to_other_pair`, ``transfer``). ``smoke`` trains them for at most
-    :data:`SMOKE_MAX_EPOCHS` epochs. ``quick`` and ``smoke`` shorten the
+    :data:`SMOKE_MAX_EPOCHS` epochs (the sample-efficiency point too). ``quick`` and ``smoke`` shorten the
     sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)."""
     from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.evaluate import evaluate
@@ -137,7 +138,8 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
     size = "smoke" if smoke else "quick" if quick else "full"
     out["sample_efficiency"] = sample_efficiency(
         train_ds, test_ds, kinds=("so2", "so2-ext", "mlp"),
-        minutes=SE_MINUTES[size], seeds=SE_SEEDS[size], metric="interaction")
+        minutes=SE_MINUTES[size], seeds=SE_SEEDS[size], metric="interaction",
+        train_kwargs={"max_epochs": SMOKE_MAX_EPOCHS} if smoke else None)
     from aerodock.experiments.sample_efficiency import plot_sample_efficiency
 
     plot_sample_efficiency(out["sample_efficiency"], fig_dir / "real_sample_efficiency.png")

@@ -400,7 +400,7 @@ def _real_data_step(run: _Run, shared_data: Path | None, quick: bool, smoke: boo
                                other_pair=other if other.is_dir() else None, smoke=smoke)
         if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
             say("    the compensations scored on real flights (held-out swap flights)")
-            compensation = compensation_section(shared_data, run.fig_dir, quick=quick or smoke,
+            compensation = compensation_section(shared_data, run.fig_dir, quick=quick, smoke=smoke,
                                                 seed=seed, cfg=run.cfg)
         else:
             say("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)")
