@@ -12,6 +12,7 @@ extras.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 import re
@@ -109,8 +110,14 @@ def _readable(command: Any) -> Any:
     return command
 
 
+@functools.cache
 def command() -> Any:
-    """The whole command line as a Click group, its help texts readable (:func:`_readable`)."""
+    """The whole command line as a Click group, its help texts readable (:func:`_readable`).
+
+    Built once per process: Typer builds it from the commands' signatures, evaluating every
+    annotation (about 0.15 s here), and each run parses its arguments with a new context of
+    the same group (a process that runs the command line a hundred times, as the fuzz suite
+    does, built it twice a run)."""
     return _readable(typer.main.get_command(app))
 
 
@@ -130,16 +137,16 @@ def _expand_repeatable(args: list[str]) -> list[str]:
     Only in commands without positional arguments (there a value list is unambiguous); a value
     list ends at the next token starting with ``-``.
     """
-    group = typer.main.get_command(app)
+    group = command()
     names = [a for a in args if not a.startswith("-")]
-    command: Any = group
+    chosen: Any = group
     for name in names[:2]:
-        sub = getattr(command, "commands", {}).get(name)
+        sub = getattr(chosen, "commands", {}).get(name)
         if sub is None:
             break
-        command = sub
-    params = getattr(command, "params", [])
-    if command is group or any(p.param_type_name == "argument" for p in params):
+        chosen = sub
+    params = getattr(chosen, "params", [])
+    if chosen is group or any(p.param_type_name == "argument" for p in params):
         return args
     repeatable = {o for p in params
                   if p.param_type_name == "option" and getattr(p, "multiple", False)
