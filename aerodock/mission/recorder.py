@@ -110,7 +110,8 @@ class FlightRecorder:
         # the attitudes, recorded as rotation matrices: one conversion of every row (each row's
         # quaternion is its own arithmetic, so the same as converting step by step; a period's
         # two conversions cost 170 µs at a batch of four, a sixth of a recorded period)
-        arr["lq"], arr["fq"] = rotmat_to_quat(arr["lq"]), rotmat_to_quat(arr["fq"])
+        if self.rows["t"]:
+            arr["lq"], arr["fq"] = rotmat_to_quat(arr["lq"]), rotmat_to_quat(arr["fq"])
         n = arr["lp"].shape[1]
         torque = {name: arr[key] for key, name in TORQUE_EXTRAS.items()
                   if len(self.rows[key]) == len(self.rows["t"]) and self.rows["t"]}
