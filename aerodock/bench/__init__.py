@@ -62,46 +62,31 @@ import time
 from pathlib import Path
 from typing import Any
 
-from aerodock.bench.docking import bench_docking, bench_reproduce
-from aerodock.bench.learning import (
-    bench_predictor,
-    bench_training,
-    predictor_inputs,
-    synthetic_dataset,
-)
-from aerodock.bench.peer import (
-    PEER_CONTROL_HZ,
-    PEER_HOVER_S,
-    PEER_MOVE_NED_M,
-    PEER_MOVE_S,
-    PEER_PHYSICS_HZ,
-    compare_rotorpy,
-    peer_aerodock,
-    peer_reference,
-    peer_rotorpy,
-    peer_rotorpy_batched,
-)
-from aerodock.bench.peer_batches import PEER_BATCHES, compare_crazyflow
-from aerodock.bench.report import TARGETS, machine_info, table_rows, targets
-from aerodock.bench.simulator import (
-    SIM_BATCHES,
-    SimLoop,
-    bench_kernels,
-    bench_python_field,
-    bench_simulator,
-    bench_vehicle_step,
-)
-from aerodock.bench.timing import Progress, failure_reason, figure, measure, quiet, unavailable
+from aerodock.bench.timing import Progress, quiet  # (no NumPy)
+from aerodock.lazy import lazy_names
 
-__all__ = [
-    "PARTS", "PEER_BATCHES", "PEER_CONTROL_HZ", "PEER_HOVER_S", "PEER_MOVE_NED_M", "PEER_MOVE_S",
-    "PEER_PHYSICS_HZ", "SIM_BATCHES", "TARGETS", "Progress", "SimLoop", "bench_docking",
-    "bench_predictor", "bench_reproduce", "bench_simulator", "bench_training",
-    "bench_vehicle_step", "compare_crazyflow", "compare_rotorpy", "figure", "machine_info",
-    "measure",
-    "peer_aerodock", "peer_reference", "peer_rotorpy", "peer_rotorpy_batched",
-    "predictor_inputs", "run_all", "synthetic_dataset", "table_rows", "targets", "unavailable",
-]
+# The names below load their modules on first use: the command line lists :data:`PARTS` for
+# ``bench --only`` at start-up, and every command (``aerodock --help`` too) would otherwise wait
+# for NumPy and the bench's modules.
+_HOMES = {
+    **dict.fromkeys(("bench_docking", "bench_reproduce"), "aerodock.bench.docking"),
+    **dict.fromkeys(("bench_predictor", "bench_training", "predictor_inputs",
+                     "synthetic_dataset"), "aerodock.bench.learning"),
+    **dict.fromkeys(("PEER_CONTROL_HZ", "PEER_HOVER_S", "PEER_MOVE_NED_M", "PEER_MOVE_S",
+                     "PEER_PHYSICS_HZ", "compare_rotorpy", "peer_aerodock", "peer_reference",
+                     "peer_rotorpy", "peer_rotorpy_batched"), "aerodock.bench.peer"),
+    **dict.fromkeys(("PEER_BATCHES", "compare_crazyflow"), "aerodock.bench.peer_batches"),
+    **dict.fromkeys(("TARGETS", "machine_info", "table_rows", "targets"),
+                    "aerodock.bench.report"),
+    **dict.fromkeys(("SIM_BATCHES", "SimLoop", "bench_kernels", "bench_python_field",
+                     "bench_simulator", "bench_vehicle_step"), "aerodock.bench.simulator"),
+    **dict.fromkeys(("failure_reason", "figure", "measure", "unavailable"),
+                    "aerodock.bench.timing"),
+}
+
+__all__ = sorted([*_HOMES, "PARTS", "Progress", "quiet", "run_all"])
+
+__getattr__ = lazy_names(__name__, _HOMES)
 
 
 PARTS = ("simulator", "docking", "predictor", "memory", "reproduce", "gym", "peer")
@@ -115,6 +100,8 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
     ``config_path`` is the file ``cfg`` came from (if any), for the subprocesses; ``only`` (one
     of :data:`PARTS`) measures that part alone (``predictor`` includes training).
     """
+    import aerodock.bench as b  # each part read from the package (loaded on use, or replaced)
+
     if only is not None and only not in PARTS:
         raise ValueError(f"unknown bench part {only!r}; choose one of {', '.join(PARTS)}")
 
@@ -124,19 +111,19 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
     started = time.perf_counter()
     figs: dict[str, Any] = {}
     if wanted("simulator"):
-        figs["simulator"] = bench_simulator(cfg, quick=quick, progress=progress,
-                                            model="rigid-body")
-        figs["simulator_point_mass"] = bench_simulator(cfg, quick=quick, progress=progress,
-                                                       model="point-mass")
-        figs["vehicle_step"] = bench_vehicle_step(cfg, quick=quick, progress=progress)
-        figs["simulator_python_field"] = bench_python_field(cfg, quick=quick,
-                                                            progress=progress)
-        figs["kernels"] = bench_kernels(cold=not quick, progress=progress)
+        figs["simulator"] = b.bench_simulator(cfg, quick=quick, progress=progress,
+                                              model="rigid-body")
+        figs["simulator_point_mass"] = b.bench_simulator(cfg, quick=quick, progress=progress,
+                                                         model="point-mass")
+        figs["vehicle_step"] = b.bench_vehicle_step(cfg, quick=quick, progress=progress)
+        figs["simulator_python_field"] = b.bench_python_field(cfg, quick=quick,
+                                                              progress=progress)
+        figs["kernels"] = b.bench_kernels(cold=not quick, progress=progress)
     if wanted("docking"):
-        figs["docking"] = bench_docking(cfg, quick=quick, progress=progress)
+        figs["docking"] = b.bench_docking(cfg, quick=quick, progress=progress)
     if wanted("predictor"):
-        figs["training"], trained = bench_training(cfg, quick=quick, progress=progress)
-        figs["predictor"] = bench_predictor(trained, quick=quick, progress=progress)
+        figs["training"], trained = b.bench_training(cfg, quick=quick, progress=progress)
+        figs["predictor"] = b.bench_predictor(trained, quick=quick, progress=progress)
     if wanted("memory"):
         from aerodock.bench.memory import bench_memory  # also the probe's script: not eager
 
@@ -145,28 +132,29 @@ def run_all(cfg: Any, quick: bool = False, progress: Progress = quiet,
         include_reproduce = not quick or only == "reproduce"
     if wanted("reproduce"):
         figs["reproduce_quick_s"] = (
-            bench_reproduce(progress, config_path) if include_reproduce
-            else unavailable("skipped with --quick (takes minutes)", "s"))
+            b.bench_reproduce(progress, config_path) if include_reproduce
+            else b.unavailable("skipped with --quick (takes minutes)", "s"))
     if wanted("gym"):
         try:
             from aerodock.bench.env_reset import bench_env_reset
             from aerodock.bench.vector_env import bench_vector_env
         except ImportError as err:  # gymnasium is an optional extra
-            figs["gym_vector_env"] = {"1": unavailable(failure_reason(err), "env-steps/s")}
-            figs["gym_env_reset"] = {"block_mean_reset": unavailable(failure_reason(err), "s")}
+            why = b.failure_reason(err)
+            figs["gym_vector_env"] = {"1": b.unavailable(why, "env-steps/s")}
+            figs["gym_env_reset"] = {"block_mean_reset": b.unavailable(why, "s")}
         else:
             figs["gym_vector_env"] = bench_vector_env(cfg, quick=quick, progress=progress)
             figs["gym_env_reset"] = bench_env_reset(cfg, quick=quick, progress=progress)
     if include_peer and wanted("peer"):
-        figs["peer"] = compare_rotorpy(cfg, quick=quick, progress=progress)
-        figs["peer_crazyflow"] = compare_crazyflow(cfg, quick=quick, progress=progress)
+        figs["peer"] = b.compare_rotorpy(cfg, quick=quick, progress=progress)
+        figs["peer_crazyflow"] = b.compare_crazyflow(cfg, quick=quick, progress=progress)
     return {
-        "machine": machine_info(),
+        "machine": b.machine_info(),
         "settings": {"quick": quick, "physics_rate_hz": cfg.sim.physics_rate_hz,
                      "control_rate_hz": cfg.sim.control_rate_hz,
                      "statistic": "median of the repetitions after a warm-up; min and max "
                                   "give the spread"},
         "figures": figs,
-        "targets": targets(figs),
+        "targets": b.targets(figs),
         "bench_wall_s": round(time.perf_counter() - started, 1),
     }

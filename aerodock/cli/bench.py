@@ -9,7 +9,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from aerodock.bench import PARTS, run_all, table_rows
+from aerodock.bench import PARTS
 from aerodock.cli.common import (
     ConfigOpt,
     JsonOpt,
@@ -41,6 +41,8 @@ def bench_command(
     installed)."""
     if only is not None and only not in PARTS:
         fail(f"unknown --only {only!r}; choose one of {', '.join(PARTS)}")
+
+    from aerodock.bench import run_all, table_rows  # (NumPy and the bench's modules: on use)
 
     cfg = load_cli_config(config, sets, trust)
     err = Console(stderr=True)

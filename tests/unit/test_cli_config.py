@@ -38,7 +38,7 @@ def test_every_command_that_reads_a_config_takes_set_and_trust():
 def test_bench_children_read_the_resolved_config_and_the_trust(monkeypatch):
     """bench measures some parts in child processes: they get the config as --set made it (a
     file) and the trusted modules (the environment), restored when the command ends."""
-    import aerodock.cli.bench as cli_bench
+    import aerodock.bench as bench  # (the command reads run_all from it when it runs)
 
     seen = {}
 
@@ -48,7 +48,7 @@ def test_bench_children_read_the_resolved_config_and_the_trust(monkeypatch):
         seen["trust"] = os.environ.get(TRUST_ENV)
         return {"machine": {}, "figures": {}, "targets": []}
 
-    monkeypatch.setattr(cli_bench, "run_all", fake_run_all)
+    monkeypatch.setattr(bench, "run_all", fake_run_all)
     monkeypatch.setenv(TRUST_ENV, "theirs")
     result = CliRunner().invoke(app, ["bench", "--quick", "--json", "--set",
                                       "platform.cable_length_m=0.5", "--trust-plugin", "mine"])
