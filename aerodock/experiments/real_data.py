@@ -106,9 +106,10 @@ def real_data_study(folder: Path, fig_dir: Path, quick: bool = False, seed: int 
                     other_pair: Path | None = None, smoke: bool = False) -> dict[str, Any]:
     """Run the study on the Neural-Swarm folder; figures go to ``fig_dir``. With
     ``other_pair`` (the small-large day's folder), the models are also judged on it
-    (:func:`transfer_to_other_pair`, ``transfer``). ``smoke`` trains them for at most
-    :data:`SMOKE_MAX_EPOCHS` epochs (the sample-efficiency point too). ``quick`` and ``smoke`` shorten the
-    sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point, one seed)."""
+    (:func:`transfer_to_other_pair`, ``transfer``). ``smoke`` trains them, and the
+    sample-efficiency point, for at most :data:`SMOKE_MAX_EPOCHS` epochs. ``quick`` and ``smoke``
+    shorten the sample-efficiency curve (:data:`SE_MINUTES`, :data:`SE_SEEDS`; smoke: one point,
+    one seed)."""
     from aerodock.experiments.sample_efficiency import sample_efficiency
     from aerodock.learning.evaluate import evaluate
     from aerodock.learning.runtime import ZeroPredictor
