@@ -34,6 +34,9 @@ from aerodock.world import Observation, World
 
 _KEYS = ("t", "lp", "lv", "lq", "fp", "fv", "fq", "u", "thrust", "aobs", "fmean", "ref", "ff",
          "phase", "bar", "valid", "contact", "tau_obs", "tau_rotor", "rates", "tau_true")
+_ATTITUDE_CHUNK = 64
+"""Periods of attitudes the recorder converts to quaternions at once (the rotation matrices it
+holds meanwhile are 9 numbers a vehicle, the quaternions 4)."""
 # Recorded rows -> FlightLog extras of the torque observations (rigid-body vehicles only).
 TORQUE_EXTRAS = {"tau_obs": "follower_obs_torque_nm", "tau_rotor": "follower_rotor_torque_nm",
                  "rates": "follower_body_rates_radps", "tau_true": "true_wake_torque_nm"}
@@ -60,6 +63,8 @@ class FlightRecorder:
             raise ValueError("the thrust basis needs the follower's mass (mass_kg > 0)")
         self.label_basis, self.mass_kg = label_basis, mass_kg
         self.rows: dict[str, list] = {k: [] for k in _KEYS}
+        # (leader, follower) attitudes of the periods not yet in rows["lq"] / rows["fq"]
+        self._attitudes: list[tuple[np.ndarray, np.ndarray]] = []
 
     def before_step(self, t_s: float, world: World, obs_l: Observation, obs_f: Observation,
                     out: ControlOutput, ref_p: np.ndarray, phase: np.ndarray) -> None:
@@ -68,10 +73,11 @@ class FlightRecorder:
         r["t"].append(t_s)
         r["lp"].append(obs_l.p)
         r["lv"].append(obs_l.v)
-        r["lq"].append(obs_l.R.copy())  # (as quaternions in flightlogs(), all at once)
+        self._attitudes.append((obs_l.R.copy(), obs_f.R.copy()))  # (as quaternions: below)
+        if len(self._attitudes) == _ATTITUDE_CHUNK:
+            self._convert_attitudes()
         r["fp"].append(obs_f.p)
         r["fv"].append(obs_f.v)
-        r["fq"].append(obs_f.R.copy())
         r["u"].append(out.applied_accel_mps2 if self.label_basis == "command"
                       else thrust_accel(obs_f.R, out.command.thrust_n, self.mass_kg))
         r["thrust"].append(out.command.thrust_n)
@@ -104,14 +110,21 @@ class FlightRecorder:
         self.rows["valid"].append(~(touched | docked))
         self.rows["contact"].append(world.contact_seen | world.captured)
 
+    def _convert_attitudes(self) -> None:
+        """The pending periods' attitudes as quaternions, in one conversion per vehicle (each
+        row's quaternion is its own arithmetic, so the same numbers as period by period; a
+        period's two conversions cost 170 µs at a batch of four, a sixth of a recorded
+        period)."""
+        if self._attitudes:
+            lead, fol = (rotmat_to_quat(np.asarray(rots)) for rots in zip(*self._attitudes))
+            self.rows["lq"].extend(lead)
+            self.rows["fq"].extend(fol)
+            self._attitudes.clear()
+
     def flightlogs(self, meta: Callable[[int], dict[str, Any]]) -> list[FlightLog]:
         """One FlightLog per trial; ``meta(i)`` gives trial ``i``'s metadata."""
+        self._convert_attitudes()
         arr = {k: np.asarray(v) for k, v in self.rows.items()}  # (T, n, ...)
-        # the attitudes, recorded as rotation matrices: one conversion of every row (each row's
-        # quaternion is its own arithmetic, so the same as converting step by step; a period's
-        # two conversions cost 170 µs at a batch of four, a sixth of a recorded period)
-        if self.rows["t"]:
-            arr["lq"], arr["fq"] = rotmat_to_quat(arr["lq"]), rotmat_to_quat(arr["fq"])
         n = arr["lp"].shape[1]
         torque = {name: arr[key] for key, name in TORQUE_EXTRAS.items()
                   if len(self.rows[key]) == len(self.rows["t"]) and self.rows["t"]}
