@@ -11,7 +11,7 @@ from ingest_helpers import DISTURBANCE, MASS_KG, synthetic_flight
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest import read_logs
-from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ
+from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ, read_csv_table
 from aerodock.ingest.csv_generic import REQUIRED_COLUMNS, read_csv, write_csv
 from aerodock.ingest.errors import IngestError
 
@@ -174,3 +174,27 @@ def test_bad_meta_line(tmp_path: Path) -> None:
     lines = path.read_text().splitlines()
     path.write_text("\n".join(["# meta: {not json"] + lines[1:]) + "\n")
     _expect(path, "'# meta:' line is not valid JSON")
+
+
+def test_quoted_and_unquoted_tables_read_the_same_numbers(tmp_path: Path) -> None:
+    """NumPy's reader takes unquoted files, Python's ``csv`` quoted ones: the same values, and
+    Python's ``float`` spellings NumPy refuses (``1_000``) still read."""
+    rows = [[0.1, -2.5e-3, 1e300], [float("nan"), 7.0, -0.0], [3.0, 4.0, 1_000.0]]
+    plain, quoted = tmp_path / "plain.csv", tmp_path / "quoted.csv"
+    plain.write_text("# a comment\na,b,c\n" + "\n".join(
+        ", ".join(repr(v) for v in r) for r in rows[:2]) + "\n3, 4, 1_000\n")
+    quoted.write_text('"a","b","c"\n' + "\n".join(
+        ",".join(f'"{v!r}"' for v in r) for r in rows) + "\n")
+    a = read_csv_table(plain, header_in_comment=False)
+    b = read_csv_table(quoted, header_in_comment=False)
+    assert a.columns == b.columns == ["a", "b", "c"] and a.comments == ["a comment"]
+    np.testing.assert_array_equal(a.data, np.array(rows))
+    np.testing.assert_array_equal(b.data, a.data)
+    assert list(a.lines) == [3, 4, 5] and list(b.lines) == [2, 3, 4]
+
+
+def test_a_field_that_is_not_a_number_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_text("a,b\n1,2\n3,x7\n")
+    with pytest.raises(IngestError, match=r"line 3: column 'b' holds 'x7', not a number"):
+        read_csv_table(path, header_in_comment=False)
