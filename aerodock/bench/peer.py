@@ -266,7 +266,7 @@ def _torch_threads(n: int) -> Iterator[None]:
 
 
 def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
-                    progress: Progress = quiet) -> dict[str, Any]:
+                    progress: Progress = quiet, repeats: int | None = None) -> dict[str, Any]:
     """Time the peer scenario with RotorPy and with aerodock in one run; times and ratios.
 
     Scenario: one quadrotor, aerodock's rigid-body vehicle of ``cfg`` in both simulators
@@ -281,7 +281,11 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     warm-up) and the part of it spent in the physics step (``physics_s``, of the median run).
     The two simulators' runs alternate (aerodock, RotorPy, aerodock, ...), so that a change of
     load on the machine hits both; a ratio is the median of the ratios of these pairs.
+    ``repeats`` sets every side's number of timed runs (None: three to five; 1 for a smoke run,
+    which checks that each side runs, not its time).
     """
+    if repeats is not None and repeats < 1:
+        raise ValueError(f"repeats must be >= 1, got {repeats}")
     steps = _peer_steps(quick)
     dt = 1.0 / PEER_PHYSICS_HZ
     ref = peer_reference(steps, dt)
@@ -295,7 +299,7 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     except ImportError:
         have_rotorpy = False
 
-    reps = (3 if quick else 5) if not have_rotorpy else 3
+    reps = repeats or ((3 if quick else 5) if not have_rotorpy else 3)
     progress("peer: aerodock batch of 1" + (" and RotorPy Multirotor, alternating"
                                             if have_rotorpy else ""))
     one, seq = _alternating_runs(
@@ -325,14 +329,14 @@ def compare_rotorpy(cfg: Any, quick: bool = False, batch: int = 256,
     try:
         with _torch_threads(1):
             many, bat = _alternating_runs(ours, batched, steps,
-                                          1 if (quick and batched) else 3, 20)
+                                          repeats or (1 if (quick and batched) else 3), 20)
     except Exception as err:  # noqa: BLE001 - RotorPy's batched simulator failed: go on
         if batched is None:
             raise
         out["rotorpy_batched"] = unavailable(
             f"RotorPy's batched simulator failed ({failure_reason(err)})", "s")
         batched = None
-        many, bat = _alternating_runs(ours, None, steps, 3, 20)
+        many, bat = _alternating_runs(ours, None, steps, repeats or 3, 20)
     out[f"aerodock_{batch}"] = _run_figure(many, batch, steps,
                                            f"the same, {batch} vehicles at once")
     if have_rotorpy:
