@@ -194,6 +194,7 @@ class FrameDrawer:
 
     def __init__(self, track: Track, figsize: tuple[float, float] = FIGSIZE_IN, dpi: int = 80):
         plt = _plt()
+        from matplotlib.layout_engine import TightLayoutEngine
         self.track = track
         self.direction = approach_direction(track)
         self.fig, (self.ax_side, self.ax_top) = plt.subplots(1, 2, figsize=figsize, dpi=dpi)
@@ -217,7 +218,10 @@ class FrameDrawer:
         self.ax_side.set_title("side view (the approach runs left to right)")
         self.ax_top.set_title("top view")
         self._artists: list[Any] = []
-        self.fig.tight_layout(rect=(0, 0.15, 1, 0.88))
+        # The tight layout placed once, not kept as the figure's layout engine: with an engine
+        # (even the placeholder ``tight_layout`` leaves), every saved frame is drawn twice
+        # (layout, then pixels); the axes do not move between frames, so the same pixels
+        TightLayoutEngine(rect=(0, 0.15, 1, 0.88)).execute(self.fig)
 
     # Views: side (along the approach, up), top (east, north).
     def _side(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
