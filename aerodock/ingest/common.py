@@ -7,14 +7,13 @@ and the problem. The checks live here so every reader words them the same way.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from aerodock.fileio import MAX_CSV_BYTES, InputError, check_input_file, read_input_text
+from aerodock.fileio import InputError, check_input_file
 from aerodock.geometry import GRAVITY_MPS2
 from aerodock.ingest.errors import IngestError
 
@@ -417,7 +416,7 @@ BAG_SUFFIXES = (".db3", ".mcap")
 
 
 @contextmanager
-def _input_errors(where: str | Path, unreadable: str) -> Iterator[None]:
+def input_errors(where: str | Path, unreadable: str) -> Iterator[None]:
     """Turn the input reader's errors into one-line :class:`IngestError` s naming ``where``
     (``unreadable``: the words before the system's reason for an unreadable file)."""
     try:
@@ -437,7 +436,7 @@ def check_regular_input(path: Path, what: str = "log file") -> None:
     Raises:
         IngestError: ``path`` is missing, a FIFO, a device, a socket or a folder.
     """
-    with _input_errors(path, "cannot read"):
+    with input_errors(path, "cannot read"):
         check_input_file(path, what)
 
 
@@ -450,126 +449,3 @@ def check_bag_folder(path: Path) -> None:
     for item in sorted(Path(path).iterdir()):
         if item.name == "metadata.yaml" or item.suffix.lower() in BAG_SUFFIXES:
             check_regular_input(item, "bag file")
-
-
-# --------------------------------------------------------------------------------------------
-# CSV tables
-# --------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class CsvTable:
-    """A numeric CSV file: column names, data ``(rows, columns)`` and each row's line number."""
-
-    path: Path
-    columns: list[str]
-    data: np.ndarray
-    lines: np.ndarray
-    comments: list[str]
-
-    def column(self, name: str) -> np.ndarray:
-        """The values of column ``name``."""
-        return self.data[:, self.columns.index(name)]
-
-
-def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
-    """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
-
-    Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
-    starting with ``#`` are comments. The file must be a regular file of at most
-    :data:`aerodock.fileio.MAX_CSV_BYTES` (a FIFO or a device is refused unread).
-
-    Args:
-        path: The file.
-        header_in_comment: The header is the first line starting with ``#`` (Neural-Swarm);
-            otherwise it is the first line that is not a ``#`` comment.
-
-    Raises:
-        IngestError: unreadable, non-regular, too large or empty file, no header, no data
-            rows, rows with a different number of fields than the header (naming the line), or a
-            field that is not a number.
-    """
-    import csv
-
-    where = str(path)
-    with _input_errors(where, "cannot read file"):
-        text = read_input_text(path, "CSV file", MAX_CSV_BYTES, encoding="utf-8-sig",
-                               errors="replace")
-    if not text.strip():
-        raise IngestError(where, "empty file")
-
-    def fields_of(line: str, number: int) -> list[str]:
-        try:
-            return next(csv.reader([line], skipinitialspace=True))
-        except (csv.Error, StopIteration) as err:
-            raise IngestError(where, f"line {number}: not CSV ({err})") from None
-
-    header: list[str] | None = None
-    comments: list[str] = []
-    body: list[str] = []  # the data lines, stripped
-    line_numbers: list[int] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip().lstrip("\ufeff")
-        if not line:
-            continue
-        if line.startswith("#"):
-            if header is None and header_in_comment:
-                header = [c.strip() for c in fields_of(line.lstrip("#").strip(), number)]
-            else:
-                comments.append(line[1:].strip())
-            continue
-        if header is None:
-            if header_in_comment:
-                raise IngestError(where, "no header line: expected a first line starting with "
-                                         "'#' that names the columns")
-            header = [c.strip() for c in fields_of(line, number)]
-            continue
-        body.append(line)
-        line_numbers.append(number)
-    if header is None:
-        raise IngestError(where, "no header line naming the columns")
-    if not body:
-        raise IngestError(where, "empty: a header but no data rows")
-    data = _numeric_rows(body, len(header)) if not any('"' in line for line in body) else None
-    if data is None:  # quoted fields, or a fault to name: field by field
-        data = _checked_rows(where, header, body, line_numbers, fields_of)
-    return CsvTable(path, header, data, np.array(line_numbers), comments)
-
-
-def _numeric_rows(lines: list[str], columns: int) -> np.ndarray | None:
-    """Unquoted numeric CSV lines as ``(rows, columns)`` floats, parsed by NumPy's reader (each
-    field as Python's ``float`` reads it: the same numbers, about 10x faster than ``csv`` with
-    ``np.array`` of strings on the Neural-Swarm files); None where a line is ragged or a field
-    is not a number, for :func:`_checked_rows` to name it."""
-    try:
-        data = np.loadtxt(lines, delimiter=",", dtype=float, ndmin=2, comments=None,
-                          quotechar=None)
-    except ValueError:
-        return None
-    return data if data.shape == (len(lines), columns) else None
-
-
-def _checked_rows(where: str, header: list[str], lines: list[str], numbers: list[int],
-                  fields_of: Callable[[str, int], list[str]]) -> np.ndarray:
-    """The data lines field by field (Python's ``csv``: quoted fields), raising an IngestError
-    that names the first ragged line, else the first field that is not a number."""
-    rows = []
-    for line, number in zip(lines, numbers, strict=True):
-        fields = fields_of(line, number)
-        if len(fields) != len(header):
-            raise IngestError(where, f"line {number} has {len(fields)} fields, the header has "
-                                     f"{len(header)} (truncated or ragged file?)")
-        rows.append(fields)
-    try:
-        return np.array(rows, dtype=float)
-    except ValueError:
-        for fields, number in zip(rows, numbers, strict=True):
-            for name, value in zip(header, fields, strict=True):
-                try:
-                    float(value)
-                except ValueError:
-                    raise IngestError(
-                        where, f"line {number}: column {name!r} holds {value.strip()!r}, "
-                        f"not a number"
-                    ) from None
-        raise

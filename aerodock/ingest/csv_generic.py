@@ -46,7 +46,6 @@ from aerodock.geometry import E3, GRAVITY_MPS2, quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest.common import (
     ENU_TO_NED,
     FLIP_YZ,
-    CsvTable,
     check_finite,
     check_kinematics,
     check_mass,
@@ -56,8 +55,8 @@ from aerodock.ingest.common import (
     convert_rotations,
     convert_vectors,
     differentiate,
-    read_csv_table,
 )
+from aerodock.ingest.csv_table import CsvTable, read_csv_table
 from aerodock.ingest.errors import IngestError
 
 SOURCE = "csv"

@@ -53,10 +53,10 @@ from aerodock.ingest.common import (
     convert_vectors,
     detect_time_unit,
     estimate_lag_s,
-    read_csv_table,
     resample_linear,
     resample_quat,
 )
+from aerodock.ingest.csv_table import read_csv_table
 from aerodock.ingest.errors import IngestError, ingest_warning
 
 SOURCE = "neural-swarm"

@@ -11,8 +11,9 @@ from ingest_helpers import DISTURBANCE, MASS_KG, synthetic_flight
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import quat_to_rotmat, rotmat_to_quat
 from aerodock.ingest import read_logs
-from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ, read_csv_table
+from aerodock.ingest.common import ENU_TO_NED, FLIP_YZ
 from aerodock.ingest.csv_generic import REQUIRED_COLUMNS, read_csv, write_csv
+from aerodock.ingest.csv_table import read_csv_table
 from aerodock.ingest.errors import IngestError
 
 
@@ -198,3 +199,23 @@ def test_a_field_that_is_not_a_number_is_named(tmp_path: Path) -> None:
     path.write_text("a,b\n1,2\n3,x7\n")
     with pytest.raises(IngestError, match=r"line 3: column 'b' holds 'x7', not a number"):
         read_csv_table(path, header_in_comment=False)
+
+
+def test_a_table_read_again_is_a_fresh_copy_and_a_changed_file_is_read_anew(tmp_path: Path
+                                                                             ) -> None:
+    """The parsed-table cache is keyed by the text: the same bytes give equal arrays that the
+    caller owns; new bytes of the same size under the same name (and time stamp) are parsed."""
+    import os
+
+    path = tmp_path / "t.csv"
+    path.write_text("a,b\n1,2\n3,4\n")
+    first = read_csv_table(path, header_in_comment=False)
+    first.data[0, 0] = 99.0  # the caller's copy
+    again = read_csv_table(path, header_in_comment=False)
+    np.testing.assert_array_equal(again.data, [[1.0, 2.0], [3.0, 4.0]])
+    assert again.data is not first.data and again.path == path
+    stamp = path.stat().st_mtime_ns
+    path.write_text("a,b\n5,6\n7,8\n")
+    os.utime(path, ns=(stamp, stamp))
+    np.testing.assert_array_equal(read_csv_table(path, header_in_comment=False).data,
+                                  [[5.0, 6.0], [7.0, 8.0]])

@@ -1,0 +1,185 @@
+"""Numeric CSV tables, as the log readers read them (:func:`read_csv_table`).
+
+A process keeps the tables it has parsed, by their text (:data:`PARSED_CACHE_BYTES` of them, the
+least recently read dropped first): reading the same files again (``reproduce`` reads the
+Neural-Swarm flights three times, a study or a test suite more) costs their reading and hashing,
+not their parsing. The text is the key, so a file that changed is parsed again whatever its
+name, size or time stamp; each caller gets its own copy of the arrays.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from aerodock.fileio import MAX_CSV_BYTES, read_input_text
+from aerodock.ingest.common import input_errors
+from aerodock.ingest.errors import IngestError
+
+PARSED_CACHE_BYTES = 128 * 2**20
+"""How much of the parsed tables' arrays a process keeps, bytes (the 38 shared Neural-Swarm
+files take 17 MB)."""
+
+
+@dataclass(frozen=True)
+class CsvTable:
+    """A numeric CSV file: column names, data ``(rows, columns)`` and each row's line number."""
+
+    path: Path
+    columns: list[str]
+    data: np.ndarray
+    lines: np.ndarray
+    comments: list[str]
+
+    def column(self, name: str) -> np.ndarray:
+        """The values of column ``name``."""
+        return self.data[:, self.columns.index(name)]
+
+
+class _Parsed(NamedTuple):
+    columns: list[str]
+    data: np.ndarray
+    lines: np.ndarray
+    comments: list[str]
+
+
+_PARSED: OrderedDict[tuple[bool, bytes], _Parsed] = OrderedDict()
+_LOCK = threading.Lock()
+
+
+def _remember(key: tuple[bool, bytes], parsed: _Parsed) -> None:
+    """Keep ``parsed`` under ``key``, dropping the least recently read tables beyond
+    :data:`PARSED_CACHE_BYTES`."""
+    size = parsed.data.nbytes + parsed.lines.nbytes
+    if size > PARSED_CACHE_BYTES:
+        return
+    with _LOCK:
+        _PARSED[key] = parsed
+        total = sum(p.data.nbytes + p.lines.nbytes for p in _PARSED.values())
+        while total > PARSED_CACHE_BYTES:
+            _, dropped = _PARSED.popitem(last=False)
+            total -= dropped.data.nbytes + dropped.lines.nbytes
+
+
+def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
+    """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
+
+    Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
+    starting with ``#`` are comments. The file must be a regular file of at most
+    :data:`aerodock.fileio.MAX_CSV_BYTES` (a FIFO or a device is refused unread).
+
+    Args:
+        path: The file.
+        header_in_comment: The header is the first line starting with ``#`` (Neural-Swarm);
+            otherwise it is the first line that is not a ``#`` comment.
+
+    Raises:
+        IngestError: unreadable, non-regular, too large or empty file, no header, no data
+            rows, rows with a different number of fields than the header (naming the line), or a
+            field that is not a number.
+    """
+    where = str(path)
+    with input_errors(where, "cannot read file"):
+        text = read_input_text(path, "CSV file", MAX_CSV_BYTES, encoding="utf-8-sig",
+                               errors="replace")
+    if not text.strip():
+        raise IngestError(where, "empty file")
+    key = (header_in_comment, hashlib.blake2b(text.encode("utf-8", "surrogatepass"),
+                                              digest_size=20).digest())
+    with _LOCK:
+        parsed = _PARSED.get(key)
+        if parsed is not None:
+            _PARSED.move_to_end(key)
+    if parsed is None:
+        parsed = _parse(where, text, header_in_comment)
+        _remember(key, parsed)
+    return CsvTable(path, list(parsed.columns), parsed.data.copy(), parsed.lines.copy(),
+                    list(parsed.comments))
+
+
+def _parse(where: str, text: str, header_in_comment: bool) -> _Parsed:
+    """The table in ``text`` (the reading of :func:`read_csv_table`)."""
+    import csv
+
+    def fields_of(line: str, number: int) -> list[str]:
+        try:
+            return next(csv.reader([line], skipinitialspace=True))
+        except (csv.Error, StopIteration) as err:
+            raise IngestError(where, f"line {number}: not CSV ({err})") from None
+
+    header: list[str] | None = None
+    comments: list[str] = []
+    body: list[str] = []  # the data lines, stripped
+    line_numbers: list[int] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip().lstrip("\ufeff")
+        if not line:
+            continue
+        if line.startswith("#"):
+            if header is None and header_in_comment:
+                header = [c.strip() for c in fields_of(line.lstrip("#").strip(), number)]
+            else:
+                comments.append(line[1:].strip())
+            continue
+        if header is None:
+            if header_in_comment:
+                raise IngestError(where, "no header line: expected a first line starting with "
+                                         "'#' that names the columns")
+            header = [c.strip() for c in fields_of(line, number)]
+            continue
+        body.append(line)
+        line_numbers.append(number)
+    if header is None:
+        raise IngestError(where, "no header line naming the columns")
+    if not body:
+        raise IngestError(where, "empty: a header but no data rows")
+    data = _numeric_rows(body, len(header)) if not any('"' in line for line in body) else None
+    if data is None:  # quoted fields, or a fault to name: field by field
+        data = _checked_rows(where, header, body, line_numbers, fields_of)
+    return _Parsed(header, data, np.array(line_numbers), comments)
+
+
+def _numeric_rows(lines: list[str], columns: int) -> np.ndarray | None:
+    """Unquoted numeric CSV lines as ``(rows, columns)`` floats, parsed by NumPy's reader (each
+    field as Python's ``float`` reads it: the same numbers; the shared Neural-Swarm files read in
+    about half the time of ``csv`` and ``np.array`` of strings); None where a line is ragged or
+    a field is not a number, for :func:`_checked_rows` to name it."""
+    try:
+        data = np.loadtxt(lines, delimiter=",", dtype=float, ndmin=2, comments=None,
+                          quotechar=None)
+    except ValueError:
+        return None
+    return data if data.shape == (len(lines), columns) else None
+
+
+def _checked_rows(where: str, header: list[str], lines: list[str], numbers: list[int],
+                  fields_of: Callable[[str, int], list[str]]) -> np.ndarray:
+    """The data lines field by field (Python's ``csv``: quoted fields), raising an IngestError
+    that names the first ragged line, else the first field that is not a number."""
+    rows = []
+    for line, number in zip(lines, numbers, strict=True):
+        fields = fields_of(line, number)
+        if len(fields) != len(header):
+            raise IngestError(where, f"line {number} has {len(fields)} fields, the header has "
+                                     f"{len(header)} (truncated or ragged file?)")
+        rows.append(fields)
+    try:
+        return np.array(rows, dtype=float)
+    except ValueError:
+        for fields, number in zip(rows, numbers, strict=True):
+            for name, value in zip(header, fields, strict=True):
+                try:
+                    float(value)
+                except ValueError:
+                    raise IngestError(
+                        where, f"line {number}: column {name!r} holds {value.strip()!r}, "
+                        f"not a number"
+                    ) from None
+        raise
