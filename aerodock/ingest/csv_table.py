@@ -24,8 +24,9 @@ from aerodock.ingest.common import input_errors
 from aerodock.ingest.errors import IngestError
 
 PARSED_CACHE_BYTES = 128 * 2**20
-"""How much of the parsed tables' arrays a process keeps, bytes (the 38 shared Neural-Swarm
-files take 17 MB)."""
+"""How much a process keeps of the tables it parsed, bytes: each table's arrays, comments and
+column names, an eighth of its text (the key's share) and 1 kB (the 38 shared Neural-Swarm files
+count for 24 MB)."""
 
 
 @dataclass(frozen=True)
@@ -50,26 +51,39 @@ class _Parsed(NamedTuple):
     comments: list[str]
 
 
-_PARSED: OrderedDict[tuple[bool, bytes], _Parsed] = OrderedDict()
+_PARSED: OrderedDict[tuple[bool, bytes], tuple[_Parsed, int]] = OrderedDict()
+_HELD = [0]  # bytes the kept tables count for
 _LOCK = threading.Lock()
+_ENTRY_BYTES = 1024  # what a kept table counts for beyond its arrays and text
 
 
-def _remember(key: tuple[bool, bytes], parsed: _Parsed) -> None:
-    """Keep ``parsed`` under ``key``, dropping the least recently read tables beyond
-    :data:`PARSED_CACHE_BYTES`."""
-    size = parsed.data.nbytes + parsed.lines.nbytes
+def _size(parsed: _Parsed, text: str) -> int:
+    """What keeping ``parsed`` (read from ``text``) counts for, bytes."""
+    return parsed.data.nbytes + parsed.lines.nbytes + len(text) // 8 + _ENTRY_BYTES + sum(
+        len(c) for c in parsed.comments) + sum(len(c) for c in parsed.columns)
+
+
+def _remember(key: tuple[bool, bytes], parsed: _Parsed, size: int) -> bool:
+    """Keep ``parsed`` under ``key`` (``size``: :func:`_size`), dropping the least recently read
+    tables beyond :data:`PARSED_CACHE_BYTES`; False if it is too large to keep."""
     if size > PARSED_CACHE_BYTES:
-        return
+        return False
     with _LOCK:
-        _PARSED[key] = parsed
-        total = sum(p.data.nbytes + p.lines.nbytes for p in _PARSED.values())
-        while total > PARSED_CACHE_BYTES:
-            _, dropped = _PARSED.popitem(last=False)
-            total -= dropped.data.nbytes + dropped.lines.nbytes
+        old = _PARSED.pop(key, None)
+        if old is not None:
+            _HELD[0] -= old[1]
+        _PARSED[key] = (parsed, size)
+        _HELD[0] += size
+        while _HELD[0] > PARSED_CACHE_BYTES:
+            _, (_, dropped) = _PARSED.popitem(last=False)
+            _HELD[0] -= dropped
+    return True
 
 
 def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
-    """Read a comma-separated numeric table with one header line (Python's ``csv`` module).
+    """Read a comma-separated numeric table with one header line (NumPy's reader for plain
+    numbers, Python's ``csv`` module for quoted fields and to name a fault; a table read before
+    in this process is not parsed again: the module docstring).
 
     Fields may be quoted (``"t_s","leader_x_m"``); a UTF-8 byte-order mark is dropped; lines
     starting with ``#`` are comments. The file must be a regular file of at most
@@ -94,12 +108,15 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
     key = (header_in_comment, hashlib.blake2b(text.encode("utf-8", "surrogatepass"),
                                               digest_size=20).digest())
     with _LOCK:
-        parsed = _PARSED.get(key)
-        if parsed is not None:
+        kept = _PARSED.get(key)
+        if kept is not None:
             _PARSED.move_to_end(key)
-    if parsed is None:
+    if kept is not None:
+        parsed = kept[0]
+    else:
         parsed = _parse(where, text, header_in_comment)
-        _remember(key, parsed)
+        if not _remember(key, parsed, _size(parsed, text)):  # not kept: the caller's own
+            return CsvTable(path, parsed.columns, parsed.data, parsed.lines, parsed.comments)
     return CsvTable(path, list(parsed.columns), parsed.data.copy(), parsed.lines.copy(),
                     list(parsed.comments))
 
@@ -147,10 +164,16 @@ def _parse(where: str, text: str, header_in_comment: bool) -> _Parsed:
 
 
 def _numeric_rows(lines: list[str], columns: int) -> np.ndarray | None:
-    """Unquoted numeric CSV lines as ``(rows, columns)`` floats, parsed by NumPy's reader (each
-    field as Python's ``float`` reads it: the same numbers; the shared Neural-Swarm files read in
-    about half the time of ``csv`` and ``np.array`` of strings); None where a line is ragged or
-    a field is not a number, for :func:`_checked_rows` to name it."""
+    """Unquoted numeric CSV lines as ``(rows, columns)`` floats, parsed by NumPy's reader (the
+    numbers Python's ``float`` reads; the shared Neural-Swarm files in about half the time of
+    ``csv`` and ``np.array`` of strings); None where a line is ragged or a field is not a
+    number, for :func:`_checked_rows` to name it, and where the two readers differ: NumPy trims
+    ``\\x1f`` around a number as white space (``float`` does not), and ``csv`` refuses a field
+    longer than its limit."""
+    import csv
+
+    if any("\x1f" in line for line in lines) or max(map(len, lines)) > csv.field_size_limit():
+        return None
     try:
         data = np.loadtxt(lines, delimiter=",", dtype=float, ndmin=2, comments=None,
                           quotechar=None)

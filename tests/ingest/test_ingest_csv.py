@@ -178,20 +178,34 @@ def test_bad_meta_line(tmp_path: Path) -> None:
 
 
 def test_quoted_and_unquoted_tables_read_the_same_numbers(tmp_path: Path) -> None:
-    """NumPy's reader takes unquoted files, Python's ``csv`` quoted ones: the same values, and
-    Python's ``float`` spellings NumPy refuses (``1_000``) still read."""
-    rows = [[0.1, -2.5e-3, 1e300], [float("nan"), 7.0, -0.0], [3.0, 4.0, 1_000.0]]
-    plain, quoted = tmp_path / "plain.csv", tmp_path / "quoted.csv"
+    """NumPy's reader takes plain files, Python's ``csv`` quoted ones and the spellings NumPy
+    refuses (``1_000``): the same values either way, bit for bit."""
+    rows = [[0.1, -2.5e-3, 1e300], [float("nan"), 7.0, -0.0], [3.0, 5e-324, 1e400]]
+    plain, quoted, odd = tmp_path / "plain.csv", tmp_path / "quoted.csv", tmp_path / "odd.csv"
     plain.write_text("# a comment\na,b,c\n" + "\n".join(
-        ", ".join(repr(v) for v in r) for r in rows[:2]) + "\n3, 4, 1_000\n")
+        ", ".join(repr(v) for v in r) for r in rows) + "\n")
     quoted.write_text('"a","b","c"\n' + "\n".join(
         ",".join(f'"{v!r}"' for v in r) for r in rows) + "\n")
+    odd.write_text("a,b,c\n1_000, 2, 3\n")
     a = read_csv_table(plain, header_in_comment=False)
     b = read_csv_table(quoted, header_in_comment=False)
     assert a.columns == b.columns == ["a", "b", "c"] and a.comments == ["a comment"]
-    np.testing.assert_array_equal(a.data, np.array(rows))
-    np.testing.assert_array_equal(b.data, a.data)
+    assert a.data.tobytes() == b.data.tobytes() == np.array(rows).tobytes()
     assert list(a.lines) == [3, 4, 5] and list(b.lines) == [2, 3, 4]
+    np.testing.assert_array_equal(read_csv_table(odd, header_in_comment=False).data,
+                                  [[1000.0, 2.0, 3.0]])
+
+
+def test_what_pythons_float_refuses_stays_refused(tmp_path: Path) -> None:
+    """NumPy's reader trims a unit separator (``\\x1f``) around a number and has no field size
+    limit; the tables still read as Python reads them: refused, naming the line."""
+    path = tmp_path / "sep.csv"
+    path.write_text("a,b\n1,\x1f2\n")
+    with pytest.raises(IngestError, match=r"line 2: column 'b' holds"):
+        read_csv_table(path, header_in_comment=False)
+    path.write_text("a,b\n1," + "1" * 200_000 + "\n")
+    with pytest.raises(IngestError, match=r"line 2: not CSV \(field larger than field limit"):
+        read_csv_table(path, header_in_comment=False)
 
 
 def test_a_field_that_is_not_a_number_is_named(tmp_path: Path) -> None:
