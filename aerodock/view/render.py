@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -218,6 +219,9 @@ class FrameDrawer:
         self.ax_side.set_title("side view (the approach runs left to right)")
         self.ax_top.set_title("top view")
         self._artists: list[Any] = []
+        self._background: Any = None  # the still parts, once drawn (blitted_rgba)
+        self._footer: tuple[GateState | None, list[Any]] = (None, [])  # legend, gate caption
+        self._footer_pixels: dict[GateState | None, Any] = {}  # drawn once per gate state
         # The tight layout placed once, not kept as the figure's layout engine: with an engine
         # (even the placeholder ``tight_layout`` leaves), every saved frame is drawn twice
         # (layout, then pixels); the axes do not move between frames, so the same pixels
@@ -273,13 +277,14 @@ class FrameDrawer:
         self._artists.append(self.fig.text(0.5, 0.97, "\n".join(lines), ha="center", va="top",
                                            fontsize=9))
         handles, labels = _legend_handles(tr, gate)
-        self._artists.append(self.fig.legend(handles, labels, loc="lower center", ncol=4,
-                                             fontsize=8, frameon=False,
-                                             bbox_to_anchor=(0.5, 0.03)))
+        footer = [self.fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8,
+                                  frameon=False, bbox_to_anchor=(0.5, 0.03))]
         if gate is not None:
-            self._artists.append(self.fig.text(
+            footer.append(self.fig.text(
                 0.5, 0.01, "gripper colour: green open, orange closing, blue captured, red missed",
                 ha="center", va="bottom", fontsize=8))
+        self._artists.extend(footer)
+        self._footer = (gate, footer)  # (what it depends on: the track and the gate's state)
 
     def _draw_bar(self, ax, view, lp, lR, bar_p) -> None:
         tr = self.track
@@ -298,6 +303,40 @@ class FrameDrawer:
         """The current frame as an (H, W, 3) uint8 array."""
         self.fig.canvas.draw()
         return np.asarray(self.fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def blitted_rgba(self, k: int) -> np.ndarray:
+        """Frame ``k`` as an (H, W, 4) uint8 array, drawn over the figure's still parts (axes,
+        ticks, grid, titles) rendered once and kept: a frame redraws only what moves, about a
+        tenth of a whole figure's drawing. What moves is drawn above the still parts (the force
+        arrow above the grid, where a whole-figure draw puts it below)."""
+        from matplotlib.transforms import Bbox
+
+        canvas = self.fig.canvas
+        if self._background is None:
+            for art in self._artists:
+                art.remove()
+            self._artists = []
+            canvas.draw()
+            self._background = canvas.copy_from_bbox(self.fig.bbox)
+        self.draw(k)
+        canvas.restore_region(self._background)
+        gate, footer = self._footer
+        for art in sorted(self._artists, key=lambda a: a.get_zorder()):
+            art.set_animated(True)  # (kept out of any later whole-figure draw)
+            if not any(art is f for f in footer):
+                (art.axes or self.fig).draw_artist(art)
+        # The legend and the gate's caption, below the axes where nothing else draws, change
+        # only with the gate's state: their pixels are drawn once a state and kept
+        pixels = self._footer_pixels.get(gate)
+        if pixels is None:
+            for art in footer:
+                self.fig.draw_artist(art)
+            renderer = canvas.get_renderer()
+            box = Bbox.union([art.get_window_extent(renderer) for art in footer]).padded(2)
+            pixels = self._footer_pixels[gate] = canvas.copy_from_bbox(box)
+        else:
+            canvas.restore_region(pixels)
+        return np.asarray(canvas.buffer_rgba()).copy()
 
     def close(self) -> None:
         """Free the figure."""
@@ -324,17 +363,20 @@ def gif_durations_ms(n_frames: int, fps: float) -> list[int]:
     return [int(d) * 10 for d in np.maximum(np.diff(starts_cs), 1)]
 
 
-def _gif_writer(fps: float) -> Any:
-    """matplotlib's PillowWriter, writing each frame's delay from :func:`gif_durations_ms`
-    (matplotlib writes ``int(1000 / fps)`` ms, which the GIF truncates: 60 ms at 15 fps)."""
-    from matplotlib.animation import PillowWriter
+def _write_gif(drawer: FrameDrawer, frames: Iterable[int], fps: float, path: Path) -> None:
+    """The GIF of ``frames`` (samples), each drawn over the still parts
+    (:meth:`FrameDrawer.blitted_rgba`) and converted as matplotlib's ``PillowWriter`` converts
+    its frames, with each frame's delay from :func:`gif_durations_ms` (``PillowWriter`` writes
+    ``int(1000 / fps)`` ms, which the GIF truncates: 60 ms at 15 fps)."""
+    from PIL import Image
 
-    class ExactRateGifWriter(PillowWriter):
-        def finish(self) -> None:
-            self._frames[0].save(self.outfile, save_all=True, append_images=self._frames[1:],
-                                 duration=gif_durations_ms(len(self._frames), self.fps), loop=0)
-
-    return ExactRateGifWriter(fps=fps)
+    images = []
+    for k in frames:
+        rgba = drawer.blitted_rgba(k)
+        im = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba, "raw", "RGBA", 0, 1)
+        images.append(im if im.getextrema()[3][0] < 255 else im.convert("RGB"))
+    images[0].save(path, format="GIF", save_all=True, append_images=images[1:],
+                   duration=gif_durations_ms(len(images), fps), loop=0)
 
 
 def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: float = 1.0,
@@ -366,16 +408,24 @@ def render_animation(track: Track, out: str | Path, fps: float = 15.0, speed: fl
         raise ValueError("fps and speed must be > 0")
     idx = frame_indices(track.t_s, fps, speed, max_frames)
     drawer = FrameDrawer(track, dpi=dpi)
-    writer = _gif_writer(fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.stem}.partial{suffix}")
+
+    def frames() -> Iterator[int]:
+        for j, k in enumerate(idx):
+            yield int(k)
+            if progress is not None:
+                progress(j + 1, len(idx))
+
     try:
-        with writer.saving(drawer.fig, str(tmp), dpi):
-            for j, k in enumerate(idx):
-                drawer.draw(int(k))
-                writer.grab_frame()
-                if progress is not None:
-                    progress(j + 1, len(idx))
+        if suffix == ".gif":
+            _write_gif(drawer, frames(), fps, tmp)
+        else:
+            writer = FFMpegWriter(fps=fps)
+            with writer.saving(drawer.fig, str(tmp), dpi):
+                for k in frames():
+                    drawer.draw(k)
+                    writer.grab_frame()
         with atomic_open(out, "wb") as fh:  # never a half-written video under the final name
             fh.write(tmp.read_bytes())
         umask = os.umask(0)

@@ -214,3 +214,28 @@ def test_gif_frames_play_at_the_stated_rate(tmp_path, fps):
     assert sum(durations) == pytest.approx(12 * period, abs=5)
     if fps == 10.0:
         assert set(durations) == {100}
+
+
+def test_a_blitted_frame_is_the_whole_figure_drawn():
+    """A GIF's frames are drawn over the still parts kept from the first (and the legend kept
+    per gate state): each is the frame a whole-figure draw makes, but for the force arrow drawn
+    above the grid, and a frame drawn after others is the frame drawn first."""
+    track = east_approach()
+    track.gate[20:], track.gate[30:] = 1, 2
+    drawer = FrameDrawer(track, dpi=40)
+    try:
+        frames = {k: drawer.blitted_rgba(k) for k in range(40)}
+    finally:
+        drawer.close()
+    for k in (0, 5, 21, 25, 31, 39):
+        whole, fresh = FrameDrawer(track, dpi=40), FrameDrawer(track, dpi=40)
+        try:
+            whole.draw(k)
+            expected = whole.rgb()
+            first = fresh.blitted_rgba(k)
+        finally:
+            whole.close()
+            fresh.close()
+        np.testing.assert_array_equal(frames[k], first)
+        differ = np.any(frames[k][..., :3] != expected, axis=2)
+        assert differ.mean() < 1e-3, (k, differ.mean())
