@@ -7,13 +7,16 @@ stored float32 weights are exact in float64).
 
 Two paths give the same numbers (to rounding):
 
-* :meth:`Predictor.predict` -- batched, ``x (n, 9)``, ``leader_R (n, 3, 3)`` -> ``(n, 3)``;
+* :meth:`Predictor.predict` -- batched, ``x (n, 9)``, ``leader_R (n, 3, 3)`` -> ``(n, 3)``; a
+  sample's prediction is the same to the bit in a batch of any size (:data:`ROW_BLOCK`);
 * :meth:`Predictor.predict_one` -- one sample, ``x (9,)``, ``leader_R (3, 3)`` -> ``(3,)``; the
   features are computed with Python floats and the layers write into preallocated buffers, so a
-  call costs tens of microseconds, not the ~100 us of the batched path's per-op overhead.
+  call costs tens of microseconds, not the ~100 us of the batched path's per-op overhead (for a
+  deployed follower; its last bits may differ from the batched path's).
 
-The controller's feed-forward uses :meth:`Predictor.predict_bodies` with the leader's and the
-follower's :class:`~aerodock.downwash.base.BodyState`::
+The controller's feed-forward uses :meth:`Predictor.predict_bodies` (the batched path, so that a
+trial flies the same numbers alone and in a campaign) with the leader's and the follower's
+:class:`~aerodock.downwash.base.BodyState`::
 
     predictor = Predictor.load("models/so2")          # or load_predictor(path_or_None)
     f_ext_hat_mps2 = predictor.predict_bodies(leader, follower)   # (n, 3), m/s^2, NED
@@ -94,6 +97,14 @@ def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray
     )
     return x, np.reshape(np.asarray(leader.R, dtype=float), (lp.shape[0], 3, 3))
 
+
+ROW_BLOCK = 8
+"""The batched path predicts for a multiple of this many samples (the batch padded with copies of
+its first): NumPy's matrix products (OpenBLAS) round a row's sums otherwise in a batch of one (a
+matrix-vector kernel) and in the rows left over from its matrix kernel's blocks, so a sample's
+prediction, and a trial's flight with the model in the loop, depended on how many samples were
+predicted beside it (by 1e-16 relative a product; this machine, NumPy 2.4, every layer shape from
+2 to 64 wide: a multiple of 8 rows gives every row the same sums)."""
 
 class Predictor:
     """A trained downwash model, NumPy only.
@@ -277,8 +288,19 @@ class Predictor:
     def predict_wrench(self, x: np.ndarray, leader_R: np.ndarray,
                        wake_scales: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray | None]:
-        """(force (n, 3) m/s², torque (n, 3) N m or None without one), world NED."""
+        """(force (n, 3) m/s², torque (n, 3) N m or None without one), world NED; each
+        sample's the same to the bit whatever the batch (:data:`ROW_BLOCK`)."""
         x, leader_R = check_inputs(x, leader_R)
+        n = x.shape[0]
+        if n % ROW_BLOCK:  # the batch padded with copies of its first sample
+            pad = ROW_BLOCK - n % ROW_BLOCK
+            scales = self._scales(wake_scales, n)  # (checked against the caller's batch)
+            if scales is not None:
+                scales = np.concatenate([scales, np.repeat(scales[:1], pad, axis=0)])
+            force, torque = self.predict_wrench(
+                np.concatenate([x, np.repeat(x[:1], pad, axis=0)]),
+                np.concatenate([leader_R, np.repeat(leader_R[:1], pad, axis=0)]), scales)
+            return force[:n], None if torque is None else torque[:n]
         if self._world_frame:
             z, out_map = x, None
         else:
@@ -345,8 +367,6 @@ class Predictor:
             return self.predict(x, rot, self.wake_scales_for_bodies(leader, follower), **footprint)
         if footprint:
             return self.predict(x, rot, **footprint)
-        if x.shape[0] == 1:
-            return self.predict_one(x[0], rot[0])[None, :]
         return self.predict(x, rot)
 
     def predict_torque_bodies(self, leader: BodyState, follower: BodyState) -> np.ndarray:

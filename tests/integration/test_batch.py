@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -20,6 +22,25 @@ def test_batch_equals_single_trials(short_cfg):
         for key in ("follower_p", "leader_p", "bar_p", "ff"):
             assert np.array_equal(one.trace[key][:steps, 0], batch.trace[key][:steps, i]), key
         assert one.success[0] == batch.success[i]
+        assert one.err_down_m[0] == batch.err_down_m[i]
+
+
+def test_batch_equals_single_trials_with_a_learnt_model_in_the_loop(short_cfg):
+    """With the model's feed-forward too: a trial's prediction does not depend on how many
+    trials are predicted beside it (``aerodock.learning.runtime.ROW_BLOCK``; before, a trial
+    alone and the same trial in a pair differed from the first period, by 1e-14 in the
+    feed-forward)."""
+    from aerodock.learning.runtime import Predictor
+
+    model = Predictor.load(Path(__file__).parents[1] / "learning" / "data" / "kind_pins" / "so2")
+    spec = {"compensation": "model", "seed": 11}
+    batch = run_campaign(short_cfg, MissionSpec(trials=3, **spec), model, record="trace")
+    for i in range(3):
+        one = run_campaign(short_cfg, MissionSpec(trials=1, first_trial=i, **spec), model,
+                           record="trace")
+        steps = min(len(one.trace["t_s"]), len(batch.trace["t_s"]))
+        for key in ("follower_p", "ff"):
+            assert np.array_equal(one.trace[key][:steps, 0], batch.trace[key][:steps, i]), key
         assert one.err_down_m[0] == batch.err_down_m[i]
 
 

@@ -93,3 +93,20 @@ def test_torch_module_bit_for_bit(kind, scenes):
     assert _same(force.numpy(), pins, "torch_force")
     if "torch_torque" in pins[0]:
         assert _same(torque.numpy(), pins, "torch_torque")
+
+
+@pytest.mark.parametrize("kind", PINNED_KINDS)
+def test_a_samples_prediction_does_not_depend_on_its_batch(kind, scenes):
+    """The batched path predicts each sample to the bit alike in batches of 1 to 17 and of all
+    48 (NumPy's products round a row otherwise in a batch of one or in a block's leftover rows;
+    the runtime pads the batch: ``aerodock.learning.runtime.ROW_BLOCK``)."""
+    x, rot = scenes["x"], scenes["rot"]
+    ws = scenes["scales"] if kind in LEADER_AWARE else None
+    pred = Predictor.load(PINS / kind)
+    force, torque = pred.predict_wrench(x, rot, ws)
+    for m in range(1, 18):
+        parts = [pred.predict_wrench(x[i:i + m], rot[i:i + m], None if ws is None else ws[i:i + m])
+                 for i in range(0, x.shape[0], m)]
+        assert np.array_equal(np.concatenate([f for f, _ in parts]), force), m
+        if torque is not None:
+            assert np.array_equal(np.concatenate([t for _, t in parts]), torque), m
