@@ -15,7 +15,6 @@ from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
@@ -44,26 +43,19 @@ class CsvTable:
         return self.data[:, self.columns.index(name)]
 
 
-class _Parsed(NamedTuple):
-    columns: list[str]
-    data: np.ndarray
-    lines: np.ndarray
-    comments: list[str]
-
-
-_PARSED: OrderedDict[tuple[bool, bytes], tuple[_Parsed, int]] = OrderedDict()
+_PARSED: OrderedDict[tuple[bool, bytes], tuple[CsvTable, int]] = OrderedDict()
 _HELD = [0]  # bytes the kept tables count for
 _LOCK = threading.Lock()
 _ENTRY_BYTES = 1024  # what a kept table counts for beyond its arrays and text
 
 
-def _size(parsed: _Parsed, text: str) -> int:
+def _size(parsed: CsvTable, text: str) -> int:
     """What keeping ``parsed`` (read from ``text``) counts for, bytes."""
     return parsed.data.nbytes + parsed.lines.nbytes + len(text) // 8 + _ENTRY_BYTES + sum(
         len(c) for c in parsed.comments) + sum(len(c) for c in parsed.columns)
 
 
-def _remember(key: tuple[bool, bytes], parsed: _Parsed, size: int) -> bool:
+def _remember(key: tuple[bool, bytes], parsed: CsvTable, size: int) -> bool:
     """Keep ``parsed`` under ``key`` (``size``: :func:`_size`), dropping the least recently read
     tables beyond :data:`PARSED_CACHE_BYTES`; False if it is too large to keep."""
     if size > PARSED_CACHE_BYTES:
@@ -112,18 +104,20 @@ def read_csv_table(path: Path, *, header_in_comment: bool) -> CsvTable:
         if kept is not None:
             _PARSED.move_to_end(key)
     if kept is not None:
-        parsed = kept[0]
+        table = kept[0]
     else:
-        parsed = _parse(where, text, header_in_comment)
-        if not _remember(key, parsed, _size(parsed, text)):  # not kept: the caller's own
-            return CsvTable(path, parsed.columns, parsed.data, parsed.lines, parsed.comments)
-    return CsvTable(path, list(parsed.columns), parsed.data.copy(), parsed.lines.copy(),
-                    list(parsed.comments))
+        table = _parse(path, text, header_in_comment)
+        if not _remember(key, table, _size(table, text)):  # not kept: the caller's own
+            return table
+    return CsvTable(path, list(table.columns), table.data.copy(), table.lines.copy(),
+                    list(table.comments))
 
 
-def _parse(where: str, text: str, header_in_comment: bool) -> _Parsed:
-    """The table in ``text`` (the reading of :func:`read_csv_table`)."""
+def _parse(path: Path, text: str, header_in_comment: bool) -> CsvTable:
+    """The table in ``text``, read from ``path`` (the reading of :func:`read_csv_table`)."""
     import csv
+
+    where = str(path)
 
     def fields_of(line: str, number: int) -> list[str]:
         try:
@@ -160,7 +154,7 @@ def _parse(where: str, text: str, header_in_comment: bool) -> _Parsed:
     data = _numeric_rows(body, len(header)) if not any('"' in line for line in body) else None
     if data is None:  # quoted fields, or a fault to name: field by field
         data = _checked_rows(where, header, body, line_numbers, fields_of)
-    return _Parsed(header, data, np.array(line_numbers), comments)
+    return CsvTable(path, header, data, np.array(line_numbers), comments)
 
 
 def _numeric_rows(lines: list[str], columns: int) -> np.ndarray | None:

@@ -307,7 +307,7 @@ class FrameDrawer:
     def blitted_rgba(self, k: int) -> np.ndarray:
         """Frame ``k`` as an (H, W, 4) uint8 array, drawn over the figure's still parts (axes,
         ticks, grid, titles) rendered once and kept: a frame redraws only what moves, about a
-        tenth of a whole figure's drawing. What moves is drawn above the still parts (the force
+        quarter of a whole figure's drawing. What moves is drawn above the still parts (the force
         arrow above the grid, where a whole-figure draw puts it below)."""
         from matplotlib.transforms import Bbox
 
