@@ -140,6 +140,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     model = PPO("MlpPolicy", env, n_steps=size["n_steps"], batch_size=size["n_steps"],
                 n_epochs=5, gamma=0.99, seed=args.seed, device="cpu",
                 tensorboard_log=args.tensorboard)
+    if args.tensorboard is None:
+        # no outputs: Stable-Baselines3's own logger would otherwise make an empty SB3-<time>
+        # folder in the temporary directory at every run
+        from stable_baselines3.common.logger import Logger
+
+        model.set_logger(Logger(folder=None, output_formats=[]))
     curve: list[dict[str, Any]] = []
     model.learn(total_timesteps=size["steps"], callback=returns_callback(curve),
                 tb_log_name=f"ppo_{args.backend}_seed{args.seed}")

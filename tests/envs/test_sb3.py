@@ -12,6 +12,7 @@ pytest.importorskip("stable_baselines3")
 
 from stable_baselines3 import PPO  # noqa: E402
 from stable_baselines3.common.env_checker import check_env  # noqa: E402
+from stable_baselines3.common.logger import Logger  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor  # noqa: E402
 
 from aerodock.envs import DockingEnv, DockingVectorEnv  # noqa: E402
@@ -105,6 +106,7 @@ def test_ppo_trains_a_few_hundred_steps_on_the_native_vector_env():
     env = VecMonitor(DockingSB3VecEnv(DockingVectorEnv(num_envs=4, campaign_seed=0,
                                                        config=KWARGS["config"])))
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=2, seed=0, device="cpu")
+    model.set_logger(Logger(folder=None, output_formats=[]))  # (SB3's own: a folder in /tmp)
     before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=256)
     assert model.num_timesteps == 256
@@ -116,12 +118,14 @@ def test_ppo_trains_a_few_hundred_steps_on_the_native_vector_env():
 
 
 @pytest.mark.parametrize("backend", ["native"])
-def test_ppo_example_quick_mode_trains_and_evaluates(backend):
+def test_ppo_example_quick_mode_trains_and_evaluates(backend, tmp_path, monkeypatch):
     """examples/ppo_sb3.py in quick mode through the adapter (its make_vec_env route is SB3's
     own vector env over DockingEnv, which test_sub_environments_are_make_vec_envs_single_
     environments already flies; left out of the suite for its 30 s). Its environments fly the
-    short timing, through the example's ENV_KWARGS."""
+    short timing, through the example's ENV_KWARGS. Without ``--tensorboard`` it leaves nothing
+    in the temporary directory (SB3's own logger makes an empty folder there)."""
     import importlib.util
+    import tempfile
     from pathlib import Path
 
     path = Path(__file__).resolve().parents[2] / "examples" / "ppo_sb3.py"
@@ -129,7 +133,9 @@ def test_ppo_example_quick_mode_trains_and_evaluates(backend):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     mod.ENV_KWARGS["config"] = KWARGS["config"]
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     result = mod.main(["--quick", "--backend", backend])
+    assert not list(tmp_path.iterdir())
     assert result["env_steps"] == 256 and result["env_steps_per_s"] > 0
     for key in ("baseline_lqg", "ppo_policy"):
         r = result[key]
