@@ -13,7 +13,24 @@ from aerodock.frozen import freeze
 
 
 def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
-    """Mean distance between the rotor-disk centres ``offsets_m`` (k, 3), m (0 for one disk)."""
+    """Mean distance between the rotor-disk centres ``offsets_m`` (k, 3), m (0 for one disk).
+
+    Kept per layout (its bytes): a wake fit builds a jet per flight at every evaluation of its
+    residual, each with the same few layouts."""
+    key = (offsets_m.shape, offsets_m.dtype.str, offsets_m.tobytes())
+    hit = _PAIR_DISTANCES.get(key)
+    if hit is None:
+        if len(_PAIR_DISTANCES) >= _PAIR_DISTANCES_KEPT:
+            _PAIR_DISTANCES.clear()
+        hit = _PAIR_DISTANCES[key] = _mean_pair_distance_m(offsets_m)
+    return hit
+
+
+_PAIR_DISTANCES: dict[tuple, float] = {}
+_PAIR_DISTANCES_KEPT = 64
+
+
+def _mean_pair_distance_m(offsets_m: np.ndarray) -> float:
     k = offsets_m.shape[0]
     if k < 2:
         return 0.0

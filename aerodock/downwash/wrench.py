@@ -44,6 +44,13 @@ def quad_rotor_offsets_body_m(diagonal_m: float, n_rotors: int = 4) -> np.ndarra
     if not diagonal_m > 0 or n_rotors < 1:
         raise ValueError(f"rotor layout needs diagonal_m > 0 and n_rotors >= 1, got "
                          f"{diagonal_m!r}, {n_rotors!r}")
+    return _quad_rotor_offsets_body_m(float(diagonal_m), int(n_rotors)).copy()
+
+
+@lru_cache(maxsize=64)
+def _quad_rotor_offsets_body_m(diagonal_m: float, n_rotors: int) -> np.ndarray:
+    """The layout of :func:`quad_rotor_offsets_body_m`, kept per size (a wake fit builds a jet
+    per flight at every evaluation of its residual); the caller gets a copy."""
     angle = np.pi / 4 + 2 * np.pi * np.arange(n_rotors) / n_rotors
     arm = 0.5 * diagonal_m
     return np.stack([arm * np.cos(angle), arm * np.sin(angle), np.zeros(n_rotors)], axis=1)

@@ -209,6 +209,7 @@ def serial_blas(fit: Callable[..., Any]) -> Callable[..., Any]:
 
     @wraps(fit)
     def one_thread(*args: Any, **kwargs: Any) -> Any:
+        import scipy.optimize  # noqa: F401  (SciPy's own BLAS loaded first, so it is limited too)
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(limits=1, user_api="blas"):

@@ -264,3 +264,29 @@ def test_field_fit_bad_input_is_one_line(tmp_path, synthetic, args, message):
     assert message in lines[0]
     assert "Traceback" not in proc.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_fit_holds_every_blas_to_one_thread_scipys_too():
+    """``serial_blas`` in a fresh process (no thread limits in its environment, SciPy not yet
+    imported): inside the fit every BLAS library runs one thread, SciPy's own (which its least
+    squares load on first use) included. Before, SciPy's was loaded inside the limit and kept
+    its threads: a fit kept a second core busy, its numbers the same."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("from threadpoolctl import threadpool_info\n"
+            "from aerodock.identify.wake_fit import serial_blas\n"
+            "def fit():\n"
+            "    from scipy.optimize import least_squares  # as settled_least_squares does\n"
+            "    return [(i['filepath'], i['num_threads']) for i in threadpool_info()\n"
+            "            if i['user_api'] == 'blas']\n"
+            "import json\n"
+            "print(json.dumps(serial_blas(fit)()))\n")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    libraries = json.loads(out.stdout.strip().splitlines()[-1])
+    assert libraries and all(threads == 1 for _, threads in libraries), libraries

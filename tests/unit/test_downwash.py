@@ -588,3 +588,21 @@ def test_wrench_batch_equals_single_trials(cfg):
         one = run(slice(i, i + 1), TrialRNG(4, 1, i))
         for (f1, t1), (fb, tb) in zip(one, batch):
             assert np.array_equal(f1[0], fb[i]) and np.array_equal(t1[0], tb[i])
+
+
+def test_the_kept_rotor_layouts_and_pair_distances_are_the_computed_ones():
+    """The layouts and the disks' mean spacing are kept per size (a wake fit builds a jet per
+    flight at every step of its least squares): a caller's copy may be changed without
+    changing the next caller's, and a spacing follows its layout's values."""
+    from aerodock.downwash.jet_inputs import _mean_pair_distance_m, mean_pair_distance_m
+
+    first = quad_rotor_offsets_body_m(0.092)
+    first[0] = 99.0
+    again = quad_rotor_offsets_body_m(0.092)
+    assert again[0, 0] == pytest.approx(0.046 * np.cos(np.pi / 4)) and again.flags.writeable
+    for diagonal in (0.092, 0.12, 0.27):
+        layout = quad_rotor_offsets_body_m(diagonal)
+        assert mean_pair_distance_m(layout) == _mean_pair_distance_m(layout)
+        layout *= 2.0  # the same array, other values: another spacing
+        assert mean_pair_distance_m(layout) == _mean_pair_distance_m(layout)
+    assert mean_pair_distance_m(np.zeros((1, 3))) == 0.0
