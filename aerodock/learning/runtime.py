@@ -99,12 +99,15 @@ def bodies_to_inputs(leader: BodyState, follower: BodyState) -> tuple[np.ndarray
 
 
 ROW_BLOCK = 8
-"""The batched path predicts for a multiple of this many samples (the batch padded with copies of
-its first): NumPy's matrix products (OpenBLAS) round a row's sums otherwise in a batch of one (a
-matrix-vector kernel) and in the rows left over from its matrix kernel's blocks, so a sample's
-prediction, and a trial's flight with the model in the loop, depended on how many samples were
-predicted beside it (by 1e-16 relative a product; this machine, NumPy 2.4, every layer shape from
-2 to 64 wide: a multiple of 8 rows gives every row the same sums)."""
+"""The batched path's layers run on a multiple of this many samples (the features padded with
+copies of the first sample's): NumPy's matrix products (OpenBLAS) round a row's sums otherwise
+in a batch of one (a matrix-vector kernel) and in the rows left over from its matrix kernel's
+blocks, so a sample's prediction, and a trial's flight with the model in the loop, depended on
+how many samples were predicted beside it (by 1e-16 relative a product; this machine, NumPy
+2.4, every layer shape from 2 to 64 wide: a multiple of 8 rows gives every row the same sums).
+A sample's features are its own arithmetic whatever the batch, so they are computed for the
+batch as it is."""
+
 
 class Predictor:
     """A trained downwash model, NumPy only.
@@ -292,23 +295,18 @@ class Predictor:
         sample's the same to the bit whatever the batch (:data:`ROW_BLOCK`)."""
         x, leader_R = check_inputs(x, leader_R)
         n = x.shape[0]
-        if n % ROW_BLOCK:  # the batch padded with copies of its first sample
-            pad = ROW_BLOCK - n % ROW_BLOCK
-            scales = self._scales(wake_scales, n)  # (checked against the caller's batch)
-            if scales is not None:
-                scales = np.concatenate([scales, np.repeat(scales[:1], pad, axis=0)])
-            force, torque = self.predict_wrench(
-                np.concatenate([x, np.repeat(x[:1], pad, axis=0)]),
-                np.concatenate([leader_R, np.repeat(leader_R[:1], pad, axis=0)]), scales)
-            return force[:n], None if torque is None else torque[:n]
         if self._world_frame:
             z, out_map = x, None
         else:
             z, out_map = feature_map(
                 self.kind, x, leader_R,
                 eps_pos_m=self.spec.eps_pos_m, eps_vel_mps=self.spec.eps_vel_mps,
-                wake_scales=self._scales(wake_scales, x.shape[0]),
+                wake_scales=self._scales(wake_scales, n),
             )
+        pad = -n % ROW_BLOCK
+        if pad:  # the layers' rows padded with copies of the first sample's features (a
+            # sample's features are its own arithmetic, whatever the batch)
+            z = np.concatenate([z, np.repeat(z[:1], pad, axis=0)])
         h, ego = (z, None) if not self._ego else (z[:, :-self._ego], z[:, -self._ego:])
         for i, (wt, b) in enumerate(self._layers_t):
             if ego is not None and i == self._phi_layers:  # deep sets: rho(phi(...), ego)
@@ -317,6 +315,8 @@ class Predictor:
             h += b
             if i < len(self._layers_t) - 1:
                 _act_inplace(self._act, h)
+        if pad:
+            h = h[:n]
         if out_map is None:
             return h, None
         if not self.has_torque:
