@@ -11,6 +11,11 @@ import numpy as np
 from aerodock.downwash.base import BodyState
 from aerodock.frozen import freeze
 
+_PAIR_DISTANCES: dict[tuple, float] = {}
+"""The disks' mean spacing by layout (:func:`mean_pair_distance_m`), at most
+:data:`_PAIR_DISTANCES_KEPT` layouts (then emptied)."""
+_PAIR_DISTANCES_KEPT = 64
+
 
 def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
     """Mean distance between the rotor-disk centres ``offsets_m`` (k, 3), m (0 for one disk).
@@ -24,10 +29,6 @@ def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
             _PAIR_DISTANCES.clear()
         hit = _PAIR_DISTANCES[key] = _mean_pair_distance_m(offsets_m)
     return hit
-
-
-_PAIR_DISTANCES: dict[tuple, float] = {}
-_PAIR_DISTANCES_KEPT = 64
 
 
 def _mean_pair_distance_m(offsets_m: np.ndarray) -> float:
