@@ -205,7 +205,6 @@ class RoundJetField:
         self.body_area_m2 = self.body_area_ratio * self.follower_n_rotors \
             * self.follower_disk_area_m2
         self.body_radius_m = float(np.sqrt(self.body_area_m2 / np.pi))
-        self._offsets_key: tuple | None = None
         self._pair_distance_m = 0.0
         # Turbulence states, component-major: the follower's shared processes (3, n: axial, and
         # the two lateral ones), each disk's own axial one (k, n), and the bar's (3, n).
@@ -581,10 +580,8 @@ class RoundJetField:
         return coeff
 
     def _pair_distance(self, offsets: np.ndarray) -> None:
-        """The disks' mean spacing for ``offsets`` (kept for the last read-only array)."""
+        """The disks' mean spacing for ``offsets`` (kept for the last read-only array; others
+        are looked up by value, :func:`mean_pair_distance_m`)."""
         if offsets is not self._offsets_obj or not is_frozen(offsets):
-            key = (offsets.shape, offsets.tobytes())
-            if key != self._offsets_key:
-                self._offsets_key = key
-                self._pair_distance_m = mean_pair_distance_m(offsets)
+            self._pair_distance_m = mean_pair_distance_m(offsets)
             self._offsets_obj = offsets

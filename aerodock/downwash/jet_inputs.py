@@ -6,32 +6,25 @@ read in a call."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from aerodock.downwash.base import BodyState
 from aerodock.frozen import freeze
 
-_PAIR_DISTANCES: dict[tuple, float] = {}
-"""The disks' mean spacing by layout (:func:`mean_pair_distance_m`), at most
-:data:`_PAIR_DISTANCES_KEPT` layouts (then emptied)."""
-_PAIR_DISTANCES_KEPT = 64
-
 
 def mean_pair_distance_m(offsets_m: np.ndarray) -> float:
     """Mean distance between the rotor-disk centres ``offsets_m`` (k, 3), m (0 for one disk).
 
-    Kept per layout (its bytes): a wake fit builds a jet per flight at every evaluation of its
+    Kept per layout (its values): a wake fit builds a jet per flight at every evaluation of its
     residual, each with the same few layouts."""
-    key = (offsets_m.shape, offsets_m.dtype.str, offsets_m.tobytes())
-    hit = _PAIR_DISTANCES.get(key)
-    if hit is None:
-        if len(_PAIR_DISTANCES) >= _PAIR_DISTANCES_KEPT:
-            _PAIR_DISTANCES.clear()
-        hit = _PAIR_DISTANCES[key] = _mean_pair_distance_m(offsets_m)
-    return hit
+    return _mean_pair_distance_m(offsets_m.shape, offsets_m.dtype.str, offsets_m.tobytes())
 
 
-def _mean_pair_distance_m(offsets_m: np.ndarray) -> float:
+@lru_cache(maxsize=64)
+def _mean_pair_distance_m(shape: tuple[int, ...], dtype: str, values: bytes) -> float:
+    offsets_m = np.frombuffer(values, dtype=dtype).reshape(shape)
     k = offsets_m.shape[0]
     if k < 2:
         return 0.0
