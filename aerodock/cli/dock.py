@@ -182,16 +182,19 @@ def faults_command(
     """Fly one docking campaign per injected fault (and one without): how each trial the fault
     struck ended (docked, missed, not held, safe or unsafe abort, other), and its clearance
     violations, collisions and NaN."""
-    from aerodock.experiments.faults import fault_campaign, rows_markdown
     from aerodock.mission.faults import load_faults
     from aerodock.mission.limits import check_campaign_size
 
-    cfg = load_cli_config(config, sets, trust)
     if not 1 <= trials <= 4096:
         fail(f"--trials must be in 1..4096, got {trials}")
-    check_campaign_size(cfg, trials)
+    # the fault file and the model before the configuration, whose field loads the compiled
+    # wake (as dock's --faults): a bad input is refused in about half the time
     faults = load_faults(fault_file)
     predictor = _load_predictor(model, compensation)
+    cfg = load_cli_config(config, sets, trust)
+    check_campaign_size(cfg, trials)
+    from aerodock.experiments.faults import fault_campaign, rows_markdown
+
     with progress_bar() as bar:
         task = bar.add_task("faults", total=len(faults) + 1)
 

@@ -51,13 +51,18 @@ def field_probe(
     check_number("--radial", radial, -100.0, 100.0)
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
+    if bar and (model is not None or leader_speed != 0.0):
+        fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
+    predictor = None
+    if model is not None:  # before the configuration, whose field loads the compiled wake
+        from aerodock.learning.runtime import Predictor
+
+        predictor = Predictor.load(model)
     cfg = load_cli_config(config, sets, trust)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_mass = cfg.leader.mass_kg
     dt = cfg.timing.physics_dt_s
     if bar:
-        if model is not None or leader_speed != 0.0:
-            fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
         area = cfg.platform.bar_length_m * cfg.platform.bar_diameter_m
         result = probe_bar(build_field(cfg), separation, radial, samples, dt,
                            np.random.default_rng(seed), area, mass, g,
@@ -82,11 +87,9 @@ def field_probe(
         if ratio is not None:
             typer.echo(f"  sd across the bar / mean vertical drag = {ratio:.3f}")
         return
-    if model is not None:
-        from aerodock.learning.runtime import Predictor
+    if predictor is not None:
         from aerodock.mission.params import fly_on_configured_rotors
 
-        predictor = Predictor.load(model)
         fly_on_configured_rotors(predictor, cfg)  # a leader-aware model: this world's rotors
         leader, follower = probe_bodies(separation, radial, leader_speed, mass, g,
                                         leader_mass_kg=lead_mass)
@@ -131,12 +134,15 @@ def field_plot(
 
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     check_writable_target(out)
-    cfg = load_cli_config(config, sets, trust)
-    if model is not None:
+    predictor = None
+    if model is not None:  # before the configuration, whose field loads the compiled wake
         from aerodock.learning.runtime import Predictor
-        from aerodock.mission.params import fly_on_configured_rotors
 
         predictor = Predictor.load(model)
+    cfg = load_cli_config(config, sets, trust)
+    if predictor is not None:
+        from aerodock.mission.params import fly_on_configured_rotors
+
         fly_on_configured_rotors(predictor, cfg)
         mean_fn, title = predictor.predict_bodies, f"learnt model {model.name}"
     else:

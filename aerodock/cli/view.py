@@ -32,9 +32,7 @@ def view_command(
     force, in a side and a top view."""
     from aerodock.fileio import check_writable_target
     from aerodock.flightlog import load_flightlogs
-    from aerodock.view.render import render_animation, track_from_flightlog
 
-    cfg = load_cli_config(config, sets, trust)
     if rerun is not None:  # an output: refused now (a FIFO would block), not after rendering
         check_writable_target(rerun)
     if max_frames < 1:
@@ -54,6 +52,11 @@ def view_command(
              f"(the flight lasts {t[-1]:.1f} s)")
     first = int(keep.argmax())
     flown = flown.slice(first, first + int(keep.sum()))
+    # the configuration and the renderer after the log: they load the compiled world (about
+    # half a second), which a refused input need not wait for
+    from aerodock.view.render import render_animation, track_from_flightlog
+
+    cfg = load_cli_config(config, sets, trust)
     track = track_from_flightlog(flown, cfg)
     out = out if out is not None else log.with_suffix(".gif")
     with progress_bar() as bar:

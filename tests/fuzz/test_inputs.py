@@ -22,12 +22,22 @@ ENTRY = "from aerodock.cli import main; main()"
 HANG_GUARD_S = 60  # generous on a loaded 2-core machine; a hang is for ever
 
 
-def cli(args: list, family: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+# ENTRY, then a last stderr line naming the compiled world's and the heavy libraries' modules the
+# run loaded (a refused input is refused before them: about half a second of every refusal)
+ENTRY_LOADED = (
+    "import atexit, sys\n"
+    "HEAVY = ('numba', 'torch', 'scipy', 'matplotlib', 'aerodock.world')\n"
+    "atexit.register(lambda: print('loaded:', *[m for m in HEAVY if m in sys.modules],"
+    " file=sys.stderr))\n" + ENTRY)
+
+
+def cli(args: list, family: str, cwd: Path | None = None,
+        entry: str = ENTRY) -> subprocess.CompletedProcess:
     """Run the CLI in a subprocess, counted as a case of ``inputs-<family>`` in the fuzz tally;
     a run that does not end in time fails the test."""
     count(f"inputs-{family}")
     try:
-        return subprocess.run([sys.executable, "-c", ENTRY, *map(str, args)], cwd=cwd,
+        return subprocess.run([sys.executable, "-c", entry, *map(str, args)], cwd=cwd,
                               capture_output=True, text=True, timeout=HANG_GUARD_S)
     except subprocess.TimeoutExpired:
         pytest.fail(f"aerodock {' '.join(map(str, args))} did not finish in {HANG_GUARD_S} s")
@@ -86,7 +96,12 @@ def _cases(bad: Path, log: Path, tmp: Path) -> dict[str, list]:
                                     "ingest rosbag", "--mapping", "view", "--faults", "faults",
                                     "sweep", "sweep config", "--model"])
 def test_dev_zero_is_refused_at_once(option, log_file, tmp_path):
-    refused(cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option], "dev-zero"), "/dev/zero")
+    """... and before the command loads the compiled world or a heavy library (view, faults and
+    probe --model loaded them first)."""
+    res = cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option], "dev-zero",
+              entry=ENTRY_LOADED)
+    refused(res, "/dev/zero")
+    assert res.stderr.splitlines()[-1] == "loaded:", res.stderr
 
 
 @pytest.mark.parametrize("option", ["--config", "--data", "ingest csv", "ingest ulog",
