@@ -31,13 +31,35 @@ SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 DATA_DIR = find_data_dir(cwd=Path(__file__).resolve().parents[1]).path or SHARED / "data"
 
 # Under xdist (``--dist loadfile``: each file runs on one worker, so a module- or session-scoped
-# fixture is built once per file rather than once per worker) the files with the long
-# ``reproduce --quick`` runs go first: longest first keeps both cores busy to the end. Each run
-# is a subprocess, so while a worker waits for one the other worker goes through the rest.
+# fixture is built once per file rather than once per worker) the longest files go first, so
+# that the last file a worker takes is a short one and both cores stay busy to the end (files
+# are handed out in this order as workers free up). First the files with the long ``reproduce
+# --smoke`` runs: each run is a subprocess, so while a worker waits for one the other worker goes
+# through the rest. Then the files that took 15 s or more of a worker, longest first (their wall
+# time in a clean clone's suite beside ../shared, 7 December 2026); the rest in collection order.
 _FIRST = (
-    "tests/protocol/test_protocol_commands.py",  # three runs started as the module begins
+    "tests/protocol/test_protocol_commands.py",  # a run started as the module begins
     "tests/e2e/test_reproduce.py",
-    "tests/studies/test_studies.py",  # about twenty study scripts, one after the other
+    "tests/studies/test_studies.py",  # about twenty study scripts, one after the other (104 s)
+    "tests/fuzz/test_kill.py",  # 92 s
+    "tests/fuzz/test_inputs.py",  # 44 s
+    "tests/identify/test_wake_fit.py",  # 43 s
+    "tests/fuzz/test_audit_tool.py",  # 42 s
+    "tests/examples/test_examples.py",  # 36 s
+    "tests/identify/test_wake_folds.py",  # 34 s
+    "tests/view/test_view.py",  # 28 s
+    "tests/fuzz/test_fuzz_config.py",  # 26 s
+    "tests/sweep/test_sweep.py",  # 25 s
+    "tests/sweep/test_ray_cleanup.py",  # 23 s
+    "tests/node/test_node_ros.py",  # 23 s
+    "tests/integration/test_cli.py",  # 22 s
+    "tests/identify/test_field_score.py",  # 19 s
+    "tests/e2e/test_real_data.py",  # 19 s
+    "tests/identify/test_wake_torque.py",  # 18 s
+    "tests/sweep/test_no_work_lost.py",  # 18 s
+    "tests/e2e/test_sim_to_real.py",  # 16 s
+    "tests/integration/test_mission.py",  # 15 s
+    "tests/ingest/test_ingest_rosbag.py",  # 15 s
 )
 
 
