@@ -89,15 +89,16 @@ def _cases(bad: Path, log: Path, tmp: Path) -> dict[str, list]:
         "sweep": ["sweep", bad, "--out", tmp / "sweep"],
         "sweep config": ["sweep", spec, "--out", tmp / "sweep"],
         "--model": ["field", "probe", "--separation", "1", "--radial", "0", "--model", bad],
+        "plot --model": ["field", "plot", "--out", tmp / "f.png", "--model", bad],
     }
 
 
 @pytest.mark.parametrize("option", ["--config", "--data", "ingest csv", "ingest ulog",
                                     "ingest rosbag", "--mapping", "view", "--faults", "faults",
-                                    "sweep", "sweep config", "--model"])
+                                    "sweep", "sweep config", "--model", "plot --model"])
 def test_dev_zero_is_refused_at_once(option, log_file, tmp_path):
     """... and before the command loads the compiled world or a heavy library (view, faults and
-    probe --model loaded them first)."""
+    field probe and plot with --model loaded them first)."""
     res = cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option], "dev-zero",
               entry=ENTRY_LOADED)
     refused(res, "/dev/zero")
