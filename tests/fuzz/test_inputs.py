@@ -97,8 +97,9 @@ def _cases(bad: Path, log: Path, tmp: Path) -> dict[str, list]:
                                     "ingest rosbag", "--mapping", "view", "--faults", "faults",
                                     "sweep", "sweep config", "--model", "plot --model"])
 def test_dev_zero_is_refused_at_once(option, log_file, tmp_path):
-    """... and before the command loads the compiled world or a heavy library (view, faults and
-    field probe and plot with --model loaded them first)."""
+    """/dev/zero as each input: refused at once in one line, before the command loads the
+    compiled world or a heavy library (view, faults and field probe and plot with --model loaded
+    them first)."""
     res = cli(_cases(Path("/dev/zero"), log_file, tmp_path)[option], "dev-zero",
               entry=ENTRY_LOADED)
     refused(res, "/dev/zero")
