@@ -26,7 +26,10 @@ manoeuvre (``--swaps`` flights of the swap task, :mod:`aerodock.collect.swaps`; 
 the real flights', in free air 0.4 m to the side). The simulated logs' rotor torque (what the
 rotors explain from their speeds) stands for the real logs' motor torque (the Crazyflie's own mixer
 of its per-motor thrust estimates). ``--torque-gain`` scales the world's wake torque
-(``disk_torque_gain``). ``--smoke``: the step of ArduCopter, the hover of the stock PID (two
+(``disk_torque_gain``). And per pairing, 0-16 cm off the axis, the inward torque while the
+follower moves in towards the leader's axis and while it moves out, real and the world's swap
+task (the real flights' torque depends on the direction of motion; the world's barely does).
+``--smoke``: the step of ArduCopter, the hover of the stock PID (two
 vehicles, 0.5 s), its flights under the wake (one flight in one band, two swaps).
 """
 
@@ -130,6 +133,22 @@ def _torque_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float,
     return out
 
 
+def _in_out_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, list[float]]:
+    """Per 2 cm offset bin, 0-16 cm: the inward torque (mN m) while the follower moves in
+    towards the leader's axis and while it moves out (nan: too few samples)."""
+    from aerodock.identify import flights as fl
+    from aerodock.identify.field_score import scaled_inertia
+    from aerodock.identify.wake_torque import torque_profile
+
+    flights = fl.prepare_flights(logs)
+    inertia = scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
+                             cfg.vehicle.inertia_kgm2)
+    profile = torque_profile(dict(cfg.downwash.params), flights, logs, inertia,
+                             separation_m=(0.15, 0.45), free_air_offset_m=free_air_m)
+    return {round(b.offset_lo_m, 2): [1e3 * b.real_moving_in_nm, 1e3 * b.real_moving_out_nm]
+            for b in profile.get(pair, [])}
+
+
 def _as_motor_torque(logs):
     """Simulated logs with their rotor torque where the real logs carry the motors'."""
     from aerodock.identify.wake_torque import MOTOR_TORQUE_KEY
@@ -154,7 +173,8 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
         real = read_logs("neural-swarm", [data / folder],
                          **({"vehicle": vehicles} if vehicles else {}))
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
-                 "world": {}, "world_swaps": {}}
+                 "world": {}, "world_swaps": {},
+                 "in_out": {"real": _in_out_rows(real, base, pair, FREE_AIR_OFFSET_M)}}
         for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
@@ -169,6 +189,8 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                                           free_air_radius_m=FREE_AIR_OFFSET_M, name="swap")
             entry["world_swaps"][stack] = _torque_rows(_as_motor_torque(swap_logs), cfg, pair,
                                                        FREE_AIR_OFFSET_M)
+            entry["in_out"][f"{stack}, swaps"] = _in_out_rows(_as_motor_torque(swap_logs), cfg,
+                                                              pair, FREE_AIR_OFFSET_M)
         rows.append(entry)
     return rows
 
@@ -214,6 +236,12 @@ def main() -> int:
             cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {b['torque_mnm']:.2f} / "
                               f"{b['lean_deg']:.1f} / {b['mnm_per_rad']:.0f}"
                               for lo, b in sorted(bins.items()))
+            print(f"  {who:<21} {cells or 'no bin with samples'}")
+        print(f"{entry['pair']}, 0.15-0.45 m below: inward torque mN m moving in / moving out, "
+              "per offset bin")
+        for who, bins in entry["in_out"].items():
+            cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {i:.2f} / {o:.2f}"
+                              for lo, (i, o) in sorted(bins.items()))
             print(f"  {who:<21} {cells or 'no bin with samples'}")
     return 0
 
