@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -111,31 +112,10 @@ def hover_losses(stack: str, overrides: dict, n: int = 16, seconds: float = 3.0)
     return int((np.linalg.norm(world.follower.p - fol_p, axis=1) > 0.2).sum())
 
 
-def _torque_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, dict]:
-    """Per offset bin: inward torque (mN m), lean into the axis (deg), and their ratio."""
-    from aerodock.identify import flights as fl
-    from aerodock.identify.field_score import scaled_inertia
-    from aerodock.identify.wake_torque import torque_profile
-
-    flights = fl.prepare_flights(logs)
-    inertia = scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
-                             cfg.vehicle.inertia_kgm2)
-    params = dict(cfg.downwash.params)
-    profile = torque_profile(params, flights, logs, inertia, separation_m=(0.1, 0.7),
-                             free_air_offset_m=free_air_m)
-    out = {}
-    for b in profile.get(pair, []):
-        if any(abs(b.offset_lo_m - lo) < 1e-9 for lo in BINS_M):
-            out[round(b.offset_lo_m, 2)] = {"torque_mnm": 1e3 * b.real_nm,
-                                            "lean_deg": b.lean_in_deg,
-                                            "mnm_per_rad": 1e3 * b.nm_per_rad,
-                                            "samples": b.samples}
-    return out
-
-
-def _in_out_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, list[float]]:
-    """Per 2 cm offset bin, 0-16 cm: the inward torque (mN m) while the follower moves in
-    towards the leader's axis and while it moves out (nan: too few samples)."""
+def _torque_bins(logs, cfg: Config, pair: str, free_air_m: float,
+                 separation_m: tuple[float, float]) -> list:
+    """The pairing's inward torque profile (:func:`aerodock.identify.wake_torque.torque_profile`
+    with the world's jet and inertia) over the samples ``separation_m`` below the leader."""
     from aerodock.identify import flights as fl
     from aerodock.identify.field_score import scaled_inertia
     from aerodock.identify.wake_torque import torque_profile
@@ -144,9 +124,30 @@ def _in_out_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float,
     inertia = scaled_inertia(flights, cfg.vehicle.mass_kg, cfg.vehicle.diagonal_m,
                              cfg.vehicle.inertia_kgm2)
     profile = torque_profile(dict(cfg.downwash.params), flights, logs, inertia,
-                             separation_m=(0.15, 0.45), free_air_offset_m=free_air_m)
-    return {round(b.offset_lo_m, 2): [1e3 * b.real_moving_in_nm, 1e3 * b.real_moving_out_nm]
-            for b in profile.get(pair, [])}
+                             separation_m=separation_m, free_air_offset_m=free_air_m)
+    return profile.get(pair, [])
+
+
+def _torque_rows(logs, cfg: Config, pair: str, free_air_m: float) -> dict[float, dict]:
+    """Per offset bin: inward torque (mN m), lean into the axis (deg), and their ratio."""
+    out = {}
+    for b in _torque_bins(logs, cfg, pair, free_air_m, (0.1, 0.7)):
+        if any(abs(b.offset_lo_m - lo) < 1e-9 for lo in BINS_M):
+            out[round(b.offset_lo_m, 2)] = {"torque_mnm": 1e3 * b.real_nm,
+                                            "lean_deg": b.lean_in_deg,
+                                            "mnm_per_rad": 1e3 * b.nm_per_rad,
+                                            "samples": b.samples}
+    return out
+
+
+def _in_out_rows(logs, cfg: Config, pair: str,
+                 free_air_m: float) -> dict[float, list[float | None]]:
+    """Per 2 cm offset bin, 0-16 cm, 0.15-0.45 m below: the inward torque (mN m) while the
+    follower moves in towards the leader's axis and while it moves out (None: too few
+    samples)."""
+    return {round(b.offset_lo_m, 2): [1e3 * x if math.isfinite(x) else None
+                                      for x in (b.real_moving_in_nm, b.real_moving_out_nm)]
+            for b in _torque_bins(logs, cfg, pair, free_air_m, (0.15, 0.45))}
 
 
 def _as_motor_torque(logs):
@@ -195,6 +196,11 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
     return rows
 
 
+def _mnm(torque_mnm: float | None) -> str:
+    """A torque in mN m as the tables print it ("-": too few samples)."""
+    return "-" if torque_mnm is None else f"{torque_mnm:.2f}"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DATA_DIR / "neural-swarm")
@@ -240,7 +246,7 @@ def main() -> int:
         print(f"{entry['pair']}, 0.15-0.45 m below: inward torque mN m moving in / moving out, "
               "per offset bin")
         for who, bins in entry["in_out"].items():
-            cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {i:.2f} / {o:.2f}"
+            cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {_mnm(i)} / {_mnm(o)}"
                               for lo, (i, o) in sorted(bins.items()))
             print(f"  {who:<21} {cells or 'no bin with samples'}")
     return 0
