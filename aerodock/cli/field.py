@@ -22,7 +22,17 @@ from aerodock.cli.common import (
 )
 
 if TYPE_CHECKING:
-    pass
+    from aerodock.learning.runtime import Predictor
+
+
+def _load_model(model: Path | None) -> Predictor | None:
+    """The trained model ``model`` (None: none), loaded before the configuration so that a bad
+    one is refused before the compiled wake loads."""
+    if model is None:
+        return None
+    from aerodock.learning.runtime import Predictor
+
+    return Predictor.load(model)
 
 
 def field_probe(
@@ -53,11 +63,7 @@ def field_probe(
     check_number("--samples", samples, 2, MAX_PROBE_SAMPLES)
     if bar and (model is not None or leader_speed != 0.0):
         fail("--bar probes the field under a hovering leader (no --model, no --leader-speed)")
-    predictor = None
-    if model is not None:  # before the configuration, whose field loads the compiled wake
-        from aerodock.learning.runtime import Predictor
-
-        predictor = Predictor.load(model)
+    predictor = _load_model(model)  # before the configuration, which loads the compiled wake
     cfg = load_cli_config(config, sets, trust)
     mass, g = cfg.vehicle.mass_kg, cfg.sim.gravity_mps2
     lead_mass = cfg.leader.mass_kg
@@ -134,11 +140,7 @@ def field_plot(
 
     check_number("--leader-speed", leader_speed, -100.0, 100.0)
     check_writable_target(out)
-    predictor = None
-    if model is not None:  # before the configuration, whose field loads the compiled wake
-        from aerodock.learning.runtime import Predictor
-
-        predictor = Predictor.load(model)
+    predictor = _load_model(model)  # before the configuration, which loads the compiled wake
     cfg = load_cli_config(config, sets, trust)
     if predictor is not None:
         from aerodock.mission.params import fly_on_configured_rotors
