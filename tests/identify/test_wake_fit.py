@@ -148,7 +148,9 @@ def test_real_fit_on_the_shared_flights(shared_data):
 def test_the_fit_settles_wherever_it_starts(shared_data):
     """The mean's least squares, started from two places of its flat valley, settles at one
     floor: the parameters agree within 2e-4 (one run of it stopped 1 % apart, at `width0_ratio`
-    0.7253 from the default start and 0.7326 from this one, on an AVX2 machine)."""
+    0.7253 from the default start and 0.7326 from this one, on an AVX2 machine; restarting it
+    from its result left an AVX-512 machine at 0.7353, another floor, until the default fit
+    also started from `OTHER_START`)."""
     from aerodock.experiments.swap_flights import read_swap_flights
 
     logs = read_swap_flights(shared_data("neural-swarm"))
