@@ -29,6 +29,9 @@ of its per-motor thrust estimates). ``--torque-gain`` scales the world's wake to
 (``disk_torque_gain``). And per pairing, 0-16 cm off the axis, the inward torque while the
 follower moves in towards the leader's axis and while it moves out, real and the world's swap
 task (the real flights' torque depends on the direction of motion; the world's barely does).
+And per pairing, the follower's attitude loop read from its logs, 2-6 Hz
+(:mod:`aerodock.identify.attitude_loop`: the commanded torque's stiffness, damping and
+rate-derivative term), real and the world's swap task, beside the configured SJC law's.
 ``--smoke``: the step of ArduCopter, the hover of the stock PID (two
 vehicles, 0.5 s), its flights under the wake (one flight in one band, two swaps).
 """
@@ -150,6 +153,27 @@ def _in_out_rows(logs, cfg: Config, pair: str,
             for b in _torque_bins(logs, cfg, pair, free_air_m, (0.15, 0.45))}
 
 
+def _loop_rows(logs, torque_key: str) -> dict[str, list[float]]:
+    """Per axis, the attitude loop read from ``logs`` in :data:`~aerodock.identify.attitude_loop.
+    BAND_HZ`: stiffness mN m/rad, damping mN m s/rad, rate-derivative term uN m s^2/rad, R^2."""
+    from aerodock.identify.attitude_loop import loop_response
+
+    return {r.axis: [1e3 * r.stiffness_nm_per_rad, 1e3 * r.damping_nms_per_rad,
+                     1e6 * r.rate_dot_nms2_per_rad, r.r2]
+            for r in loop_response(logs, torque_key)}
+
+
+def _law_rows(cfg: Config) -> dict[str, list[float | None]]:
+    """The configured SJC law's loop, as :func:`_loop_rows` gives a logged one (R^2 None)."""
+    from aerodock.identify.attitude_loop import sjc_law_response
+
+    a = cfg.autopilot
+    return {r.axis: [1e3 * r.stiffness_nm_per_rad, 1e3 * r.damping_nms_per_rad,
+                     1e6 * r.rate_dot_nms2_per_rad, None]
+            for r in sjc_law_response(a.sjc_lambda, a.sjc_k_nms, a.sjc_ki_nm, a.sjc_kdw_nms2,
+                                      a.sjc_jtune_kgm2)}
+
+
 def _as_motor_torque(logs):
     """Simulated logs with their rotor torque where the real logs carry the motors'."""
     from aerodock.identify.wake_torque import MOTOR_TORQUE_KEY
@@ -163,7 +187,7 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
               smoke: bool) -> list[dict]:
     from aerodock.collect.swaps import SWAP_SEPARATIONS_M, swap_task_flights
     from aerodock.experiments.sim_to_real import simulated_flights
-    from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M
+    from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M, MOTOR_TORQUE_KEY
     from aerodock.ingest import read_logs
 
     rows = []
@@ -175,7 +199,11 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                          **({"vehicle": vehicles} if vehicles else {}))
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
                  "world": {}, "world_swaps": {},
-                 "in_out": {"real": _in_out_rows(real, base, pair, FREE_AIR_OFFSET_M)}}
+                 "in_out": {"real": _in_out_rows(real, base, pair, FREE_AIR_OFFSET_M)},
+                 # the real follower's own logs only (the other vehicle's are in the folder too)
+                 "loop": {"real": _loop_rows([lg for lg in real if lg.meta.get(
+                     "follower_mass_kg") == base.vehicle.mass_kg], MOTOR_TORQUE_KEY),
+                          "the SJC law, its gains": _law_rows(base)}}
         for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
@@ -192,6 +220,7 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                                                        FREE_AIR_OFFSET_M)
             entry["in_out"][f"{stack}, swaps"] = _in_out_rows(_as_motor_torque(swap_logs), cfg,
                                                               pair, FREE_AIR_OFFSET_M)
+            entry["loop"][f"{stack}, swaps"] = _loop_rows(swap_logs, "follower_rotor_torque_nm")
         rows.append(entry)
     return rows
 
@@ -249,6 +278,12 @@ def main() -> int:
             cells = "; ".join(f"{100 * lo:.0f}-{100 * lo + 2:.0f} cm {_mnm(i)} / {_mnm(o)}"
                               for lo, (i, o) in sorted(bins.items()))
             print(f"  {who:<21} {cells or 'no bin with samples'}")
+        print(f"{entry['pair']}: the follower's attitude loop, 2-6 Hz, roll; pitch: stiffness "
+              "mN m/rad / damping mN m s/rad / rate-derivative uN m s^2/rad (R^2)")
+        for who, axes in entry["loop"].items():
+            cells = "; ".join(f"{k:.1f} / {c:.2f} / {d:.0f}" + (f" ({r2:.2f})" if r2 else "")
+                              for k, c, d, r2 in axes.values())
+            print(f"  {who:<21} {cells}")
     return 0
 
 

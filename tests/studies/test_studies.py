@@ -84,7 +84,11 @@ STUDY_CASES = (
            rf"^  crazyflie-pid\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
            rf"^  crazyflie-pid, swaps\s+4-6 cm {NUMBER} / {NUMBER} / {NUMBER}; 6-8 cm",
            r"^32 g under 32 g, 0\.15-0\.45 m below: inward torque mN m moving in / moving out",
-           rf"^  real\s+0-2 cm {NUMBER} / {NUMBER}; 2-4 cm {NUMBER} / {NUMBER};"),
+           rf"^  real\s+0-2 cm {NUMBER} / {NUMBER}; 2-4 cm {NUMBER} / {NUMBER};",
+           r"^32 g under 32 g: the follower's attitude loop, 2-6 Hz",
+           rf"^  real\s+{NUMBER} / {NUMBER} / {NUMBER} \({NUMBER}\); {NUMBER} / {NUMBER}",
+           rf"^  the SJC law, its gains {NUMBER} / {NUMBER} / {NUMBER}; {NUMBER}",
+           rf"^  crazyflie-pid, swaps\s+{NUMBER} / {NUMBER} / {NUMBER} \({NUMBER}\); "),
           frozenset({"data"})),
     Study("baseline_ladder.py", ("--model", "{model}"),
           (r"^\s*\d/2 with,\s+\d/2 without\s+\(slips \d, err \d+\.\d{3} m\)\s+"
