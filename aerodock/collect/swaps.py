@@ -15,7 +15,10 @@ relative to the leader, so the two vehicles' velocities there are nearly always 
 trained on them cannot tell the leader's velocity (which skews its wake) from the follower's.
 These flights give it the real task's geometry. What differs from the real flights: both
 vehicles fly the world's position controllers (the nominal one, with the bias observer), not the
-firmware's; ``goTo``'s segment is the firmware's planner's polynomial (:func:`goto_profile`).
+firmware's; ``goTo``'s segment is the firmware's planner's polynomial (:func:`goto_profile`). And
+the real swaps flew with the Neural-Swarm learnt interaction compensation on (the script sets
+``ctrlFa/enableNN`` to 2 for every swap; the data folders' ``readme.txt``: "NN enabled"); these
+compensate nothing.
 """
 
 from __future__ import annotations
