@@ -167,11 +167,9 @@ def _law_rows(cfg: Config) -> dict[str, list[float | None]]:
     """The configured SJC law's loop, as :func:`_loop_rows` gives a logged one (R^2 None)."""
     from aerodock.identify.attitude_loop import sjc_law_response
 
-    a = cfg.autopilot
     return {r.axis: [1e3 * r.stiffness_nm_per_rad, 1e3 * r.damping_nms_per_rad,
                      1e6 * r.rate_dot_nms2_per_rad, None]
-            for r in sjc_law_response(a.sjc_lambda, a.sjc_k_nms, a.sjc_ki_nm, a.sjc_kdw_nms2,
-                                      a.sjc_jtune_kgm2)}
+            for r in sjc_law_response(cfg.autopilot)}
 
 
 def _as_motor_torque(logs):
@@ -189,6 +187,7 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
     from aerodock.experiments.sim_to_real import simulated_flights
     from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M, MOTOR_TORQUE_KEY
     from aerodock.ingest import read_logs
+    from aerodock.learning.labels import ROTOR_TORQUE_KEY
 
     rows = []
     for pair, (path, folder, vehicles) in WORLDS.items():
@@ -200,9 +199,10 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
         entry = {"pair": pair, "real": _torque_rows(real, base, pair, FREE_AIR_OFFSET_M),
                  "world": {}, "world_swaps": {},
                  "in_out": {"real": _in_out_rows(real, base, pair, FREE_AIR_OFFSET_M)},
-                 # the real follower's own logs only (the other vehicle's are in the folder too)
-                 "loop": {"real": _loop_rows([lg for lg in real if lg.meta.get(
-                     "follower_mass_kg") == base.vehicle.mass_kg], MOTOR_TORQUE_KEY),
+                 # the pairing's follower's own logs only (the folder holds the other's too)
+                 "loop": {"real": _loop_rows([lg for lg in real if math.isclose(
+                     lg.meta.get("follower_mass_kg", 0.0), base.vehicle.mass_kg)],
+                                             MOTOR_TORQUE_KEY),
                           "the SJC law, its gains": _law_rows(base)}}
         for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
@@ -220,7 +220,7 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                                                        FREE_AIR_OFFSET_M)
             entry["in_out"][f"{stack}, swaps"] = _in_out_rows(_as_motor_torque(swap_logs), cfg,
                                                               pair, FREE_AIR_OFFSET_M)
-            entry["loop"][f"{stack}, swaps"] = _loop_rows(swap_logs, "follower_rotor_torque_nm")
+            entry["loop"][f"{stack}, swaps"] = _loop_rows(swap_logs, ROTOR_TORQUE_KEY)
         rows.append(entry)
     return rows
 
@@ -281,7 +281,8 @@ def main() -> int:
         print(f"{entry['pair']}: the follower's attitude loop, 2-6 Hz, roll; pitch: stiffness "
               "mN m/rad / damping mN m s/rad / rate-derivative uN m s^2/rad (R^2)")
         for who, axes in entry["loop"].items():
-            cells = "; ".join(f"{k:.1f} / {c:.2f} / {d:.0f}" + (f" ({r2:.2f})" if r2 else "")
+            cells = "; ".join(f"{k:.1f} / {c:.2f} / {d:.0f}"
+                              + (f" ({r2:.2f})" if r2 is not None else "")
                               for k, c, d, r2 in axes.values())
             print(f"  {who:<21} {cells}")
     return 0
