@@ -12,8 +12,9 @@ a torque, the wake's included. (Left out: the integral's ``-K_I lambda int theta
 a damping of ``-K_I lambda / omega^2``, 3-4 % of ``c`` at 2 Hz on the Crazyflies.)
 Band-passed to a band above the position loop (whose set-point moves slowly) and below the
 motors' and the logs' limits (:data:`BAND_HZ`), the logged torque's least squares on the
-band-passed angle, rate and rate derivative reads ``k``, ``c`` and ``d`` from any flight, the wake's and the manoeuvre's disturbances included (the law answers the states,
-whatever moved them). :func:`sjc_law_response` gives the same three of a configured SJC loop, so
+band-passed angle, rate and rate derivative reads ``k``, ``c`` and ``d`` from any flight, the
+wake's and the manoeuvre's disturbances included (the law answers the states, whatever moved
+them). :func:`sjc_law_response` gives the same three of a configured SJC loop, so
 a world's loop, the logs' and the law's stand side by side.
 
 What it reads: the real logs' commanded torque (``follower_motor_torque_nm``, the Neural-Swarm
