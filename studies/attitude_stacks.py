@@ -153,23 +153,12 @@ def _in_out_rows(logs, cfg: Config, pair: str,
             for b in _torque_bins(logs, cfg, pair, free_air_m, (0.15, 0.45))}
 
 
-def _loop_rows(logs, torque_key: str) -> dict[str, list[float]]:
-    """Per axis, the attitude loop read from ``logs`` in :data:`~aerodock.identify.attitude_loop.
-    BAND_HZ`: stiffness mN m/rad, damping mN m s/rad, rate-derivative term uN m s^2/rad, R^2."""
-    from aerodock.identify.attitude_loop import loop_response
-
+def _loop_cells(responses) -> dict[str, list[float | None]]:
+    """Per axis, an attitude loop (read from logs, or a law's: R^2 None) as the study prints it:
+    stiffness mN m/rad, damping mN m s/rad, rate-derivative term uN m s^2/rad, R^2."""
     return {r.axis: [1e3 * r.stiffness_nm_per_rad, 1e3 * r.damping_nms_per_rad,
-                     1e6 * r.rate_dot_nms2_per_rad, r.r2]
-            for r in loop_response(logs, torque_key)}
-
-
-def _law_rows(cfg: Config) -> dict[str, list[float | None]]:
-    """The configured SJC law's loop, as :func:`_loop_rows` gives a logged one (R^2 None)."""
-    from aerodock.identify.attitude_loop import sjc_law_response
-
-    return {r.axis: [1e3 * r.stiffness_nm_per_rad, 1e3 * r.damping_nms_per_rad,
-                     1e6 * r.rate_dot_nms2_per_rad, None]
-            for r in sjc_law_response(cfg.autopilot)}
+                     1e6 * r.rate_dot_nms2_per_rad, None if math.isnan(r.r2) else r.r2]
+            for r in responses}
 
 
 def _as_motor_torque(logs):
@@ -185,6 +174,7 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
               smoke: bool) -> list[dict]:
     from aerodock.collect.swaps import SWAP_SEPARATIONS_M, swap_task_flights
     from aerodock.experiments.sim_to_real import simulated_flights
+    from aerodock.identify.attitude_loop import loop_response, sjc_law_response
     from aerodock.identify.wake_torque import FREE_AIR_OFFSET_M, MOTOR_TORQUE_KEY
     from aerodock.ingest import read_logs
     from aerodock.learning.labels import ROTOR_TORQUE_KEY
@@ -200,10 +190,11 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                  "world": {}, "world_swaps": {},
                  "in_out": {"real": _in_out_rows(real, base, pair, FREE_AIR_OFFSET_M)},
                  # the pairing's follower's own logs only (the folder holds the other's too)
-                 "loop": {"real": _loop_rows([lg for lg in real if math.isclose(
+                 "loop": {"real": _loop_cells(loop_response([lg for lg in real if math.isclose(
                      lg.meta.get("follower_mass_kg", 0.0), base.vehicle.mass_kg)],
-                                             MOTOR_TORQUE_KEY),
-                          "the SJC law, its gains": _law_rows(base)}}
+                                                            MOTOR_TORQUE_KEY)),
+                          "the SJC law, its gains": _loop_cells(sjc_law_response(
+                              base.autopilot))}}
         for stack in CF_STACKS[1:2] if smoke else CF_STACKS:
             cfg = base.with_overrides({"autopilot": _autopilot(stack),
                                        "downwash": {"params": {"disk_torque_gain":
@@ -220,7 +211,8 @@ def wake_rows(data: Path, flights: int, swaps: int, torque_gain: float,
                                                        FREE_AIR_OFFSET_M)
             entry["in_out"][f"{stack}, swaps"] = _in_out_rows(_as_motor_torque(swap_logs), cfg,
                                                               pair, FREE_AIR_OFFSET_M)
-            entry["loop"][f"{stack}, swaps"] = _loop_rows(swap_logs, ROTOR_TORQUE_KEY)
+            entry["loop"][f"{stack}, swaps"] = _loop_cells(loop_response(swap_logs,
+                                                                         ROTOR_TORQUE_KEY))
         rows.append(entry)
     return rows
 

@@ -4,6 +4,7 @@ world's SJC loop on its own swap flights, and the real Neural-Swarm followers' a
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -89,8 +90,7 @@ def test_bad_logs_and_bands_are_refused_in_one_line():
         al.loop_response([log], "follower_motor_torque_nm", band_hz=(2.0, 60.0))
     torque = log.extra["follower_motor_torque_nm"].copy()
     torque[100, 0] = np.nan
-    bad = FlightLog(**{**{f: getattr(log, f) for f in log.__dataclass_fields__},
-                       "extra": {**log.extra, "follower_motor_torque_nm": torque}})
+    bad = replace(log, extra={**log.extra, "follower_motor_torque_nm": torque})
     with pytest.raises(al.AttitudeLoopError, match="known0: .* NaN or infinite"):
         al.loop_response([bad], "follower_motor_torque_nm")
 
