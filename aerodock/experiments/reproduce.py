@@ -55,6 +55,7 @@ from aerodock.experiments.run_size import (  # SHORT_MISSION: where tests and st
 )
 from aerodock.experiments.targets import learnt_mean_check, targets
 from aerodock.fileio import building_dir, check_output_dir, json_ready, one_line, write_json
+from aerodock.processes import SideWorker, side_worker
 
 if TYPE_CHECKING:
     from aerodock.flightlog import FlightLog
@@ -78,6 +79,8 @@ class LearningData:
     predictor: Predictor  # the paper's curriculum's model (the deep one without deep stages)
     test_ds: Dataset  # held-out excitation flights
     train_logs: list[FlightLog]  # the curriculum's flights, then the sample-efficiency pool
+    deep_model_dir: Path  # where deep_predictor was loaded from
+    model_dir: Path  # where predictor was loaded from
 
 
 def learning_data(cfg: Config, size: RunSize, data_dir: Path, seed: int = 0, *,
@@ -104,9 +107,10 @@ def learning_data(cfg: Config, size: RunSize, data_dir: Path, seed: int = 0, *,
                                 train_kwargs=train_kwargs, name_as=name_as)
     # The deep curriculum's model (down to the docking depth) and the paper's (down to 0.5 m),
     # trained before the deep stages: the reproduction flies the paper's.
-    deep_predictor = Predictor.load(data_dir / "models" / "final")
-    predictor = (Predictor.load(data_dir / "models" / "paper")
-                 if "paper_model" in curriculum else deep_predictor)
+    deep_dir = data_dir / "models" / "final"
+    paper_dir = data_dir / "models" / "paper" if "paper_model" in curriculum else deep_dir
+    deep_predictor = Predictor.load(deep_dir)
+    predictor = Predictor.load(paper_dir) if paper_dir != deep_dir else deep_predictor
     test_logs = []
     for st in curriculum_stages(learn_cfg):
         test_logs += excitation_flights(cfg, size.test_flights_per_stage, st.depth_min_m,
@@ -123,7 +127,8 @@ def learning_data(cfg: Config, size: RunSize, data_dir: Path, seed: int = 0, *,
             train_logs += excitation_flights(cfg, size.se_pool_flights // 5, st.depth_min_m,
                                              st.depth_max_m, seed + 4241 + st.index, predictor,
                                              name=f"pool{st.index}")
-    return LearningData(curriculum, deep_predictor, predictor, test_ds, train_logs)
+    return LearningData(curriculum, deep_predictor, predictor, test_ds, train_logs, deep_dir,
+                        paper_dir)
 
 
 def run_reproduce(cfg: Config, out_dir: Path, quick: bool = False, seed: int = 0,
@@ -211,15 +216,32 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     run = _Run(cfg, size, seed, say, bar, Path(out_dir), named)
     run.fig_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    learned, learning = _learning_step(run)
-    se = _sample_efficiency_step(run, learned)
-    docking, controllers = _controllers_step(run, learned)
-    paper_counts = paper_outcome_probabilities(
-        docking.hover_docking.with_model, docking.hover_docking.without_model,
-        docking.cable_study)
-    targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
-    costs = _costs_step(run, learned)
-    real_data, compensation = _real_data_step(run, shared_data, quick, smoke)
+    # Step 5 and the levers' costs depend on nothing the simulations after them compute: they
+    # run on a second process beside the rest (the same numbers: every training runs on one
+    # thread and every campaign draws its own trials' streams, wherever they run).
+    with side_worker() as side:
+        if not side.run_here:
+            say("the real-data study and the levers' costs run on a second process, beside the "
+                "rest")
+        real_data_job = side.submit(_real_data_job, shared_data, run.fig_dir, quick, smoke, seed,
+                                    run.cfg)
+        _share_cores(side)
+        learned, learning = _learning_step(run)
+        costs_job = side.submit(_costs_job, run.cfg, run.size, run.seed,
+                                learned.model_dir,
+                                learned.deep_model_dir if run.size.target_all_rows else None)
+        _share_cores(side)
+        se = _sample_efficiency_step(run, learned)
+        _share_cores(side)
+        docking, controllers = _controllers_step(run, learned)
+        paper_counts = paper_outcome_probabilities(
+            docking.hover_docking.with_model, docking.hover_docking.without_model,
+            docking.cable_study)
+        _share_cores(side)
+        targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
+        costs = _costs_step(run, costs_job)
+        real_data, compensation = _real_data_step(run, shared_data, real_data_job)
+        _share_cores(side)
     run.timings["total_s"] = time.perf_counter() - started
     results = ReproduceResults(
         aerodock_reproduce=header, units=UNITS,
@@ -370,45 +392,88 @@ def _targets_step(run: _Run, learned: LearningData, ours: OursController
     return result, wrench_curriculum
 
 
-def _costs_step(run: _Run, learned: LearningData) -> dict[str, Any]:
-    """What each lever the paper leaves unstated costs."""
+def _costs_job(cfg: Config, size: RunSize, seed: int, model: Path, ours_model: Path | None
+               ) -> tuple[dict[str, Any], float]:
+    """What each lever the paper leaves unstated costs, flown with the models saved in
+    ``model`` (the paper's curriculum's) and ``ours_model`` (None: none for ours); and its
+    seconds of wall time. Picklable: it may run on another process."""
+    from aerodock.learning.runtime import Predictor
+
     t0 = time.perf_counter()
+    costs = controller_costs(
+        cfg, size.costs, Predictor.load(model), seed + 3,
+        ours_predictor=None if ours_model is None else Predictor.load(ours_model))
+    return costs, time.perf_counter() - t0
+
+
+def _costs_step(run: _Run, job: Callable[[], tuple[dict[str, Any], float]]) -> dict[str, Any]:
+    """What each lever the paper leaves unstated costs (:func:`_costs_job`, waited for through
+    ``job``); ``controller_costs_s`` is the job's own wall time, wherever it ran."""
     run.say("    what each unstated lever costs: observer bandwidth, terminal gains, gripper "
             "window")
-    costs = controller_costs(
-        run.cfg, run.size.costs, learned.predictor, run.seed + 3,
-        ours_predictor=learned.deep_predictor if run.size.target_all_rows else None)
-    run.timed("controller_costs_s", t0)
+    costs, seconds = job()
+    run.timings["controller_costs_s"] = seconds
     return costs
 
 
-def _real_data_step(run: _Run, shared_data: Path | None, quick: bool, smoke: bool
-                    ) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
-    """Step 5: the real-data study and the compensations scored on real flights, each ``None``
-    when the data location lacks its flights."""
-    t0 = time.perf_counter()
-    say, seed = run.say, run.seed
-    real_dir = None if shared_data is None else shared_data / "neural-swarm" / "swap_ss"
-    real = compensation = None
-    if real_dir is not None and real_dir.is_dir():
-        say("5/5 real-data study (Neural-Swarm, leave flights out)")
-        from aerodock.experiments.compensation_study import FOLDERS, compensation_section
-        from aerodock.experiments.real_data import real_data_study
+def _share_cores(side: SideWorker) -> None:
+    """The simulations' threads (numba's, for a period's blocks of trials) leave a core to the
+    side worker while it works, and take it back when it is done: a period's blocks wait for
+    each other, so a block on a core the worker holds would slow them all."""
+    import numba
 
-        other = shared_data / "neural-swarm" / "swap_sl_2020-06-19"
-        real = real_data_study(real_dir, run.fig_dir, quick=quick, seed=seed,
-                               other_pair=other if other.is_dir() else None, smoke=smoke)
-        if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
-            say("    the compensations scored on real flights (held-out swap flights)")
-            compensation = compensation_section(shared_data, run.fig_dir, quick=quick, smoke=smoke,
-                                                seed=seed, cfg=run.cfg)
-        else:
-            say("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)")
-    else:
+    cores = numba.config.NUMBA_NUM_THREADS
+    numba.set_num_threads(max(1, cores - 1) if side.busy() else cores)
+
+
+def _real_dir(shared_data: Path | None) -> Path | None:
+    """The real-data study's flights (``neural-swarm/swap_ss`` in the data location), or None
+    when the data location lacks them."""
+    real_dir = None if shared_data is None else shared_data / "neural-swarm" / "swap_ss"
+    return real_dir if real_dir is not None and real_dir.is_dir() else None
+
+
+def _real_data_job(shared_data: Path | None, fig_dir: Path, quick: bool, smoke: bool, seed: int,
+                   cfg: Config) -> tuple[dict[str, Any] | None, dict[str, Any] | None,
+                                         list[str], float]:
+    """Step 5's work (picklable: it may run on another process): the real-data study and the
+    compensations scored on real flights, each ``None`` when the data location lacks their
+    flights; the lines to say about it; its seconds of wall time."""
+    t0 = time.perf_counter()
+    real_dir = _real_dir(shared_data)
+    if real_dir is None or shared_data is None:
         why = ("no data location: --no-real-data, or neither --data-dir nor AERODOCK_DATA_DIR"
-               if shared_data is None else f"{real_dir} not found")
-        say(f"5/5 real-data study skipped ({why})")
-    run.timed("real_data_s", t0)
+               if shared_data is None else f"{shared_data / 'neural-swarm' / 'swap_ss'} not found")
+        return None, None, [f"5/5 real-data study skipped ({why})"], time.perf_counter() - t0
+    from aerodock.experiments.compensation_study import FOLDERS, compensation_section
+    from aerodock.experiments.real_data import real_data_study
+
+    other = shared_data / "neural-swarm" / "swap_sl_2020-06-19"
+    real = real_data_study(real_dir, fig_dir, quick=quick, seed=seed,
+                           other_pair=other if other.is_dir() else None, smoke=smoke)
+    compensation = None
+    if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
+        lines = ["    the compensations scored on real flights (held-out swap flights)"]
+        compensation = compensation_section(shared_data, fig_dir, quick=quick, smoke=smoke,
+                                            seed=seed, cfg=cfg)
+    else:
+        lines = ["    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)"]
+    return real, compensation, lines, time.perf_counter() - t0
+
+
+def _real_data_step(run: _Run, shared_data: Path | None,
+                    job: Callable[[], tuple[dict[str, Any] | None, dict[str, Any] | None,
+                                            list[str], float]]
+                    ) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    """Step 5: the real-data study and the compensations scored on real flights
+    (:func:`_real_data_job`, its result waited for through ``job``), each ``None`` when the data
+    location lacks its flights. ``real_data_s`` is the job's own wall time, wherever it ran."""
+    if _real_dir(shared_data) is not None:
+        run.say("5/5 real-data study (Neural-Swarm, leave flights out)")
+    real, compensation, lines, seconds = job()
+    for line in lines:
+        run.say(line)
+    run.timings["real_data_s"] = seconds
     return real, compensation
 
 

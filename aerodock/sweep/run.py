@@ -17,12 +17,9 @@ process group; the driver alone reacts, so no worker prints a traceback) and are
 from __future__ import annotations
 
 import contextlib
-import multiprocessing
 import os
-import signal
-import threading
-from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from collections.abc import Callable
+from concurrent.futures import Future, as_completed
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -30,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
+from aerodock.processes import sigint_ignored, single_threaded_children, stop_pool, worker_pool
 from aerodock.sweep.spec import Cell, SweepSpec, cell_config, check_against_config
 from aerodock.sweep.store import OUTCOME_NAMES, CellStore, cell_key, cell_settings, model_digest
 
@@ -135,61 +133,6 @@ def _cell_job(cfg_data: dict[str, Any], cfg_source: str, cells: tuple[Cell, ...]
     return run_cells(Config(cfg_data, cfg_source), cells, trials, model)
 
 
-_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-@contextlib.contextmanager
-def _single_threaded_children() -> Iterator[None]:
-    """Child processes started inside see one thread per BLAS/OpenMP pool (restored after)."""
-    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
-    os.environ.update({k: "1" for k in _THREAD_VARS})
-    try:
-        yield
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-
-
-def _ignore_sigint() -> None:
-    """A worker's initializer: Ctrl-C is the driver's to handle (it stops the workers)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-@contextlib.contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """``SIGINT`` ignored inside (main thread only): processes started here inherit it through
-    ``exec``, so a Ctrl-C while a worker interpreter starts (before its initializer) does not
-    print a traceback from it. The driver's handler is restored on leaving."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-def _stop_pool(pool: ProcessPoolExecutor, futures: list[Future]) -> None:
-    """Stop every worker now (a running cell is abandoned) and wait for them to exit."""
-    for fut in futures:
-        fut.cancel()
-    procs = list((getattr(pool, "_processes", None) or {}).values())
-    for proc in procs:
-        with contextlib.suppress(Exception):
-            proc.terminate()
-    pool.shutdown(wait=True, cancel_futures=True)
-    for proc in procs:
-        with contextlib.suppress(Exception):
-            proc.join(5.0)
-            if proc.is_alive():
-                proc.kill()
-                proc.join(5.0)
-
-
 def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], None]) -> None:
     """The batches of cells on ``workers`` local processes (or in this process for one
     worker); ``finished(cell index, rows)`` for each cell."""
@@ -200,21 +143,20 @@ def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], 
         return
     # Fresh interpreters with one BLAS/OpenMP thread each: N processes on N cores (inherited
     # thread pools oversubscribe the cores and spin in the kernel).
-    with _single_threaded_children(), _sigint_ignored():
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint,
-                                   mp_context=multiprocessing.get_context("spawn"))
+    with single_threaded_children(), sigint_ignored():
+        pool = worker_pool(workers)
         futures: list[Future] = []
         try:
             futures = [pool.submit(_cell_job, *a) for a in args]  # starts the workers
         except BaseException:
-            _stop_pool(pool, futures)
+            stop_pool(pool, futures)
             raise
     try:
         for fut in as_completed(futures):
             for done in fut.result():
                 finished(*done)
     except BaseException:
-        _stop_pool(pool, futures)
+        stop_pool(pool, futures)
         raise
     pool.shutdown(wait=True)
 
