@@ -221,8 +221,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     # thread and every campaign draws its own trials' streams, wherever they run).
     with side_worker() as side:
         if not side.run_here:
-            say("the real-data study and the levers' costs run on a second process, beside the "
-                "rest")
+            say(("the real-data study and the levers' costs run" if _real_dir(shared_data)
+                 else "the levers' costs run") + " on a second process, beside the rest")
         real_data_job = side.submit(_real_data_job, shared_data, run.fig_dir, quick, smoke, seed,
                                     run.cfg)
         _share_cores(side)
