@@ -9,6 +9,9 @@
 5. the real-data study on the Neural-Swarm flights, when the data location holds them
    (:mod:`aerodock.ingest.data_dir`);
 then ``results.json``, ``report.md`` and ``figures/`` (:mod:`aerodock.experiments.report`).
+Step 5 and the costs of the levers the paper leaves unstated depend on nothing the other steps
+compute: on a machine with two cores they run on a second process from the start
+(:func:`aerodock.processes.side_worker`), with the same numbers.
 
 "Without model" is the paper's LQG baseline (bias observer); "with model" adds the learnt model's
 feed-forward. The oracle (true mean field) is run as an upper bound.
@@ -16,10 +19,11 @@ feed-forward. The oracle (true mean field) is run as an upper bound.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -219,29 +223,28 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     # Step 5 and the levers' costs depend on nothing the simulations after them compute: they
     # run on a second process beside the rest (the same numbers: every training runs on one
     # thread and every campaign draws its own trials' streams, wherever they run).
-    with side_worker() as side:
+    with side_worker() as side, _cores_shared_with(side) as share_cores:
         if not side.run_here:
             say(("the real-data study and the levers' costs run" if _real_dir(shared_data)
                  else "the levers' costs run") + " on a second process, beside the rest")
         real_data_job = side.submit(_real_data_job, shared_data, run.fig_dir, quick, smoke, seed,
                                     run.cfg)
-        _share_cores(side)
+        share_cores()
         learned, learning = _learning_step(run)
         costs_job = side.submit(_costs_job, run.cfg, run.size, run.seed,
                                 learned.model_dir,
                                 learned.deep_model_dir if run.size.target_all_rows else None)
-        _share_cores(side)
+        share_cores()
         se = _sample_efficiency_step(run, learned)
-        _share_cores(side)
+        share_cores()
         docking, controllers = _controllers_step(run, learned)
         paper_counts = paper_outcome_probabilities(
             docking.hover_docking.with_model, docking.hover_docking.without_model,
             docking.cable_study)
-        _share_cores(side)
+        share_cores()
         targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
         costs = _costs_step(run, costs_job)
         real_data, compensation = _real_data_step(run, shared_data, real_data_job)
-        _share_cores(side)
     run.timings["total_s"] = time.perf_counter() - started
     results = ReproduceResults(
         aerodock_reproduce=header, units=UNITS,
@@ -416,14 +419,23 @@ def _costs_step(run: _Run, job: Callable[[], tuple[dict[str, Any], float]]) -> d
     return costs
 
 
-def _share_cores(side: SideWorker) -> None:
-    """The simulations' threads (numba's, for a period's blocks of trials) leave a core to the
-    side worker while it works, and take it back when it is done: a period's blocks wait for
-    each other, so a block on a core the worker holds would slow them all."""
+@contextlib.contextmanager
+def _cores_shared_with(side: SideWorker) -> Iterator[Callable[[], None]]:
+    """Yields a function to call between steps: the simulations' threads (numba's, for a
+    period's blocks of trials) leave a core to the side worker while it works, and take it back
+    when it is done (a period's blocks wait for each other, so a block on a core the worker
+    holds would slow them all). numba's thread count is restored on leaving."""
     import numba
 
-    cores = numba.config.NUMBA_NUM_THREADS
-    numba.set_num_threads(max(1, cores - 1) if side.busy() else cores)
+    before = numba.get_num_threads()
+
+    def share() -> None:
+        numba.set_num_threads(max(1, before - 1) if side.busy() else before)
+
+    try:
+        yield share
+    finally:
+        numba.set_num_threads(before)
 
 
 def _real_dir(shared_data: Path | None) -> Path | None:

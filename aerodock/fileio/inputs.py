@@ -178,6 +178,10 @@ class InputError(ValueError):
         self.reason = reason
         super().__init__(f"{path}: {reason}")
 
+    def __reduce__(self) -> tuple:
+        # rebuilt from its two parts (an error raised on a worker process reaches the driver)
+        return (type(self), (self.path, self.reason))
+
 
 def _size_text(n_bytes: int) -> str:
     for unit, size in (("GiB", 1024**3), ("MiB", 1024**2), ("KiB", 1024)):

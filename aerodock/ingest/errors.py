@@ -22,6 +22,10 @@ class IngestError(ValueError):
         self.problem = _one_line(problem)
         super().__init__(_one_line(f"{self.where}: {self.problem}"))
 
+    def __reduce__(self) -> tuple:
+        # rebuilt from its two parts (an error raised on a worker process reaches the driver)
+        return (type(self), (self.where, self.problem))
+
 
 class IngestWarning(UserWarning):
     """A log was read, but something in it deserves attention (``FILE: remark``)."""

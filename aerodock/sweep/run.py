@@ -27,7 +27,13 @@ from typing import Any
 import numpy as np
 
 from aerodock.config import Config
-from aerodock.processes import sigint_ignored, single_threaded_children, stop_pool, worker_pool
+from aerodock.processes import (
+    portable_call,
+    sigint_ignored,
+    single_threaded_children,
+    stop_pool,
+    worker_pool,
+)
 from aerodock.sweep.spec import Cell, SweepSpec, cell_config, check_against_config
 from aerodock.sweep.store import OUTCOME_NAMES, CellStore, cell_key, cell_settings, model_digest
 
@@ -147,7 +153,8 @@ def _run_local(args: list[tuple], workers: int, finished: Callable[[int, Rows], 
         pool = worker_pool(workers)
         futures: list[Future] = []
         try:
-            futures = [pool.submit(_cell_job, *a) for a in args]  # starts the workers
+            # (the first submit starts the workers)
+            futures = [pool.submit(portable_call, _cell_job, *a) for a in args]
         except BaseException:
             stop_pool(pool, futures)
             raise
