@@ -17,6 +17,13 @@ TARGETS = {
     "predictor_single_call_us": 50.0,
     "reproduce_quick_s": 300.0,
     "env_reset_s": 0.5,  # DockingEnv.reset, mean over a training loop's resets (issue 25)
+    # issue 38 (the compiled step): rigid-body world with controllers, wall time
+    "compiled_steps_per_s_at_1": 200_000.0,
+    "compiled_steps_per_s_at_256": 3_000_000.0,
+    "compiled_steps_per_s_at_1024": 5_000_000.0,
+    "compiled_reproduce_quick_s": 90.0,
+    "env_steps_per_s_single": 5_000.0,
+    "env_steps_per_s_at_128": 200_000.0,
 }
 
 
@@ -79,6 +86,21 @@ def targets(figs: dict[str, Any]) -> list[dict[str, Any]]:
          _value(figs.get("reproduce_quick_s"))),
         ("DockingEnv.reset, mean over a training loop's resets (s)", "<", TARGETS["env_reset_s"],
          _value(figs.get("gym_env_reset", {}).get("block_mean_reset"))),
+    ]
+    simulator = figs.get("simulator", {})
+    vector_env = figs.get("gym_vector_env", {})
+    rows += [  # issue 38
+        (f"vehicle-steps/s at a batch of {n}, rigid-body, with controllers (issue 38)", ">=",
+         TARGETS[f"compiled_steps_per_s_at_{n}"],
+         _value(simulator.get(str(n), {}).get("with_controllers")))
+        for n in (1, 256, 1024)]
+    rows += [
+        ("aerodock reproduce --quick (s, issue 38)", "<", TARGETS["compiled_reproduce_quick_s"],
+         _value(figs.get("reproduce_quick_s"))),
+        ("env-steps/s, one DockingEnv (issue 38)", ">=", TARGETS["env_steps_per_s_single"],
+         _value(vector_env.get("1"))),
+        ("env-steps/s, the vector env at 128 (issue 38)", ">=", TARGETS["env_steps_per_s_at_128"],
+         _value(vector_env.get("128"))),
     ]
     out = []
     for name, op, threshold, measured in rows:
