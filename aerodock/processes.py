@@ -71,14 +71,10 @@ def sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _ignore_sigint() -> None:
-    """Ctrl-C is the driver's to handle (it stops the workers)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def _worker_init(driver_pid: int) -> None:
-    """A worker's initializer: ``SIGINT`` ignored, and the worker ends when its driver dies."""
-    _ignore_sigint()
+    """A worker's initializer: ``SIGINT`` ignored (Ctrl-C is the driver's to handle: it stops
+    the workers), and the worker ends when its driver dies."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         import ctypes
 

@@ -10,11 +10,12 @@ pre-drawn in chunks (one short Python loop over trials per chunk, not per step).
 from __future__ import annotations
 
 import copy
-import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
+
+from aerodock.processes import usable_cores
 
 # Draws per trial and refill. The normal and uniform buffers share each trial's generator,
 # so the refill size fixes which of the stream's numbers each gets: changing it changes them.
@@ -163,7 +164,7 @@ def _refill(gens: list[np.random.Generator], kind: str, size: int, out: np.ndarr
     between threads (NumPy draws and copies without the GIL): every stream is still drawn by
     one thread, in its own order, so the numbers are the same."""
     n = len(gens)
-    threads = min(_threads(), n // _THREADED_MIN)
+    threads = min(usable_cores(), n // _THREADED_MIN)
     if threads <= 1:
         _refill_columns(gens, kind, size, out, 0, n)
         return
@@ -191,14 +192,6 @@ def _refill_columns(gens: list[np.random.Generator], kind: str, size: int, out: 
 
 _THREADED_MIN = 64  # trials per thread below which a refill stays in one thread
 _POOL: dict[int, ThreadPoolExecutor] = {}
-
-
-def _threads() -> int:
-    """The threads a refill may use: the CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # (not on every platform)
-        return os.cpu_count() or 1
 
 
 def _pool(threads: int) -> ThreadPoolExecutor:

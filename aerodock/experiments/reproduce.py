@@ -244,7 +244,7 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         share_cores()
         targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
         costs = _costs_step(run, costs_job)
-        real_data, compensation = _real_data_step(run, shared_data, real_data_job)
+        real_data, compensation = _real_data_step(run, real_data_job)
     run.timings["total_s"] = time.perf_counter() - started
     results = ReproduceResults(
         aerodock_reproduce=header, units=UNITS,
@@ -464,24 +464,24 @@ def _real_data_job(shared_data: Path | None, fig_dir: Path, quick: bool, smoke: 
     real = real_data_study(real_dir, fig_dir, quick=quick, seed=seed,
                            other_pair=other if other.is_dir() else None, smoke=smoke)
     compensation = None
+    lines = ["5/5 real-data study (Neural-Swarm, leave flights out)"]
     if all((shared_data / "neural-swarm" / name).is_dir() for name in FOLDERS):
-        lines = ["    the compensations scored on real flights (held-out swap flights)"]
+        lines.append("    the compensations scored on real flights (held-out swap flights)")
         compensation = compensation_section(shared_data, fig_dir, quick=quick, smoke=smoke,
                                             seed=seed, cfg=cfg)
     else:
-        lines = ["    the compensations not scored (swap_ss and swap_sl_2020-06-19 both needed)"]
+        lines.append("    the compensations not scored (swap_ss and swap_sl_2020-06-19 both "
+                     "needed)")
     return real, compensation, lines, time.perf_counter() - t0
 
 
-def _real_data_step(run: _Run, shared_data: Path | None,
+def _real_data_step(run: _Run,
                     job: Callable[[], tuple[dict[str, Any] | None, dict[str, Any] | None,
                                             list[str], float]]
                     ) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
     """Step 5: the real-data study and the compensations scored on real flights
     (:func:`_real_data_job`, its result waited for through ``job``), each ``None`` when the data
     location lacks its flights. ``real_data_s`` is the job's own wall time, wherever it ran."""
-    if _real_dir(shared_data) is not None:
-        run.say("5/5 real-data study (Neural-Swarm, leave flights out)")
     real, compensation, lines, seconds = job()
     for line in lines:
         run.say(line)

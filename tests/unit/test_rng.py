@@ -40,7 +40,7 @@ def test_a_refill_split_between_threads_draws_the_same_numbers(monkeypatch):
     its stream draws alone, whatever the split."""
     import aerodock.rng as rng_module
 
-    monkeypatch.setattr(rng_module, "_threads", lambda: 3)
+    monkeypatch.setattr(rng_module, "usable_cores", lambda: 3)
     monkeypatch.setattr(rng_module, "_THREADED_MIN", 20)
     batch = TrialRNG(3, 100)
     normals = batch.standard_normal_t(5000).copy()  # past a chunk: two refills
