@@ -83,7 +83,7 @@ def main() -> int:
     labels = {"asked": (logs, prepare_flights(logs)),
               "sent": (sent_logs, prepare_flights(sent_logs))}
     profile, sent = (torque_profile(params, flights, some, inertia, rotor_radii_m=radii,
-                                    max_offset_m=MAX_OFFSET_M)
+                                    max_offset_m=MAX_OFFSET_M, hub_moments=True)
                      for some, flights in labels.values())
     forces = {sep: force_profile(logs, separation_m=sep) for sep in FORCE_SEPARATIONS_M}
     slopes = thrust_map_slope(logs)
@@ -105,8 +105,8 @@ def main() -> int:
     world_nm_per_rad = float(cfg.vehicle.inertia_kgm2[0] * ap.attitude_p[0] * ap.rate_p[0])
     if args.json:
         print(dumps_json(json_ready({
-            "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad, "lever_m": b.lever_m}
-                               for b in bins]
+            "profile": {pair: [{**asdict(b), "nm_per_rad": b.nm_per_rad, "lever_m": b.lever_m,
+                                "lever_bound_m": b.lever_bound_m} for b in bins]
                         for pair, bins in profile.items()},
             "force_profile": {f"{lo:.2f}-{hi:.2f} m": {pair: [asdict(b) for b in bins]
                                                         for pair, bins in by_pair.items()}
@@ -142,7 +142,9 @@ def main() -> int:
                   f"{1e3 * b.nm_per_rad:10.0f}  {1e3 * b.real_moving_in_nm:17.2f} / "
                   f"{1e3 * b.real_moving_out_nm:.2f}")
         print(f"  (a loss of thrust on the disks alone: lever at most the half diagonal, "
-              f"{100 * bins[0].half_diagonal_m:.1f} cm)")
+              f"{100 * bins[0].half_diagonal_m:.1f} cm, with each disk's force at its hub; "
+              f"{100 * bins[0].lever_bound_m:.1f} cm however it is spread over the disks)")
+    print_hub_moments(profile)
     for vid, c in commands.items():
         print(f"{vid}'s motor commands: {c['free_air_median']:.2f} median in free air, "
               f"{c['p99']:.2f} at the 99th percentile of every flight")
@@ -189,6 +191,21 @@ def main() -> int:
     print(f"the small Crazyflie world's attitude loop as a spring (J x angle gain x rate gain): "
           f"{1e3 * world_nm_per_rad:.1f} mN m/rad")
     return 0
+
+
+def print_hub_moments(profile: dict) -> None:
+    """The jet's load spread over each disk (its moments about the hubs) beside its disk
+    torque and the real one, out to the printed offset."""
+    print("the jet's axial load spread over each disk, not put at its hub (hub_moments_nm): "
+          "its inward moments about the hubs, mN m, their share of the jet's disk torque, and "
+          "the real torque over both:")
+    for pair, bins in profile.items():
+        cells = ", ".join(f"{100 * b.offset_lo_m:.0f}-{100 * b.offset_hi_m:.0f}: "
+                          f"{1e3 * b.hub_nm:.2f} ({100 * b.hub_nm / b.jet_nm:.0f} %, real "
+                          f"{b.real_nm / (b.jet_nm + b.hub_nm):.1f}x)"
+                          for b in bins if b.offset_hi_m <= PRINTED_DISK_OFFSET_M + 1e-9)
+        if cells:
+            print(f"  {pair}: {cells}")
 
 
 def print_as_sent(asked: dict, sent: dict, sent_force: dict, maps: list[MotorMap]) -> None:

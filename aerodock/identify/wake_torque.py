@@ -34,7 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from aerodock.downwash.jet import quad_rotor_offsets_body_m
+from aerodock.downwash.base import BodyState
+from aerodock.downwash.jet import RoundJetField, quad_rotor_offsets_body_m
 from aerodock.flightlog import FlightLog
 from aerodock.geometry import GRAVITY_MPS2, quat_to_rotmat
 from aerodock.identify.flights import FlightSamples, WakeFitError, log_geometry, pair_name
@@ -49,6 +50,9 @@ FREE_AIR_OFFSET_M = 0.4
 MIN_FREE_SAMPLES = 50
 MIN_BIN_SAMPLES = 20
 RADIAL_SPEED_MPS = 0.1  # moving towards or away from the axis: faster than this along e_r
+# The polar grid on each rotor disk for the load's moments about its hub (hub_moments_nm):
+# equal-area rings x azimuths
+HUB_RINGS, HUB_AZIMUTHS = 6, 16
 
 
 @dataclass(frozen=True)
@@ -77,14 +81,27 @@ class TorqueBin:
     the axis (its own horizontal velocity along ``e_r`` beyond ``RADIAL_SPEED_MPS``; nan: fewer
     than ``MIN_BIN_SAMPLES``): a torque of the follower's own motion through the air (blade
     flapping, rotor drag) changes sign between them, the wake's does not."""
+    hub_nm: float = float("nan")
+    """The jet's inward hub moments (:func:`hub_moments_nm`: its axial load spread over each
+    disk, which ``jet_nm`` puts at the hubs), N·m; nan: not asked for."""
+    rotor_radius_m: float = float("nan")
+    """The follower's rotor radius, m (the lever's bound with ``half_diagonal_m``)."""
 
     @property
     def lever_m(self) -> float:
         """The inward torque over the downward force: where the force would have to act to make
         the torque. A loss of thrust on the disks alone puts it at most ``half_diagonal_m``
-        from the centre; beyond that the disks away from the axis must gain thrust."""
+        from the centre if each disk's force acts at its hub, at most :attr:`lever_bound_m`
+        however it is spread over the disks; beyond that the disks away from the axis must gain
+        thrust."""
         force = self.real_down_force_n
         return float(self.real_nm / force) if abs(force) > 1e-12 else float("nan")
+
+    @property
+    def lever_bound_m(self) -> float:
+        """The farthest a downward load on the disks can act from the centre: the half
+        diagonal plus the rotor radius, m."""
+        return self.half_diagonal_m + self.rotor_radius_m
 
     @property
     def nm_per_rad(self) -> float:
@@ -182,16 +199,76 @@ def inward_nm(torque_world: np.ndarray, e_r: np.ndarray) -> np.ndarray:
     return -(torque_world[:, 0] * e_r[:, 1] - torque_world[:, 1] * e_r[:, 0])
 
 
+def hub_moments_nm(jet: RoundJetField, leader: BodyState, follower: BodyState, *,
+                   rings: int = HUB_RINGS, azimuths: int = HUB_AZIMUTHS) -> np.ndarray:
+    """(n, 3) the moments of the jet's mean axial load about the follower's rotor hubs, summed
+    over its disks, N·m, body frame (FRD): the part of the disks' torque that the jet, which
+    puts each disk's force at its hub (:meth:`RoundJetField.mean_disk_torque_nm`), leaves out.
+
+    A rotor's loss of thrust to an axial inflow ``w`` is, at small inflow, the same per unit of
+    disk area (blade-element theory: an element at radius ``r`` loses lift in proportion to
+    ``Omega r w``, and the annulus it sweeps grows with ``r``). In the wake's shear each disk's
+    load therefore has its centroid off the hub, towards the stronger inflow: for a linear
+    inflow across a disk of radius ``R`` the moment is the disk's force times ``R^2 / 4`` times
+    the load's relative gradient. Here each point's load is the jet's own ingest law at the
+    point, ``phi(w(x) - v) - phi(-v)`` (``w`` its axial wind there, ``v`` the follower's own
+    velocity along the axis), over an equal-area polar grid of ``rings`` x ``azimuths`` points
+    on each disk in the follower's body plane; each disk's moment is the jet's axial force on
+    it (:meth:`RoundJetField.mean_disk_forces_n`) acting at the load's centroid, about the hub.
+    However the load is spread, a loss of thrust on the disks cannot put the disks'
+    torque over their downward force (the lever) beyond the half diagonal plus the rotor
+    radius."""
+    n = leader.n
+    offsets = jet.rotor_offsets_body_m
+    k = offsets.shape[0]
+    radius = jet.follower_disk_radius_m
+    ring = np.sqrt((np.arange(rings) + 0.5) / rings)  # equal areas
+    angle = 2.0 * np.pi * (np.arange(azimuths) + 0.5) / azimuths
+    grid = np.zeros((rings * azimuths, 3))
+    grid[:, 0] = (ring[:, None] * np.cos(angle)[None, :]).ravel() * radius
+    grid[:, 1] = (ring[:, None] * np.sin(angle)[None, :]).ravel() * radius
+    q = grid.shape[0]
+    rot = np.asarray(follower.R, dtype=float)
+    at = offsets[:, None, :] + grid[None, :, :]  # (k, q, 3), body
+    points = follower.p[:, None, None, :] + np.einsum("nij,kqj->nkqi", rot, at)
+    many = k * q
+
+    def repeat(a: np.ndarray) -> np.ndarray:
+        return np.repeat(np.asarray(a, dtype=float), many, axis=0)
+
+    around = BodyState(p=repeat(leader.p), v=repeat(leader.v), R=repeat(leader.R),
+                       thrust_n=repeat(leader.thrust_n), mass_kg=repeat(leader.mass_kg))
+    wind = jet.wind_mps(around, points.reshape(-1, 3)).reshape(n, k, q, 3)
+    axis = np.asarray(leader.R, dtype=float)[:, :, 2]  # the wake's axis: the leader's body z
+    w = np.einsum("nkqi,ni->nkq", wind, axis)
+    v = np.sum(np.asarray(follower.v, dtype=float) * axis, axis=1)[:, None, None]
+    p = jet.ingest_exponent
+    load = _phi(w - v, p) - _phi(-v, p)  # (n, k, q)
+    total = load.sum(axis=2)
+    ok = np.abs(total) > 1e-12 * np.maximum(np.abs(load).sum(axis=2), 1e-300)
+    centroid = np.einsum("nkq,qj->nkj", load, grid) / np.where(ok, total, 1.0)[..., None]
+    centroid[~ok] = 0.0  # no load to spread
+    force = jet.mean_disk_forces_n(leader, follower).T  # (n, k)
+    axis_body = np.einsum("nji,nj->ni", rot, axis)
+    return np.cross(centroid, force[:, :, None] * axis_body[:, None, :]).sum(axis=1)
+
+
+def _phi(x: np.ndarray, p: float) -> np.ndarray:
+    """The jet's ingest law's ``sign(x) |x|^p``."""
+    return np.sign(x) * np.abs(x) ** p
+
+
 def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                    logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]], *,
                    rotor_radii_m: dict[str, float] | None = None,
                    separation_m: tuple[float, float] = (0.15, 0.45),
                    bin_m: float = 0.02, max_offset_m: float = 0.16,
-                   free_air_offset_m: float = FREE_AIR_OFFSET_M,
+                   free_air_offset_m: float = FREE_AIR_OFFSET_M, hub_moments: bool = False,
                    ) -> dict[str, list[TorqueBin]]:
     """Per pairing (``FlightSamples.pair``), the inward wake torque against the horizontal
     offset from the leader's axis: the real flights' (module docstring) and the jet's with
-    ``params`` at the same logged states, over the samples ``separation_m`` below the leader.
+    ``params`` at the same logged states, over the samples ``separation_m`` below the leader;
+    with ``hub_moments``, also the jet's moments about the hubs (:func:`hub_moments_nm`).
 
     Args:
         params: the jet's fitted parameters (:data:`wake_fit.FITTED_PARAMS` keys).
@@ -206,12 +283,12 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
         WakeFitError: no flight with the motor torque, or a follower without an inertia.
     """
     samples = _inward_samples(params, flights, logs, inertia_kgm2, rotor_radii_m or {},
-                              free_air_offset_m)
+                              free_air_offset_m, hub_moments)
     out: dict[str, list[TorqueBin]] = {}
     for pair, x in samples.items():
-        horizontal, sep, real, model, lean, pwm, down, half, radial_v = (
+        horizontal, sep, real, model, lean, pwm, down, half, radial_v, hub, radius = (
             x[k] for k in ("horizontal", "separation", "real", "model", "lean", "near_pwm",
-                           "down", "half", "radial_v"))
+                           "down", "half", "radial_v", "hub", "radius"))
         below = (sep >= separation_m[0]) & (sep <= separation_m[1])
         bins = []
         for lo in np.arange(0.0, max_offset_m - 1e-9, bin_m):
@@ -230,7 +307,8 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                 near_motor_pwm=(float(np.nanmedian(pwm[m])) if np.isfinite(pwm[m]).any()
                                 else None),
                 real_moving_in_nm=_mean_if_enough(real[m & (radial_v < -RADIAL_SPEED_MPS)]),
-                real_moving_out_nm=_mean_if_enough(real[m & (radial_v > RADIAL_SPEED_MPS)])))
+                real_moving_out_nm=_mean_if_enough(real[m & (radial_v > RADIAL_SPEED_MPS)]),
+                hub_nm=float(hub[m].mean()), rotor_radius_m=float(radius[m].mean())))
         out[pair] = bins
     return out
 
@@ -238,12 +316,13 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
 def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
                     logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]],
                     rotor_radii_m: dict[str, float], free_air_offset_m: float,
-                    ) -> dict[str, dict[str, np.ndarray]]:
+                    hub_moments: bool = False) -> dict[str, dict[str, np.ndarray]]:
     """Per pairing, every fitted sample of the flights that carry the motor torque: the
     horizontal offset and separation, the real and the jet's inward torque, the lean into the
     axis, the command of the motor nearest it (nan: not logged), the real downward force, the
-    half diagonal, the follower's own radial speed and the angle (deg, 0-45 on a quad) between
-    the line to the axis and its nearest motor arm, in the body's plane.
+    half diagonal and rotor radius, the follower's own radial speed, the angle (deg, 0-45 on a
+    quad) between the line to the axis and its nearest motor arm, in the body's plane, and the
+    jet's inward hub moments (nan unless ``hub_moments``).
 
     Raises:
         WakeFitError: no flight with the motor torque, or a follower without an inertia.
@@ -266,6 +345,8 @@ def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
         geometry = geometry_with(flight, rotor_radii_m)
         jet = build_jet(params, geometry)
         jet_body = jet.mean_disk_torque_nm(flight.leader, flight.follower)
+        hub_body = (hub_moments_nm(jet, flight.leader, flight.follower) if hub_moments
+                    else np.full((i.size, 3), np.nan))
         dp = flight.follower.p - flight.leader.p
         horizontal = np.hypot(dp[:, 0], dp[:, 1])
         e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]
@@ -292,6 +373,8 @@ def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
             "model": inward_nm(np.einsum("nij,nj->ni", rot, jet_body), e_r), "lean": lean,
             "near_pwm": near_pwm, "down": flight.label_mps2[:, 2] * geometry["follower_mass_kg"],
             "half": np.full(i.size, geometry["follower_diagonal_m"] / 2.0),
+            "radius": np.full(i.size, geometry["follower_rotor_radius_m"]),
+            "hub": inward_nm(np.einsum("nij,nj->ni", rot, hub_body), e_r),
             "radial_v": np.sum(flight.follower.v[:, :2] * e_r, axis=1),  # its own, in the air
             "motor_angle_deg": np.degrees(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0)))})
     if not parts:
