@@ -74,6 +74,8 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
 
     ``model`` (``"rigid-body"`` or ``"point-mass"``) overrides ``cfg``'s ``[vehicle] model``.
     """
+    from aerodock.world import period
+    from aerodock.world.block_choice import block_choice
     from aerodock.world.period import kernel_blocks
 
     if model is not None:
@@ -100,8 +102,11 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
             "100 Hz")
         row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
         # the control period's blocks of trials across numba's threads (world/period.py): the
-        # CPU time then counts every thread's, so per_cpu_s is below the wall figure
+        # CPU time then counts every thread's, so per_cpu_s is below the wall figure; whether
+        # the blocks ran across them at the end (the faster way, world/block_choice.py)
         row["threads"] = kernel_blocks(n)
+        row["in_blocks"] = row["threads"] > 1 and (not period.CHOOSE_BLOCKS
+                                                   or block_choice(n).home)
         out[str(n)] = row
     return out
 

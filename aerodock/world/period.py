@@ -28,6 +28,7 @@ as each step does.
 from __future__ import annotations
 
 import os
+import time
 from functools import lru_cache
 from typing import Any
 
@@ -41,6 +42,7 @@ from aerodock.downwash.jet_inputs import offsets_array
 from aerodock.jit import NUMPY_LOOPS
 from aerodock.rng import TrialRNG
 from aerodock.world import terms
+from aerodock.world.block_choice import block_choice
 from aerodock.world.gripper import (
     _any,
     _armed_any,
@@ -102,6 +104,10 @@ PARALLEL_MIN_TRIALS = 64
 (:func:`~aerodock.world.period_kernel.period_kernel_parallel`, one block a thread); below it, in
 one (a thread's start and join cost about what a small batch's step does). The numbers are the
 same either way."""
+CHOOSE_BLOCKS = True
+"""A batch that may run in blocks runs them across the threads only while that measures faster
+than one after another (:mod:`aerodock.world.block_choice`: on a machine where another process
+holds a core, the threads are the slower way); False: always in blocks."""
 DISABLED: list[str] = []
 """Why the compiled period was turned off in this process (empty: it was not): a kernel
 signature numba could not compile here (e.g. a callee sealed by :func:`aerodock.jit.any_layout`
@@ -205,9 +211,10 @@ _JET_METHODS = ("_pair_distance", "_jet_params", "_columns", "_force_coeff", "_b
 
 
 def kernel_blocks(n: int) -> int:
-    """How many blocks of trials a period of ``n`` trials is stepped in: one a thread of
+    """How many blocks of trials a period of ``n`` trials may be stepped in: one a thread of
     numba's (:func:`numba.get_num_threads`) from :data:`PARALLEL_MIN_TRIALS` trials on, else 1
-    (the serial kernel)."""
+    (the serial kernel). :func:`run_period` runs them one after another instead while that
+    measures faster (:data:`CHOOSE_BLOCKS`)."""
     if n < PARALLEL_MIN_TRIALS:
         return 1  # (asking numba for its threads costs about 2 µs, at every period)
     threads = numba.get_num_threads()
@@ -279,9 +286,13 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
     passive_any, passive, active_any, active = cache.triggers
     loss = state.rotor_loss
     blocks = kernel_blocks(n)
+    choice = block_choice(n) if blocks > 1 and CHOOSE_BLOCKS else None
+    if choice is not None and not choice.parallel():
+        blocks = 1
     if blocks > 1:
         one_blas_thread()
     kernel = period_kernel_parallel if blocks > 1 else period_kernel
+    start = time.perf_counter()
     try:
         result = kernel(
             NUMPY_LOOPS, TRIG_LOOPS, steps, cache.consts, iv, params.substeps,
@@ -313,6 +324,8 @@ def run_period(state: WorldState, params: WorldParams, targets: RigidTargets,
         DISABLED.append(f"{type(err).__name__}: {err}")
         return 0, STOP_UNCOVERED
     done, why, changed = result
+    if choice is not None:
+        choice.record(time.perf_counter() - start, done)
     if done == 0:
         if why == STOP_DRAWS:
             rng.reserve_normals(int(iv[I_NEED]))  # (as below)

@@ -57,6 +57,7 @@ def _blocks(monkeypatch: pytest.MonkeyPatch, blocks: int, counts: dict) -> None:
     """Every period in ``blocks`` blocks (1: the serial kernel), whatever the batch's size;
     ``counts`` gathers the steps each kernel ran."""
     monkeypatch.setattr(period, "kernel_blocks", lambda n: blocks)
+    monkeypatch.setattr(period, "CHOOSE_BLOCKS", False)  # in blocks whatever the timing
 
     def counted(*args):
         done, why = _RUN_PERIOD(*args)
