@@ -2,6 +2,7 @@
 and body rates) against the fitted jet's at the same states (aerodock/identify/wake_torque.py).
 
     .venv/bin/python studies/wake_torque.py [--data $AERODOCK_DATA_DIR/neural-swarm] [--json]
+        [--figure docs/figures/wake_torque.png]
         [--smoke]    # accepted for the suite: the study reads data only and takes seconds
 
 The jet is examples/crazyflie_small_under_large.toml's (the fitted wake, cf101's fitted rotors);
@@ -48,6 +49,7 @@ from aerodock.identify.wake_torque import (
     torque_profile,
 )
 from aerodock.ingest.data_dir import find_data_dir
+from aerodock.plots import plot_torque_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 # The data location (aerodock.ingest.data_dir): AERODOCK_DATA_DIR, else ../shared/data.
@@ -64,6 +66,8 @@ def main() -> int:
     parser.add_argument("--data", type=Path,
                         default=DATA_DIR / "neural-swarm")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--figure", type=Path,
+                        help="draw the torque by offset and its lever (PNG) here")
     add_smoke_option(parser)
     args = parser.parse_args()
     try:
@@ -99,6 +103,8 @@ def main() -> int:
     by_angle = {name: torque_by_motor_angle(params, flights, some, inertia, rotor_radii_m=radii)
                 for name, (some, flights) in labels.items()}
     commands = motor_command_range(logs)
+    if args.figure is not None:
+        plot_torque_profile(profile, sent, args.figure)
     map_check = free_air_map_check(logs)
     # The world's attitude loop read as a spring: J times its angle gain times its rate gain.
     ap = cfg.autopilot

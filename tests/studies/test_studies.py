@@ -69,6 +69,12 @@ def _peer_within_tolerance(out: str, tmp: Path) -> None:
     assert float(m[1]) < float(m[2]) and float(m[3]) < float(m[4])
 
 
+def _png(path: Path) -> None:
+    """A figure was drawn there: a PNG of some size."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000, path
+
+
 def _sample_efficiency_json(out: str, tmp: Path) -> None:
     record = json.loads((tmp / "se" / "sample_efficiency_real.json").read_text())
     se = record["sample_efficiency"]
@@ -175,14 +181,15 @@ STUDY_CASES = (
            r"^\| cable study \(leader on a stand\), offsets docked \| 6/6 with vs 0/6 without \| "
            r"0/3 \| 0/3 \| 3/3 \| 3/3 \|$",
            r"^\| ours \+ deep model \| 4/4 \(51%-100%\) met \|")),
-    Study("wake_torque.py", ("--data", "{data}"),
+    Study("wake_torque.py", ("--data", "{data}", "--figure", "{tmp}/wake_torque.png"),
           (r"^cf51's motor commands: \d\.\d\d median in free air",
            rf"^  cf101: 12 flights, residual sd up to {NUMBER} mN; \d+ motor samples at the "
            rf"ceiling \(commands up to {NUMBER}\), {NUMBER} mN asked beyond the map there$",
            rf"^  32 g under 32 g +4-6 +{NUMBER} / +{NUMBER} / +{NUMBER} +{NUMBER} +{NUMBER}$",
            rf"^  sent, 67 g under 32 g: 0-15 deg: {NUMBER} \({NUMBER}\) / {NUMBER}, 15-30 deg: ",
-           rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$"),
-          frozenset({"data"})),
+           rf"^the small Crazyflie world's attitude loop as a spring .*: {NUMBER} mN m/rad$",
+           rf"^  32 g under 32 g: .*4-6: {NUMBER} \({NUMBER} %, real {NUMBER}x\)"),
+          frozenset({"data"}), check=lambda out, tmp: _png(tmp / "wake_torque.png")),
 )
 RUN_ELSEWHERE = {"sim_to_real.py": "tests/e2e/test_sim_to_real.py"}
 """Scripts whose ``--smoke`` run (exit code, printed line) is checked by another test, which
