@@ -150,7 +150,10 @@ def main() -> int:
         print(f"  (a loss of thrust on the disks alone: lever at most the half diagonal, "
               f"{100 * bins[0].half_diagonal_m:.1f} cm, with each disk's force at its hub; "
               f"{100 * bins[0].lever_bound_m:.1f} cm however it is spread over the disks)")
-    print_hub_moments(profile)
+    linear = torque_profile(params, labels["asked"][1], logs, inertia, rotor_radii_m=radii,
+                            max_offset_m=MAX_OFFSET_M, hub_moments=True, hub_exponent=1.0)
+    print_hub_moments(profile, "the jet's own ingest law")
+    print_hub_moments(linear, "a load linear in the inflow (blade-element theory)")
     for vid, c in commands.items():
         print(f"{vid}'s motor commands: {c['free_air_median']:.2f} median in free air, "
               f"{c['p99']:.2f} at the 99th percentile of every flight")
@@ -199,12 +202,12 @@ def main() -> int:
     return 0
 
 
-def print_hub_moments(profile: dict) -> None:
+def print_hub_moments(profile: dict, law: str) -> None:
     """The jet's load spread over each disk (its moments about the hubs) beside its disk
     torque and the real one, out to the printed offset."""
-    print("the jet's axial load spread over each disk, not put at its hub (hub_moments_nm): "
-          "its inward moments about the hubs, mN m, their share of the jet's disk torque, and "
-          "the real torque over both:")
+    print(f"the jet's axial load spread over each disk, not put at its hub (hub_moments_nm, "
+          f"{law}): its inward moments about the hubs, mN m, their share of the jet's disk "
+          f"torque, and the real torque over both:")
     for pair, bins in profile.items():
         cells = ", ".join(f"{100 * b.offset_lo_m:.0f}-{100 * b.offset_hi_m:.0f}: "
                           f"{1e3 * b.hub_nm:.2f} ({100 * b.hub_nm / b.jet_nm:.0f} %, real "

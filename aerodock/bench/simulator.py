@@ -102,11 +102,12 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
             "100 Hz")
         row["physics_only"]["note"] = f"{cfg.vehicle.model}, World.step under held commands"
         # the control period's blocks of trials across numba's threads (world/period.py): the
-        # CPU time then counts every thread's, so per_cpu_s is below the wall figure; whether
-        # the blocks ran across them at the end (the faster way, world/block_choice.py)
+        # CPU time then counts every thread's, so per_cpu_s is below the wall figure when
+        # they ran; whether the blocks' home was across them at the end (the faster way, with
+        # a few probe periods of the other: world/block_choice.py)
         row["threads"] = kernel_blocks(n)
         row["in_blocks"] = row["threads"] > 1 and (not period.CHOOSE_BLOCKS
-                                                   or block_choice(n).home)
+                                                   or block_choice(n, row["threads"]).home)
         out[str(n)] = row
     return out
 

@@ -200,7 +200,8 @@ def inward_nm(torque_world: np.ndarray, e_r: np.ndarray) -> np.ndarray:
 
 
 def hub_moments_nm(jet: RoundJetField, leader: BodyState, follower: BodyState, *,
-                   rings: int = HUB_RINGS, azimuths: int = HUB_AZIMUTHS) -> np.ndarray:
+                   exponent: float | None = None, rings: int = HUB_RINGS,
+                   azimuths: int = HUB_AZIMUTHS) -> np.ndarray:
     """(n, 3) the moments of the jet's mean axial load about the follower's rotor hubs, summed
     over its disks, N·m, body frame (FRD): the part of the disks' torque that the jet, which
     puts each disk's force at its hub (:meth:`RoundJetField.mean_disk_torque_nm`), leaves out.
@@ -212,9 +213,13 @@ def hub_moments_nm(jet: RoundJetField, leader: BodyState, follower: BodyState, *
     inflow across a disk of radius ``R`` the moment is the disk's force times ``R^2 / 4`` times
     the load's relative gradient. Here each point's load is the jet's own ingest law at the
     point, ``phi(w(x) - v) - phi(-v)`` (``w`` its axial wind there, ``v`` the follower's own
-    velocity along the axis), over an equal-area polar grid of ``rings`` x ``azimuths`` points
+    velocity along the axis, ``phi(x) = sign(x) |x|^p`` with the jet's fitted ``p``, or
+    ``exponent``: 1 is blade-element theory's load, linear in the inflow; the fitted ``p``,
+    0.56, below 1, spreads the load more evenly and gives smaller moments), over an
+    equal-area polar grid of ``rings`` x ``azimuths`` points
     on each disk in the follower's body plane; each disk's moment is the jet's axial force on
-    it (:meth:`RoundJetField.mean_disk_forces_n`) acting at the load's centroid, about the hub.
+    it (:meth:`RoundJetField.mean_disk_forces_n`, before any ``disk_torque_gain``) acting at
+    the load's centroid, about the hub.
     However the load is spread, a loss of thrust on the disks cannot put the disks'
     torque over their downward force (the lever) beyond the half diagonal plus the rotor
     radius."""
@@ -242,7 +247,7 @@ def hub_moments_nm(jet: RoundJetField, leader: BodyState, follower: BodyState, *
     axis = np.asarray(leader.R, dtype=float)[:, :, 2]  # the wake's axis: the leader's body z
     w = np.einsum("nkqi,ni->nkq", wind, axis)
     v = np.sum(np.asarray(follower.v, dtype=float) * axis, axis=1)[:, None, None]
-    p = jet.ingest_exponent
+    p = jet.ingest_exponent if exponent is None else float(exponent)
     load = _phi(w - v, p) - _phi(-v, p)  # (n, k, q)
     total = load.sum(axis=2)
     ok = np.abs(total) > 1e-12 * np.maximum(np.abs(load).sum(axis=2), 1e-300)
@@ -264,11 +269,12 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
                    separation_m: tuple[float, float] = (0.15, 0.45),
                    bin_m: float = 0.02, max_offset_m: float = 0.16,
                    free_air_offset_m: float = FREE_AIR_OFFSET_M, hub_moments: bool = False,
-                   ) -> dict[str, list[TorqueBin]]:
+                   hub_exponent: float | None = None) -> dict[str, list[TorqueBin]]:
     """Per pairing (``FlightSamples.pair``), the inward wake torque against the horizontal
     offset from the leader's axis: the real flights' (module docstring) and the jet's with
     ``params`` at the same logged states, over the samples ``separation_m`` below the leader;
-    with ``hub_moments``, also the jet's moments about the hubs (:func:`hub_moments_nm`).
+    with ``hub_moments``, also the jet's moments about the hubs (:func:`hub_moments_nm`, its
+    load's exponent ``hub_exponent``: None, the jet's own).
 
     Args:
         params: the jet's fitted parameters (:data:`wake_fit.FITTED_PARAMS` keys).
@@ -283,7 +289,7 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
         WakeFitError: no flight with the motor torque, or a follower without an inertia.
     """
     samples = _inward_samples(params, flights, logs, inertia_kgm2, rotor_radii_m or {},
-                              free_air_offset_m, hub_moments)
+                              free_air_offset_m, hub_moments, hub_exponent)
     out: dict[str, list[TorqueBin]] = {}
     for pair, x in samples.items():
         horizontal, sep, real, model, lean, pwm, down, half, radial_v, hub, radius = (
@@ -316,7 +322,8 @@ def torque_profile(params: dict[str, float], flights: Sequence[FlightSamples],
 def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
                     logs: Sequence[FlightLog], inertia_kgm2: dict[str, Sequence[float]],
                     rotor_radii_m: dict[str, float], free_air_offset_m: float,
-                    hub_moments: bool = False) -> dict[str, dict[str, np.ndarray]]:
+                    hub_moments: bool = False, hub_exponent: float | None = None,
+                    ) -> dict[str, dict[str, np.ndarray]]:
     """Per pairing, every fitted sample of the flights that carry the motor torque: the
     horizontal offset and separation, the real and the jet's inward torque, the lean into the
     axis, the command of the motor nearest it (nan: not logged), the real downward force, the
@@ -345,8 +352,8 @@ def _inward_samples(params: dict[str, float], flights: Sequence[FlightSamples],
         geometry = geometry_with(flight, rotor_radii_m)
         jet = build_jet(params, geometry)
         jet_body = jet.mean_disk_torque_nm(flight.leader, flight.follower)
-        hub_body = (hub_moments_nm(jet, flight.leader, flight.follower) if hub_moments
-                    else np.full((i.size, 3), np.nan))
+        hub_body = (hub_moments_nm(jet, flight.leader, flight.follower, exponent=hub_exponent)
+                    if hub_moments else np.full((i.size, 3), np.nan))
         dp = flight.follower.p - flight.leader.p
         horizontal = np.hypot(dp[:, 0], dp[:, 1])
         e_r = dp[:, :2] / np.maximum(horizontal, 1e-9)[:, None]

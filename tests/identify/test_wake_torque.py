@@ -326,26 +326,34 @@ def test_hub_moments_are_the_small_disk_limit():
     offset = np.array([0.0, 0.03, 0.06, 0.09, 0.12])
     n = offset.size
     level = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+    turn = np.radians(30.0)  # the follower yawed: its body frame is not the world's
+    yawed = np.broadcast_to([[np.cos(turn), -np.sin(turn), 0.0],
+                             [np.sin(turn), np.cos(turn), 0.0], [0.0, 0.0, 1.0]],
+                            (n, 3, 3)).copy()
     leader = BodyState(p=np.zeros((n, 3)), v=np.zeros((n, 3)), R=level,
                        thrust_n=np.full(n, 0.32), mass_kg=np.full(n, 0.032))
     follower = BodyState(p=np.stack([offset, np.zeros(n), np.full(n, 0.3)], axis=1),
-                         v=np.zeros((n, 3)), R=level, thrust_n=np.full(n, 0.32),
+                         v=np.zeros((n, 3)), R=yawed, thrust_n=np.full(n, 0.32),
                          mass_kg=np.full(n, 0.032))
     e_r = np.tile([1.0, 0.0], (n, 1))
-    hub = wt.inward_nm(wt.hub_moments_nm(jet, leader, follower), e_r)
+    hub_body = wt.hub_moments_nm(jet, leader, follower)
+    hub = wt.inward_nm(np.einsum("nij,nj->ni", yawed, hub_body), e_r)
     half_width = jet._point_wake(leader, follower.p)[2]
     forces = jet.mean_disk_forces_n(leader, follower)  # (k, n)
-    along = offset[None, :] + jet.rotor_offsets_body_m[:, 0, None]  # r_k . e_r
+    disks = jet.rotor_offsets_body_m @ yawed[0].T  # the disks' offsets in the world
+    along = offset[None, :] + disks[:, 0, None]  # r_k . e_r
     p = jet.ingest_exponent
     expected = (forces * along).sum(axis=0) * radius ** 2 / 4 * 2 * p * np.log(2) \
         / half_width ** 2
     assert abs(hub[0]) < 1e-12 * np.abs(forces).sum()  # on the axis: the moments cancel
     assert hub[1:] == pytest.approx(expected[1:], rel=0.01)  # measured within 0.4 %
     assert np.all(hub[1:] > 0)  # inwards: the load leans towards the axis
-    # the disks' forces at their hubs are the jet's own disk torque
+    # the disks' forces at their hubs are the jet's own disk torque in roll and pitch (its yaw
+    # is its small planar part's, planar_ratio 0.003: in-plane forces on a yawed follower)
     hubs = np.cross(jet.rotor_offsets_body_m[None], forces.T[:, :, None] * [0.0, 0.0, 1.0])
-    assert hubs.sum(axis=1) == pytest.approx(jet.mean_disk_torque_nm(leader, follower),
-                                             abs=1e-12)
+    assert np.abs(hub_body[:, 2]).max() < 1e-12  # no yaw from an axial load
+    torque = jet.mean_disk_torque_nm(leader, follower)
+    assert hubs.sum(axis=1)[:, :2] == pytest.approx(torque[:, :2], abs=1e-12)
 
 
 def test_hub_moments_do_not_make_the_real_torque(shared_data):
