@@ -76,7 +76,6 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
     """
     from aerodock.world import period
     from aerodock.world.block_choice import block_choice
-    from aerodock.world.period import kernel_blocks
 
     if model is not None:
         cfg = cfg.with_overrides({"vehicle": {"model": model}}, source="bench")
@@ -105,7 +104,7 @@ def bench_simulator(cfg: Any, batches: tuple[int, ...] = SIM_BATCHES, quick: boo
         # CPU time then counts every thread's, so per_cpu_s is below the wall figure when
         # they ran; whether the blocks' home was across them at the end (the faster way, with
         # a few probe periods of the other: world/block_choice.py)
-        row["threads"] = kernel_blocks(n)
+        row["threads"] = period.kernel_blocks(n)
         row["in_blocks"] = row["threads"] > 1 and (not period.CHOOSE_BLOCKS
                                                    or block_choice(n, row["threads"]).home)
         out[str(n)] = row

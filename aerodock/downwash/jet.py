@@ -34,13 +34,10 @@ serves every pair of vehicles: the world's rotor sizes and the leader's thrust g
 - **The disks' differences, scaled** (``disk_torque_gain``, 1 by default): each disk's mean axial
   force is its disks' mean plus ``disk_torque_gain`` times its difference from it, so the net
   force and the turbulence stay as they are and the axial forces' mean torque scales by the
-  gain. The real
-  Crazyflie flights' logged motor torques put the wake's torque at 2.2-4.5 times this jet's
-  fitted with it (docs/crazyflie.md, "The wake's torque in the logs"), by no mechanism the jet
-  has (the disks' load leaning towards the axis within each disk, a moment about each hub the
-  jet leaves out, is 4-13 % of its torque, 5-18 % with a load linear in the inflow:
-  ``aerodock.identify.wake_torque.hub_moments_nm``); the default
-  keeps the jet's own, and a world can ask for the logs' to see what it costs.
+  gain. The real Crazyflie flights' logged motor torques put the wake's torque at 2.2-4.5 times
+  this jet's fitted with it (docs/crazyflie.md, "The wake's torque in the logs"), by no mechanism
+  the jet has (its moments about the hubs add 4-13 %: ``aerodock.identify.hub_moments``); the
+  default keeps the jet's own, and a world can ask for the logs' to see what it costs.
 - **Turbulence per rotor disk**: each disk's axial force is scaled by ``1 + turb_vertical n_k``,
   ``n_k`` a unit Ornstein-Uhlenbeck process of its own, correlated with the other disks' by the
   jet's integral length scale ``l = turb_length_ratio * b``: a process shared by the disks (and
@@ -316,10 +313,8 @@ class RoundJetField:
 
     def mean_disk_forces_n(self, leader: BodyState, follower: BodyState) -> np.ndarray:
         """(k, n) mean (turbulence-free) axial force on each of the follower's rotor disks, N,
-        along the wake's axis (the leader's body z; positive: pushed along it, a loss of
-        thrust), as the jet's law gives it: before ``disk_torque_gain`` scales the disks'
-        differences (with the gain 1, these forces at the hubs are
-        :meth:`mean_disk_torque_nm`)."""
+        along the wake's axis (the leader's body z; positive: a loss of thrust), before
+        ``disk_torque_gain`` (with the gain 1, at the hubs they are :meth:`mean_disk_torque_nm`)."""
         offsets = self.rotor_offsets_body_m
         axial = self._run(leader, follower, offsets, 0.0, advance=False, noisy=False,
                           split=True, want_torque=False)[3][0]

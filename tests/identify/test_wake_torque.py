@@ -15,6 +15,7 @@ from aerodock.downwash.base import BodyState
 from aerodock.identify import flights as fl
 from aerodock.identify import wake_fit as wf
 from aerodock.identify import wake_torque as wt
+from aerodock.identify.hub_moments import hub_moments_nm
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 INERTIA = {vid: (1.7e-5, 1.7e-5, 3.0e-5) for vid in ("cf1", "cf2", "cf9")}
@@ -336,7 +337,7 @@ def test_hub_moments_are_the_small_disk_limit():
                          v=np.zeros((n, 3)), R=yawed, thrust_n=np.full(n, 0.32),
                          mass_kg=np.full(n, 0.032))
     e_r = np.tile([1.0, 0.0], (n, 1))
-    hub_body = wt.hub_moments_nm(jet, leader, follower)
+    hub_body = hub_moments_nm(jet, leader, follower)
     hub = wt.inward_nm(np.einsum("nij,nj->ni", yawed, hub_body), e_r)
     half_width = jet._point_wake(leader, follower.p)[2]
     forces = jet.mean_disk_forces_n(leader, follower)  # (k, n)
