@@ -10,8 +10,9 @@
    (:mod:`aerodock.ingest.data_dir`);
 then ``results.json``, ``report.md`` and ``figures/`` (:mod:`aerodock.experiments.report`).
 Step 5 and the costs of the levers the paper leaves unstated depend on nothing the other steps
-compute: on a machine with two cores they run on a second process from the start
-(:func:`aerodock.processes.side_worker`), with the same numbers.
+compute, and the tuned controller's steps 2-4 only on the paper's model: on a machine with two
+cores they run on a second process (:func:`aerodock.processes.side_worker`; step 5 from the
+start, the other two once step 1 has saved its models), with the same numbers.
 
 "Without model" is the paper's LQG baseline (bias observer); "with model" adds the learnt model's
 feed-forward. The oracle (true mean field) is run as an upper bound.
@@ -220,9 +221,10 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
     run = _Run(cfg, size, seed, say, bar, Path(out_dir), named)
     run.fig_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    # Step 5 and the levers' costs depend on nothing the simulations after them compute: they
-    # run on a second process beside the rest (the same numbers: every training runs on one
-    # thread and every campaign draws its own trials' streams, wherever they run).
+    # Step 5, the levers' costs and the tuned controller's rows depend on nothing the
+    # simulations after them compute: they run on a second process beside the rest (the same
+    # numbers: every training runs on one thread and every campaign draws its own trials'
+    # streams, wherever they run).
     with side_worker() as side, _cores_shared_with(side) as share_cores:
         if not side.run_here:
             say(("the real-data study and the levers' costs run" if _real_dir(shared_data)
@@ -234,6 +236,11 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         costs_job = side.submit(_costs_job, run.cfg, run.size, run.seed,
                                 learned.model_dir,
                                 learned.deep_model_dir if run.size.target_all_rows else None)
+        # the tuned controller's steps 2-4 need only the paper's model: after the levers' costs
+        tuned_job = (side.submit(_tuned_job, run.cfg, run.size, run.seed, learned.model_dir)
+                     if run.size.tuned_row else None)
+        if tuned_job is not None and not side.run_here:
+            run.say("    the tuned controller's steps 2-4 run on the second process too")
         share_cores()
         se = _sample_efficiency_step(run, learned)
         share_cores()
@@ -244,6 +251,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         share_cores()
         targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
         costs = _costs_step(run, costs_job)
+        if tuned_job is not None:
+            controllers = replace(controllers, tuned=_tuned_step(run, tuned_job))
         real_data, compensation = _real_data_step(run, real_data_job)
     run.timings["total_s"] = time.perf_counter() - started
     results = ReproduceResults(
@@ -313,7 +322,7 @@ def _sample_efficiency_step(run: _Run, learned: LearningData) -> dict[str, Any]:
 def _controllers_step(run: _Run, learned: LearningData
                       ) -> tuple[DockingRecord, ControllersRecord]:
     """Steps 2-4 flown by the paper's controller (the reproduction, its traces the figures'),
-    then by the tuned controller (not in a smoke run) and by ours."""
+    then by ours; the tuned controller's row is :func:`_tuned_job`'s, left None here."""
     cfg, size, seed, say = run.cfg, run.size, run.seed, run.say
     paper_cfg = controller_config(cfg, "paper")
     docking, traces, times = docking_experiments(paper_cfg, size, learned.predictor, seed, say,
@@ -329,16 +338,6 @@ def _controllers_step(run: _Run, learned: LearningData
         command_rate_hz=paper_cfg.control.command_rate_hz,
         reference_ff_factor=paper_cfg.control.reference_ff_factor,
         observer_rise_63_s=bias_step_response(paper_cfg).rise_63_s)
-    tuned = None
-    if size.tuned_row:
-        tuned_docking, _, times = docking_experiments(controller_config(cfg, "tuned"), size,
-                                                       learned.predictor, seed, say,
-                                                       "tuned controller")
-        tuned = TunedController(
-            source="the configuration's weights (terminal gain schedule)",
-            q_diag=list(cfg.control.q_diag), terminal_q_diag=list(cfg.control.terminal_q_diag),
-            observer_bias_tau_s=cfg.control.observer_bias_tau_s, docking=tuned_docking)
-        run.timings.update({f"tuned_{k}": v for k, v in times.items()})
     ours_cfg = controller_config(cfg, "ours")
     ours_docking, _, times = docking_experiments(
         ours_cfg, size, learned.deep_predictor, seed, say,
@@ -348,7 +347,32 @@ def _controllers_step(run: _Run, learned: LearningData
                "model", accel_observer_tau_s=ours_cfg.control.accel_observer_tau_s,
         terminal_q_diag=list(ours_cfg.control.terminal_q_diag), docking=ours_docking)
     run.timings.update({f"ours_{k}": v for k, v in times.items()})
-    return docking, ControllersRecord(paper=paper, tuned=tuned, ours=ours)
+    return docking, ControllersRecord(paper=paper, tuned=None, ours=ours)
+
+
+def _tuned_job(cfg: Config, size: RunSize, seed: int, model: Path
+               ) -> tuple[DockingRecord, dict[str, float]]:
+    """Steps 2-4 flown by the tuned controller with the model saved in ``model`` (the paper's
+    curriculum's), and their timings (picklable: it may run on another process; every campaign
+    draws its own trials' streams, so its numbers are the same wherever it runs)."""
+    from aerodock.learning.runtime import Predictor
+
+    docking, _, times = docking_experiments(controller_config(cfg, "tuned"), size,
+                                            Predictor.load(model), seed, lambda _line: None,
+                                            "tuned controller")
+    return docking, times
+
+
+def _tuned_step(run: _Run, job: Callable[[], tuple[DockingRecord, dict[str, float]]]
+                ) -> TunedController:
+    """The tuned controller's row (:func:`_tuned_job`, waited for through ``job``)."""
+    cfg = run.cfg
+    docking, times = job()
+    run.timings.update({f"tuned_{k}": v for k, v in times.items()})
+    return TunedController(
+        source="the configuration's weights (terminal gain schedule)",
+        q_diag=list(cfg.control.q_diag), terminal_q_diag=list(cfg.control.terminal_q_diag),
+        observer_bias_tau_s=cfg.control.observer_bias_tau_s, docking=docking)
 
 
 def _targets_step(run: _Run, learned: LearningData, ours: OursController
