@@ -252,7 +252,8 @@ def _reproduce_into(cfg: Config, out_dir: Path, named: Path, quick: bool, seed: 
         targets_result, wrench_curriculum = _targets_step(run, learned, controllers.ours)
         costs = _costs_step(run, costs_job)
         if tuned_job is not None:
-            controllers = replace(controllers, tuned=_tuned_step(run, tuned_job))
+            controllers = replace(controllers,
+                                  tuned=_tuned_step(run, tuned_job, here=side.run_here))
         real_data, compensation = _real_data_step(run, real_data_job)
     run.timings["total_s"] = time.perf_counter() - started
     results = ReproduceResults(
@@ -363,10 +364,13 @@ def _tuned_job(cfg: Config, size: RunSize, seed: int, model: Path
     return docking, times
 
 
-def _tuned_step(run: _Run, job: Callable[[], tuple[DockingRecord, dict[str, float]]]
-                ) -> TunedController:
-    """The tuned controller's row (:func:`_tuned_job`, waited for through ``job``)."""
+def _tuned_step(run: _Run, job: Callable[[], tuple[DockingRecord, dict[str, float]]],
+                here: bool) -> TunedController:
+    """The tuned controller's row (:func:`_tuned_job`, waited for through ``job``; ``here``:
+    the job runs in this process now)."""
     cfg = run.cfg
+    if here:
+        run.say("2-4/5 cable-length study, hover docking and the moving leader, tuned controller")
     docking, times = job()
     run.timings.update({f"tuned_{k}": v for k, v in times.items()})
     return TunedController(
